@@ -1,0 +1,30 @@
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'mill_bringup'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='mill developers',
+    maintainer_email='mill@example.com',
+    description='Scenario runner, offline simulator, metrics, benchmark and launch files for mill.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'run_scenario = mill_bringup.runner:main',
+            'offline_sim = mill_bringup.offline:main',
+            'benchmark = mill_bringup.benchmark:main',
+        ],
+    },
+)

@@ -1,0 +1,85 @@
+"""Entry point shared by all mill nodes: --help, clean start-up errors, spin, clean exit."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Sequence
+
+from mill_common.env import ros_environment
+from mill_common.parameters import ParameterError, ParamSpec
+
+
+class NodeExit(Exception):
+    """Raised from a callback to end the node with an exit code and a message."""
+
+    def __init__(self, code: int, message: str) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
+    lines = []
+    width = max((len(name) for name, _ in specs), default=10)
+    for name, spec in specs:
+        default = spec.default
+        ro = ' (read-only)' if spec.read_only else ''
+        lines.append(f'  {name:<{width}}  {spec.description}{ro} [default: {default!r}]')
+    return '\n'.join(lines)
+
+
+def _user_args(argv: Sequence[str]) -> list[str]:
+    args = list(argv[1:])
+    return args[: args.index('--ros-args')] if '--ros-args' in args else args
+
+
+def run_node(
+    make_node: Callable[[], object],
+    executable: str,
+    summary: str,
+    specs: Sequence[tuple[str, ParamSpec]],
+    argv: Sequence[str] | None = None,
+) -> int:
+    """Run one node until it ends or is interrupted; returns the process exit code."""
+    argv = list(sys.argv if argv is None else argv)
+    user = _user_args(argv)
+    if '-h' in user or '--help' in user:
+        print(
+            f'usage: {executable} [--ros-args -p NAME:=VALUE ... --params-file FILE]\n\n'
+            f'{summary}\n\nparameters:\n{format_parameter_help(specs)}'
+        )
+        return 0
+    if user:
+        print(f'{executable}: error: unexpected arguments {user}; use --ros-args', file=sys.stderr)
+        return 2
+
+    import os
+
+    # Keep DDS on loopback unless the user chose otherwise (see README, Network).
+    for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE',):
+        os.environ.setdefault(key, ros_environment({})[key])
+
+    import rclpy
+    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+    rclpy.init(args=argv)
+    node = None
+    code = 0
+    try:
+        node = make_node()
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        executor.spin()
+    except (ParameterError, ValueError) as exc:
+        print(f'{executable}: error: {exc}', file=sys.stderr)
+        code = 2
+    except NodeExit as exc:
+        print(f'{executable}: {"error: " if exc.code else ""}{exc}', file=sys.stderr)
+        code = exc.code
+    except (KeyboardInterrupt, ExternalShutdownException):
+        code = 0
+    finally:
+        if node is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.try_shutdown()
+    return code

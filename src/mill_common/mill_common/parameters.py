@@ -1,0 +1,145 @@
+"""Parameter specifications, ROS-free.
+
+An algorithm lists its parameters as ParamSpec entries (name, default,
+description, check). Nodes turn them into ROS parameters with descriptions;
+the same checks reject bad values at start-up and at run time, so an invalid
+value is always refused with a reason and never half-applied.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+Check = Callable[[Any], 'str | None']
+
+
+def no_check(_value: Any) -> str | None:
+    return None
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter: name (without any prefix), default, description, and a check.
+
+    check returns None when the value is acceptable, otherwise the reason it is not.
+    """
+
+    name: str
+    default: Any
+    description: str
+    check: Check = no_check
+    read_only: bool = False
+
+
+class ParameterError(ValueError):
+    """A parameter value was refused; str() is a one-line message naming it."""
+
+    def __init__(self, name: str, value: Any, reason: str) -> None:
+        super().__init__(f'invalid parameter {name}={value!r}: {reason}')
+        self.name = name
+        self.value = value
+        self.reason = reason
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def number(value: Any) -> str | None:
+    if not _is_number(value) or not math.isfinite(value):
+        return 'must be a finite number'
+    return None
+
+
+def positive(value: Any) -> str | None:
+    return number(value) or (None if value > 0 else 'must be > 0')
+
+
+def non_negative(value: Any) -> str | None:
+    return number(value) or (None if value >= 0 else 'must be >= 0')
+
+
+def positive_or_inf(value: Any) -> str | None:
+    if _is_number(value) and value == math.inf:
+        return None
+    return positive(value)
+
+
+def in_range(lo: float, hi: float) -> Check:
+    def check(value: Any) -> str | None:
+        return number(value) or (None if lo <= value <= hi else f'must be in [{lo}, {hi}]')
+
+    return check
+
+
+def positive_int(value: Any) -> str | None:
+    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+        return 'must be a whole number >= 1'
+    return None
+
+
+def one_of(*choices: str) -> Check:
+    def check(value: Any) -> str | None:
+        if value in choices:
+            return None
+        return f"must be one of: {', '.join(choices)}"
+
+    return check
+
+
+def boolean(value: Any) -> str | None:
+    return None if isinstance(value, bool) else 'must be true or false'
+
+
+def text(value: Any) -> str | None:
+    return None if isinstance(value, str) else 'must be a string'
+
+
+def number_list(length: int | None = None, each: Check = number) -> Check:
+    """A list of numbers, optionally of a fixed length, each passing `each`."""
+
+    def check(value: Any) -> str | None:
+        if not isinstance(value, list | tuple):
+            return 'must be a list of numbers'
+        if length is not None and len(value) != length:
+            return f'must have {length} entries, got {len(value)}'
+        for i, item in enumerate(value):
+            reason = each(item)
+            if reason:
+                return f'entry {i} {reason}'
+        return None
+
+    return check
+
+
+def coerce(spec: ParamSpec, value: Any) -> Any:
+    """Accept an integer where a float is expected (YAML writes 12 for 12.0)."""
+    if isinstance(spec.default, float) and _is_number(value):
+        return float(value)
+    is_float_list = isinstance(spec.default, list | tuple) and bool(spec.default)
+    if is_float_list and isinstance(spec.default[0], float) and isinstance(value, list | tuple):
+        return [float(v) if _is_number(v) else v for v in value]
+    return value
+
+
+def validate(spec: ParamSpec, value: Any, full_name: str | None = None) -> Any:
+    """Return the coerced value, or raise ParameterError with the reason."""
+    value = coerce(spec, value)
+    reason = spec.check(value)
+    if reason:
+        raise ParameterError(full_name or spec.name, value, reason)
+    return value
+
+
+def validate_all(
+    specs: Sequence[ParamSpec], values: Mapping[str, Any], prefix: str = ''
+) -> dict[str, Any]:
+    """Validate a mapping name -> value (names without prefix); missing names take defaults."""
+    out: dict[str, Any] = {}
+    for spec in specs:
+        raw = values.get(spec.name, spec.default)
+        out[spec.name] = validate(spec, raw, prefix + spec.name)
+    return out

@@ -1,0 +1,25 @@
+"""Sample times as integer nanoseconds, converted to seconds in exactly one way.
+
+The distributed graph and the offline simulator must compute identical float
+times from the same step, so both go through these functions.
+"""
+
+from __future__ import annotations
+
+
+def period_ns(period_s: float) -> int:
+    """Sample period in whole nanoseconds; ValueError unless it is positive and exact to 1 ns."""
+    ns = round(period_s * 1e9)
+    if ns <= 0 or abs(ns - period_s * 1e9) > 1e-3:
+        raise ValueError(f'sample period must be a positive whole number of ns, got {period_s!r} s')
+    return ns
+
+
+def step_ns(k: int, dt_ns: int) -> int:
+    """Stamp of sample k in nanoseconds."""
+    return k * dt_ns
+
+
+def seconds(ns: int) -> float:
+    """Time in seconds of a stamp in nanoseconds."""
+    return ns / 1e9

@@ -1,0 +1,25 @@
+"""Topic names of the hardware contract (see the README's topic table). ROS-free."""
+
+from __future__ import annotations
+
+REFERENCE = '/mill/reference'
+CUTTING_FORCE = '/mill/cutting_force'
+GROUND_TRUTH = '/mill/ground_truth'
+FEED_OVERRIDE = '/mill/feed_override'
+CLOCK = '/clock'
+DIAGNOSTICS = '/diagnostics'
+
+
+def state(axis: str) -> str:
+    """Measured position of one axis (plant or hardware driver publishes)."""
+    return f'/mill/{axis}/state'
+
+
+def joint_command(axis: str) -> str:
+    """Motor torque command of one axis (its controller publishes)."""
+    return f'/mill/{axis}/joint_command'
+
+
+def estimate(axis: str) -> str:
+    """Observer output of one axis."""
+    return f'/mill/{axis}/estimate'

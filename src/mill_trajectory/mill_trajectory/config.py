@@ -1,0 +1,50 @@
+"""Parameters of the trajectory node and how they build the trajectory core. ROS-free.
+
+The offline simulator builds the same core from the same scenario file through here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from mill_common.parameters import ParamSpec, non_negative, one_of
+
+from mill_trajectory.base import Trajectory
+from mill_trajectory.registry import TRAJECTORIES
+
+
+def parameter_specs() -> list[tuple[str, ParamSpec]]:
+    specs = [
+        ('trajectory', ParamSpec('trajectory', 'linear', 'path type', one_of(*TRAJECTORIES))),
+        (
+            'duration',
+            ParamSpec(
+                'duration', 0.0, 'end the job after this time [s]; 0 = when the path ends',
+                non_negative,
+            ),
+        ),
+        (
+            'settle_time',
+            ParamSpec('settle_time', 0.0, 'time held at the end of the path [s]', non_negative),
+        ),
+    ]
+    for cls in TRAJECTORIES.values():
+        specs += [(f'{cls.PREFIX}.{s.name}', s) for s in cls.PARAMETERS]
+    return specs
+
+
+@dataclass(frozen=True)
+class Job:
+    trajectory: Trajectory
+    end_time: float  # the job is over at this time [s]
+
+
+def build_job(values: dict[str, Any]) -> Job:
+    cls = TRAJECTORIES[values['trajectory']]
+    own = {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}
+    path = cls.from_parameters(own)
+    end = path.end_time + values['settle_time']
+    if values['duration'] > 0:
+        end = min(end, values['duration'])
+    return Job(path, end)

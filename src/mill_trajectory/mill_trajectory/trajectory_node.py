@@ -1,0 +1,96 @@
+"""Trajectory node: answers each /clock tick with the reference of all axes for that time.
+
+Publishes /mill/reference (trajectory_msgs/JointTrajectory, one point stamped
+with the tick) and the job status on /diagnostics ("running" with progress,
+then "done" once the job's end time is reached).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from mill_common.node_main import run_node
+from mill_common.ros import DATA_QOS, from_stamp, to_stamp
+from mill_common.ros_params import NodeParameters
+from mill_common.signals import AXES
+from mill_common.timebase import seconds
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+
+from mill_common import topics
+from mill_trajectory.config import build_job, parameter_specs
+
+JOB_STATUS_NAME = 'mill_trajectory: job'
+
+
+class TrajectoryNode(Node):
+    def __init__(self) -> None:
+        super().__init__('trajectory')
+        self._path = None
+        self._job_end = 0.0
+        self._done_sent = False
+        self._next_report = 0.0
+        self.params = NodeParameters(self, parameter_specs(), self._configure)
+        self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
+        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
+        self.get_logger().info(
+            f'{self.params.values["trajectory"]} path, job ends at t = {self._job_end:.3f} s'
+        )
+
+    def _configure(self, values: dict[str, Any]) -> None:
+        job = build_job(values)
+        self._path, self._job_end = job.trajectory, job.end_time
+        self._done_sent = False
+
+    def _on_clock(self, msg: Clock) -> None:
+        ns = from_stamp(msg.clock)
+        t = seconds(ns)
+        sample = self._path.sample(t)
+        out = JointTrajectory()
+        out.header.stamp = to_stamp(ns)
+        out.joint_names = list(AXES)
+        point = JointTrajectoryPoint()
+        point.positions = list(sample.position)
+        point.velocities = list(sample.velocity)
+        point.accelerations = list(sample.acceleration)
+        out.points = [point]
+        self._ref_pub.publish(out)
+        if t >= self._job_end and not self._done_sent:
+            self._done_sent = True
+            self._report(t, 'done')
+        elif t >= self._next_report:
+            self._next_report = t + 1.0
+            self._report(t, 'running')
+
+    def _report(self, t: float, state: str) -> None:
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.OK,
+            name=JOB_STATUS_NAME,
+            message=f'job {state}',
+            hardware_id='mill',
+            values=[
+                KeyValue(key='state', value=state),
+                KeyValue(key='time', value=repr(t)),
+                KeyValue(key='end_time', value=repr(self._job_end)),
+            ],
+        )
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self._diag_pub.publish(array)
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_node(
+        TrajectoryNode,
+        'trajectory_node',
+        'Publishes the reference of all axes on /mill/reference for every /clock tick.',
+        parameter_specs(),
+        argv,
+    )
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
