@@ -17,7 +17,6 @@ setup(
     description='Shared ROS adapters for mill: topic names, QoS, stamps, parameter checking, node entry.',
     license='Apache-2.0',
     entry_points={
-        'console_scripts': [
-        ],
+        'console_scripts': [],
     },
 )

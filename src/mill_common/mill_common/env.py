@@ -19,8 +19,10 @@ def ros_environment(base: Mapping[str, str] | None = None, domain_id: str | None
     env = dict(os.environ if base is None else base)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
-    if 'ROS_DOMAIN_ID' not in env:
-        env['ROS_DOMAIN_ID'] = domain_id or private_domain_id()
+    if domain_id is not None:
+        env['ROS_DOMAIN_ID'] = str(domain_id)
+    elif 'ROS_DOMAIN_ID' not in env:
+        env['ROS_DOMAIN_ID'] = private_domain_id()
     # Children print their logs as they happen, not in blocks at exit.
     env.setdefault('PYTHONUNBUFFERED', '1')
     env.setdefault('RCUTILS_LOGGING_BUFFERED_STREAM', '0')

@@ -85,7 +85,7 @@ def one_of(*choices: str) -> Check:
     def check(value: Any) -> str | None:
         if value in choices:
             return None
-        return f"must be one of: {', '.join(choices)}"
+        return f'must be one of: {", ".join(choices)}'
 
     return check
 
@@ -143,3 +143,26 @@ def validate_all(
         raw = values.get(spec.name, spec.default)
         out[spec.name] = validate(spec, raw, prefix + spec.name)
     return out
+
+
+def axis_node_specs() -> list[tuple[str, ParamSpec]]:
+    """Parameters every per-axis node (controller, observer) has."""
+    from mill_common.signals import AXES
+
+    return [
+        ('axis', ParamSpec('axis', 'x', 'machine axis this node serves', one_of(*AXES), True)),
+        (
+            'input_gain',
+            ParamSpec(
+                'input_gain',
+                0.0,
+                'b of the nominal model x" = b tau + xi [m/s^2 per N m]; '
+                '0 = 1/(a m_e) from Beltrán 2013 Table 1 for this axis',
+                lambda v: number(v) or (None if v >= 0 else 'must be >= 0 (0 = nominal)'),
+            ),
+        ),
+        (
+            'sample_period',
+            ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+        ),
+    ]

@@ -12,7 +12,7 @@ def axis_index(axis: str) -> int:
     try:
         return AXES.index(axis)
     except ValueError:
-        raise ValueError(f"axis must be one of {', '.join(AXES)}, got {axis!r}") from None
+        raise ValueError(f'axis must be one of {", ".join(AXES)}, got {axis!r}') from None
 
 
 @dataclass(frozen=True)

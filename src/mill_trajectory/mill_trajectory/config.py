@@ -20,7 +20,9 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         (
             'duration',
             ParamSpec(
-                'duration', 0.0, 'end the job after this time [s]; 0 = when the path ends',
+                'duration',
+                0.0,
+                'end the job after this time [s]; 0 = when the path ends',
                 non_negative,
             ),
         ),

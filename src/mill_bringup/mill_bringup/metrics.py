@@ -1,0 +1,98 @@
+"""The record of one run and the metrics computed from it. ROS-free.
+
+The offline simulator fills a RunRecord directly; the distributed run fills
+it from the messages it received. Both go through `summarize`, so the
+figures of the two are computed by the same code.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from mill_common.signals import AXES
+
+SIGNALS = (
+    'position',  # measured position [m]
+    'reference',  # reference position [m]
+    'reference_velocity',  # [m/s]
+    'estimate_velocity',  # observer velocity [m/s]
+    'estimate_disturbance',  # observer xi [m/s^2]
+    'torque',  # commanded torque [N m]
+    'true_velocity',  # plant velocity [m/s] (simulation only)
+    'true_disturbance',  # plant xi [m/s^2] (simulation only)
+    'force',  # cutting force [N]
+)
+
+
+@dataclass
+class RunRecord:
+    """Signals of a run on the sample grid t[k] = k T; absent values are NaN."""
+
+    t: np.ndarray
+    signals: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def empty(cls, n: int, dt: float) -> RunRecord:
+        t = np.arange(n) * dt
+        return cls(t, {s: np.full((n, len(AXES)), np.nan) for s in SIGNALS})
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.signals[name]
+
+    @property
+    def tracking_error(self) -> np.ndarray:
+        return self['position'] - self['reference']
+
+    @property
+    def disturbance_error(self) -> np.ndarray:
+        return self['estimate_disturbance'] - self['true_disturbance']
+
+
+@dataclass(frozen=True)
+class AxisMetrics:
+    axis: str
+    max_error: float  # max |e| after the skip [m]
+    rms_error: float  # RMS e after the skip [m]
+    rms_disturbance_error: float  # RMS (xi_hat - xi) after the skip [m/s^2]
+    rms_disturbance: float  # RMS xi after the skip, for scale [m/s^2]
+
+
+def _rms(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
+
+
+def _max_abs(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.max(np.abs(x))) if x.size else math.nan
+
+
+def summarize(record: RunRecord, skip: float = 1.0) -> list[AxisMetrics]:
+    """Per-axis metrics over t >= skip (the start transient is excluded)."""
+    after = record.t >= skip
+    e = record.tracking_error[after]
+    d = record.disturbance_error[after]
+    xi = record['true_disturbance'][after]
+    out = []
+    for i, axis in enumerate(AXES):
+        if not np.isfinite(record['position'][:, i]).any():
+            continue  # axis not in this run
+        out.append(
+            AxisMetrics(axis, _max_abs(e[:, i]), _rms(e[:, i]), _rms(d[:, i]), _rms(xi[:, i]))
+        )
+    return out
+
+
+def format_summary(metrics: list[AxisMetrics], skip: float) -> str:
+    lines = [
+        f'axis   max |e| [mm]   RMS e [mm]   RMS(xi_hat - xi) [m/s^2]   RMS xi [m/s^2]'
+        f'   (t >= {skip:g} s)'
+    ]
+    for m in metrics:
+        lines.append(
+            f'{m.axis:>4}   {m.max_error * 1e3:12.6f}   {m.rms_error * 1e3:10.6f}'
+            f'   {m.rms_disturbance_error:24.6f}   {m.rms_disturbance:14.6f}'
+        )
+    return '\n'.join(lines)

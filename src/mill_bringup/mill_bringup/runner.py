@@ -1,0 +1,364 @@
+"""Scenario runner: starts every node of a scenario in its own process and reports the job.
+
+    run_scenario slotting                      # the Beltrán 2013 job, 8 processes
+    run_scenario slotting --controller pd      # the uncompensated run
+    run_scenario slotting --duration 5 --compare-offline
+
+Each node runs as `ros2 run` would start it (`--ros-args -r __node:=NAME
+--params-file SCENARIO`). The runner listens to the run, shows progress, stops
+the graph when the trajectory reports the job done, and prints per-axis
+tracking and disturbance-estimation errors, wall time and real-time factor.
+Logs and summary.json go to the run directory (--output).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import importlib.metadata
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+from mill_common.env import ros_environment
+from mill_common.timebase import period_ns, seconds
+from mill_trajectory.config import build_job
+
+from mill_bringup import scenario as scenario_mod
+from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
+from mill_bringup.offline import apply_cli_overrides, job_steps, simulate
+
+JOB_STATUS = 'mill_trajectory: job'
+PLANT_STATUS = 'mill_plant: lockstep'
+
+
+class RunError(RuntimeError):
+    """The run could not complete; str() says why."""
+
+
+@dataclass
+class RunResult:
+    scenario: str
+    samples: int
+    sim_time: float
+    wall_time: float
+    real_time_factor: float
+    steps_per_second: float
+    metrics: list[AxisMetrics]
+    missing_samples: dict[str, int]
+    peak_rss_mb: dict[str, float]
+    domain_id: str
+    offline_max_difference: float | None = None
+    record: RunRecord | None = field(default=None, repr=False)
+
+    def to_json(self) -> dict:
+        d = asdict(self)
+        d.pop('record')
+        d['total_peak_rss_mb'] = sum(self.peak_rss_mb.values())
+        return d
+
+
+def module_of(package: str, executable: str) -> str:
+    """The Python module behind a package's console script (what `ros2 run` would start)."""
+    for ep in importlib.metadata.entry_points(group='console_scripts'):
+        if ep.name == executable and ep.value.startswith(package + '.'):
+            return ep.value.split(':')[0]
+    raise scenario_mod.ScenarioError(f'{package} has no executable {executable!r}')
+
+
+def vm_hwm_mb(pid: int) -> float:
+    """Peak resident memory of a live process [MB] (VmHWM), NaN if unreadable."""
+    try:
+        for line in Path(f'/proc/{pid}/status').read_text().splitlines():
+            if line.startswith('VmHWM:'):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float('nan')
+
+
+class Graph:
+    """The scenario's node processes."""
+
+    def __init__(self, scen: scenario_mod.Scenario, run_dir: Path, env: dict[str, str]) -> None:
+        self.scen = scen
+        self.procs: dict[str, subprocess.Popen] = {}
+        self.logs: dict[str, Path] = {}
+        log_dir = run_dir / 'logs'
+        log_dir.mkdir(parents=True, exist_ok=True)
+        overrides = run_dir / 'overrides.yaml'
+        overrides.write_text(
+            yaml.safe_dump({n: {'ros__parameters': p} for n, p in scen.overrides.items()})
+        )
+        for node in scen.nodes:
+            cmd = [
+                sys.executable,
+                '-m',
+                module_of(node.package, node.executable),
+                '--ros-args',
+                '-r',
+                f'__node:={node.name}',
+                '--params-file',
+                str(scen.path),
+                '--params-file',
+                str(overrides),
+            ]
+            self.logs[node.name] = log_dir / f'{node.name}.log'
+            with open(self.logs[node.name], 'w') as log:
+                self.procs[node.name] = subprocess.Popen(
+                    cmd,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    env=env,
+                    start_new_session=True,
+                )
+
+    def exited(self) -> dict[str, int]:
+        return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
+
+    def peak_rss(self) -> dict[str, float]:
+        return {n: vm_hwm_mb(p.pid) for n, p in self.procs.items() if p.poll() is None}
+
+    def log_tail(self, name: str, lines: int = 6) -> str:
+        try:
+            text = self.logs[name].read_text().strip().splitlines()
+        except OSError:
+            return ''
+        return '\n'.join('    ' + t for t in text[-lines:])
+
+    def stop(self, grace: float = 5.0) -> None:
+        for p in self.procs.values():
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + grace
+        for p in self.procs.values():
+            try:
+                p.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+
+
+class Progress:
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self.next = 0.0
+
+    def show(self, text: str, force: bool = False) -> None:
+        now = time.monotonic()
+        if self.quiet or (now < self.next and not force):
+            return
+        self.next = now + (0.5 if self.tty else 5.0)
+        sys.stderr.write(('\r' + text + '   ') if self.tty else text + '\n')
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.tty and not self.quiet:
+            sys.stderr.write('\n')
+
+
+def run(
+    scen: scenario_mod.Scenario,
+    run_dir: Path,
+    skip: float = 1.0,
+    stall_timeout: float = 30.0,
+    startup_timeout: float = 120.0,
+    quiet: bool = False,
+    domain_id: str | None = None,
+    compare_offline: bool = False,
+) -> RunResult:
+    # Validate every node's parameters before starting anything.
+    for node in scen.nodes:
+        scen.parameters(node.name)
+    plant_values = scen.parameters(scen.nodes_of('mill_plant')[0].name)
+    dt_ns = period_ns(plant_values['sample_period'])
+    job = build_job(scen.parameters(scen.nodes_of('mill_trajectory')[0].name))
+    n = job_steps(job.end_time, dt_ns)
+    axes = list(plant_values['axes'])
+
+    env = ros_environment(domain_id=domain_id)
+    os.environ.update(env)
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from mill_bringup.monitor import Monitor, plant_status
+
+    progress = Progress(quiet)
+    rclpy.init()
+    graph = None
+    try:
+        monitor = Monitor(axes)
+        executor = SingleThreadedExecutor()
+        executor.add_node(monitor)
+        graph = Graph(scen, run_dir, env)
+        progress.show(
+            f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}); '
+            f'waiting for discovery',
+            force=True,
+        )
+        t_start = time.monotonic()
+        t_first = None
+        last_count, last_change = 0, t_start
+        state_topic = f'/mill/{axes[0]}/state'
+        counts_needed = [f'/mill/{a}/{kind}' for a in axes for kind in ('state', 'estimate')]
+        while True:
+            executor.spin_once(timeout_sec=0.05)
+            now = time.monotonic()
+            exited = graph.exited()
+            if exited:
+                name, code = next(iter(exited.items()))
+                raise RunError(
+                    f'node {name} exited with code {code} before the job ended:\n'
+                    + graph.log_tail(name)
+                )
+            count = monitor.count(state_topic)
+            if count != last_count:
+                last_count, last_change = count, now
+                if t_first is None:
+                    t_first = now
+            if t_first is None and now - t_start > startup_timeout:
+                raise RunError(f'no step within {startup_timeout:g} s of the start')
+            if t_first is not None and now - last_change > stall_timeout:
+                raise RunError(f'the run stalled: no new sample for {stall_timeout:g} s')
+            if all(monitor.count(t) >= n for t in counts_needed):
+                break
+            if t_first is not None:
+                t_sim = seconds(max(monitor.last_stamp_ns, 0))
+                rtf = t_sim / max(now - t_first, 1e-9)
+                progress.show(
+                    f't = {t_sim:7.2f} / {job.end_time:.2f} s '
+                    f'({100 * t_sim / job.end_time:5.1f} %), real-time factor {rtf:.2f}'
+                )
+        wall = time.monotonic() - t_first
+        # Let the last ground-truth and force messages of the final step arrive.
+        settle = time.monotonic() + 1.0
+        while time.monotonic() < settle:
+            executor.spin_once(timeout_sec=0.05)
+        peak = graph.peak_rss()
+        status = plant_status(monitor.diagnostics, PLANT_STATUS)
+        graph.stop()
+        progress.done()
+        record, missing = monitor.record(n, dt_ns)
+    finally:
+        if graph is not None:
+            graph.stop()
+        progress.done()
+        rclpy.try_shutdown()
+
+    import resource
+
+    peak['runner'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    sim_time = seconds((n - 1) * dt_ns)
+    result = RunResult(
+        scenario=scen.name,
+        samples=n,
+        sim_time=sim_time,
+        wall_time=wall,
+        real_time_factor=sim_time / wall,
+        steps_per_second=n / wall,
+        metrics=summarize(record, skip),
+        missing_samples={k: v for k, v in missing.items() if v},
+        peak_rss_mb=peak,
+        domain_id=env['ROS_DOMAIN_ID'],
+        record=record,
+    )
+    if status.get('x.faults', '0') != '0':
+        sys.stderr.write(f'plant reported faults: {status}\n')
+    if compare_offline:
+        offline = simulate(scen)
+        diff = np.abs(record.tracking_error - offline.tracking_error)
+        result.offline_max_difference = float(np.nanmax(diff))
+    return result
+
+
+def format_result(r: RunResult, skip: float) -> str:
+    lines = [
+        f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
+        format_summary(r.metrics, skip),
+        f'wall time {r.wall_time:.1f} s, real-time factor {r.real_time_factor:.2f}, '
+        f'{r.steps_per_second:.0f} steps/s',
+        f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
+        f'({len(r.peak_rss_mb)} processes)',
+    ]
+    if r.missing_samples:
+        lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
+    if r.offline_max_difference is not None:
+        lines.append(f'max |e_distributed - e_offline| = {r.offline_max_difference:.3e} m')
+    return '\n'.join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog='run_scenario',
+        description='Start every node of a scenario in its own process, run the job in '
+        'lockstep and print its results.',
+    )
+    parser.add_argument('scenario', nargs='?', default='slotting', help='name or YAML file')
+    parser.add_argument(
+        '--param',
+        '-p',
+        action='append',
+        default=[],
+        metavar='NODE.NAME=VALUE',
+        help='override a node parameter; NODE may be a glob',
+    )
+    parser.add_argument('--controller', help='shortcut for -p "*_controller.controller=NAME"')
+    parser.add_argument('--duration', type=float, help='end the job after this time [s]')
+    parser.add_argument(
+        '--skip',
+        type=float,
+        default=1.0,
+        help='metrics over t >= SKIP (start transient excluded) [s]',
+    )
+    parser.add_argument('--output', type=Path, help='run directory (default runs/NAME-TIME)')
+    parser.add_argument('--domain-id', help='ROS_DOMAIN_ID (default: yours, else private)')
+    parser.add_argument(
+        '--stall-timeout',
+        type=float,
+        default=30.0,
+        help='give up when no sample arrives for this long [s]',
+    )
+    parser.add_argument(
+        '--compare-offline',
+        action='store_true',
+        help='also run the offline simulator and print the largest difference',
+    )
+    parser.add_argument('--quiet', '-q', action='store_true', help='no progress line')
+    args = parser.parse_args(argv)
+    try:
+        scen = scenario_mod.load(args.scenario)
+        apply_cli_overrides(scen, args)
+        stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
+        run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
+        run_dir.mkdir(parents=True, exist_ok=True)
+        print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
+        result = run(
+            scen,
+            run_dir,
+            skip=args.skip,
+            stall_timeout=args.stall_timeout,
+            quiet=args.quiet,
+            domain_id=args.domain_id,
+            compare_offline=args.compare_offline,
+        )
+    except (scenario_mod.ScenarioError, RunError) as exc:
+        print(f'run_scenario: error: {exc}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print('run_scenario: interrupted', file=sys.stderr)
+        return 130
+    (run_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
+    print(format_result(result, args.skip))
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

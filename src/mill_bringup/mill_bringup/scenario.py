@@ -1,0 +1,161 @@
+"""Scenario files: ROS 2 parameter files with a `mill_scenario` entry listing the nodes. ROS-free.
+
+The same file feeds `ros2 run ... --params-file`, the runner and the offline
+simulator, so a scenario is defined once.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import importlib
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+from mill_common.parameters import ParameterError, ParamSpec, validate
+
+SCENARIO_KEY = 'mill_scenario'
+
+
+class _Loader(yaml.SafeLoader):
+    """YAML as ROS reads parameter files: `1.37e9` is a float (PyYAML's YAML 1.1 says string)."""
+
+
+_Loader.add_implicit_resolver(
+    'tag:yaml.org,2002:float',
+    re.compile(r'^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$'),
+    list('-+0123456789'),
+)
+
+
+def parse_yaml(text: str):
+    return yaml.load(text, Loader=_Loader)
+
+
+# Which module holds a package's parameter specs and builders.
+CONFIG_MODULES = {
+    'mill_plant': 'mill_plant.config',
+    'mill_trajectory': 'mill_trajectory.config',
+    'mill_controllers': 'mill_controllers.config',
+    'mill_observers': 'mill_observers.config',
+}
+
+
+class ScenarioError(ValueError):
+    """A scenario file or override that cannot be used; str() says why in one line."""
+
+
+@dataclass(frozen=True)
+class NodeLaunch:
+    name: str
+    package: str
+    executable: str
+
+
+@dataclass
+class Scenario:
+    path: Path
+    description: str
+    nodes: list[NodeLaunch]
+    raw: dict[str, Any]
+    overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return self.path.stem
+
+    def node(self, name: str) -> NodeLaunch:
+        for n in self.nodes:
+            if n.name == name:
+                return n
+        raise ScenarioError(f'scenario {self.name} has no node {name!r}')
+
+    def nodes_of(self, package: str) -> list[NodeLaunch]:
+        return [n for n in self.nodes if n.package == package]
+
+    def raw_parameters(self, name: str) -> dict[str, Any]:
+        """Parameters a node of this name gets: /** entries, then its own, then overrides."""
+        merged: dict[str, Any] = {}
+        for key in ('/**', name, '/' + name):
+            entry = self.raw.get(key) or {}
+            merged.update(entry.get('ros__parameters') or {})
+        merged.update(self.overrides.get(name, {}))
+        return merged
+
+    def parameters(self, name: str) -> dict[str, Any]:
+        """Validated parameter values of one node, as its node would hold them."""
+        launch = self.node(name)
+        module = importlib.import_module(CONFIG_MODULES[launch.package])
+        specs: list[tuple[str, ParamSpec]] = module.parameter_specs()
+        raw = self.raw_parameters(name)
+        values = {}
+        for full, spec in specs:
+            try:
+                values[full] = validate(spec, raw.get(full, spec.default), full)
+            except ParameterError as exc:
+                raise ScenarioError(f'{name}: {exc}') from None
+        return values
+
+    def add_override(self, text: str) -> None:
+        """NODE.NAME=VALUE, NODE may be a glob (`*_controller.controller=pd`)."""
+        target, sep, value_text = text.partition('=')
+        node_glob, dot, param = target.partition('.')
+        if not sep or not dot or not param:
+            raise ScenarioError(f'override {text!r} is not NODE.NAME=VALUE')
+        try:
+            value = parse_yaml(value_text)
+        except yaml.YAMLError:
+            raise ScenarioError(f'override {text!r}: value is not valid YAML') from None
+        matched = [n.name for n in self.nodes if fnmatch.fnmatchcase(n.name, node_glob)]
+        if not matched:
+            raise ScenarioError(f'override {text!r} matches no node of scenario {self.name}')
+        for name in matched:
+            self.overrides.setdefault(name, {})[param] = value
+
+
+def config_dirs() -> list[Path]:
+    """Where scenario names are looked up: the source tree, then an installed share dir."""
+    dirs = [Path(__file__).resolve().parents[3] / 'config']
+    try:
+        from ament_index_python.packages import get_package_share_directory
+
+        dirs.append(Path(get_package_share_directory('mill_bringup')) / 'config')
+    except Exception:
+        pass
+    return dirs
+
+
+def resolve(name_or_path: str) -> Path:
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    for d in config_dirs():
+        candidate = d / f'{name_or_path}.yaml'
+        if candidate.is_file():
+            return candidate
+    known = sorted({p.stem for d in config_dirs() if d.is_dir() for p in d.glob('*.yaml')})
+    raise ScenarioError(
+        f'no scenario {name_or_path!r} (a file, or one of: {", ".join(known) or "none"})'
+    )
+
+
+def load(name_or_path: str) -> Scenario:
+    path = resolve(name_or_path)
+    try:
+        raw = parse_yaml(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ScenarioError(f'{path}: not valid YAML ({exc})') from None
+    entry = (raw or {}).get(SCENARIO_KEY, {}).get('ros__parameters')
+    if not entry or 'launch' not in entry:
+        raise ScenarioError(f'{path}: no {SCENARIO_KEY}: ros__parameters: launch: list')
+    nodes = []
+    for line in entry['launch']:
+        parts = str(line).split()
+        if len(parts) != 3:
+            raise ScenarioError(f'{path}: launch entry {line!r} is not "name package executable"')
+        if parts[1] not in CONFIG_MODULES:
+            raise ScenarioError(f'{path}: unknown package {parts[1]!r} in {line!r}')
+        nodes.append(NodeLaunch(*parts))
+    return Scenario(path, str(entry.get('description', path.stem)), nodes, raw)

@@ -1,0 +1,44 @@
+"""Parameters of the axis controller node and how they build the controller core. ROS-free."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from mill_common.parameters import ParamSpec, axis_node_specs, one_of
+from mill_plant.rigid_axis import nominal_input_gain
+
+from mill_controllers.base import AxisController
+from mill_controllers.registry import CONTROLLERS
+
+
+def parameter_specs() -> list[tuple[str, ParamSpec]]:
+    specs = axis_node_specs()
+    specs.append(
+        (
+            'controller',
+            ParamSpec(
+                'controller',
+                'adrc',
+                'control law (see README: algorithms)',
+                one_of(*CONTROLLERS),
+            ),
+        )
+    )
+    seen = set()
+    for cls in CONTROLLERS.values():
+        for s in cls.PARAMETERS:
+            name = f'{cls.PREFIX}.{s.name}'
+            if name not in seen:
+                seen.add(name)
+                specs.append((name, s))
+    return specs
+
+
+def input_gain(values: dict[str, Any]) -> float:
+    return values['input_gain'] or nominal_input_gain(values['axis'])
+
+
+def build_controller(values: dict[str, Any]) -> AxisController:
+    cls = CONTROLLERS[values['controller']]
+    own = {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}
+    return cls.from_parameters(input_gain(values), values['sample_period'], own)

@@ -1,0 +1,33 @@
+"""Name → controller class, as selected by the node's 'controller' parameter (ROS-free)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from mill_common.parameters import ParameterError
+
+from mill_controllers.base import AxisController
+from mill_controllers.pd_law import AdrcController, PdController
+
+CONTROLLERS: dict[str, type] = {
+    'adrc': AdrcController,
+    'pd': PdController,
+}
+
+
+def controller_class(name: str) -> type:
+    """The registered class; ParameterError('controller', …) for an unknown name."""
+    try:
+        return CONTROLLERS[name]
+    except (KeyError, TypeError):
+        raise ParameterError(
+            'controller', name, f'must be one of: {", ".join(CONTROLLERS)}'
+        ) from None
+
+
+def make_controller(
+    name: str, input_gain: float, sample_period: float, values: Mapping[str, Any]
+) -> AxisController:
+    """Build controller `name` from its parameters (names without the prefix)."""
+    return controller_class(name).from_parameters(input_gain, sample_period, values)

@@ -1,0 +1,30 @@
+"""Name → observer class, as selected by the node's 'observer' parameter (ROS-free)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from mill_common.parameters import ParameterError
+
+from mill_observers.base import Observer
+from mill_observers.gpi import GpiObserver
+
+OBSERVERS: dict[str, type] = {
+    'gpi': GpiObserver,
+}
+
+
+def observer_class(name: str) -> type:
+    """The registered class; ParameterError('observer', …) for an unknown name."""
+    try:
+        return OBSERVERS[name]
+    except (KeyError, TypeError):
+        raise ParameterError('observer', name, f'must be one of: {", ".join(OBSERVERS)}') from None
+
+
+def make_observer(
+    name: str, input_gain: float, sample_period: float, values: Mapping[str, Any]
+) -> Observer:
+    """Build observer `name` from its parameters (names without the prefix)."""
+    return observer_class(name).from_parameters(input_gain, sample_period, values)
