@@ -6,11 +6,8 @@ the run goes on); messages are decoded once at the end.
 
 from __future__ import annotations
 
-import math
-
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import WrenchStamped
-from mill_common.ros import DATA_QOS, from_stamp
+from mill_common.ros import DATA_QOS, from_duration, from_stamp
 from mill_common.signals import AXES
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
@@ -29,13 +26,12 @@ class Monitor(Node):
         self.last_stamp_ns = -1
         self.diagnostics: list[DiagnosticArray] = []
         self._types = {}
+        # What the summary needs; commands and forces are for the recorder.
         for axis in axes:
             self._listen(topics.state(axis), JointState, track=(axis == axes[0]))
             self._listen(topics.estimate(axis), JointState)
-            self._listen(topics.joint_command(axis), JointState)
         self._listen(topics.REFERENCE, JointTrajectory)
         self._listen(topics.GROUND_TRUTH, JointState)
-        self._listen(topics.CUTTING_FORCE, WrenchStamped)
         self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, 100)
 
     def _listen(self, topic: str, msg_type: type, track: bool = False) -> None:
@@ -59,8 +55,10 @@ class Monitor(Node):
         s = rec.signals
         missing: dict[str, int] = {}
 
-        def rows(topic: str):
-            msg_type = self._types[topic]
+        def rows(topic: str, chunks: bool = False):
+            msg_type = self._types.get(topic)
+            if msg_type is None:
+                return  # not listened to
             seen = set()
             for data in self.raw.get(topic, ()):
                 msg = deserialize_message(data, msg_type)
@@ -68,7 +66,8 @@ class Monitor(Node):
                 if rem == 0 and 0 <= k < n:
                     seen.add(k)
                     yield k, msg
-            missing[topic] = n - len(seen)
+            if not chunks:
+                missing[topic] = n - len(seen)
 
         for axis in self.axes:
             i = AXES.index(axis)
@@ -79,13 +78,16 @@ class Monitor(Node):
                 s['estimate_disturbance'][k, i] = msg.effort[0]
             for k, msg in rows(topics.joint_command(axis)):
                 s['torque'][k, i] = msg.effort[0]
-        for k, msg in rows(topics.REFERENCE):
-            point = msg.points[0]
-            for j, name in enumerate(msg.joint_names):
-                if name in self.axes:
-                    i = AXES.index(name)
-                    s['reference'][k, i] = point.positions[j]
-                    s['reference_velocity'][k, i] = point.velocities[j]
+        for k0, msg in rows(topics.REFERENCE, chunks=True):
+            for point in msg.points:
+                k = k0 + from_duration(point.time_from_start) // dt_ns
+                if k >= n:
+                    break
+                for j, name in enumerate(msg.joint_names):
+                    if name in self.axes:
+                        i = AXES.index(name)
+                        s['reference'][k, i] = point.positions[j]
+                        s['reference_velocity'][k, i] = point.velocities[j]
         for k, msg in rows(topics.GROUND_TRUTH):
             for j, name in enumerate(msg.name):
                 i = AXES.index(name)
@@ -116,7 +118,3 @@ def plant_status(diagnostics: list[DiagnosticArray], status_name: str) -> dict[s
             if status.name == status_name:
                 return {kv.key: kv.value for kv in status.values} | {'message': status.message}
     return {}
-
-
-def finite(x: float) -> bool:
-    return math.isfinite(x)

@@ -187,7 +187,7 @@ def run(
     env = ros_environment(domain_id=domain_id)
     os.environ.update(env)
     import rclpy
-    from rclpy.executors import SingleThreadedExecutor
+    from mill_common.node_main import make_executor
 
     from mill_bringup.monitor import Monitor, plant_status
 
@@ -196,7 +196,7 @@ def run(
     graph = None
     try:
         monitor = Monitor(axes)
-        executor = SingleThreadedExecutor()
+        executor = make_executor()
         executor.add_node(monitor)
         graph = Graph(scen, run_dir, env)
         progress.show(

@@ -10,11 +10,22 @@ from mill_common.parameters import ParameterError, ParamSpec
 
 
 class NodeExit(Exception):
-    """Raised from a callback to end the node with an exit code and a message."""
+    """Why a node ends by itself: an exit code and a message.
+
+    Callbacks do not raise it (an exception thrown through the C++ events
+    executor is not a clean way out); they hand it to `request_exit` and the
+    spin loop ends the node.
+    """
 
     def __init__(self, code: int, message: str) -> None:
         super().__init__(message)
         self.code = code
+
+
+def request_exit(node: object, code: int, message: str) -> None:
+    """Ask run_node to end `node` after the current callback."""
+    if getattr(node, 'exit_request', None) is None:
+        node.exit_request = NodeExit(code, message)
 
 
 def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
@@ -25,6 +36,31 @@ def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
         ro = ' (read-only)' if spec.read_only else ''
         lines.append(f'  {name:<{width}}  {spec.description}{ro} [default: {default!r}]')
     return '\n'.join(lines)
+
+
+EXECUTORS = ('single', 'events')
+
+
+def make_executor():
+    """The executor named by MILL_EXECUTOR: 'events' (default) or 'single'.
+
+    'events' is rclpy's C++ EventsExecutor (rclpy.experimental in Jazzy): it halves
+    the CPU time per message of the SingleThreadedExecutor, and CPU per message is
+    what bounds a 1 kHz lockstep loop across processes (README, Performance).
+    Callbacks never raise through it: nodes end via `request_exit`.
+    """
+    import os
+
+    name = os.environ.get('MILL_EXECUTOR', 'events')
+    if name == 'events':
+        from rclpy.experimental import EventsExecutor
+
+        return EventsExecutor()
+    if name != 'single':
+        raise ValueError(f'MILL_EXECUTOR must be one of {EXECUTORS}, got {name!r}')
+    from rclpy.executors import SingleThreadedExecutor
+
+    return SingleThreadedExecutor()
 
 
 def _user_args(argv: Sequence[str]) -> list[str]:
@@ -59,16 +95,19 @@ def run_node(
         os.environ.setdefault(key, ros_environment({})[key])
 
     import rclpy
-    from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+    from rclpy.executors import ExternalShutdownException
 
     rclpy.init(args=argv)
     node = None
     code = 0
     try:
         node = make_node()
-        executor = SingleThreadedExecutor()
+        executor = make_executor()
         executor.add_node(node)
-        executor.spin()
+        while rclpy.ok() and getattr(node, 'exit_request', None) is None:
+            executor.spin_once(timeout_sec=0.2)
+        if node.exit_request is not None:
+            raise node.exit_request
     except (ParameterError, ValueError) as exc:
         print(f'{executable}: error: {exc}', file=sys.stderr)
         code = 2

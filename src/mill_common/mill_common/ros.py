@@ -26,6 +26,11 @@ def from_stamp(stamp: Time) -> int:
     return stamp.sec * 1_000_000_000 + stamp.nanosec
 
 
+def from_duration(duration) -> int:
+    """builtin_interfaces/Duration in nanoseconds."""
+    return duration.sec * 1_000_000_000 + duration.nanosec
+
+
 def joint_state(
     ns: int,
     names: Sequence[str],

@@ -1,9 +1,10 @@
 """Axis controller node: one axis, one process.
 
 For every sample it joins the measured position (/mill/<axis>/state), the
-observer's estimate (/mill/<axis>/estimate) and the reference
-(/mill/reference) by stamp, runs the selected control law and publishes the
-torque on /mill/<axis>/joint_command with the same stamp.
+observer's estimate (/mill/<axis>/estimate) and the reference point of that
+time (/mill/reference, several points per message) by stamp, runs the
+selected control law and publishes the torque on /mill/<axis>/joint_command
+with the same stamp.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import time
 from typing import Any
 
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, first, from_stamp, joint_state
+from mill_common.ros import DATA_QOS, first, from_duration, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AxisReference, Estimate
 from mill_common.stamp_join import StampJoin
@@ -76,20 +77,21 @@ class AxisControllerNode(Node):
             self._offer('estimate', ns, est)
 
     def _on_reference(self, msg: JointTrajectory) -> None:
-        ns = from_stamp(msg.header.stamp)
-        if ns <= self._last_ns or not msg.points:
-            return
         try:
             i = list(msg.joint_names).index(self.axis)
         except ValueError:
             return  # a reference for other axes only
-        p = msg.points[0]
-        ref = AxisReference(
-            p.positions[i],
-            p.velocities[i] if len(p.velocities) > i else 0.0,
-            p.accelerations[i] if len(p.accelerations) > i else 0.0,
-        )
-        self._offer('reference', ns, ref)
+        ns0 = from_stamp(msg.header.stamp)
+        for p in msg.points:
+            ns = ns0 + from_duration(p.time_from_start)
+            if ns <= self._last_ns:
+                continue
+            ref = AxisReference(
+                p.positions[i],
+                p.velocities[i] if len(p.velocities) > i else 0.0,
+                p.accelerations[i] if len(p.accelerations) > i else 0.0,
+            )
+            self._offer('reference', ns, ref)
 
     def _offer(self, slot: str, ns: int, value: Any) -> None:
         inputs = self._join.put(slot, ns, value)

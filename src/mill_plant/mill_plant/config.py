@@ -94,6 +94,17 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), ro),
         ),
         (
+            'clock_period',
+            ParamSpec(
+                'clock_period',
+                0.01,
+                'sim time between /clock messages [s] (a multiple of sample_period); every '
+                'node with use_sim_time wakes for each one',
+                in_range(1e-6, 10.0),
+                ro,
+            ),
+        ),
+        (
             'substeps',
             ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, ro),
         ),

@@ -16,7 +16,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
-from mill_common.node_main import NodeExit, run_node
+from mill_common.node_main import request_exit, run_node
 from mill_common.ros import DATA_QOS, first, joint_state, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
@@ -41,6 +41,7 @@ class PlantNode(Node):
         self._active = [a in v['axes'] for a in AXES]
         self._dt_ns = period_ns(v['sample_period'])
         self._dt = seconds(self._dt_ns)
+        self._clock_every = max(1, round(v['clock_period'] * 1e9 / self._dt_ns))
         self._k = 0
         self._started = False
         self._commands: dict[str, float] = {}
@@ -93,8 +94,8 @@ class PlantNode(Node):
 
     def _publish_step(self) -> None:
         ns = self._stamp_ns()
-        stamp = to_stamp(ns)
-        self._clock_pub.publish(ClockMsg(clock=stamp))
+        if self._k % self._clock_every == 0:
+            self._clock_pub.publish(ClockMsg(clock=to_stamp(ns)))
         position = self._plant.position
         for i, axis in enumerate(AXES):
             if self._active[i]:
@@ -124,7 +125,7 @@ class PlantNode(Node):
         self._commands = {}
         ns = self._stamp_ns()
         if self.params.values['publish_ground_truth']:
-            self._publish_truth(ns, torque)
+            self._publish_truth(ns, torque)  # before the step: the state of sample k
         report = self._plant.step(torque, self._dt)
         for i, axis in enumerate(AXES):
             if not self._active[i]:
@@ -147,10 +148,14 @@ class PlantNode(Node):
         self._publish_step()
 
     def _publish_truth(self, ns: int, torque: tuple[float, ...]) -> None:
-        xi = self._plant.disturbance(torque)
-        self._truth_pub.publish(
-            joint_state(ns, AXES, self._plant.position, self._plant.velocity, xi)
-        )
+        # Skipped without listeners: publishing costs more than the whole plant step.
+        if self._truth_pub.get_subscription_count():
+            xi = self._plant.disturbance(torque)
+            self._truth_pub.publish(
+                joint_state(ns, AXES, self._plant.position, self._plant.velocity, xi)
+            )
+        if not self._force_pub.get_subscription_count():
+            return
         force = self._plant.cutting_force()
         msg = WrenchStamped()
         msg.header.stamp = to_stamp(ns)
@@ -177,7 +182,7 @@ class PlantNode(Node):
             if missing:
                 self._ready_since = None
                 if now - self._wall_start > self.params.values['startup_timeout']:
-                    raise NodeExit(3, 'peers never appeared: ' + '; '.join(missing))
+                    request_exit(self, 3, 'peers never appeared: ' + '; '.join(missing))
                 return
             if self._ready_since is None:
                 self._ready_since = now
@@ -194,7 +199,7 @@ class PlantNode(Node):
             self._retry_at = now + 1.0
             self._publish_step()
         if now - self._last_progress > self.params.values['lockstep_timeout']:
-            raise NodeExit(3, self._timeout_message())
+            request_exit(self, 3, self._timeout_message())
         if now - self._period_wall >= 1.0 and self._k > 0:
             self._period_wall = now
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from mill_common.parameters import ParamSpec, non_negative, one_of
+from mill_common.parameters import ParamSpec, in_range, non_negative, one_of
 
 from mill_trajectory.base import Trajectory
 from mill_trajectory.registry import TRAJECTORIES
@@ -24,6 +24,20 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 0.0,
                 'end the job after this time [s]; 0 = when the path ends',
                 non_negative,
+            ),
+        ),
+        (
+            'sample_period',
+            ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+        ),
+        (
+            'preview_time',
+            ParamSpec(
+                'preview_time',
+                0.02,
+                'span of reference points sent per /clock tick [s]; must cover the '
+                "plant's clock_period",
+                in_range(1e-6, 10.0),
             ),
         ),
         (

@@ -1,12 +1,15 @@
-"""Trajectory node: answers each /clock tick with the reference of all axes for that time.
+"""Trajectory node: answers each /clock tick with the reference of all axes ahead of it.
 
-Publishes /mill/reference (trajectory_msgs/JointTrajectory, one point stamped
-with the tick) and the job status on /diagnostics ("running" with progress,
-then "done" once the job's end time is reached).
+Publishes /mill/reference (trajectory_msgs/JointTrajectory stamped with the
+tick; point i holds positions, velocities and accelerations of x, y, z at
+stamp + i T, time_from_start = i T, for `preview_time`), so the controllers
+have the reference of every sample until the next tick. The job status goes
+to /diagnostics ("running" with progress, then "done" at the job's end).
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -14,7 +17,8 @@ from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
-from mill_common.timebase import seconds
+from mill_common.timebase import period_ns, seconds
+from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -43,20 +47,24 @@ class TrajectoryNode(Node):
     def _configure(self, values: dict[str, Any]) -> None:
         job = build_job(values)
         self._path, self._job_end = job.trajectory, job.end_time
+        self._dt_ns = period_ns(values['sample_period'])
+        self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
         self._done_sent = False
 
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
-        sample = self._path.sample(t)
         out = JointTrajectory()
         out.header.stamp = to_stamp(ns)
         out.joint_names = list(AXES)
-        point = JointTrajectoryPoint()
-        point.positions = list(sample.position)
-        point.velocities = list(sample.velocity)
-        point.accelerations = list(sample.acceleration)
-        out.points = [point]
+        for i in range(self._points):
+            sample = self._path.sample(seconds(ns + i * self._dt_ns))
+            point = JointTrajectoryPoint()
+            point.positions = list(sample.position)
+            point.velocities = list(sample.velocity)
+            point.accelerations = list(sample.acceleration)
+            point.time_from_start = Duration(nanoseconds=i * self._dt_ns).to_msg()
+            out.points.append(point)
         self._ref_pub.publish(out)
         if t >= self._job_end and not self._done_sent:
             self._done_sent = True
