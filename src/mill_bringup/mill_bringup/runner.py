@@ -274,9 +274,20 @@ def run(
         sys.stderr.write(f'plant reported faults: {status}\n')
     if compare_offline:
         offline = simulate(scen)
-        diff = np.abs(record.tracking_error - offline.tracking_error)
-        result.offline_max_difference = float(np.nanmax(diff))
+        result.offline_max_difference = max_difference(record, offline)
     return result
+
+
+def max_difference(a: RunRecord, b: RunRecord) -> float:
+    """Largest |tracking error a - b| over all samples and axes; inf where only one has a value."""
+    ea, eb = a.tracking_error, b.tracking_error
+    if ea.shape != eb.shape:
+        return float('inf')
+    diff = np.abs(ea - eb)
+    same_gap = np.isnan(ea) & np.isnan(eb)
+    diff[same_gap] = 0.0
+    diff[np.isnan(diff)] = np.inf
+    return float(diff.max())
 
 
 def format_result(r: RunResult, skip: float) -> str:

@@ -1,0 +1,40 @@
+"""The distributed lockstep run equals the offline simulator (issue: time model)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+
+@pytest.mark.system
+def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'mill_bringup.runner',
+            'slotting',
+            '--duration',
+            '5',
+            '--compare-offline',
+            '--quiet',
+            '--output',
+            str(out),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['samples'] == 5001  # t = 0 .. 5 s at 1 kHz, the start included
+    assert summary['missing_samples'] == {}
+    # Every sample of every axis: |e_distributed - e_offline| <= 1e-9 m.
+    assert summary['offline_max_difference'] <= 1e-9
+    # 8 node processes + the runner
+    assert len(summary['peak_rss_mb']) == 9
