@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -12,7 +13,7 @@ import pytest
 def tx_packets_off_loopback() -> int:
     """Packets sent so far through every interface but loopback (/proc/net/dev)."""
     total = 0
-    for line in open('/proc/net/dev').read().splitlines()[2:]:
+    for line in Path('/proc/net/dev').read_text().splitlines()[2:]:
         name, _, fields = line.partition(':')
         if name.strip() != 'lo':
             total += int(fields.split()[9])

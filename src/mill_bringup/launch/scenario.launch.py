@@ -33,7 +33,8 @@ def generate_launch_description() -> LaunchDescription:
     return LaunchDescription(
         [
             DeclareLaunchArgument(
-                'scenario', default_value='slotting',
+                'scenario',
+                default_value='slotting',
                 description='scenario name (config/NAME.yaml) or path to a scenario file',
             ),
             OpaqueFunction(function=_nodes),

@@ -270,8 +270,9 @@ def run(
         domain_id=env['ROS_DOMAIN_ID'],
         record=record,
     )
-    if status.get('x.faults', '0') != '0':
-        sys.stderr.write(f'plant reported faults: {status}\n')
+    faults = {k: v for k, v in status.items() if k.endswith('.faults') and v != '0'}
+    if faults:
+        sys.stderr.write(f'plant braked axes on non-finite commands (steps): {faults}\n')
     if compare_offline:
         offline = simulate(scen)
         result.offline_max_difference = max_difference(record, offline)

@@ -36,6 +36,7 @@ STATUS_NAME = 'mill_plant: lockstep'
 class PlantNode(Node):
     def __init__(self) -> None:
         super().__init__('plant')
+        self._plant = None
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         self._active = [a in v['axes'] for a in AXES]
@@ -52,8 +53,6 @@ class PlantNode(Node):
         self._last_publish_wall = self._wall_start
         self._wait_sum = 0.0
         self._wait_max = 0.0
-        self._period_steps = 0
-        self._period_wall = self._wall_start
         self._ready_since: float | None = None
         self._retry_at = 0.0
 
@@ -83,8 +82,8 @@ class PlantNode(Node):
 
     # -- configuration -------------------------------------------------------------------
     def _configure(self, values: dict[str, Any]) -> None:
-        if hasattr(self, '_plant'):
-            return  # model parameters are read-only; nothing to rebuild at run time
+        if self._plant is not None:
+            return  # the model's parameters are read-only; the others are read where used
         self._plant = build_plant(values)
         self._resolution = values['sensor_resolution']
 
@@ -141,7 +140,6 @@ class PlantNode(Node):
             if report.saturated[i]:
                 self._saturations[axis] += 1
         self._k += 1
-        self._period_steps += 1
         self._last_progress = now
         if self._k % max(1, round(1.0 / self._dt)) == 0:
             self._publish_status(DiagnosticStatus.OK, 'running')
@@ -200,8 +198,6 @@ class PlantNode(Node):
             self._publish_step()
         if now - self._last_progress > self.params.values['lockstep_timeout']:
             request_exit(self, 3, self._timeout_message())
-        if now - self._period_wall >= 1.0 and self._k > 0:
-            self._period_wall = now
 
     def _timeout_message(self) -> str:
         waiting = [a for a in self._command_subs if a not in self._commands]

@@ -1,0 +1,230 @@
+"""Plant safety: non-finite commands brake the axis, missing peers end the run with a name.
+
+The test process plays the controller of x where a run needs one. Plant overrides use
+`-p plant:NAME:=VALUE`: with the scenario file, a plain `-p NAME:=VALUE` loses to the
+file's `plant:` entry (rcl stores plain `-p` under `/**`, and node-specific values win).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Iterator
+
+import pytest
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_common.ros import DATA_QOS, from_stamp, joint_state
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+
+from mill_common import topics
+from test.conftest import wait_until
+
+PLANT = 'mill_plant.plant_node'
+CONTROLLER = 'mill_controllers.axis_controller_node'
+T_NS = 1_000_000  # sample_period of the scenario file
+STATE = topics.state('x')
+COMMAND = topics.joint_command('x')
+
+
+def plant_args(**values: str) -> list[str]:
+    args = []
+    for name, value in values.items():
+        args += ['-p', f'plant:{name}:={value}']
+    return args
+
+
+@contextlib.contextmanager
+def ros_node(name: str) -> Iterator[tuple[Node, SingleThreadedExecutor]]:
+    """A node of the test process in its own context (environment from ros_env)."""
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node(name, context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        try:
+            yield node, executor
+        finally:
+            executor.shutdown()
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+class FakeController:
+    """Answers /mill/x/state with torque(k) stamped like the state, for steps k < steps."""
+
+    def __init__(self, node: Node, torque, steps: int) -> None:
+        self.torque = torque
+        self.steps = steps
+        self.states: list[tuple[int, float]] = []  # (stamp ns, position) in arrival order
+        self._pub = node.create_publisher(JointState, COMMAND, DATA_QOS)
+        node.create_subscription(JointState, STATE, self._on_state, DATA_QOS)
+        self._node = node
+
+    def _on_state(self, msg: JointState) -> None:
+        ns = from_stamp(msg.header.stamp)
+        self.states.append((ns, msg.position[0]))
+        k = ns // T_NS
+        if k < self.steps:
+            self._pub.publish(joint_state(ns, ('x',), effort=(self.torque(k),)))
+
+    def matched(self) -> bool:
+        node = self._node
+        return node.count_publishers(STATE) >= 1 and node.count_subscribers(COMMAND) >= 1
+
+
+def spin_until(executor: SingleThreadedExecutor, predicate, timeout: float) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        executor.spin_once(timeout_sec=0.1)
+    return predicate()
+
+
+# Command schedule of the braking test, by step k.
+FINITE = 0.05  # N·m: ~99 N of drive force against 0.3 N of Coulomb friction
+NAN_STEPS = range(50, 70)
+INF_STEPS = range(70, 75)  # +inf, then -inf
+STEPS = 100
+
+
+def braking_torque(k: int) -> float:
+    if k in NAN_STEPS:
+        return math.nan
+    if k in INF_STEPS:
+        return math.inf if k < 73 else -math.inf
+    return FINITE
+
+
+@pytest.mark.system
+def test_non_finite_command_brakes_the_axis(start_node) -> None:
+    plant = start_node(
+        PLANT,
+        'plant',
+        *plant_args(axes='["x"]', min_subscribers='1', cutting_model='none'),
+    )
+    truth: dict[int, JointState] = {}
+    errors: list[DiagnosticStatus] = []
+
+    def on_truth(msg: JointState) -> None:
+        truth[from_stamp(msg.header.stamp) // T_NS] = msg
+
+    def on_diagnostics(msg: DiagnosticArray) -> None:
+        errors.extend(s for s in msg.status if s.level == DiagnosticStatus.ERROR)
+
+    with ros_node('fake_x_controller') as (node, executor):
+        node.create_subscription(JointState, topics.GROUND_TRUTH, on_truth, DATA_QOS)
+        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, on_diagnostics, 10)
+        fake = FakeController(node, braking_torque, STEPS)
+
+        def done() -> bool:
+            last = fake.states[-1][0] // T_NS if fake.states else -1
+            return last >= STEPS and STEPS - 1 in truth and bool(errors)
+
+        assert wait_until(
+            lambda: fake.matched() and node.count_publishers(topics.GROUND_TRUTH) >= 1, 60
+        ), 'plant never matched'
+        finished = spin_until(executor, done, 120)
+        assert plant.alive(), plant.stop()[2]
+        assert finished, (
+            f'states up to {fake.states[-1] if fake.states else None}, '
+            f'{len(truth)} truth samples, {len(errors)} errors'
+        )
+
+    # The plant kept stepping: stamps 0, T, 2T, ... without gaps (step 0 may be offered twice).
+    stamps = [ns for ns, _ in fake.states]
+    assert stamps == sorted(stamps)
+    assert sorted(set(stamps)) == [k * T_NS for k in range(len(set(stamps)))]
+    position = {ns // T_NS: y for ns, y in fake.states}
+    assert all(math.isfinite(y) for y in position.values()), position
+
+    # Braked: the position after a non-finite command is the position before it.
+    non_finite = [k for k in range(STEPS) if not math.isfinite(braking_torque(k))]
+    for k in non_finite:
+        assert position[k + 1] == position[k], f'axis moved on step {k}'
+    # ... and the finite commands did move it, before and after the braking.
+    assert position[NAN_STEPS.start] > position[0]
+    assert position[STEPS] > position[INF_STEPS.stop]
+
+    # Ground truth (state of sample k): finite, x velocity 0 after every braked step.
+    for k in range(STEPS):
+        msg = truth[k]
+        assert list(msg.name) == ['x', 'y', 'z']
+        assert all(math.isfinite(v) for v in [*msg.position, *msg.velocity]), (k, msg)
+        if math.isfinite(braking_torque(k)):
+            assert math.isfinite(msg.effort[0]), (k, msg.effort)
+        assert msg.position[0] == position[k]
+    for k in non_finite:
+        assert truth[k + 1].velocity[0] == 0.0, (k + 1, truth[k + 1].velocity)
+    assert truth[NAN_STEPS.start].velocity[0] > 0.0
+
+    # Reported on /diagnostics.
+    assert any(s.name == 'mill_plant: lockstep' and s.message == 'axis x braked' for s in errors), (
+        errors
+    )
+
+
+@pytest.mark.system
+def test_plant_ends_when_peers_never_appear(start_node) -> None:
+    plant = start_node(PLANT, 'plant', *plant_args(startup_timeout='3.0'))
+    code, _out, err = plant.wait(timeout=30)
+    assert code == 3, err
+    assert '/mill/x/joint_command' in err
+    assert 'peers never appeared' in err
+
+
+@pytest.mark.system
+def test_plant_ends_when_a_command_stops_coming(start_node) -> None:
+    plant = start_node(
+        PLANT,
+        'plant',
+        *plant_args(
+            axes='["x"]', min_subscribers='1', cutting_model='none', lockstep_timeout='2.0'
+        ),
+    )
+    answered = 20
+    with ros_node('stalling_x_controller') as (node, executor):
+        fake = FakeController(node, lambda k: FINITE, answered)
+        assert wait_until(fake.matched, 60), 'plant never matched'
+        assert spin_until(
+            executor, lambda: any(ns >= answered * T_NS for ns, _ in fake.states), 60
+        ), fake.states[-1:]
+        # Stop answering, but keep the publisher (and so its node name) in the graph.
+        code, _out, err = plant.wait(timeout=60)
+    assert code == 3, err
+    assert 'lockstep timeout' in err
+    assert f'step {answered}' in err
+    assert '/mill/x/joint_command' in err
+    assert 'stalling_x_controller' in err
+
+
+@pytest.mark.system
+def test_controller_without_observer_is_named(start_node) -> None:
+    controller = start_node(CONTROLLER, 'x_controller')
+    plant = start_node(
+        PLANT,
+        'plant',
+        *plant_args(
+            axes='["x"]', min_subscribers='1', cutting_model='none', lockstep_timeout='3.0'
+        ),
+    )
+    code, _out, err = plant.wait(timeout=90)
+    assert code == 3, err
+    assert 'lockstep timeout' in err
+    assert '/mill/x/joint_command (from x_controller)' in err
+    # The controller got the state of step 0 at least 3 s ago (the plant's timeout); it
+    # warns every 2 s once it has waited 2 s. Give it two more periods, then read its log.
+    time.sleep(4.5)
+    assert controller.alive()
+    _code, out, log = controller.stop()
+    warnings = [
+        line for line in (out + log).splitlines() if 'WARN' in line and 'waiting for' in line
+    ]
+    assert warnings, out + log
+    assert any('/mill/x/estimate' in line for line in warnings), warnings
