@@ -9,7 +9,7 @@ value is always refused with a reason and never half-applied.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -166,3 +166,17 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
         ),
     ]
+
+
+def algorithm_specs(classes: Iterable[type]) -> list[tuple[str, ParamSpec]]:
+    """Parameters of registered algorithm classes under their PREFIX, each full name once."""
+    specs: dict[str, ParamSpec] = {}
+    for cls in classes:
+        for spec in cls.PARAMETERS:
+            specs.setdefault(f'{cls.PREFIX}.{spec.name}', spec)
+    return list(specs.items())
+
+
+def algorithm_values(cls: type, values: Mapping[str, Any]) -> dict[str, Any]:
+    """An algorithm's own values (names without prefix) out of a node's values."""
+    return {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}

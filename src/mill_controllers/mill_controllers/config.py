@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from mill_common.parameters import ParamSpec, axis_node_specs, one_of
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_specs,
+    algorithm_values,
+    axis_node_specs,
+    one_of,
+)
 from mill_plant.rigid_axis import nominal_input_gain
 
 from mill_controllers.base import AxisController
@@ -24,14 +30,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
-    seen = set()
-    for cls in CONTROLLERS.values():
-        for s in cls.PARAMETERS:
-            name = f'{cls.PREFIX}.{s.name}'
-            if name not in seen:
-                seen.add(name)
-                specs.append((name, s))
-    return specs
+    return specs + algorithm_specs(CONTROLLERS.values())
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -40,5 +39,5 @@ def input_gain(values: dict[str, Any]) -> float:
 
 def build_controller(values: dict[str, Any]) -> AxisController:
     cls = CONTROLLERS[values['controller']]
-    own = {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}
+    own = algorithm_values(cls, values)
     return cls.from_parameters(input_gain(values), values['sample_period'], own)

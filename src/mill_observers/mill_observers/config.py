@@ -4,7 +4,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from mill_common.parameters import ParamSpec, axis_node_specs, one_of
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_specs,
+    algorithm_values,
+    axis_node_specs,
+    one_of,
+)
 from mill_plant.rigid_axis import nominal_input_gain
 
 from mill_observers.base import Observer
@@ -16,18 +22,11 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
     specs.append(
         ('observer', ParamSpec('observer', 'gpi', 'observer algorithm', one_of(*OBSERVERS)))
     )
-    seen = set()
-    for cls in OBSERVERS.values():
-        for s in cls.PARAMETERS:
-            name = f'{cls.PREFIX}.{s.name}'
-            if name not in seen:
-                seen.add(name)
-                specs.append((name, s))
-    return specs
+    return specs + algorithm_specs(OBSERVERS.values())
 
 
 def build_observer(values: dict[str, Any]) -> Observer:
     cls = OBSERVERS[values['observer']]
-    own = {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}
+    own = algorithm_values(cls, values)
     gain = values['input_gain'] or nominal_input_gain(values['axis'])
     return cls.from_parameters(gain, values['sample_period'], own)

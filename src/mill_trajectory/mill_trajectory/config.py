@@ -8,7 +8,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from mill_common.parameters import ParamSpec, in_range, non_negative, one_of
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_specs,
+    algorithm_values,
+    in_range,
+    non_negative,
+    one_of,
+)
 
 from mill_trajectory.base import Trajectory
 from mill_trajectory.registry import TRAJECTORIES
@@ -45,9 +52,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('settle_time', 0.0, 'time held at the end of the path [s]', non_negative),
         ),
     ]
-    for cls in TRAJECTORIES.values():
-        specs += [(f'{cls.PREFIX}.{s.name}', s) for s in cls.PARAMETERS]
-    return specs
+    return specs + algorithm_specs(TRAJECTORIES.values())
 
 
 @dataclass(frozen=True)
@@ -58,7 +63,7 @@ class Job:
 
 def build_job(values: dict[str, Any]) -> Job:
     cls = TRAJECTORIES[values['trajectory']]
-    own = {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}
+    own = algorithm_values(cls, values)
     path = cls.from_parameters(own)
     end = path.end_time + values['settle_time']
     if values['duration'] > 0:
