@@ -1,0 +1,313 @@
+"""Offline closed force loop of Rubio 2013 (issue #4), ROS-free.
+
+Per sample k (t_k = kT, T = one spindle revolution):
+
+1. the measured peak force F_p,k; a non-finite sample is replaced by the last finite one;
+2. the controller (fixed β, scheme 1 or scheme 2) gets the known depth a_dc(t_k) and
+   returns the feed command f_c,k [mm/s];
+3. the feed override o_k = f_c,k / nominal_feed is clamped to [override_min,
+   override_max] (a non-finite one holds the last applied override); the applied feed
+   o_k·nominal_feed is reported back to the controller (its memory uses what was applied);
+4. the plant sees the active β-hold reconstruction u_k + β(u_k − u_{k−1})τ/T, itself
+   clamped to the feed range, integrated exactly (mill_plant.force_process).
+
+The continuous-time cost eq. (14), J_c = Σ_j ∫_{(j−1)T}^{jT} (F_p(τ) − F_pm(τ))² dτ [N²·s],
+compares the continuous force with the continuous response F_pm of eq. (7) to the
+continuous reference (the step F_r = 1200 N at t = 0), on a grid of T/32 per sample
+(Simpson, split at depth changes and clamp corners).
+
+Run: python -m mill_bringup.force_loop [--plot froh_cost.png]
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
+from mill_controllers.model_reference import (
+    ContinuousReference,
+    ForceControlDesigner,
+    HeldPlant,
+    ModelReferenceForceController,
+    SampleHold,
+)
+from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
+from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+
+
+class ForceController(Protocol):
+    @property
+    def active_beta(self) -> float: ...
+
+    def set_depth(self, depth: float) -> None: ...
+
+    def update(self, force_reference: float, force_measured: float) -> float: ...
+
+    def record_applied(self, feed: float) -> None: ...
+
+
+def _number_or_inf(value: Any) -> str | None:
+    if isinstance(value, int | float) and not isinstance(value, bool) and math.isinf(value):
+        return None
+    return number(value)
+
+
+LOOP_PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec('reference_force', 1200.0, 'reference peak force F_r [N] (Rubio 2013 §5)', positive),
+    ParamSpec('job_duration', 10.0, 'simulated job length [s]', positive),
+    ParamSpec(
+        'nominal_feed',
+        10.0,
+        'programmed path speed the feed override multiplies [mm/s]',
+        positive,
+    ),
+    ParamSpec('override_min', 0.0, 'lowest feed override [-] (0: never reverse)', _number_or_inf),
+    ParamSpec('override_max', 2.0, 'highest feed override [-] (200 %)', _number_or_inf),
+    ParamSpec('intersample_intervals', 32, 'grid intervals per sample for J_c [-]', positive_int),
+)
+
+
+@dataclass
+class LoopRecord:
+    """Samples (index k) and the continuous cost of one run."""
+
+    t: np.ndarray
+    reference: np.ndarray
+    force: np.ndarray  # force the controller used [N] (held over NaN samples)
+    feed_command: np.ndarray  # controller output [mm/s]
+    feed: np.ndarray  # applied feed [mm/s]
+    override: np.ndarray  # applied override [-]
+    beta: np.ndarray  # active β over [t_k, t_k+1)
+    depth: np.ndarray  # a_dc(t_k) [mm]
+    interval_cost: np.ndarray  # ∫ over [t_k, t_k+1) of (F_p − F_pm)² [N²·s]
+    fine: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+    held_samples: int = 0
+
+    @property
+    def j_c(self) -> float:
+        """Rubio 2013 eq. (14) over the job [N²·s]."""
+        return float(self.interval_cost.sum())
+
+    def fine_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, F_p, F_pm) on the J_c grid (needs keep_trace=True)."""
+        if not self.fine:
+            return np.zeros(0), np.zeros(0), np.zeros(0)
+        return tuple(np.concatenate([p[i] for p in self.fine]) for i in range(3))  # type: ignore[return-value]
+
+
+def loop_values(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    return validate_all(LOOP_PARAMETERS, dict(values or {}), prefix='force_loop.')
+
+
+def make_controller(
+    kind: str,
+    model: ForceProcessModel,
+    loop: Mapping[str, Any] | None = None,
+    values: Mapping[str, Any] | None = None,
+) -> ForceController:
+    """'fixed' (values['beta']), 'scheme1' or 'scheme2', with the loop's feed range."""
+    lv = loop_values(loop)
+    lo = lv['override_min'] * lv['nominal_feed']
+    hi = lv['override_max'] * lv['nominal_feed']
+    values = dict(values or {})
+    if kind == 'fixed':
+        return ModelReferenceForceController.from_parameters(model, values)
+    if kind == 'scheme1':
+        return MultiModelScheme1(model, values, lo, hi)
+    if kind == 'scheme2':
+        return MultiModelScheme2(model, values, lo, hi)
+    raise ValueError(f"controller kind must be 'fixed', 'scheme1' or 'scheme2', got {kind!r}")
+
+
+def simulate(
+    controller: ForceController,
+    model: ForceProcessModel,
+    loop: Mapping[str, Any] | None = None,
+    nan_samples: Sequence[int] = (),
+    override_corruption: Mapping[int, float] | None = None,
+    keep_trace: bool = False,
+) -> LoopRecord:
+    """Run the job; nan_samples: k whose force measurement is NaN (sensor dropout).
+
+    override_corruption {k: value} replaces the controller's override at k (tests of the
+    clamp/hold path); the applied override is what the plant sees.
+    """
+    lv = loop_values(loop)
+    T = model.sample_period
+    n = max(1, math.ceil(lv['job_duration'] / T - 1e-9))
+    nominal = lv['nominal_feed']
+    o_lo, o_hi = lv['override_min'], lv['override_max']
+    if not o_lo <= o_hi:
+        raise ValueError(f'override range [{o_lo}, {o_hi}] is empty')
+    held = HeldPlant(
+        ForceProcessPlant(model), o_lo * nominal, o_hi * nominal, T / lv['intersample_intervals']
+    )
+    designer = ForceControlDesigner(model)
+    f_ref = ContinuousReference(designer.damping, designer.omega_n)
+    hold = SampleHold(0.0)
+    nan_set = set(nan_samples)
+    corrupt = dict(override_corruption or {})
+    r_val = lv['reference_force']
+    rec = {
+        key: np.zeros(n)
+        for key in (
+            't',
+            'reference',
+            'force',
+            'feed_command',
+            'feed',
+            'override',
+            'beta',
+            'depth',
+            'interval_cost',
+        )
+    }
+    fine = []
+    last_override = 0.0
+    for k in range(n):
+        t = held.plant.time
+        measured = held.plant.force
+        if k in nan_set:
+            measured = math.nan
+        y = hold(measured)
+        depth = model.depth_at(t)
+        controller.set_depth(depth)
+        u = controller.update(r_val, y)
+        override = u / nominal
+        if k in corrupt:
+            override = corrupt[k]
+        override = min(o_hi, max(o_lo, override)) if math.isfinite(override) else last_override
+        last_override = override
+        feed = override * nominal
+        controller.record_applied(feed)
+        beta = controller.active_beta
+        f_ref.begin(r_val)
+        _, cost, trace = held.advance(feed, beta, f_ref, keep_trace)
+        f_ref.advance(T)
+        for key, value in (
+            ('t', t),
+            ('reference', r_val),
+            ('force', y),
+            ('feed_command', u),
+            ('feed', feed),
+            ('override', override),
+            ('beta', beta),
+            ('depth', depth),
+            ('interval_cost', cost),
+        ):
+            rec[key][k] = value
+        fine.extend(trace)
+    return LoopRecord(**rec, fine=fine, held_samples=hold.held)
+
+
+def run(
+    kind: str,
+    beta: float = 0.0,
+    model: ForceProcessModel | None = None,
+    loop: Mapping[str, Any] | None = None,
+    values: Mapping[str, Any] | None = None,
+    keep_trace: bool = False,
+) -> LoopRecord:
+    model = model or ForceProcessModel()
+    values = dict(values or {})
+    if kind == 'fixed':
+        values.setdefault('beta', beta)
+    ctrl = make_controller(kind, model, loop, values)
+    return simulate(ctrl, model, loop, keep_trace=keep_trace)
+
+
+def sweep(
+    betas: Sequence[float],
+    model: ForceProcessModel | None = None,
+    loop: Mapping[str, Any] | None = None,
+    values: Mapping[str, Any] | None = None,
+) -> np.ndarray:
+    """J_c [N²·s] of the fixed-β loop for each β."""
+    return np.array([run('fixed', b, model, loop, values).j_c for b in betas])
+
+
+PAPER_CASES: dict[str, tuple[str, float]] = {
+    'ZOH (β = 0)': ('fixed', 0.0),
+    'β = −0.3': ('fixed', -0.3),
+    'scheme 1': ('scheme1', 0.0),
+    'scheme 2': ('scheme2', 0.0),
+}
+
+
+def paper_cases(
+    model: ForceProcessModel | None = None,
+    loop: Mapping[str, Any] | None = None,
+    scheme_values: Mapping[str, Any] | None = None,
+) -> dict[str, LoopRecord]:
+    """The four runs of Rubio 2013 §5 on the same job."""
+    out = {}
+    for name, (kind, beta) in PAPER_CASES.items():
+        values = None if kind == 'fixed' else scheme_values
+        out[name] = run(kind, beta, model, loop, values)
+    return out
+
+
+def plot_cost_vs_beta(
+    betas: Sequence[float],
+    costs: Sequence[float],
+    path: str,
+    marks: Mapping[str, float] | None = None,
+    title: str = 'Continuous-time cost J_c vs β (cf. Rubio 2013 fig. 10)',
+) -> None:
+    """J_c vs β as a PNG; marks {label: J_c} (e.g. the schemes) are horizontal lines."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.0, 4.5))
+    ax.plot(betas, costs, 'o-', color='tab:blue', label='fixed β-FROH')
+    colors = ['tab:red', 'tab:green', 'tab:orange', 'tab:purple']
+    for i, (label, value) in enumerate((marks or {}).items()):
+        ax.axhline(value, color=colors[i % 4], lw=1.2, ls='--', label=f'{label}: {value:.6g}')
+    ax.set_xlabel('hold gain β [-]')
+    ax.set_ylabel('J_c [N²·s]')
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _table(rows: Sequence[tuple[str, str]]) -> str:
+    w = max(len(a) for a, _ in rows)
+    return '\n'.join(f'{a:<{w}}  {b}' for a, b in rows)
+
+
+def main(argv: Sequence[str] | None = None, out: Callable[[str], None] = print) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--plot', default='', help='write the J_c vs β plot to this PNG')
+    parser.add_argument('--step', type=float, default=0.1, help='β step of the sweep')
+    parser.add_argument(
+        '--unclamped', action='store_true', help='no override range (the paper has none)'
+    )
+    args = parser.parse_args(argv)
+    loop = {'override_min': -math.inf, 'override_max': math.inf} if args.unclamped else {}
+    betas = np.round(np.arange(-1.0, 1.0 + 1e-9, args.step), 10)
+    costs = sweep(betas, loop=loop)
+    rows = [(f'{b:+.2f}', f'{c:.6g}') for b, c in zip(betas, costs, strict=True)]
+    out(_table([('β', 'J_c [N²·s]'), *rows]))
+    cases = paper_cases(loop=loop)
+    out('')
+    out(_table([(name, f'J_c = {rec.j_c:.6g}') for name, rec in cases.items()]))
+    if args.plot:
+        marks = {name: cases[name].j_c for name in ('ZOH (β = 0)', 'scheme 1', 'scheme 2')}
+        plot_cost_vs_beta(betas, costs, args.plot, marks)
+        out(f'plot: {args.plot}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

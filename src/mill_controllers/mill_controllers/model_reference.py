@@ -1,0 +1,600 @@
+"""Model-reference pole-placement force control of Rubio 2013 eq. (7)-(11) (ROS-free).
+
+Design, for a hold β (polynomials in z, highest power first):
+
+- plant H_β(z) = B(z)/A(z): the unit-gain force process 1/((τ_c s + 1)(τ_m s + 1))
+  discretised under the β-FROH (froh.py); the process gain K_p(a_dc) scales B and is
+  applied at run time (S and T are divided by K_p; R does not depend on it);
+- reference model eq. (7) G_m(s) = ω_n²/(s² + 2ξω_n s + ω_n²) with ξ = 0.7 and
+  ω_n = 2.5/T_r, T_r = 3 spindle periods = 3T (§2.3, §5: ω_n ≈ 9.93 rad/s at 715 rpm),
+  discretised with the same β-FROH: H_m,β(z) = B_m(z)/A_m(z), deg A_m = deg A = n;
+- B = B⁺·B⁻: B⁺ (monic) holds the zeros inside `zero_cancel_radius` (1 = every stable
+  zero, the paper's reading), B⁻ the rest and the leading coefficient; R = B⁺·R₁ (the
+  papers README: eq. (10) prints R = B·R₁);
+- observer polynomial A_o(z) = (z − e^{−T/τ_o})^{n_o}, our choice (the paper gives no
+  values): by default n_o = 1 and τ_o = τ_c, an observer as fast as the fastest plant
+  pole (e^{−T/τ_c} = e^{−4} ≈ 0.018, nearly deadbeat);
+- eq. (10): A·R₁ + B⁻·S = z^{deg B⁻}·A_m·A_o, solved with the Sylvester matrix of A and
+  B⁻ (deg S = n − 1, deg R₁ = deg B⁻ + n_o), so A·R + B·S = B⁺·z^{deg B⁻}·A_m·A_o;
+- T = A_o·B_m/B⁻(1), so the closed loop B·T/(A·R + B·S) = B_m/A_m when every zero is
+  cancelled (the case for the paper's plant at every β ∈ [−1, 1]); otherwise the model
+  is B⁻(z)/(B⁻(1) z^{deg B⁻})·B_m/A_m (unit DC gain, the unstable zeros kept, causal).
+
+The paper's eq. (9) degrees (deg R = n, deg A_m A_o = 2n) are those of a design without
+cancellation and do not fit R = B⁺·R₁; the degrees above are the minimal causal ones:
+deg R = n − 1 + n_o = deg T ≥ deg S.
+
+Control law eq. (11): R(q)·f_c = T(q)·F_r − S(q)·F_p, computed as a causal difference
+equation (u_k uses r_j, y_j for j ≤ k and u_j for j < k).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+from mill_common.parameters import (
+    ParamSpec,
+    in_range,
+    non_negative,
+    positive,
+    validate_all,
+)
+from mill_plant.force_process import AffineLti, ForceProcessModel, ForceProcessPlant
+
+from mill_controllers.froh import DiscreteTF, clamped_pieces, froh_discretize, hold_input
+
+# --- polynomials (numpy arrays, highest power first) ------------------------------------
+
+
+def trim(p: Sequence[float], tol: float = 0.0) -> np.ndarray:
+    """Drop leading coefficients with |c| <= tol (keeps at least one coefficient)."""
+    p = np.atleast_1d(np.asarray(p, dtype=float))
+    nz = np.nonzero(np.abs(p) > tol)[0]
+    return p[nz[0] :].copy() if nz.size else np.zeros(1)
+
+
+def degree(p: Sequence[float]) -> int:
+    return len(trim(p)) - 1
+
+
+def pad(p: Sequence[float], length: int) -> np.ndarray:
+    """Left-pad with zeros to `length` coefficients (same polynomial)."""
+    p = trim(p)
+    if len(p) > length:
+        raise ValueError(f'polynomial of degree {len(p) - 1} does not fit {length} coefficients')
+    return np.concatenate([np.zeros(length - len(p)), p])
+
+
+def sylvester_matrix(a: Sequence[float], b: Sequence[float], deg_x: int, deg_y: int) -> np.ndarray:
+    """M with M·[x; y] = coefficients of a·x + b·y (deg x = deg_x, deg y = deg_y).
+
+    Columns are the shifted coefficient vectors z^{deg_x−i}·a and z^{deg_y−j}·b, rows the
+    powers of z from deg_x + deg a down to 0; square when deg b <= deg a and
+    deg_y = deg a − 1 (the Sylvester resultant matrix when also deg_x = deg b − 1).
+    """
+    a = trim(a)
+    b = trim(b)
+    rows = max(len(a) + deg_x, len(b) + deg_y)
+    m = np.zeros((rows, deg_x + 1 + deg_y + 1))
+    for i in range(deg_x + 1):
+        shift = deg_x - i  # column i multiplies z^{shift}
+        end = rows - shift
+        m[end - len(a) : end, i] = a
+    for j in range(deg_y + 1):
+        shift = deg_y - j
+        end = rows - shift
+        m[end - len(b) : end, deg_x + 1 + j] = b
+    return m
+
+
+def solve_diophantine(
+    a: Sequence[float], b: Sequence[float], c: Sequence[float]
+) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) with a·x + b·y = c, deg y = deg a − 1, deg x = deg c − deg a.
+
+    Needs a and b coprime and deg b <= deg x + 1 (else the system is not square);
+    solved with numpy.linalg.solve on the Sylvester matrix.
+    """
+    a = trim(a)
+    b = trim(b)
+    c = trim(c)
+    na = len(a) - 1
+    deg_x = len(c) - 1 - na
+    deg_y = na - 1
+    if deg_x < 0 or deg_y < 0:
+        raise ValueError('deg c must be >= deg a >= 1')
+    m = sylvester_matrix(a, b, deg_x, deg_y)
+    if m.shape[0] != m.shape[1]:
+        raise ValueError(f'Diophantine system is not square: {m.shape} (deg b too high)')
+    sol = np.linalg.solve(m, pad(c, m.shape[0]))
+    return sol[: deg_x + 1], sol[deg_x + 1 :]
+
+
+def split_numerator(b: Sequence[float], radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """B = B⁺·B⁻: B⁺ monic with the zeros |z| < radius, B⁻ the rest times the lead."""
+    b = trim(b)
+    zeros = np.roots(b)
+    inside = zeros[np.abs(zeros) < radius]
+    outside = zeros[np.abs(zeros) >= radius]
+    b_plus = np.real(np.poly(inside)) if inside.size else np.ones(1)
+    b_minus = b[0] * (np.real(np.poly(outside)) if outside.size else np.ones(1))
+    return np.atleast_1d(b_plus), np.atleast_1d(b_minus)
+
+
+# --- design -----------------------------------------------------------------------------
+
+
+def natural_frequency(rise_time: float) -> float:
+    """ω_n = 2.5/T_r [rad/s], Rubio 2013 §2.3."""
+    return 2.5 / rise_time
+
+
+def reference_model(damping: float, omega_n: float) -> tuple[np.ndarray, np.ndarray]:
+    """(num, den) in s of eq. (7)."""
+    # Rubio 2013 eq. (7): G_m(s) = ω_n² / (s² + 2ξω_n s + ω_n²)
+    return np.array([omega_n**2]), np.array([1.0, 2.0 * damping * omega_n, omega_n**2])
+
+
+@dataclass(frozen=True)
+class RstDesign:
+    """R, S, T of eq. (10)-(11) for one hold β, on the unit-gain plant.
+
+    r, s, t have the same length deg R + 1 (left-padded), r[0] = 1.
+    """
+
+    beta: float
+    r: np.ndarray
+    s: np.ndarray
+    t: np.ndarray
+    plant: DiscreteTF
+    reference: DiscreteTF
+    observer: np.ndarray
+    b_plus: np.ndarray
+    b_minus: np.ndarray
+    r1: np.ndarray
+    model_poles: np.ndarray = field(repr=False)  # z^{deg B⁻}·A_m
+
+    @property
+    def order(self) -> int:
+        return len(self.r) - 1
+
+    def characteristic_polynomial(self) -> np.ndarray:
+        """A·R + B·S computed from the design (unit gain)."""
+        return np.polyadd(np.polymul(self.plant.den, self.r), np.polymul(self.plant.num, self.s))
+
+    def designed_polynomial(self) -> np.ndarray:
+        """B⁺·z^{deg B⁻}·A_m·A_o: what A·R + B·S must equal."""
+        return np.polymul(self.b_plus, np.polymul(self.model_poles, self.observer))
+
+
+def design_rst(
+    plant: DiscreteTF,
+    reference: DiscreteTF,
+    observer: Sequence[float],
+    zero_cancel_radius: float = 1.0,
+) -> RstDesign:
+    """Model-following R, S, T (module docstring) for a strictly proper plant."""
+    a = trim(plant.den)
+    b = trim(plant.num)
+    n = len(a) - 1
+    if len(b) - 1 >= n:
+        raise ValueError('the plant must be strictly proper')
+    am = trim(reference.den)
+    bm = trim(reference.num)
+    if len(am) - 1 != n:
+        raise ValueError(f'reference model order {len(am) - 1} differs from the plant order {n}')
+    ao = trim(observer)
+    b_plus, b_minus = split_numerator(b, zero_cancel_radius)
+    m_minus = len(b_minus) - 1
+    model_poles = np.polymul(np.concatenate([[1.0], np.zeros(m_minus)]), am)
+    # Rubio 2013 eq. (10): A R₁ + B⁻ S = A_m A_o (A_m extended by z^{deg B⁻})
+    r1, s = solve_diophantine(a, b_minus, np.polymul(model_poles, ao))
+    # R = B⁺ R₁ (papers README: printed R = B R₁)
+    r = np.polymul(b_plus, r1)
+    # T = A_o B_m / B⁻(1): closed loop B⁻(z)/(B⁻(1) z^{deg B⁻}) · B_m/A_m
+    t = np.polymul(ao, bm) / np.polyval(b_minus, 1.0)
+    d = len(r) - 1
+    if degree(s) > d or degree(t) > d:
+        raise ValueError('non-causal design: deg S or deg T exceeds deg R')
+    lead = r[0]
+    return RstDesign(
+        beta=plant.beta,
+        r=r / lead,
+        s=pad(s, d + 1) / lead,
+        t=pad(t, d + 1) / lead,
+        plant=plant,
+        reference=reference,
+        observer=ao,
+        b_plus=b_plus,
+        b_minus=b_minus,
+        r1=r1,
+        model_poles=model_poles,
+    )
+
+
+def _observer_degree(value: Any) -> str | None:
+    if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 6:
+        return 'must be a whole number in [0, 6]'
+    return None
+
+
+DESIGN_PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec('damping_ratio', 0.7, 'ξ of the reference model eq. (7) [-]', positive),
+    ParamSpec(
+        'rise_time_periods',
+        3.0,
+        'rise time T_r of the reference model in spindle periods (ω_n = 2.5/T_r) [-]',
+        positive,
+    ),
+    ParamSpec(
+        'natural_frequency',
+        0.0,
+        'ω_n of eq. (7) [rad/s]; 0 = 2.5/T_r (Rubio 2013 §2.3)',
+        non_negative,
+    ),
+    ParamSpec(
+        'observer_degree',
+        1,
+        'degree n_o of the observer polynomial A_o = (z − e^{−T/τ_o})^{n_o} [-]',
+        _observer_degree,
+    ),
+    ParamSpec(
+        'observer_time_constant',
+        0.0,
+        'τ_o of the observer poles [s]; 0 = τ_c, the cutting-process constant',
+        non_negative,
+    ),
+    ParamSpec(
+        'zero_cancel_radius',
+        1.0,
+        'plant zeros with |z| below this are cancelled (B⁺); the rest kept (B⁻) [-]',
+        in_range(0.0, 1.0),
+    ),
+)
+
+
+class ForceControlDesigner:
+    """Builds (and caches) the eq. (7)-(11) design for any β for one force-process model."""
+
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = DESIGN_PARAMETERS
+
+    def __init__(
+        self,
+        model: ForceProcessModel,
+        damping_ratio: float = 0.7,
+        rise_time_periods: float = 3.0,
+        natural_frequency: float = 0.0,
+        observer_degree: int = 1,
+        observer_time_constant: float = 0.0,
+        zero_cancel_radius: float = 1.0,
+        prefix: str = '',
+    ) -> None:
+        v = validate_all(
+            DESIGN_PARAMETERS,
+            {
+                'damping_ratio': damping_ratio,
+                'rise_time_periods': rise_time_periods,
+                'natural_frequency': natural_frequency,
+                'observer_degree': observer_degree,
+                'observer_time_constant': observer_time_constant,
+                'zero_cancel_radius': zero_cancel_radius,
+            },
+            prefix=prefix,
+        )
+        self.model = model
+        self.T = model.sample_period
+        self.damping: float = v['damping_ratio']
+        rise_time = v['rise_time_periods'] * self.T
+        wn = v['natural_frequency']
+        self.omega_n: float = wn if wn > 0 else 2.5 / rise_time
+        tau_o = v['observer_time_constant'] or model.tau_c
+        self.observer_pole = math.exp(-self.T / tau_o)
+        self.observer = np.real(np.poly(np.full(v['observer_degree'], self.observer_pole)))
+        self.observer = np.atleast_1d(self.observer)
+        self.zero_cancel_radius: float = v['zero_cancel_radius']
+        self._plant_s = model.unit_transfer_function()
+        self._ref_s = reference_model(self.damping, self.omega_n)
+        a, b, c = reference_state_space(self.damping, self.omega_n)
+        self.reference_lti = AffineLti(a, b, c)
+        self._cache: dict[float, RstDesign] = {}
+
+    def design(self, beta: float) -> RstDesign:
+        key = float(beta)
+        d = self._cache.get(key)
+        if d is None:
+            plant = froh_discretize(self._plant_s, self.T, key)
+            ref = froh_discretize(self._ref_s, self.T, key)
+            d = design_rst(plant, ref, self.observer, self.zero_cancel_radius)
+            if len(self._cache) > 512:
+                self._cache.clear()
+            self._cache[key] = d
+        return d
+
+
+def reference_state_space(damping: float, omega_n: float) -> tuple[np.ndarray, ...]:
+    """(A, B, C) of eq. (7), state [F_m, Ḟ_m], for its continuous response."""
+    a = np.array([[0.0, 1.0], [-(omega_n**2), -2.0 * damping * omega_n]])
+    b = np.array([0.0, omega_n**2])
+    c = np.array([1.0, 0.0])
+    return a, b, c
+
+
+# --- run time ---------------------------------------------------------------------------
+
+
+class RstController:
+    """Causal R(q)u = T(q)r − S(q)y with a process gain, polynomials swappable.
+
+    The history (past r, y and applied u) is kept apart from the polynomials, so a
+    multi-model supervisor can switch designs without losing it.
+    """
+
+    HISTORY: ClassVar[int] = 16
+
+    def __init__(self, design: RstDesign, gain: float = 1.0) -> None:
+        self._design = design
+        self.set_gain(gain)
+        self._r_hist = [0.0] * self.HISTORY  # r_{k−1}, r_{k−2}, …
+        self._y_hist = [0.0] * self.HISTORY
+        self._u_hist = [0.0] * self.HISTORY
+
+    @property
+    def design(self) -> RstDesign:
+        return self._design
+
+    def set_design(self, design: RstDesign) -> None:
+        if design.order >= self.HISTORY:
+            raise ValueError(f'controller order {design.order} exceeds the history length')
+        self._design = design
+
+    @property
+    def gain(self) -> float:
+        return self._gain
+
+    def set_gain(self, gain: float) -> None:
+        """Process gain K_p [N·s/mm] the unit-gain design is scaled by (S/K_p, T/K_p)."""
+        if not (math.isfinite(gain) and gain > 0.0):
+            raise ValueError(f'process gain must be finite and > 0, got {gain!r}')
+        self._gain = float(gain)
+
+    def update(self, reference: float, measured: float) -> float:
+        """u_k from r_k, y_k and the past; raises ValueError on non-finite input."""
+        if not (math.isfinite(reference) and math.isfinite(measured)):
+            raise ValueError(
+                f'RstController.update: non-finite input r={reference!r}, y={measured!r}'
+            )
+        d = self._design
+        r_now = [reference, *self._r_hist]
+        y_now = [measured, *self._y_hist]
+        acc = 0.0
+        for i in range(d.order + 1):
+            acc += d.t[i] * r_now[i] - d.s[i] * y_now[i]
+        # Rubio 2013 eq. (11): R(q) f_c = T(q) F_r − S(q) F_p, R monic
+        u = acc / self._gain
+        for i in range(1, d.order + 1):
+            u -= d.r[i] * self._u_hist[i - 1]
+        self._r_hist = r_now[: self.HISTORY]
+        self._y_hist = y_now[: self.HISTORY]
+        self._u_hist = [u, *self._u_hist[: self.HISTORY - 1]]
+        return u
+
+    def record_applied(self, u: float) -> None:
+        """Replace the last output by what was actually applied (e.g. after clamping)."""
+        if not math.isfinite(u):
+            raise ValueError(f'applied feed must be finite, got {u!r}')
+        self._u_hist[0] = float(u)
+
+    @property
+    def last_output(self) -> float:
+        return self._u_hist[0]
+
+    def history(self) -> tuple[list[float], list[float], list[float]]:
+        """(past r, past y, past u), most recent first (copies)."""
+        return list(self._r_hist), list(self._y_hist), list(self._u_hist)
+
+    def load_history(self, history: tuple[list[float], list[float], list[float]]) -> None:
+        r, y, u = history
+        self._r_hist, self._y_hist, self._u_hist = list(r), list(y), list(u)
+
+    def reset(self) -> None:
+        self._r_hist = [0.0] * self.HISTORY
+        self._y_hist = [0.0] * self.HISTORY
+        self._u_hist = [0.0] * self.HISTORY
+
+
+class ModelReferenceForceController:
+    """Basic scheme of Rubio 2013 fig. 1: a fixed β, feed command from force samples.
+
+    update(force_reference [N], force_measured [N]) → feed command f_c [mm/s], unclamped
+    (the caller clamps and may report the applied value with record_applied()).
+    set_depth() gives the known axial depth of cut (the paper assumes it known).
+    """
+
+    PREFIX: ClassVar[str] = 'force_control'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec('beta', 0.0, 'β of the fractional-order hold, 0 = ZOH [-]', in_range(-1, 1)),
+        *DESIGN_PARAMETERS,
+    )
+
+    def __init__(self, model: ForceProcessModel, beta: float = 0.0, **design: Any) -> None:
+        v = validate_all(self.PARAMETERS, {'beta': beta, **design}, prefix=self.PREFIX + '.')
+        self.beta: float = v.pop('beta')
+        self.designer = ForceControlDesigner(model, **v, prefix=self.PREFIX + '.')
+        self.model = model
+        self._depth = model.depth_at(0.0)
+        self._ctrl = RstController(self.designer.design(self.beta), model.process_gain(self._depth))
+
+    @classmethod
+    def from_parameters(
+        cls, model: ForceProcessModel, values: Mapping[str, Any]
+    ) -> ModelReferenceForceController:
+        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
+        return cls(model, **v)
+
+    @property
+    def active_beta(self) -> float:
+        return self.beta
+
+    @property
+    def design(self) -> RstDesign:
+        return self._ctrl.design
+
+    def set_depth(self, depth: float) -> None:
+        """Axial depth of cut a_dc [mm] now in force (scales S and T by 1/K_p)."""
+        self._ctrl.set_gain(self.model.process_gain(depth))
+        self._depth = depth
+
+    def update(self, force_reference: float, force_measured: float) -> float:
+        return self._ctrl.update(force_reference, force_measured)
+
+    def record_applied(self, feed: float) -> None:
+        self._ctrl.record_applied(feed)
+
+    def reset(self) -> None:
+        self._ctrl.reset()
+
+
+class SampleHold:
+    """Pass finite samples, replace a non-finite one by the last finite (initial value first)."""
+
+    def __init__(self, initial: float = 0.0) -> None:
+        self._last = float(initial)
+        self.held = 0
+
+    def __call__(self, value: float) -> float:
+        if isinstance(value, int | float) and math.isfinite(value):
+            self._last = float(value)
+        else:
+            self.held += 1
+        return self._last
+
+
+class ContinuousReference:
+    """Continuous response F_pm(t) of eq. (7) to a reference held constant over each sample.
+
+    begin(r) fixes the input from the current time; values(times) evaluates the response
+    at absolute times in the current interval (closed form); advance(h) moves on by h.
+    """
+
+    def __init__(self, damping: float, omega_n: float) -> None:
+        self.a, self.b, self.c = reference_state_space(damping, omega_n)
+        self._x = np.zeros(2)
+        self._t = 0.0
+        self._r = 0.0
+        # e^{Aτ} = e^{mτ}[C(τ)·I + S(τ)·(A − m I)], m = tr A/2, q² = m² − det A
+        self._m = 0.5 * float(np.trace(self.a))
+        self._q = complex(self._m**2 - float(np.linalg.det(self.a))) ** 0.5
+
+    def reset(self, value: float = 0.0, t: float = 0.0) -> None:
+        """At rest at `value` [N] (steady state) at time t."""
+        self._x = np.array([float(value), 0.0])
+        self._t = float(t)
+        self._r = float(value)
+
+    @property
+    def time(self) -> float:
+        return self._t
+
+    @property
+    def state(self) -> np.ndarray:
+        return self._x.copy()
+
+    def set_state(self, state: Sequence[float], t: float) -> None:
+        self._x = np.asarray(state, dtype=float).reshape(2).copy()
+        self._t = float(t)
+
+    def begin(self, reference: float) -> None:
+        if not math.isfinite(reference):
+            raise ValueError(f'reference must be finite, got {reference!r}')
+        self._r = float(reference)
+
+    def _states(self, tau: np.ndarray) -> np.ndarray:
+        tau = np.asarray(tau, dtype=float)
+        q = self._q
+        qt = q * tau
+        cc = np.cosh(qt).real
+        ss = (np.sinh(qt) / q).real if abs(q) > 1e-12 else tau.copy()
+        em = np.exp(self._m * tau)
+        x_ss = np.array([self._r, 0.0])  # unit DC gain: steady state [r, 0]
+        dx = self._x - x_ss
+        n = self.a - self._m * np.eye(2)
+        nd = n @ dx
+        return x_ss[None, :] + em[:, None] * (cc[:, None] * dx[None, :] + ss[:, None] * nd)
+
+    def values(self, times: np.ndarray) -> np.ndarray:
+        """F_pm at absolute times (>= the interval start) [N]."""
+        tau = np.atleast_1d(np.asarray(times, dtype=float)) - self._t
+        return self._states(tau) @ self.c
+
+    def advance(self, h: float) -> None:
+        self._x = self._states(np.array([h]))[0]
+        self._t += h
+
+
+def simpson(times: np.ndarray, values: np.ndarray) -> float:
+    """Composite Simpson's rule on an equally spaced grid with an even number of intervals."""
+    n = len(times) - 1
+    if n < 2 or n % 2:
+        raise ValueError('simpson needs an even number (>= 2) of intervals')
+    h = (times[-1] - times[0]) / n
+    return float(
+        h / 3.0 * (values[0] + values[-1] + 4.0 * values[1:-1:2].sum() + 2.0 * values[2:-1:2].sum())
+    )
+
+
+class HeldPlant:
+    """A force-process plant seen through a β-FROH and a clamp on the reconstructed feed.
+
+    advance(u_k, beta) applies u(kT + τ) = u_k + β(u_k − u_{k−1})τ/T over one period,
+    clamped to [lo, hi] (the plant never sees a feed outside the range), and returns the
+    force at the end [N]; with a ContinuousReference it also integrates the squared error
+    ∫(F_p − F_pm)² over the period (Simpson on a grid, split where the input or the depth
+    changes slope or value).
+    """
+
+    def __init__(
+        self,
+        plant: ForceProcessPlant,
+        lo: float = -math.inf,
+        hi: float = math.inf,
+        spacing: float | None = None,
+    ) -> None:
+        self.plant = plant
+        self.lo = float(lo)
+        self.hi = float(hi)
+        self.T = plant.model.sample_period
+        self.spacing = float(spacing) if spacing else self.T / 16.0
+        self.u_prev = 0.0
+
+    def clamp(self, u: float) -> float:
+        return min(self.hi, max(self.lo, float(u)))
+
+    def advance(
+        self,
+        u_k: float,
+        beta: float,
+        reference: ContinuousReference | None = None,
+        keep_trace: bool = False,
+    ) -> tuple[float, float, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+        """(force at the end [N], ∫(F_p − F_pm)² dτ [N²·s] (0 without reference), pieces).
+
+        pieces (only with keep_trace and a reference): [(times, F_p, F_pm)].
+        """
+        u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
+        cost = 0.0
+        trace = []
+        for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
+            if reference is None:
+                self.plant.step(start, sl, length)
+                continue
+            for times, force in self.plant.trace(start, sl, length, self.spacing):
+                f_ref = reference.values(times)
+                cost += simpson(times, (force - f_ref) ** 2)
+                if keep_trace:
+                    trace.append((times, force, f_ref))
+        self.u_prev = float(u_k)
+        return self.plant.force, cost, trace
