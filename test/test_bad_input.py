@@ -125,6 +125,10 @@ def test_controller_rejects_bad_changes_at_run_time(start_node) -> None:
         assert params.set('pd.omega_c', 20.0).successful
         assert params.get('pd.omega_c', 'controller', 'axis') == {**before, 'pd.omega_c': 20.0}
         assert params.get('pd.zeta_c') == {'pd.zeta_c': 0.7071}  # still answering
+        # `ros2 param set ... 25` sends an integer: stored as the double it means.
+        assert params.set('pd.omega_c', 25).successful
+        value = params.get('pd.omega_c')['pd.omega_c']
+        assert isinstance(value, float) and value == 25.0
     assert controller.alive()
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 from collections.abc import Callable, Sequence
 
@@ -63,6 +64,19 @@ def make_executor():
     return SingleThreadedExecutor()
 
 
+def install_stop_handlers() -> list[int]:
+    """SIGINT/SIGTERM only append to the returned list; the spin loop polls it.
+
+    rclpy's own handler raises KeyboardInterrupt wherever Python happens to be,
+    and inside a callback run by the C++ EventsExecutor that aborts the process
+    (std::terminate). A flag checked between spin_once calls is a clean way out.
+    """
+    stop: list[int] = []
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda number, _frame: stop.append(number))
+    return stop
+
+
 def _user_args(argv: Sequence[str]) -> list[str]:
     args = list(argv[1:])
     return args[: args.index('--ros-args')] if '--ros-args' in args else args
@@ -96,17 +110,19 @@ def run_node(
 
     import rclpy
     from rclpy.executors import ExternalShutdownException
+    from rclpy.signals import SignalHandlerOptions
 
-    rclpy.init(args=argv)
+    stop = install_stop_handlers()
+    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     node = None
     code = 0
     try:
         node = make_node()
         executor = make_executor()
         executor.add_node(node)
-        while rclpy.ok() and getattr(node, 'exit_request', None) is None:
+        while rclpy.ok() and not stop and getattr(node, 'exit_request', None) is None:
             executor.spin_once(timeout_sec=0.2)
-        if node.exit_request is not None:
+        if getattr(node, 'exit_request', None) is not None:
             raise node.exit_request
     except (ParameterError, ValueError) as exc:
         print(f'{executable}: error: {exc}', file=sys.stderr)
@@ -117,6 +133,9 @@ def run_node(
     except (KeyboardInterrupt, ExternalShutdownException):
         code = 0
     finally:
+        # A second SIGINT (ros2 launch forwards one after the terminal's) must not
+        # break the teardown; CPython keeps SIG_IGN through interpreter exit.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         if node is not None:
             node.destroy_node()
         if rclpy.ok():

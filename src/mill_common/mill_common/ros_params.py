@@ -13,8 +13,9 @@ from typing import Any
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 
-from mill_common.parameters import ParameterError, ParamSpec, validate
+from mill_common.parameters import ParameterError, ParamSpec, coerce, validate
 
 
 def _plain(value: Any) -> Any:
@@ -41,7 +42,11 @@ class NodeParameters:
                 description=spec.description, read_only=spec.read_only, dynamic_typing=True
             )
             node.declare_parameter(name, spec.default, descriptor)
-            values[name] = validate(spec, _plain(node.get_parameter(name).value), name)
+            given = node.get_parameter(name)
+            typed = self._typed(given)
+            if typed is not given and not spec.read_only:
+                node.set_parameters([typed])  # keep the declared type: 12 -> 12.0
+            values[name] = validate(spec, _plain(typed.value), name)
         try:
             apply(values)
         except ParameterError:
@@ -49,7 +54,22 @@ class NodeParameters:
         except ValueError as exc:
             raise ParameterError('configuration', '', str(exc)) from exc
         self.values = values
+        node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
+
+    def _typed(self, param: Parameter) -> Parameter:
+        """An integer given for a float parameter, as that float (`param set ... 20`)."""
+        spec = self._specs.get(param.name)
+        if spec is None:
+            return param
+        value = _plain(param.value)
+        coerced = coerce(spec, value)
+        if repr(coerced) == repr(value):  # also tells 12 from 12.0 inside lists
+            return param
+        return Parameter(param.name, value=coerced)
+
+    def _coerce(self, params: list[Parameter]) -> list[Parameter]:
+        return [self._typed(p) for p in params]
 
     def _on_set(self, params: list) -> SetParametersResult:
         candidate = dict(self.values)
