@@ -32,9 +32,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 
-# Table 1 gives J in kg·mm²; the model needs kg·m².
-_KG_MM2 = 1e-6
-
 
 @dataclass(frozen=True)
 class RigidAxisParams:
@@ -98,7 +95,7 @@ class RigidAxisParams:
 def _table1_axis(mass: float, inertia_kg_mm2: float) -> RigidAxisParams:
     return RigidAxisParams(
         mass=mass,
-        screw_inertia=inertia_kg_mm2 * _KG_MM2,
+        screw_inertia=inertia_kg_mm2 / 1e6,  # exact decimal: 16.249 / 1e6 = 1.6249e-05
         pitch=0.003175,
         cart_damping=2.5,
         screw_damping=2.5,
