@@ -8,11 +8,15 @@ from typing import Any
 from mill_common.parameters import ParameterError
 
 from mill_controllers.base import AxisController
+from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
+from mill_controllers.sliding_gpi import SlidingGpiController
 
 CONTROLLERS: dict[str, type] = {
-    'adrc': AdrcController,
-    'pd': PdController,
+    'adrc': AdrcController,  # Beltrán 2013 eq. (9) with the observer's xi_hat
+    'pd': PdController,  # the same law, xi_hat = 0
+    'gpi': GpiController,  # Chávez-Conde eq. (9)-(12)
+    'sliding_gpi': SlidingGpiController,  # Chávez-Conde eq. (13)-(17)
 }
 
 

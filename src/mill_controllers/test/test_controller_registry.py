@@ -22,7 +22,7 @@ def test_factory_builds_with_values() -> None:
     assert isinstance(make_controller('pd', B, 1e-3, {}), PdController)
 
 
-@pytest.mark.parametrize('name', ['PD', 'lqr', '', 'gpi', None])
+@pytest.mark.parametrize('name', ['PD', 'lqr', '', 'sliding', None])
 def test_unknown_controller(name: object) -> None:
     with pytest.raises(ParameterError) as info:
         make_controller(name, B, 1e-3, {})  # type: ignore[arg-type]
