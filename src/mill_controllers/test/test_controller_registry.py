@@ -4,14 +4,21 @@ from __future__ import annotations
 
 import pytest
 from mill_common.parameters import ParameterError
+from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.registry import CONTROLLERS, controller_class, make_controller
+from mill_controllers.sliding_gpi import SlidingGpiController
 
 B = 20.96
 
 
 def test_registered_names() -> None:
-    assert {'adrc': AdrcController, 'pd': PdController} == CONTROLLERS
+    assert {
+        'adrc': AdrcController,
+        'pd': PdController,
+        'gpi': GpiController,
+        'sliding_gpi': SlidingGpiController,
+    } == CONTROLLERS
     assert controller_class('pd') is PdController
 
 
