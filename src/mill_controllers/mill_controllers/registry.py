@@ -7,7 +7,9 @@ from typing import Any
 
 from mill_common.parameters import ParameterError
 
+from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
 from mill_controllers.base import AxisController
+from mill_controllers.cascade_pi import CascadePi
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.sliding_gpi import SlidingGpiController
@@ -17,6 +19,9 @@ CONTROLLERS: dict[str, type] = {
     'pd': PdController,  # the same law, xi_hat = 0
     'gpi': GpiController,  # Chávez-Conde eq. (9)-(12)
     'sliding_gpi': SlidingGpiController,  # Chávez-Conde eq. (13)-(17)
+    'cascade_pi': CascadePi,  # Maharof 2018 §4.1, output in V
+    'adaptive_pi': AdaptivePi,  # Hatwesh 2013 self-tuning PI, output in V
+    'machine_pi': MachinePi,  # Hatwesh 2013 fixed machine PI, output in V
 }
 
 

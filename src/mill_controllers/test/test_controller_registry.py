@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import pytest
 from mill_common.parameters import ParameterError
+from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
+from mill_controllers.cascade_pi import CascadePi
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.registry import CONTROLLERS, controller_class, make_controller
@@ -18,6 +20,9 @@ def test_registered_names() -> None:
         'pd': PdController,
         'gpi': GpiController,
         'sliding_gpi': SlidingGpiController,
+        'cascade_pi': CascadePi,
+        'adaptive_pi': AdaptivePi,
+        'machine_pi': MachinePi,
     } == CONTROLLERS
     assert controller_class('pd') is PdController
 

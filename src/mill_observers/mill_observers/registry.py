@@ -8,10 +8,16 @@ from typing import Any
 from mill_common.parameters import ParameterError
 
 from mill_observers.base import Observer
+from mill_observers.dfo import Dfo
 from mill_observers.gpi import GpiObserver
+from mill_observers.imbdo import Imbdo
+from mill_observers.imbdo_dfo import ImbdoDfo
 
 OBSERVERS: dict[str, type] = {
-    'gpi': GpiObserver,
+    'gpi': GpiObserver,  # Beltrán 2013 eq. (13)-(18)
+    'imbdo': Imbdo,  # Maharof 2018, inverse model + Q filter, estimate in V
+    'dfo': Dfo,  # Maharof 2018 eq. (10)-(11), estimate in V
+    'imbdo_dfo': ImbdoDfo,  # both, as in the paper
 }
 
 

@@ -1,0 +1,431 @@
+"""Self-tuning PI velocity loop of Hatwesh 2013 and the fixed "machine PI" (ROS-free).
+
+Both regulate the table velocity v [m/s] with a voltage u [V] (Hatwesh eq. (1)-(3): the
+amplifier input) by a PI with a backward-Euler integral and conditional integration
+(anti-windup), clipped to ±limit:
+
+    u(k) = K_p e(k) + I(k),   I(k) = I(k−1) + K_i T e(k),   e = v* − v.
+
+A gain change moves u by ΔK_p·e(k) (small: the gains are re-tuned every sample). Neither
+the incremental form u(k) = u(k−1) + K_p Δe + K_i T e (under saturation it loses the clipped
+part of the proportional step) nor a bumpless transfer that loads I with (ΔK_p)·e is used:
+with the pole-cancelling design any offset left in I decays only with the plant's τ (≈ 2 s).
+
+Loop quantities:
+    v* = ẋ_ref + k_x (x_ref − y)   (k_x = position_gain; 0 = pure velocity loop as in the paper).
+
+v is the backward difference of the measured position (velocity_source 'difference') or
+est.velocity ('estimate').
+
+AdaptivePi: an RlsEstimator (mill_observers.rls) identifies y(k) = a y(k−1) + Σ b_i u(k−i)
+from (v, u) each sample; from its FOPDT read-out K, τ, θ_d the PI is re-tuned by the
+phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"):
+
+    K(s) = K_i (1 + τ s)/s      (eq. (8) with a = K_i, b = τ: the PI zero cancels the
+                                 estimated plant pole, which fixes the one free parameter),
+    L(s) = K(s)·K e^{−θs}/(τ s + 1) = K_i K e^{−θs}/s,  θ = θ_d + T/2 (ZOH),
+    ∠L(jω_gc) = −π/2 − ω_gc θ = −π + φ_m  ⇒  ω_gc = (π/2 − φ_m)/θ,
+    |L(jω_gc)| = 1                       ⇒  K_i = ω_gc/K,  K_p = τ ω_gc/K.
+
+Until the estimator has had `warmup` updates and gives a usable model (0 < a < 1,
+K > 0), the initial gains are used.
+
+MachinePi: the fixed gains of Hatwesh Table 1, K_p = 1.5735, K_i = 5.4976 at 0.25 ms. The
+paper does not state their velocity unit. On the x axis of Table 1 (K_a K_t = 21.87 N·m/V,
+J = 2.8828e-3 kg·m², B = 1.4e-3 N·m·s) the sampled loop is stable with the error in motor
+rev/s (crossover 1.9e3 rad/s, phase margin 76° with the ZOH, 63° with a backward-difference
+velocity), and also in m/min or m/s of the table, but unstable in rad/s, rpm or mm/s
+(crossover beyond what 0.25 ms sampling allows). Motor rev/s (= table mm/s ÷ 12 mm pitch) is
+the default reading: a 300 Hz velocity-loop bandwidth, typical of such servo drives.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    in_range,
+    non_negative,
+    number,
+    one_of,
+    positive,
+    positive_int,
+    positive_or_inf,
+    validate_all,
+)
+from mill_common.signals import AxisReference, Estimate
+from mill_observers.rls import FopdtEstimate, RlsEstimator
+
+# Hatwesh 2013 Table 1, x axis.
+HATWESH_PITCH = 0.012  # ball-screw pitch [m]
+HATWESH_KP = 1.5735
+HATWESH_KI = 5.4976
+DEFAULT_VOLTAGE_LIMIT = 10.0  # ±10 V analogue amplifier command
+
+# Velocity units the machine PI's error may be expressed in: factor per (m/s) of table speed.
+_UNITS = ('rev/s', 'm/min', 'm/s', 'rad/s', 'rpm', 'mm/s')
+
+
+def unit_factor(unit: str, pitch: float) -> float:
+    """How many `unit` one m/s of table velocity is (rev/s etc. are motor/screw speeds)."""
+    return {
+        'rev/s': 1.0 / pitch,
+        'rad/s': 2.0 * math.pi / pitch,
+        'rpm': 60.0 / pitch,
+        'mm/s': 1000.0,
+        'm/s': 1.0,
+        'm/min': 60.0,
+    }[unit]
+
+
+def phase_margin_pi(model: FopdtEstimate, phase_margin: float, hold_delay: float) -> tuple:
+    """(K_p, K_i, ω_gc) of the phase-margin rule for K e^{−θs}/(τs + 1), θ = θ_d + hold_delay.
+
+    phase_margin in rad, in (0, π/2). K_p [u per y-unit], K_i [u per y-unit·s], ω_gc [rad/s].
+    """
+    theta = model.dead_time + hold_delay
+    if not (0.0 < phase_margin < 0.5 * math.pi):
+        raise ValueError(f'phase margin must be in (0, π/2) rad, got {phase_margin!r}')
+    if not (theta > 0.0 and model.gain > 0.0 and math.isfinite(model.time_constant)):
+        raise ValueError(f'no phase-margin design for {model!r} (θ = {theta!r})')
+    # Hatwesh 2013: ∠L(jω_gc) = −π + φ_m with L = K_i K e^{−θs}/s ⇒ ω_gc = (π/2 − φ_m)/θ
+    w_gc = (0.5 * math.pi - phase_margin) / theta
+    # Hatwesh 2013: |L(jω_gc)| = 1 ⇒ K_i = ω_gc/K; eq. (8) b = τ ⇒ K_p = K_i τ
+    k_i = w_gc / model.gain
+    return k_i * model.time_constant, k_i, w_gc
+
+
+def _common_specs(kp: float, ki: float, kp_text: str, ki_text: str) -> tuple[ParamSpec, ...]:
+    return (
+        ParamSpec('k_p', kp, kp_text, non_negative),
+        ParamSpec('k_i', ki, ki_text, non_negative),
+        ParamSpec(
+            'position_gain',
+            0.0,
+            'outer P position gain k_x, v* = ẋ_ref + k_x (x_ref − y); 0 = velocity loop only '
+            '(the paper) [1/s]',
+            non_negative,
+        ),
+        ParamSpec(
+            'voltage_limit',
+            DEFAULT_VOLTAGE_LIMIT,
+            'command saturation ±limit [V]; .inf disables it',
+            positive_or_inf,
+        ),
+        ParamSpec(
+            'velocity_source',
+            'difference',
+            "measured velocity: 'difference' = (y(k) − y(k−1))/T, 'estimate' = est.velocity",
+            one_of('difference', 'estimate'),
+        ),
+    )
+
+
+class _VelocityPi:
+    """Incremental PI on the table velocity; subclasses supply the gains."""
+
+    PREFIX: ClassVar[str] = ''
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+
+    def _init_loop(self, sample_period: float, values: Mapping[str, Any]) -> None:
+        reason = positive(sample_period)
+        if reason:
+            raise ParameterError('sample_period', sample_period, reason)
+        self._T = float(sample_period)
+        self._kx = values['position_gain']
+        self._limit = values['voltage_limit']
+        self._use_estimate = values['velocity_source'] == 'estimate'
+        self._y_prev: float | None = None
+        self._i = 0.0
+        self._u = 0.0
+        self._v = 0.0
+
+    @classmethod
+    def from_parameters(cls, input_gain: float, sample_period: float, values: Mapping[str, Any]):
+        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
+        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
+        return cls(input_gain, sample_period, **v)
+
+    def _measure(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+        inputs = (t, y, ref.position, ref.velocity, est.velocity)
+        if not all(math.isfinite(x) for x in inputs):
+            raise ValueError(
+                f'{type(self).__name__}: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
+                f'velocity estimate={est.velocity!r})'
+            )
+        if self._use_estimate:
+            v = est.velocity
+        else:
+            v = 0.0 if self._y_prev is None else (y - self._y_prev) / self._T
+        self._y_prev = y
+        self._v = v
+        return v
+
+    def _pi_step(self, e: float, kp: float, ki: float) -> float:
+        # PI: u(k) = K_p e(k) + I(k),  I(k) = I(k−1) + K_i T e(k)
+        i_new = self._i + ki * self._T * e
+        u = kp * e + i_new
+        u_sat = min(self._limit, max(-self._limit, u))
+        if u_sat == u or e * (u - u_sat) <= 0.0:  # conditional integration
+            self._i = i_new
+        self._u = u_sat
+        return u_sat
+
+    def _error(self, y: float, ref: AxisReference, v: float) -> float:
+        return ref.velocity + self._kx * (ref.position - y) - v
+
+    def reset(self) -> None:
+        self._y_prev = None
+        self._i = 0.0
+        self._u = 0.0
+
+    @property
+    def velocity(self) -> float:
+        """Last measured velocity [m/s]."""
+        return self._v
+
+
+class MachinePi(_VelocityPi):
+    """Hatwesh 2013 Table 1 fixed PI; the error is converted to velocity_unit first."""
+
+    PREFIX: ClassVar[str] = 'machine_pi'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        *_common_specs(
+            HATWESH_KP,
+            HATWESH_KI,
+            'proportional gain K_p, Table 1 [V per velocity_unit]',
+            'integral gain K_i, Table 1 [V per velocity_unit·s]',
+        ),
+        ParamSpec(
+            'velocity_unit',
+            'rev/s',
+            'unit of the velocity error the gains act on (not stated in the paper; rev/s of '
+            'the motor keeps the 0.25 ms loop stable)',
+            one_of(*_UNITS),
+        ),
+        ParamSpec('screw_pitch', HATWESH_PITCH, 'ball-screw pitch h_p, Table 1 [m]', positive),
+    )
+
+    def __init__(
+        self,
+        input_gain: float,
+        sample_period: float,
+        k_p: float = HATWESH_KP,
+        k_i: float = HATWESH_KI,
+        position_gain: float = 0.0,
+        voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
+        velocity_source: str = 'difference',
+        velocity_unit: str = 'rev/s',
+        screw_pitch: float = HATWESH_PITCH,
+    ) -> None:
+        del input_gain  # voltage output
+        v = validate_all(
+            self.PARAMETERS,
+            {
+                'k_p': k_p,
+                'k_i': k_i,
+                'position_gain': position_gain,
+                'voltage_limit': voltage_limit,
+                'velocity_source': velocity_source,
+                'velocity_unit': velocity_unit,
+                'screw_pitch': screw_pitch,
+            },
+            prefix=self.PREFIX + '.',
+        )
+        self._init_loop(sample_period, v)
+        self._factor = unit_factor(v['velocity_unit'], v['screw_pitch'])
+        self._kp, self._ki = v['k_p'], v['k_i']
+
+    @property
+    def gains_si(self) -> tuple[float, float]:
+        """(K_p [V/(m/s)], K_i [V/m]) after the unit conversion."""
+        return self._kp * self._factor, self._ki * self._factor
+
+    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+        """Voltage [V] from y [m], ref [m, m/s] (and est.velocity if selected)."""
+        v = self._measure(t, y, ref, est)
+        e = self._error(y, ref, v) * self._factor  # error in velocity_unit
+        return self._pi_step(e, self._kp, self._ki)
+
+
+def _pair(value: Any) -> str | None:
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        return 'must be a list [low, high]'
+    reason = number(value[0]) or number(value[1])
+    if reason:
+        return reason
+    return None if value[0] < value[1] else 'must have low < high'
+
+
+class AdaptivePi(_VelocityPi):
+    """Hatwesh 2013 self-tuning PI: RLS on the velocity loop + phase-margin re-tuning."""
+
+    PREFIX: ClassVar[str] = 'adaptive_pi'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        *_common_specs(
+            HATWESH_KP / HATWESH_PITCH,
+            HATWESH_KI / HATWESH_PITCH,
+            'initial proportional gain until the estimate is usable (default: Table 1 read '
+            'in motor rev/s) [V/(m/s)]',
+            'initial integral gain until the estimate is usable [V/m]',
+        ),
+        ParamSpec(
+            'phase_margin',
+            60.0,
+            'desired phase margin φ_m (the machine PI has ≈ 63-76° on the nominal plant) [deg]',
+            in_range(1.0, 89.0),
+        ),
+        ParamSpec(
+            'forgetting',
+            0.9995,
+            'RLS forgetting factor λ (memory ≈ T/(1 − λ), 0.5 s at 0.25 ms) [-]',
+            in_range(0.9, 1.0),
+        ),
+        ParamSpec('initial_covariance', 1e4, 'RLS initial covariance P(0) = p0·I [-]', positive),
+        ParamSpec('covariance_limit', 1e8, 'RLS cap on trace(P) (wind-up guard) [-]', positive),
+        ParamSpec(
+            'input_taps',
+            2,
+            'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 '
+            'samples [-]',
+            positive_int,
+        ),
+        ParamSpec(
+            'a_bounds',
+            [0.0, 0.99999],
+            'projection box of the RLS pole a = e^{−T/τ} [-]',
+            _pair,
+        ),
+        ParamSpec(
+            'b_bounds',
+            [-1.0, 1.0],
+            'projection box of each RLS input coefficient b_i [(m/s)/V per sample]',
+            _pair,
+        ),
+        ParamSpec(
+            'warmup',
+            400,
+            'RLS updates before the estimated gains replace the initial ones [samples]',
+            positive_int,
+        ),
+    )
+
+    def __init__(
+        self,
+        input_gain: float,
+        sample_period: float,
+        k_p: float = HATWESH_KP / HATWESH_PITCH,
+        k_i: float = HATWESH_KI / HATWESH_PITCH,
+        position_gain: float = 0.0,
+        voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
+        velocity_source: str = 'difference',
+        phase_margin: float = 60.0,
+        forgetting: float = 0.9995,
+        initial_covariance: float = 1e4,
+        covariance_limit: float = 1e8,
+        input_taps: int = 2,
+        a_bounds: tuple[float, float] | list[float] = (0.0, 0.99999),
+        b_bounds: tuple[float, float] | list[float] = (-1.0, 1.0),
+        warmup: int = 400,
+    ) -> None:
+        del input_gain  # voltage output; the plant is identified online
+        v = validate_all(
+            self.PARAMETERS,
+            {
+                'k_p': k_p,
+                'k_i': k_i,
+                'position_gain': position_gain,
+                'voltage_limit': voltage_limit,
+                'velocity_source': velocity_source,
+                'phase_margin': phase_margin,
+                'forgetting': forgetting,
+                'initial_covariance': initial_covariance,
+                'covariance_limit': covariance_limit,
+                'input_taps': input_taps,
+                'a_bounds': list(a_bounds),
+                'b_bounds': list(b_bounds),
+                'warmup': warmup,
+            },
+            prefix=self.PREFIX + '.',
+        )
+        self._init_loop(sample_period, v)
+        self._kp0, self._ki0 = v['k_p'], v['k_i']
+        self._kp, self._ki = self._kp0, self._ki0
+        self._phi_m = math.radians(v['phase_margin'])
+        self._warmup = v['warmup']
+        self._w_gc = math.nan
+        self._adapted = False
+        self.rls = RlsEstimator(
+            self._T,
+            n_b=v['input_taps'],
+            forgetting=v['forgetting'],
+            initial_covariance=v['initial_covariance'],
+            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
+            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
+            covariance_limit=v['covariance_limit'],
+        )
+
+    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+        """Voltage [V]; identifies the plant from (v(k), u(k)) and re-tunes every sample."""
+        v = self._measure(t, y, ref, est)
+        self._retune()
+        u = self._pi_step(self._error(y, ref, v), self._kp, self._ki)
+        self.rls.update(v, u)  # u(k) enters the regressor of the next samples
+        return u
+
+    def _retune(self) -> None:
+        if self.rls.diagnostics()['updates'] < self._warmup:
+            return
+        model = self.rls.fopdt()
+        a = float(self.rls.theta[0])
+        if not (0.0 < a < 1.0 and model.gain > 0.0):
+            return  # keep the last gains
+        self._kp, self._ki, self._w_gc = phase_margin_pi(model, self._phi_m, 0.5 * self._T)
+        self._adapted = True
+
+    def reset(self) -> None:
+        super().reset()
+        self.rls.reset()
+        self._kp, self._ki = self._kp0, self._ki0
+        self._adapted = False
+        self._w_gc = math.nan
+
+    # --- published state -------------------------------------------------------------
+
+    @property
+    def gains(self) -> tuple[float, float]:
+        """Current (K_p [V/(m/s)], K_i [V/m])."""
+        return self._kp, self._ki
+
+    @property
+    def adapted(self) -> bool:
+        """True once the gains come from the estimate."""
+        return self._adapted
+
+    @property
+    def crossover(self) -> float:
+        """ω_gc of the current design [rad/s] (nan before adaptation)."""
+        return self._w_gc
+
+    def model(self) -> FopdtEstimate:
+        """Current FOPDT estimate: K [(m/s)/V], τ [s], θ_d [s]."""
+        return self.rls.fopdt()
+
+    def status(self) -> dict[str, float]:
+        """Everything worth publishing: estimates, gains, RLS diagnostics."""
+        m = self.rls.fopdt()
+        out = {
+            'k_p': self._kp,
+            'k_i': self._ki,
+            'crossover': self._w_gc,
+            'adapted': 1.0 if self._adapted else 0.0,
+            'gain': m.gain,
+            'time_constant': m.time_constant,
+            'dead_time': m.dead_time,
+        }
+        out.update(self.rls.diagnostics())
+        return out

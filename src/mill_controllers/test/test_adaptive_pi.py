@@ -1,0 +1,115 @@
+"""AdaptivePi / MachinePi on the velocity loop of Hatwesh 2013 Table 1 (x axis)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.signal
+from mill_common.parameters import ParameterError
+from mill_common.signals import AxisReference, Estimate
+from mill_controllers.adaptive_pi import AdaptivePi, MachinePi, phase_margin_pi
+from mill_observers.rls import FopdtEstimate
+
+# Hatwesh 2013 Table 1, x axis
+KA, KT, B, J = 15.7311, 1.39, 14e-4, 2.8828e-3
+PITCH, T = 0.012, 0.25e-3
+K_TRUE = KA * KT / B * PITCH / (2 * math.pi)  # (m/s)/V ≈ 29.83
+
+
+def simulate(ctrl, inertia=J, duration=1.0, v_ref=0.05):
+    """Eq. (3) with ZOH at 0.25 ms; square-wave velocity reference ±v_ref at 5 Hz.
+
+    Returns (t, v_ref, v, u) or None if it diverged.
+    """
+    a = np.array([[0.0, PITCH / (2 * math.pi)], [0.0, -B / inertia]])
+    b = np.array([[0.0], [KA * KT / inertia]])
+    ad, bd, *_ = scipy.signal.cont2discrete((a, b, np.eye(2), np.zeros((2, 1))), T, 'zoh')
+    x = np.zeros(2)
+    out = []
+    for k in range(round(duration / T)):
+        t = k * T
+        r = v_ref if (t % 0.2) < 0.1 else -v_ref
+        u = ctrl.compute(t, x[0], AxisReference(0.0, r, 0.0), Estimate(x[0], 0.0, 0.0))
+        out.append((t, r, x[1] * PITCH / (2 * math.pi), u))
+        x = ad @ x + bd[:, 0] * u
+        if not np.all(np.abs(x) < 1e6):
+            return None
+    return np.array(out)
+
+
+@pytest.mark.parametrize(
+    ('gain', 'tau', 'dead', 'phi_deg'),
+    [(29.8, 2.06, 0.0, 60.0), (5.0, 0.01, 1e-3, 45.0), (100.0, 0.3, 2.5e-4, 70.0)],
+)
+def test_phase_margin_rule_gives_phi_m_at_the_crossover(gain, tau, dead, phi_deg) -> None:
+    model = FopdtEstimate(gain, tau, dead, dead / T)
+    phi = math.radians(phi_deg)
+    kp, ki, w_gc = phase_margin_pi(model, phi, 0.5 * T)
+    theta = dead + 0.5 * T
+
+    def loop(w):  # full L = PI × FOPDT, no cancellation assumed
+        s = 1j * w
+        return (kp + ki / s) * gain * np.exp(-s * theta) / (tau * s + 1.0)
+
+    lw = loop(w_gc)
+    assert abs(lw) == pytest.approx(1.0, rel=1e-12)
+    assert np.angle(lw) == pytest.approx(-math.pi + phi, abs=1e-12)
+    # It is the only crossover: |L| falls monotonically through 1.
+    w = np.logspace(-3, 3, 2000) * w_gc
+    mag = np.abs(loop(w))
+    assert np.all(np.diff(mag) < 0)
+
+
+def test_adaptive_pi_identifies_the_plant_and_retunes() -> None:
+    ctrl = AdaptivePi(0.0, T)
+    assert ctrl.gains == pytest.approx((1.5735 / PITCH, 5.4976 / PITCH))
+    out = simulate(ctrl)
+    assert out is not None
+    st = ctrl.status()
+    assert ctrl.adapted
+    # Measured: K 29.09 vs 29.83 (−2.5 %), τ 2.008 vs 2.059 s, θ_d 0.5 sample (the
+    # backward-difference velocity lags half a sample).
+    assert st['gain'] == pytest.approx(K_TRUE, rel=0.05)
+    assert st['time_constant'] == pytest.approx(J / B, rel=0.05)
+    assert st['dead_time'] == pytest.approx(0.5 * T, rel=0.2)
+    # Tracks the reference: error small at the end of each 0.1 s half period.
+    ends = [round(t / T) - 1 for t in (0.7, 0.8, 0.9)]
+    assert np.all(np.abs(out[ends, 1] - out[ends, 2]) < 1e-3 * 0.05)
+
+
+def test_inertia_change_raises_the_proportional_gain() -> None:
+    nominal, heavy = AdaptivePi(0.0, T), AdaptivePi(0.0, T)
+    simulate(nominal)
+    assert simulate(heavy, inertia=3 * J) is not None
+    # K_p = τ ω_gc / K ∝ J: three times the inertia, three times K_p (measured 3.00).
+    assert heavy.gains[0] / nominal.gains[0] == pytest.approx(3.0, rel=0.05)
+
+
+@pytest.mark.parametrize(
+    ('unit', 'stable'),
+    [
+        ('rev/s', True),
+        ('m/min', True),
+        ('m/s', True),
+        ('rad/s', False),
+        ('rpm', False),
+        ('mm/s', False),
+    ],
+)
+def test_machine_pi_is_stable_only_in_some_velocity_units(unit, stable) -> None:
+    out = simulate(MachinePi(0.0, T, velocity_unit=unit, voltage_limit=math.inf), duration=0.3)
+    assert (out is not None) == stable
+    if unit == 'rev/s':
+        assert abs(out[-1, 1] - out[-1, 2]) < 2e-3 * 0.05  # settled at the end
+
+
+def test_parameters_are_checked() -> None:
+    with pytest.raises(ParameterError, match='phase_margin'):
+        AdaptivePi.from_parameters(0.0, T, {'phase_margin': 95.0})
+    with pytest.raises(ParameterError, match='a_bounds'):
+        AdaptivePi.from_parameters(0.0, T, {'a_bounds': [1.0, 0.5]})
+    with pytest.raises(ParameterError, match='velocity_unit'):
+        MachinePi.from_parameters(0.0, T, {'velocity_unit': 'furlong/s'})
+    assert MachinePi(0.0, T).gains_si == pytest.approx((1.5735 / PITCH, 5.4976 / PITCH))

@@ -1,0 +1,180 @@
+"""Recursive least squares with exponential forgetting, Hatwesh 2013 eq. (10)-(13) (ROS-free).
+
+Model (reading of eq. (11)-(12)): a first-order plant with an input delay line,
+
+    y(k) = a·y(k−1) + Σ_{i=1..m} b_i·u(k−i),      θ = [a, b_1, …, b_m],
+
+so h(k) = [y(k−1), u(k−1), …, u(k−m)]. Eq. (12) prints h with −y(k−1) but the model's
+denominator 1 − a q⁻¹; the signs are made consistent here (a > 0 is the sampled pole).
+With m = 1 this is eq. (11)'s FOPDT with zero dead time; with m > 1, the leading taps of
+a dead time d tend to zero ("RLS estimation approaches to zero for unwanted parameters"),
+which is how the dead time is read off.
+
+Update (the standard form; eq. (13) prints a minus sign and a power ρ^(k−1)):
+
+    ε(k) = y(k) − θ̂ᵀ(k−1) h(k)
+    g(k) = P(k−1) h(k) / (λ + hᵀ(k) P(k−1) h(k))
+    θ̂(k) = θ̂(k−1) + g(k) ε(k)
+    P(k) = (P(k−1) − g(k) hᵀ(k) P(k−1)) / λ
+
+then θ̂ is projected (clipped) onto the box a ∈ [a_min, a_max], b_i ∈ [b_min, b_max],
+and P is scaled down if its trace exceeds a limit (covariance wind-up guard when the
+signals are not exciting).
+
+FOPDT read-out (eq. (11): a = e^{−T_s/τ}, b = K(1 − a)):
+    K = Σ b_i / (1 − a),  τ = −T_s / ln a,
+    dead time d = Σ (i−1)·b_i / Σ b_i samples (the b-weighted centroid of the delay line:
+    exactly d for a pure d-sample delay, fractional for a delay between samples),
+    θ_d = d·T_s.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class FopdtEstimate:
+    """Gain K [y-unit per u-unit], time constant τ [s], dead time θ_d [s] (and in samples)."""
+
+    gain: float
+    time_constant: float
+    dead_time: float
+    dead_time_samples: float
+
+
+class RlsEstimator:
+    """θ = [a, b_1..b_m] of y(k) = a y(k−1) + Σ b_i u(k−i), with forgetting and bounds.
+
+    Call update(y, u) once per sample with the new output y(k) and the input u(k) that will
+    be applied from k on (it enters the regressor of later samples).
+    """
+
+    def __init__(
+        self,
+        sample_period: float,
+        n_b: int = 1,
+        forgetting: float = 0.995,
+        initial_covariance: float = 1e4,
+        initial_theta: Sequence[float] | None = None,
+        a_bounds: tuple[float, float] = (0.0, 0.999999),
+        b_bounds: tuple[float, float] = (-1e6, 1e6),
+        covariance_limit: float = 1e8,
+    ) -> None:
+        if not (sample_period > 0 and math.isfinite(sample_period)):
+            raise ValueError(f'sample_period must be > 0, got {sample_period!r}')
+        if not isinstance(n_b, int) or n_b < 1:
+            raise ValueError(f'n_b must be a whole number >= 1, got {n_b!r}')
+        if not 0.0 < forgetting <= 1.0:
+            raise ValueError(f'forgetting factor must be in (0, 1], got {forgetting!r}')
+        if not initial_covariance > 0:
+            raise ValueError(f'initial_covariance must be > 0, got {initial_covariance!r}')
+        if not (a_bounds[0] < a_bounds[1] and b_bounds[0] < b_bounds[1]):
+            raise ValueError('bounds must be (low, high) with low < high')
+        if not covariance_limit > 0:
+            raise ValueError(f'covariance_limit must be > 0, got {covariance_limit!r}')
+        self._T = float(sample_period)
+        self._m = n_b
+        self._lam = float(forgetting)
+        self._p0 = float(initial_covariance)
+        self._lo = np.array([a_bounds[0], *[b_bounds[0]] * n_b], dtype=float)
+        self._hi = np.array([a_bounds[1], *[b_bounds[1]] * n_b], dtype=float)
+        self._p_limit = float(covariance_limit)
+        if initial_theta is None:
+            theta0 = np.array([0.5 * (a_bounds[0] + a_bounds[1]), *[0.0] * n_b])
+        else:
+            theta0 = np.asarray(initial_theta, dtype=float)
+            if theta0.shape != (n_b + 1,):
+                raise ValueError(f'initial_theta must have {n_b + 1} entries')
+        self._theta0 = np.clip(theta0, self._lo, self._hi)
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to θ̂(0), P(0) = p0·I; the regressor history is forgotten."""
+        n = self._m + 1
+        self._theta = self._theta0.copy()
+        self._p = self._p0 * np.eye(n)
+        self._y_prev: float | None = None
+        self._u_hist = np.zeros(self._m)  # u(k−1), …, u(k−m)
+        self._updates = 0
+        self._last_error = 0.0
+        self._err_sq = 0.0  # exponentially weighted mean of ε²
+        self._clipped = False
+
+    def update(self, y: float, u: float) -> float:
+        """Feed y(k) and u(k); returns the a-priori error ε(k) (0 on the first call)."""
+        if not (math.isfinite(y) and math.isfinite(u)):
+            raise ValueError(f'RlsEstimator.update: non-finite sample y={y!r}, u={u!r}')
+        eps = 0.0
+        if self._y_prev is not None:
+            # Hatwesh 2013 eq. (12): h(k) = [y(k−1), u(k−1), …, u(k−m)] (sign made consistent)
+            h = np.concatenate(([self._y_prev], self._u_hist))
+            # Hatwesh 2013: ε(k) = y(k) − θ̂ᵀ(k−1) h(k)
+            eps = float(y - self._theta @ h)
+            ph = self._p @ h
+            # Hatwesh 2013 eq. (13), standard form: g = P h / (λ + hᵀ P h)
+            g = ph / (self._lam + h @ ph)
+            # θ̂(k) = θ̂(k−1) + g ε   (the printed minus sign read as +)
+            theta = self._theta + g * eps
+            clipped = np.clip(theta, self._lo, self._hi)
+            self._clipped = bool(np.any(clipped != theta))
+            self._theta = clipped
+            # P(k) = (P − g hᵀ P)/λ, kept symmetric
+            p = (self._p - np.outer(g, ph)) / self._lam
+            p = 0.5 * (p + p.T)
+            tr = float(np.trace(p))
+            if tr > self._p_limit:
+                p *= self._p_limit / tr
+            self._p = p
+            self._updates += 1
+            self._last_error = eps
+            self._err_sq = self._lam * self._err_sq + (1.0 - self._lam) * eps * eps
+        self._y_prev = float(y)
+        if self._m:
+            self._u_hist = np.concatenate(([float(u)], self._u_hist[:-1]))
+        return eps
+
+    # --- read-outs -------------------------------------------------------------------
+
+    @property
+    def theta(self) -> np.ndarray:
+        """[a, b_1, …, b_m] (a copy)."""
+        return self._theta.copy()
+
+    @property
+    def covariance(self) -> np.ndarray:
+        return self._p.copy()
+
+    @property
+    def sample_period(self) -> float:
+        return self._T
+
+    def fopdt(self) -> FopdtEstimate:
+        """K, τ, θ_d of eq. (10)-(11) from θ̂ (see the module docstring)."""
+        a = float(self._theta[0])
+        b = self._theta[1:]
+        b_sum = float(b.sum())
+        # Hatwesh 2013 eq. (11): a = e^{−T_s/τ}, b = K (1 − a)
+        gain = b_sum / (1.0 - a)
+        tau = -self._T / math.log(a) if 0.0 < a < 1.0 else math.inf if a >= 1.0 else 0.0
+        if b_sum != 0.0:
+            d = float(np.arange(self._m) @ b) / b_sum
+            d = min(max(d, 0.0), float(self._m - 1))
+        else:
+            d = 0.0
+        return FopdtEstimate(gain, tau, d * self._T, d)
+
+    def diagnostics(self) -> dict[str, float]:
+        """Convergence diagnostics: updates, last a-priori error, its forgetting-weighted RMS,
+        trace of P, and whether the last update hit a bound (1.0) or not (0.0)."""
+        return {
+            'updates': float(self._updates),
+            'last_error': self._last_error,
+            'error_rms': math.sqrt(self._err_sq),
+            'covariance_trace': float(np.trace(self._p)),
+            'clipped': 1.0 if self._clipped else 0.0,
+        }
