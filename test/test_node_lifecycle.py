@@ -9,6 +9,14 @@ import time
 import pytest
 
 from test.conftest import wait_until
+from test.test_bad_input import ros_node
+
+
+def wait_until_in_graph(name: str) -> None:
+    """The node has started spinning (its signal handlers are installed by then)."""
+    with ros_node('lifecycle_probe') as (probe, _executor):
+        assert wait_until(lambda: name in probe.get_node_names(), 60), f'{name} never appeared'
+
 
 NODES = [
     ('mill_controllers.axis_controller_node', 'x_controller'),
@@ -22,9 +30,7 @@ NODES = [
 @pytest.mark.parametrize(('module', 'name'), NODES, ids=[n for _, n in NODES])
 def test_double_sigint_exits_cleanly(start_node, module, name) -> None:
     node = start_node(module, name)
-    # Up and spinning: it has logged its start-up line.
-    assert wait_until(lambda: node.alive(), 5)
-    time.sleep(3.0)
+    wait_until_in_graph(name)
     assert node.alive()
     node.proc.send_signal(signal.SIGINT)
     time.sleep(0.05)
@@ -38,7 +44,7 @@ def test_double_sigint_exits_cleanly(start_node, module, name) -> None:
 @pytest.mark.system
 def test_sigterm_exits_cleanly(start_node) -> None:
     node = start_node('mill_controllers.axis_controller_node', 'x_controller')
-    time.sleep(3.0)
+    wait_until_in_graph('x_controller')
     node.proc.send_signal(signal.SIGTERM)
     code, _out, err = node.wait(timeout=30)
     assert code == 0, err

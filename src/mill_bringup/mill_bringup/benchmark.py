@@ -2,12 +2,19 @@
 
     benchmark                    # 10 s of the slotting job + 5000 ping-pong round trips
     benchmark --duration 53.334  # the whole job
+    benchmark --record --repeat 3                 # cost of recording every topic
+    benchmark --record --duration 53.334 --repeat 1 --round-trips 0
 
 Prints steps per second and the real-time factor of the distributed job at
 the scenario's sample rate, the peak RSS of every process of the graph, and,
 in the same run, the round-trip rate of a plain rclpy ping-pong between two
 processes (same message type, QoS and executor): the most any lockstep loop
 that crosses processes could reach on this machine.
+
+With --record, the job runs --repeat times without and --repeat times with
+recording every topic to a rosbag2 bag (`run_scenario --record`), alternating,
+and prints the slowdown of the median steps per second, the bag size per
+simulated second and the time `report` takes on the last bag.
 """
 
 from __future__ import annotations
@@ -15,9 +22,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from mill_common.env import ros_environment
@@ -50,6 +59,72 @@ def measure_pingpong(count: int, env: dict[str, str]) -> dict:
         pong.wait()
 
 
+def _rates(values: list[float], fmt: str = '.0f') -> str:
+    return ' '.join(format(v, fmt) for v in values)
+
+
+def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
+    """Runs without and with recording, alternating; the bag's size and the report's time."""
+    plain, recorded = [], []
+    plain_cpu, recorded_cpu = [], []
+    result = None
+    bag = None
+    for i in range(repeat):
+        order = (False, True) if i % 2 == 0 else (True, False)
+        for record in order:
+            run_dir = tmp / f'run{i}-{"rec" if record else "plain"}'
+            bag = run_dir / 'bag' if record else bag
+            print(
+                f'  run {i + 1}/{repeat} {"with" if record else "without"} recording ...',
+                file=sys.stderr,
+            )
+            r = run(
+                scen,
+                run_dir,
+                quiet=True,
+                domain_id=env['ROS_DOMAIN_ID'],
+                record_bag=run_dir / 'bag' if record else None,
+            )
+            (recorded if record else plain).append(r.steps_per_second)
+            (recorded_cpu if record else plain_cpu).append(r.cpu_ms_per_step)
+            if record:
+                result = r
+    import resource
+
+    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.monotonic()
+    proc = subprocess.run(
+        [sys.executable, '-m', 'mill_bringup.report', str(bag), '--out', str(tmp / 'report')],
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    report_seconds = time.monotonic() - t0
+    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    report_cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
+    plain_median = statistics.median(plain)
+    recorded_median = statistics.median(recorded)
+    figures = {
+        'repeat': repeat,
+        'plain_steps_per_second': plain,
+        'recorded_steps_per_second': recorded,
+        'plain_median': plain_median,
+        'recorded_median': recorded_median,
+        'slowdown_percent': 100.0 * (1.0 - recorded_median / plain_median),
+        'plain_cpu_ms_per_step': plain_cpu,
+        'recorded_cpu_ms_per_step': recorded_cpu,
+        'cpu_increase_percent': 100.0
+        * (statistics.median(recorded_cpu) / statistics.median(plain_cpu) - 1.0),
+        'bag_messages': result.bag['messages'],
+        'bag_bytes': result.bag['size_bytes'],
+        'bag_bytes_per_sim_second': result.bag['bytes_per_sim_second'],
+        'report_seconds': report_seconds,
+        'report_cpu_seconds': report_cpu,
+        'report_exit_code': proc.returncode,
+    }
+    return result, figures
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='benchmark',
@@ -61,16 +136,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--round-trips', type=int, default=5000, help='ping-pong round trips')
     parser.add_argument('--executor', choices=EXECUTORS, help='rclpy executor of every node')
     parser.add_argument('--json', type=Path, help='also write the figures to this file')
+    parser.add_argument(
+        '--record',
+        action='store_true',
+        help='measure the cost of recording every topic (runs with and without), bag size '
+        'and report time',
+    )
+    parser.add_argument(
+        '--repeat', type=int, default=3, help='runs with and without recording (--record)'
+    )
     args = parser.parse_args(argv)
     if args.executor:
         os.environ['MILL_EXECUTOR'] = args.executor
     executor = os.environ.get('MILL_EXECUTOR', 'events')
     env = ros_environment()
+    recording = None
     try:
-        print(
-            f'ping-pong: {args.round_trips} round trips between two processes ...', file=sys.stderr
-        )
-        pp = measure_pingpong(args.round_trips, env)
+        pp = None
+        if args.round_trips > 0:
+            print(
+                f'ping-pong: {args.round_trips} round trips between two processes ...',
+                file=sys.stderr,
+            )
+            pp = measure_pingpong(args.round_trips, env)
         scen = scenario_mod.load(args.scenario)
         for node in scen.nodes_of('mill_trajectory'):
             scen.add_override(f'{node.name}.duration={args.duration!r}')
@@ -79,7 +167,10 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         with tempfile.TemporaryDirectory() as tmp:
-            result = run(scen, Path(tmp), quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+            if args.record:
+                result, recording = measure_recording(scen, Path(tmp), env, max(1, args.repeat))
+            else:
+                result = run(scen, Path(tmp), quiet=True, domain_id=env['ROS_DOMAIN_ID'])
     except (scenario_mod.ScenarioError, RunError, TimeoutError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
@@ -91,27 +182,58 @@ def main(argv: list[str] | None = None) -> int:
         'wall_time_s': result.wall_time,
         'steps_per_second': result.steps_per_second,
         'real_time_factor': result.real_time_factor,
-        'pingpong_round_trips_per_second': pp['round_trips_per_second'],
-        'pingpong_median_ms': pp['median_ms'],
-        'pingpong_p99_ms': pp['p99_ms'],
-        'pingpong_cpu_us_per_round_trip': pp['ping_cpu_us_per_round_trip'],
+        'cpu_ms_per_step': result.cpu_ms_per_step,
         'peak_rss_mb': result.peak_rss_mb,
         'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
         'cpu_count': os.cpu_count(),
+        'load_average_1min': os.getloadavg()[0],
     }
+    if pp is not None:
+        figures.update(
+            {
+                'pingpong_round_trips_per_second': pp['round_trips_per_second'],
+                'pingpong_median_ms': pp['median_ms'],
+                'pingpong_p99_ms': pp['p99_ms'],
+                'pingpong_cpu_us_per_round_trip': pp['ping_cpu_us_per_round_trip'],
+            }
+        )
+    if recording is not None:
+        figures['recording'] = recording
     rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(result.peak_rss_mb.items()))
-    print(
+    lines = [
         f'lockstep job ({len(scen.nodes)} processes, {rate:g} Hz, executor {executor}, '
-        f'{os.cpu_count()} cores):\n'
+        f'{os.cpu_count()} cores):',
         f'  {result.steps_per_second:8.0f} steps/s   real-time factor '
         f'{result.real_time_factor:.2f}   ({result.sim_time:g} s machine time in '
-        f'{result.wall_time:.1f} s)\n'
-        f'transport limit, rclpy ping-pong between two processes:\n'
-        f'  {pp["round_trips_per_second"]:8.0f} round trips/s   median '
-        f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
-        f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip\n'
-        f'peak RSS of the graph: {figures["peak_rss_total_mb"]:.0f} MB ({rss})'
-    )
+        f'{result.wall_time:.1f} s, {result.cpu_ms_per_step:.2f} ms CPU per step)',
+    ]
+    if pp is not None:
+        lines += [
+            'transport limit, rclpy ping-pong between two processes:',
+            f'  {pp["round_trips_per_second"]:8.0f} round trips/s   median '
+            f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
+            f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip',
+        ]
+    lines.append(f'peak RSS of the graph: {figures["peak_rss_total_mb"]:.0f} MB ({rss})')
+    if recording is not None:
+        rec = recording
+        lines += [
+            f'recording every topic ({rec["repeat"]} runs each, alternating):',
+            f'  without {_rates(rec["plain_steps_per_second"])} steps/s, median '
+            f'{rec["plain_median"]:.0f}',
+            f'  with    {_rates(rec["recorded_steps_per_second"])} steps/s, median '
+            f'{rec["recorded_median"]:.0f}',
+            f'  slowdown {rec["slowdown_percent"]:.1f} % (of the median steps/s)',
+            f'  CPU per step without {_rates(rec["plain_cpu_ms_per_step"], ".2f")} ms, with '
+            f'{_rates(rec["recorded_cpu_ms_per_step"], ".2f")} ms: '
+            f'+{rec["cpu_increase_percent"]:.1f} % (medians; graph + runner while stepping)',
+            f'  bag: {rec["bag_messages"]} messages, {rec["bag_bytes"] / 1e6:.1f} MB, '
+            f'{rec["bag_bytes_per_sim_second"] / 1e6:.3f} MB per simulated second',
+            f'  report on the bag ({result.sim_time:g} s job): {rec["report_seconds"]:.1f} s '
+            f'wall, {rec["report_cpu_seconds"]:.1f} s CPU (exit code {rec["report_exit_code"]})',
+        ]
+    lines.append(f'load average (1 min) at the end: {figures["load_average_1min"]:.2f}')
+    print('\n'.join(lines))
     if args.json:
         args.json.write_text(json.dumps(figures, indent=2))
     return 0

@@ -3,12 +3,15 @@
     run_scenario slotting                      # the Beltrán 2013 job, 8 processes
     run_scenario slotting --controller pd      # the uncompensated run
     run_scenario slotting --duration 5 --compare-offline
+    run_scenario slotting --record             # also write the run to a rosbag2 bag (RUN_DIR/bag)
 
 Each node runs as `ros2 run` would start it (`--ros-args -r __node:=NAME
 --params-file SCENARIO`). The runner listens to the run, shows progress, stops
 the graph when the trajectory reports the job done, and prints per-axis
 tracking and disturbance-estimation errors, wall time and real-time factor.
-Logs and summary.json go to the run directory (--output).
+Logs and summary.json go to the run directory (--output). With --record the
+monitor also writes every topic of the graph to a rosbag2 bag in MCAP storage
+(see mill_bringup.recorder); `report BAG` analyses it.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from mill_common.timebase import period_ns, seconds
 from mill_trajectory.config import build_job
 
 from mill_bringup import scenario as scenario_mod
+from mill_bringup.bag import BagError
 from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
 from mill_bringup.offline import apply_cli_overrides, job_steps, simulate
 
@@ -55,7 +59,9 @@ class RunResult:
     missing_samples: dict[str, int]
     peak_rss_mb: dict[str, float]
     domain_id: str
+    cpu_ms_per_step: float | None = None  # CPU time of graph + runner per step while stepping
     offline_max_difference: float | None = None
+    bag: dict | None = None
     record: RunRecord | None = field(default=None, repr=False)
 
     def to_json(self) -> dict:
@@ -71,6 +77,15 @@ def module_of(package: str, executable: str) -> str:
         if ep.name == executable and ep.value.startswith(package + '.'):
             return ep.value.split(':')[0]
     raise scenario_mod.ScenarioError(f'{package} has no executable {executable!r}')
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a live process [s] (/proc/PID/stat), 0 if unreadable."""
+    try:
+        fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+    except (OSError, IndexError, ValueError):
+        return 0.0
 
 
 def vm_hwm_mb(pid: int) -> float:
@@ -123,6 +138,10 @@ class Graph:
     def exited(self) -> dict[str, int]:
         return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
 
+    def cpu(self) -> float:
+        """CPU seconds used so far by the node processes and this process."""
+        return time.process_time() + sum(cpu_seconds(p.pid) for p in self.procs.values())
+
     def peak_rss(self) -> dict[str, float]:
         return {n: vm_hwm_mb(p.pid) for n, p in self.procs.items() if p.poll() is None}
 
@@ -174,10 +193,15 @@ def run(
     quiet: bool = False,
     domain_id: str | None = None,
     compare_offline: bool = False,
+    record_bag: Path | None = None,
 ) -> RunResult:
     # Validate every node's parameters before starting anything.
     for node in scen.nodes:
         scen.parameters(node.name)
+    # The runner's monitor listens to every state topic too: the plant waits for it
+    # (controller, observer, monitor), so the first samples reach the record.
+    for node in scen.nodes_of('mill_plant'):
+        scen.overrides.setdefault(node.name, {}).setdefault('min_subscribers', 3)
     plant_values = scen.parameters(scen.nodes_of('mill_plant')[0].name)
     dt_ns = period_ns(plant_values['sample_period'])
     job = build_job(scen.parameters(scen.nodes_of('mill_trajectory')[0].name))
@@ -187,15 +211,35 @@ def run(
     env = ros_environment(domain_id=domain_id)
     os.environ.update(env)
     import rclpy
-    from mill_common.node_main import make_executor
+    from mill_common.node_main import install_stop_handlers, make_executor
+    from rclpy.signals import SignalHandlerOptions
 
-    from mill_bringup.monitor import Monitor, plant_status
+    from mill_bringup.monitor import Monitor, RecordOptions, plant_status
 
+    options = None
+    if record_bag is not None:
+        # The graph's clock: nodes with use_sim_time stamp in sim time (the plant's k T).
+        trajectory = scen.nodes_of('mill_trajectory')[0].name
+        sim_time = bool(scen.raw_parameters(trajectory).get('use_sim_time', False))
+        options = RecordOptions(Path(record_bag), sim_time=sim_time)
     progress = Progress(quiet)
-    rclpy.init()
+    # SIGINT/SIGTERM only set a flag that the loops below turn into KeyboardInterrupt:
+    # raised inside a callback of the C++ EventsExecutor it would abort the process
+    # (std::terminate) and leave the graph running and the bag unclosed.
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    stop = install_stop_handlers()
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     graph = None
+    monitor = None
+    bag = None
+
+    def spin() -> None:
+        executor.spin_once(timeout_sec=0.05)
+        if stop:
+            raise KeyboardInterrupt
+
     try:
-        monitor = Monitor(axes)
+        monitor = Monitor(axes, record=options)
         executor = make_executor()
         executor.add_node(monitor)
         graph = Graph(scen, run_dir, env)
@@ -210,7 +254,7 @@ def run(
         state_topic = f'/mill/{axes[0]}/state'
         counts_needed = [f'/mill/{a}/{kind}' for a in axes for kind in ('state', 'estimate')]
         while True:
-            executor.spin_once(timeout_sec=0.05)
+            spin()
             now = time.monotonic()
             exited = graph.exited()
             if exited:
@@ -219,16 +263,20 @@ def run(
                     f'node {name} exited with code {code} before the job ended:\n'
                     + graph.log_tail(name)
                 )
+            if monitor.recorder is not None and monitor.recorder.error:
+                raise RunError(monitor.recorder.error)
             count = monitor.count(state_topic)
             if count != last_count:
                 last_count, last_change = count, now
                 if t_first is None:
                     t_first = now
+                    cpu_first = graph.cpu()
             if t_first is None and now - t_start > startup_timeout:
                 raise RunError(f'no step within {startup_timeout:g} s of the start')
             if t_first is not None and now - last_change > stall_timeout:
                 raise RunError(f'the run stalled: no new sample for {stall_timeout:g} s')
-            if all(monitor.count(t) >= n for t in counts_needed):
+            last_ns = (n - 1) * dt_ns
+            if all(monitor.latest_stamp_ns(t) >= last_ns for t in counts_needed):
                 break
             if t_first is not None:
                 t_sim = seconds(max(monitor.last_stamp_ns, 0))
@@ -238,20 +286,36 @@ def run(
                     f'({100 * t_sim / job.end_time:5.1f} %), real-time factor {rtf:.2f}'
                 )
         wall = time.monotonic() - t_first
+        cpu_ms_per_step = 1e3 * (graph.cpu() - cpu_first) / max(n - 1, 1)
         # Let the last ground-truth and force messages of the final step arrive.
         settle = time.monotonic() + 1.0
         while time.monotonic() < settle:
-            executor.spin_once(timeout_sec=0.05)
+            spin()
         peak = graph.peak_rss()
         status = plant_status(monitor.diagnostics, PLANT_STATUS)
         graph.stop()
         progress.done()
+        if monitor.recorder is not None:
+            # Take what the nodes sent before they stopped, then close the bag.
+            drain = time.monotonic() + 0.3
+            while time.monotonic() < drain:
+                spin()
+            monitor.close_recording()
+            bag = {
+                'path': str(record_bag),
+                'messages': monitor.recorder.message_count,
+                'size_bytes': monitor.recorder.writer.size_bytes,
+            }
         record, missing = monitor.record(n, dt_ns)
     finally:
         if graph is not None:
             graph.stop()
+        if monitor is not None:
+            monitor.close_recording()  # on every way out: the bag is closed and valid
         progress.done()
         rclpy.try_shutdown()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
     import resource
 
@@ -268,8 +332,12 @@ def run(
         missing_samples={k: v for k, v in missing.items() if v},
         peak_rss_mb=peak,
         domain_id=env['ROS_DOMAIN_ID'],
+        cpu_ms_per_step=cpu_ms_per_step,
+        bag=bag,
         record=record,
     )
+    if bag is not None:
+        bag['bytes_per_sim_second'] = bag['size_bytes'] / sim_time if sim_time > 0 else None
     faults = {k: v for k, v in status.items() if k.endswith('.faults') and v != '0'}
     if faults:
         sys.stderr.write(f'plant braked axes on non-finite commands (steps): {faults}\n')
@@ -296,7 +364,7 @@ def format_result(r: RunResult, skip: float) -> str:
         f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
         format_summary(r.metrics, skip),
         f'wall time {r.wall_time:.1f} s, real-time factor {r.real_time_factor:.2f}, '
-        f'{r.steps_per_second:.0f} steps/s',
+        f'{r.steps_per_second:.0f} steps/s, {r.cpu_ms_per_step:.2f} ms CPU per step',
         f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
         f'({len(r.peak_rss_mb)} processes)',
     ]
@@ -304,6 +372,13 @@ def format_result(r: RunResult, skip: float) -> str:
         lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
     if r.offline_max_difference is not None:
         lines.append(f'max |e_distributed - e_offline| = {r.offline_max_difference:.3e} m')
+    if r.bag is not None:
+        per_s = r.bag['bytes_per_sim_second']
+        lines.append(
+            f'bag {r.bag["path"]}: {r.bag["messages"]} messages, '
+            f'{r.bag["size_bytes"] / 1e6:.1f} MB'
+            + (f' ({per_s / 1e6:.2f} MB per simulated second)' if per_s else '')
+        )
     return '\n'.join(lines)
 
 
@@ -343,14 +418,29 @@ def main(argv: list[str] | None = None) -> int:
         action='store_true',
         help='also run the offline simulator and print the largest difference',
     )
+    parser.add_argument(
+        '--record',
+        nargs='?',
+        const='',
+        metavar='BAG',
+        help='write every topic to a rosbag2 bag (MCAP) in directory BAG, which must not '
+        'exist (default: RUN_DIR/bag)',
+    )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress line')
     args = parser.parse_args(argv)
+    # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     try:
         scen = scenario_mod.load(args.scenario)
         apply_cli_overrides(scen, args)
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
         run_dir.mkdir(parents=True, exist_ok=True)
+        record_bag = None
+        if args.record is not None:
+            record_bag = Path(args.record) if args.record else run_dir / 'bag'
+            if record_bag.exists():
+                raise RunError(f'--record: {record_bag} exists already; a bag is never overwritten')
         print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
         result = run(
             scen,
@@ -360,8 +450,9 @@ def main(argv: list[str] | None = None) -> int:
             quiet=args.quiet,
             domain_id=args.domain_id,
             compare_offline=args.compare_offline,
+            record_bag=record_bag,
         )
-    except (scenario_mod.ScenarioError, RunError) as exc:
+    except (scenario_mod.ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
         return 1
     except KeyboardInterrupt:

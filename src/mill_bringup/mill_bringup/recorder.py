@@ -1,0 +1,391 @@
+"""Recorder: writes a graph's topics into a rosbag2 bag in MCAP storage, as `ros2 bag record` does.
+
+    recorder --ros-args -p output:=runs/bag1                       # every topic
+    recorder --ros-args -p output:=bag1 -p "topics:=['/mill/x/state', '/clock']"
+    recorder --ros-args -p output:=bag1 -p regex:='^/mill/' -p use_sim_time:=true
+    ros2 run mill_bringup recorder --ros-args -p output:=bag1      # with a full ROS install
+
+`TopicRecorder` is the reusable part: it subscribes to topics of any node with
+serialized (raw) subscriptions, so a message is never decoded, and writes each
+message as it arrived (CDR) with its topic type and the publishers' offered QoS.
+The runner's monitor uses it to record a run in its own process
+(`run_scenario --record`), sharing the subscriptions it has anyway.
+
+Timestamps. Each message gets two: the MCAP log time (the one rosbag2 readers
+use) and the publish time. When the graph runs on sim time (`use_sim_time`),
+the log time is the message's own stamp for messages whose first field is a
+std_msgs/Header (and Clock.clock for /clock), i.e. k T for the mill topics, and
+the latest such stamp seen for other messages (/rosout, /parameter_events).
+Without sim time it is the wall-clock receive time, as `ros2 bag record`
+stores it. The publish time is always the wall-clock receive time (the
+EventsExecutor does not expose the DDS source timestamp), so the loop timing can
+be analysed from the bag.
+
+Durability. Messages are buffered in memory by the subscription callbacks and
+written every `flush_period` (<= 1 s) of wall time: each write closes an MCAP
+chunk, hands it to the OS and refreshes metadata.yaml. SIGINT or SIGTERM close
+the bag (summary, footer, final metadata.yaml); a hard kill loses at most the
+messages of the last `flush_period` and leaves a bag that `report` reads as it
+is and `python -m mill_bringup.bag recover` makes complete.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import importlib
+import re
+import sys
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mill_common.node_main import request_exit, run_node
+from mill_common.parameters import ParamSpec, in_range, one_of, text
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from mill_bringup.bag import (
+    COMPRESSIONS,
+    BagError,
+    BagWriter,
+    TopicInfo,
+    cdr_stamp_ns,
+    message_definition,
+    sim_stamped,
+)
+
+DEPTH = 2000  # as the data topics' own depth: a busy recorder must not drop samples
+
+
+def message_class(msgtype: str) -> type:
+    """The Python message class of 'pkg/msg/Name'."""
+    pkg, _, name = msgtype.partition('/msg/')
+    try:
+        return getattr(importlib.import_module(f'{pkg}.msg'), name)
+    except (ImportError, AttributeError):
+        raise BagError(f'message type {msgtype} is not installed') from None
+
+
+def _duration(d: Any) -> dict[str, int]:
+    sec, nsec = divmod(int(d.nanoseconds), 1_000_000_000)
+    return {'sec': sec, 'nsec': nsec}
+
+
+def qos_dicts(endpoints: Iterable[Any]) -> list[dict]:
+    """Offered QoS profiles of a topic's publishers, as rosbag2 (version 9) stores them."""
+    out = []
+    for info in endpoints:
+        p = info.qos_profile
+        out.append(
+            {
+                'history': p.history.name.lower(),
+                'depth': int(p.depth),
+                'reliability': p.reliability.name.lower(),
+                'durability': p.durability.name.lower(),
+                'deadline': _duration(p.deadline),
+                'lifespan': _duration(p.lifespan),
+                'liveliness': p.liveliness.name.lower(),
+                'liveliness_lease_duration': _duration(p.liveliness_lease_duration),
+                'avoid_ros_namespace_conventions': bool(p.avoid_ros_namespace_conventions),
+            }
+        )
+    return out
+
+
+def subscription_qos(endpoints: list[Any], depth: int = DEPTH) -> QoSProfile:
+    """A QoS that matches every publisher, as rosbag2 adapts it: reliable and transient-local
+    only if all publishers offer it."""
+    profiles = [e.qos_profile for e in endpoints]
+    reliable = bool(profiles) and all(p.reliability == ReliabilityPolicy.RELIABLE for p in profiles)
+    latched = bool(profiles) and all(
+        p.durability == DurabilityPolicy.TRANSIENT_LOCAL for p in profiles
+    )
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
+
+
+@dataclass
+class _Topic:
+    name: str
+    msgtype: str
+    stamped: bool
+    qos: list[dict] | None = None
+    type_hash: str | None = None
+    info: TopicInfo | None = None
+
+
+class TopicRecorder:
+    """Records topics of `node` into a rosbag2 MCAP bag at `output`.
+
+    topics / regex select what discovery subscribes to (neither: every topic;
+    both: either); `tap(topic, type)` gives a callback for a raw subscription the
+    node has already, `subscribe(topic, type, qos)` subscribes before the topic
+    is discovered (so the first message is not missed).
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        output: Path,
+        *,
+        topics: Iterable[str] = (),
+        regex: str = '',
+        sim_time: bool = False,
+        compression: str = 'zstd',
+        flush_period: float = 0.5,
+        discovery_period: float = 0.5,
+        discover: bool = True,
+    ) -> None:
+        self.node = node
+        self.sim_time = sim_time
+        self.names = {t if t.startswith('/') else '/' + t for t in topics}
+        try:
+            self.regex = re.compile(regex) if regex else None
+        except re.error as exc:
+            raise BagError(f'regex {regex!r} is not a valid regular expression: {exc}') from None
+        self.writer = BagWriter(output, compression)
+        self._buf: list[tuple[_Topic, int, bytes]] = []
+        self._topics: dict[str, _Topic] = {}
+        self._subs: list[Any] = []
+        self._skipped: set[str] = set()
+        self._latest_sim_ns = 0
+        self.closed = False
+        self.error: str | None = None  # why writing failed, if it did
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timers = [node.create_timer(flush_period, self._on_flush_timer, clock=steady)]
+        if discover:
+            self._timers.append(node.create_timer(discovery_period, self.discover, clock=steady))
+
+    # -- what to record ------------------------------------------------------------------------
+    def matches(self, topic: str) -> bool:
+        if not self.names and self.regex is None:
+            return not any(part.startswith('_') for part in topic.split('/'))  # no hidden topics
+        return topic in self.names or bool(self.regex and self.regex.search(topic))
+
+    def _entry(self, topic: str, msgtype: str) -> _Topic:
+        if topic in self._topics:
+            raise BagError(f'topic {topic} is recorded twice')
+        message_definition(msgtype)  # fails early for a type without definition
+        entry = _Topic(topic, msgtype, sim_stamped(msgtype))
+        self._topics[topic] = entry
+        return entry
+
+    def tap(self, topic: str, msgtype: str) -> Callable[[bytes], None]:
+        """Callback that records a serialized message of `topic` (for a subscription you own)."""
+        entry = self._entry(topic, msgtype)
+        append = self._buf.append
+        now = time.time_ns
+
+        def on_message(data: bytes) -> None:
+            append((entry, now(), data))
+
+        return on_message
+
+    def subscribe(self, topic: str, msgtype: str, qos: QoSProfile) -> None:
+        callback = self.tap(topic, msgtype)
+        self._subs.append(
+            self.node.create_subscription(message_class(msgtype), topic, callback, qos, raw=True)
+        )
+
+    def discover(self) -> None:
+        """Subscribe to new matching topics that have publishers; note the publishers' QoS."""
+        if self.closed:
+            return
+        for name, types in self.node.get_topic_names_and_types():
+            entry = self._topics.get(name)
+            if entry is not None:
+                if entry.info is None and entry.qos is None:
+                    self._note_publishers(entry)
+                continue
+            if name in self._skipped or not self.matches(name):
+                continue
+            endpoints = self.node.get_publishers_info_by_topic(name)
+            if not endpoints:
+                continue  # no publisher yet: its QoS is unknown
+            msgtype = types[0]
+            try:
+                self.subscribe(name, msgtype, subscription_qos(endpoints))
+            except BagError as exc:
+                self._skipped.add(name)
+                self.node.get_logger().warning(f'not recording {name}: {exc}')
+                continue
+            self._note_publishers(self._topics[name], endpoints)
+
+    def _note_publishers(self, entry: _Topic, endpoints: list[Any] | None = None) -> None:
+        if endpoints is None:
+            try:
+                endpoints = self.node.get_publishers_info_by_topic(entry.name)
+            except Exception:  # the context may be shut down already (Ctrl-C)
+                return
+        if endpoints:
+            entry.qos = qos_dicts(endpoints)
+            entry.type_hash = str(endpoints[0].topic_type_hash) or None
+
+    # -- writing -----------------------------------------------------------------------------
+    def _on_flush_timer(self) -> None:
+        # Nothing may be thrown through the executor: a failed write ends the node instead.
+        if self.error is not None:
+            return
+        try:
+            self.flush()
+        except (OSError, ValueError) as exc:
+            self.error = f'cannot write the bag {self.writer.path}: {exc}'
+            self.node.get_logger().error(self.error)
+            request_exit(self.node, 1, self.error)
+
+    def flush(self) -> None:
+        """Write what arrived since the last flush as one chunk; refresh metadata.yaml."""
+        if self.writer.closed:
+            return
+        buf = self._buf
+        n = len(buf)
+        batch = buf[:n]
+        del buf[:n]
+        writer = self.writer
+        latest = self._latest_sim_ns
+        for entry, received, data in batch:
+            info = entry.info
+            if info is None:
+                if entry.qos is None and not self.closed:
+                    self._note_publishers(entry)
+                info = entry.info = writer.add_topic(
+                    entry.name, entry.msgtype, entry.qos or [], entry.type_hash
+                )
+            if not self.sim_time:
+                stamp = received
+            elif entry.stamped and (stamp := cdr_stamp_ns(data)) is not None:
+                latest = max(latest, stamp)
+            else:
+                stamp = latest
+            writer.write(info, stamp, received, data)
+        self._latest_sim_ns = latest
+        writer.flush()
+
+    def close(self) -> None:
+        """Write the rest and close the bag (idempotent)."""
+        if self.writer.closed:
+            return
+        for timer in self._timers:
+            timer.cancel()
+        try:
+            try:
+                self.flush()
+            finally:
+                self.closed = True
+                self.writer.close()
+        except OSError as exc:
+            raise BagError(f'cannot write the bag {self.writer.path}: {exc}') from None
+
+    @property
+    def message_count(self) -> int:
+        return self.writer.message_count
+
+    def summary(self) -> str:
+        size = self.writer.size_bytes / 1e6
+        return (
+            f'bag {self.writer.path}: {self.writer.message_count} messages on '
+            f'{len(self.writer.topics)} topics, {size:.1f} MB'
+        )
+
+
+# -- the recorder node -------------------------------------------------------------------------
+
+
+def _string_list(value: Any) -> str | None:
+    if isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
+        return None
+    return 'must be a list of topic names'
+
+
+def _regex(value: Any) -> str | None:
+    if not isinstance(value, str):
+        return 'must be a string'
+    try:
+        re.compile(value)
+    except re.error as exc:
+        return f'not a valid regular expression ({exc})'
+    return None
+
+
+def parameter_specs() -> list[tuple[str, ParamSpec]]:
+    specs = [
+        ParamSpec(
+            'output',
+            '',
+            'bag directory to create (default rosbag2_YYYY_MM_DD-HH_MM_SS); never overwritten',
+            text,
+            True,
+        ),
+        ParamSpec(
+            'topics', [], 'topics to record (empty and no regex: all topics)', _string_list, True
+        ),
+        ParamSpec('regex', '', 'also record topics matching this regular expression', _regex, True),
+        ParamSpec('compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), True),
+        ParamSpec(
+            'flush_period',
+            0.5,
+            'write buffered messages to the file this often [s]; a hard kill loses at most this',
+            in_range(0.05, 1.0),
+            True,
+        ),
+    ]
+    return [(s.name, s) for s in specs]
+
+
+class RecorderNode(Node):
+    def __init__(self) -> None:
+        super().__init__('recorder')
+        from mill_common.ros_params import NodeParameters
+
+        self.recorder: TopicRecorder | None = None
+        self.params = NodeParameters(self, parameter_specs(), lambda _values: None)
+        v = self.params.values
+        output = v['output'] or dt.datetime.now().strftime('rosbag2_%Y_%m_%d-%H_%M_%S')
+        sim_time = bool(self.get_parameter('use_sim_time').value)
+        self.recorder = TopicRecorder(
+            self,
+            Path(output),
+            topics=v['topics'],
+            regex=v['regex'],
+            sim_time=sim_time,
+            compression=v['compression'],
+            flush_period=v['flush_period'],
+        )
+        what = sorted(self.recorder.names)
+        if v['regex']:
+            what.append(f'topics matching {v["regex"]!r}')
+        self.get_logger().info(
+            f'recording {", ".join(what) or "all topics"} to {output} '
+            f'({"sim time" if sim_time else "wall time"} stamps)'
+        )
+
+    def destroy_node(self) -> None:
+        if self.recorder is not None:
+            self.recorder.close()
+            print(f'recorder: {self.recorder.summary()}', file=sys.stderr)
+            self.recorder = None
+        super().destroy_node()
+
+
+def main(argv: list[str] | None = None) -> int:
+    # run_node ends the node on SIGINT and SIGTERM alike; destroy_node closes the bag.
+    return run_node(
+        RecorderNode,
+        'recorder',
+        'Records topics into a rosbag2 bag in MCAP storage (as `ros2 bag record -s mcap`). '
+        'With use_sim_time:=true a message is stamped with its header stamp (sim time); '
+        'SIGINT/SIGTERM close the bag.',
+        parameter_specs(),
+        argv,
+    )
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,445 @@
+"""Recording runs to rosbag2 bags (issue 5), with real processes in a private domain on loopback.
+
+- `run_scenario --record`: the bag opens in rosbags and in mcap + mcap_ros2 with every message
+  decoded, and holds every message the lockstep implies was published; the metrics computed
+  from it equal the runner's summary; `report` on it writes report.md and the plots.
+- The standalone `recorder`: SIGINT and SIGTERM close a valid bag holding exactly what was
+  published; SIGKILL loses at most the last second and the rest is recoverable.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import signal
+import subprocess
+import sys
+import time
+from collections import Counter
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import rclpy
+import yaml
+from geometry_msgs.msg import WrenchStamped
+from mill_bringup.bag import cdr_stamp_ns, joint_state_cdr, open_bag, read_run, recover
+from mill_bringup.metrics import summarize
+from mill_common.ros import DATA_QOS, joint_state, to_stamp
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+
+from mill_common import topics
+from test.conftest import wait_until
+
+T_NS = 1_000_000
+AXES = ('x', 'y', 'z')
+PNGS = {
+    'position.png',
+    'tracking_error.png',
+    'torque.png',
+    'disturbance.png',
+    'disturbance_zoom.png',
+    'cutting_force.png',
+    'contour.png',
+    'error_spectrum.png',
+    'loop_timing.png',
+}
+
+_RUN: dict[str, object] = {}
+
+
+@pytest.fixture
+def recorded_run(ros_env, tmp_path_factory) -> dict:
+    """`run_scenario slotting --duration 2 --record` once for the module: run dir and stdout."""
+    if 'dir' not in _RUN:
+        out = tmp_path_factory.mktemp('recorded') / 'run'
+        proc = subprocess.run(
+            [
+                sys.executable,
+                '-m',
+                'mill_bringup.runner',
+                'slotting',
+                '--duration',
+                '2',
+                '--record',
+                '--quiet',
+                '--output',
+                str(out),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        _RUN.update(dir=out, stdout=proc.stdout)
+    return _RUN
+
+
+def both_readers(bag: Path) -> tuple[Counter, Counter, dict[str, list[int]]]:
+    """Messages per topic in rosbags and in mcap + mcap_ros2 (every message decoded by both),
+    and the header / clock stamps per topic in sample periods, in file order."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    by_rosbags = Counter()
+    with Reader(bag) as reader:
+        for conn, _timestamp, data in reader.messages():
+            msg = store.deserialize_cdr(data, conn.msgtype)
+            by_rosbags[conn.topic] += 1
+            if conn.msgtype == 'sensor_msgs/msg/JointState':
+                assert same_joint_state(joint_state_cdr(data), msg)  # report's fast reader
+    by_mcap = Counter()
+    ks: dict[str, list[int]] = {}
+    (mcap_file,) = bag.glob('*.mcap')
+    with open(mcap_file, 'rb') as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _schema, channel, message, decoded in reader.iter_decoded_messages(
+            log_time_order=False
+        ):
+            by_mcap[channel.topic] += 1
+            stamp = getattr(getattr(decoded, 'header', None), 'stamp', None)
+            stamp = decoded.clock if channel.topic == topics.CLOCK else stamp
+            if stamp is not None:
+                ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+                ks.setdefault(channel.topic, []).append(ns // T_NS)
+                assert message.log_time == ns  # sim time: the bag time is the stamp
+    return by_rosbags, by_mcap, ks
+
+
+def same_joint_state(a, b) -> bool:
+    return (
+        (a.header.stamp.sec, a.header.stamp.nanosec, a.header.frame_id, list(a.name))
+        == (b.header.stamp.sec, b.header.stamp.nanosec, b.header.frame_id, list(b.name))
+        and list(a.position) == list(b.position)
+        and list(a.velocity) == list(b.velocity)
+        and list(a.effort) == list(b.effort)
+    )
+
+
+def once_each(ks: list[int], first: int = 0, step: int = 1) -> bool:
+    return sorted(ks) == list(range(first, first + step * len(ks), step))
+
+
+@pytest.mark.system
+def test_recorded_run_opens_in_both_readers_with_every_published_message(recorded_run):
+    bag = recorded_run['dir'] / 'bag'
+    by_rosbags, by_mcap, ks = both_readers(bag)
+    assert by_rosbags == by_mcap
+    meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    listed = {t['topic_metadata']['name']: t for t in meta['topics_with_message_count']}
+    assert {name: t['message_count'] for name, t in listed.items()} == dict(by_mcap)
+    contract = {
+        **{topics.state(a): 'sensor_msgs/msg/JointState' for a in AXES},
+        **{topics.estimate(a): 'sensor_msgs/msg/JointState' for a in AXES},
+        **{topics.joint_command(a): 'sensor_msgs/msg/JointState' for a in AXES},
+        topics.REFERENCE: 'trajectory_msgs/msg/JointTrajectory',
+        topics.GROUND_TRUTH: 'sensor_msgs/msg/JointState',
+        topics.CUTTING_FORCE: 'geometry_msgs/msg/WrenchStamped',
+        topics.CLOCK: 'rosgraph_msgs/msg/Clock',
+        topics.DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
+    }
+    for name, msgtype in contract.items():
+        meta_topic = listed[name]['topic_metadata']
+        assert meta_topic['type'] == msgtype
+        assert meta_topic['type_description_hash'].startswith('RIHS01_')
+        qos = meta_topic['offered_qos_profiles']
+        assert qos and all(q['reliability'] == 'reliable' for q in qos), name
+
+    # What the lockstep says was published. The plant published states 0..K (step 0
+    # once more for each re-offer), /clock with every 10th step, the ground truth and
+    # force of every step it took (0..K-1, perhaps K); the controllers a command and the
+    # observers an estimate for every state (repeats of step 0 answered or not).
+    state_k = ks[topics.state('x')]
+    K = max(state_k)
+    repeats = state_k.count(0) - 1
+    assert K >= 2000  # the job's 2001 samples at least
+    for axis in AXES:
+        k = ks[topics.state(axis)]
+        assert k.count(0) == 1 + repeats and once_each([v for v in k if v], 1), axis
+        assert len(k) == K + 1 + repeats
+        for kind in (topics.estimate(axis), topics.joint_command(axis)):
+            k = ks[kind]
+            assert 1 <= k.count(0) <= 1 + repeats, kind
+            assert once_each([v for v in k if v], 1) and K - 1 <= max(k) <= K, kind
+    clock = ks[topics.CLOCK]
+    assert clock.count(0) == 1 + repeats and once_each([v for v in clock if v], 10, 10)
+    assert len(clock) == K // 10 + 1 + repeats
+    for name in (topics.GROUND_TRUTH, topics.CUTTING_FORCE):
+        assert once_each(ks[name]) and len(ks[name]) in (K, K + 1), name
+    ref = ks[topics.REFERENCE]  # one per /clock tick the trajectory answered
+    assert once_each([v for v in ref if v], 10, 10) and max(ref) >= 10 * (K // 10) - 10
+
+
+@pytest.mark.system
+def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
+    summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())
+    run = read_run(recorded_run['dir'] / 'bag')
+    assert run.n == summary['samples'] == 2001
+    assert run.missing == {} and summary['missing_samples'] == {}
+    from_bag = summarize(run.record, 1.0)
+    assert [m.axis for m in from_bag] == [m['axis'] for m in summary['metrics']] == list(AXES)
+    for m, ref in zip(from_bag, summary['metrics'], strict=True):
+        for key in ('max_error', 'rms_error', 'rms_disturbance_error', 'rms_disturbance'):
+            assert abs(getattr(m, key) - ref[key]) <= 1e-12, (m.axis, key)
+    assert summary['bag']['messages'] == run.message_count == sum(run.bag.counts.values())
+
+
+@pytest.mark.system
+def test_report_on_the_recorded_run(recorded_run, tmp_path):
+    out = tmp_path / 'report'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.report', str(recorded_run['dir'] / 'bag')),
+            *('--out', str(out), '--freqs', '60,120'),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert {p.name for p in out.glob('*.png')} == PNGS
+    text = (out / 'report.md').read_text()
+    for name in PNGS:
+        assert (out / name).stat().st_size > 10_000 and f']({name})' in text
+    # The runner's summary block, printed again from the bag by the same code.
+    runner_lines = recorded_run['stdout'].splitlines()
+    start = next(i for i, line in enumerate(runner_lines) if line.startswith('axis   max |e|'))
+    assert '\n'.join(runner_lines[start : start + 4]) in proc.stdout
+    assert 'no feed override in this bag' in proc.stdout
+    assert 'lockstep wait for commands mean' in proc.stdout
+
+
+def processes_mentioning(text: str) -> list[int]:
+    """Live processes whose command line contains `text`."""
+    pids = []
+    for proc in Path('/proc').glob('[0-9]*'):
+        try:
+            if text in (proc / 'cmdline').read_bytes().decode(errors='replace'):
+                pids.append(int(proc.name))
+        except OSError:
+            continue
+    return pids
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_path, sig):
+    run_dir = tmp_path / 'run'
+    bag = run_dir / 'bag'
+    proc = subprocess.Popen(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '30'),
+            *('--record', '--quiet', '--output', str(run_dir)),
+        ],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        # stepping, and the first flushes are on disk
+        assert wait_until(lambda: metadata_counts(bag).get(topics.state('x'), 0) > 200, 120)
+        proc.send_signal(sig)
+        _out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == 'run_scenario: interrupted'
+    assert wait_until(lambda: not processes_mentioning(str(run_dir)), 10), 'nodes left running'
+    by_rosbags, by_mcap, ks = both_readers(bag)  # complete: summary and footer written
+    assert by_rosbags == by_mcap == metadata_counts(bag)
+    states = sorted(set(ks[topics.state('x')]))
+    assert states == list(range(len(states))) and len(states) > 200
+
+
+# -- the standalone recorder ----------------------------------------------------------------
+
+RECORDED = (topics.state('x'), topics.CUTTING_FORCE, topics.CLOCK)
+
+
+@contextlib.contextmanager
+def ros_node(name: str) -> Iterator[Node]:
+    """A node of the test process in its own context (environment from ros_env)."""
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    try:
+        node = rclpy.create_node(name, context=context)
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(node)
+        try:
+            yield node
+        finally:
+            executor.shutdown()
+            node.destroy_node()
+    finally:
+        rclpy.try_shutdown(context=context)
+
+
+class FakePlant:
+    """Publishes what the plant would: state and force every step (stamp k T), /clock every 10."""
+
+    def __init__(self, node: Node) -> None:
+        self.state = node.create_publisher(JointState, topics.state('x'), DATA_QOS)
+        self.force = node.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
+        self.clock = node.create_publisher(Clock, topics.CLOCK, DATA_QOS)
+        self.walls: list[int] = []
+
+    def matched(self) -> bool:
+        return all(p.get_subscription_count() >= 1 for p in (self.state, self.force, self.clock))
+
+    def publish(self, k: int) -> None:
+        ns = k * T_NS
+        if k % 10 == 0:
+            self.clock.publish(Clock(clock=to_stamp(ns)))
+        self.state.publish(joint_state(ns, ('x',), position=(k * 1e-6,)))
+        force = WrenchStamped()
+        force.header.stamp = to_stamp(ns)
+        force.wrench.force.x = float(k)
+        self.force.publish(force)
+        self.walls.append(time.time_ns())
+
+
+def start_recorder(start_node, bag: Path):
+    return start_node(
+        'mill_bringup.recorder',
+        'recorder',
+        '-p',
+        f'output:={bag}',
+        '-p',
+        f'topics:={list(RECORDED)}',
+        '-p',
+        'use_sim_time:=true',
+        params_file=False,
+    )
+
+
+def metadata_counts(bag: Path) -> dict[str, int]:
+    try:
+        meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    except (OSError, yaml.YAMLError, TypeError, KeyError):
+        return {}
+    return {
+        t['topic_metadata']['name']: t['message_count'] for t in meta['topics_with_message_count']
+    }
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
+    bag = tmp_path / 'bag'
+    recorder = start_recorder(start_node, bag)
+    n = 600
+    with ros_node('fake_plant') as node:
+        plant = FakePlant(node)
+        assert wait_until(plant.matched, 60), 'the recorder never subscribed'
+        for k in range(n):
+            plant.publish(k)
+            time.sleep(0.001)
+        expected = {topics.state('x'): n, topics.CUTTING_FORCE: n, topics.CLOCK: n // 10}
+        # metadata.yaml is refreshed while recording: it shows every message before the end
+        assert wait_until(lambda: metadata_counts(bag) == expected, 30), metadata_counts(bag)
+    recorder.proc.send_signal(sig)
+    code, _out, err = recorder.wait(timeout=30)
+    assert code == 0, err
+    by_rosbags, by_mcap, ks = both_readers(bag)
+    assert by_rosbags == by_mcap == expected
+    assert ks[topics.state('x')] == list(range(n))
+    assert sorted(ks[topics.CLOCK]) == list(range(0, n, 10))
+    assert metadata_counts(bag) == expected
+
+
+@pytest.mark.system
+def test_sigkill_loses_at_most_the_last_second(start_node, tmp_path):
+    bag = tmp_path / 'bag'
+    recorder = start_recorder(start_node, bag)
+    kill_at, n = 2000, 3000  # about 2.5 s of publishing, then SIGKILL, then more
+    with ros_node('fake_plant') as node:
+        plant = FakePlant(node)
+        assert wait_until(plant.matched, 60), 'the recorder never subscribed'
+        for k in range(n):
+            plant.publish(k)
+            if k == kill_at:
+                killed_ns = time.time_ns()
+                recorder.proc.send_signal(signal.SIGKILL)
+            time.sleep(0.001)
+    code, _out, _err = recorder.wait(timeout=30)
+    assert code == -signal.SIGKILL
+    # metadata.yaml of the last flush identifies the bag; the MCAP file has no footer.
+    assert set(metadata_counts(bag)) == set(RECORDED)
+    reader = open_bag(bag)
+    rows = list(reader.read())
+    assert reader.truncated == [next(bag.glob('*.mcap'))]
+    state = [cdr_stamp_ns(d) // T_NS for t, _, _, _, d in rows if t == topics.state('x')]
+    assert state == list(range(len(state)))  # a whole prefix: nothing lost in between
+    before_last_second = max(k for k, w in enumerate(plant.walls) if w <= killed_ns - 10**9)
+    assert before_last_second < len(state) <= kill_at + 1
+    # the report reads it as it is, and says so
+    run = read_run(bag)
+    assert run.n == len(state) and topics.state('x') not in run.missing
+    assert any('not closed' in note for note in run.notes)
+    # recover: a complete bag that rosbags and mcap read, with every message kept
+    kept, files = recover(bag)
+    assert (kept, files) == (len(rows), 1)
+    by_rosbags, by_mcap, _ = both_readers(bag)
+    assert by_rosbags == by_mcap and sum(by_mcap.values()) == len(rows)
+
+
+@pytest.mark.system
+def test_recorder_refuses_an_existing_output_with_one_line(start_node, tmp_path):
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    proc = start_recorder(start_node, bag)
+    code, _out, err = proc.wait(timeout=60)
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert code == 2 and len(lines) == 1, err
+    assert lines[0] == f'recorder: error: {bag} exists already; a bag is never overwritten'
+
+
+@pytest.mark.system
+def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
+    bag = tmp_path / 'bag'
+    bag.mkdir()
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--record', str(bag)),
+            *('--output', str(tmp_path / 'run')),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    lines = [line for line in proc.stderr.splitlines() if line.strip()]
+    assert proc.returncode == 1 and len(lines) == 1, proc.stderr
+    assert (
+        lines[0]
+        == f'run_scenario: error: --record: {bag} exists already; a bag is never overwritten'
+    )
+
+
+@pytest.mark.system
+def test_recorder_and_report_help(ros_env):
+    for module, expected in (
+        ('mill_bringup.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
+        ('mill_bringup.report', ['--out', '--skip', '--freqs', '--window']),
+    ):
+        done = subprocess.run(
+            [sys.executable, '-m', module, '--help'],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.startswith('usage: ')
+        for word in expected:
+            assert word in done.stdout, (module, word)
