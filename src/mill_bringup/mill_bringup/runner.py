@@ -112,7 +112,13 @@ class Graph:
         overrides.write_text(
             yaml.safe_dump({n: {'ros__parameters': p} for n, p in scen.overrides.items()})
         )
-        for node in scen.nodes:
+        self._log_dir = log_dir
+        self._overrides = overrides
+        self._env = env
+
+    def launch(self, nodes) -> None:
+        """Start these nodes of the scenario, each in its own process."""
+        for node in nodes:
             cmd = [
                 sys.executable,
                 '-m',
@@ -121,17 +127,17 @@ class Graph:
                 '-r',
                 f'__node:={node.name}',
                 '--params-file',
-                str(scen.path),
+                str(self.scen.path),
                 '--params-file',
-                str(overrides),
+                str(self._overrides),
             ]
-            self.logs[node.name] = log_dir / f'{node.name}.log'
+            self.logs[node.name] = self._log_dir / f'{node.name}.log'
             with open(self.logs[node.name], 'w') as log:
                 self.procs[node.name] = subprocess.Popen(
                     cmd,
                     stdout=log,
                     stderr=subprocess.STDOUT,
-                    env=env,
+                    env=self._env,
                     start_new_session=True,
                 )
 
@@ -243,6 +249,26 @@ def run(
         executor = make_executor()
         executor.add_node(monitor)
         graph = Graph(scen, run_dir, env)
+        # The plant starts last, once this monitor has matched the other nodes'
+        # publishers: the plant cannot see whether an observer's estimates reach
+        # the monitor, and estimates sent before that match would be lost.
+        plants = scen.nodes_of('mill_plant')
+        graph.launch([n for n in scen.nodes if n not in plants])
+        upstream = [f'/mill/{a}/estimate' for a in axes] + ['/mill/reference']
+        deadline = time.monotonic() + startup_timeout
+        while any(monitor.count_publishers(t) < 1 for t in upstream):
+            if time.monotonic() > deadline:
+                missing = [t for t in upstream if monitor.count_publishers(t) < 1]
+                raise RunError(f'no publisher appeared on {", ".join(missing)}')
+            exited = graph.exited()
+            if exited:
+                name, code = next(iter(exited.items()))
+                raise RunError(
+                    f'node {name} exited with code {code} before the job started:\n'
+                    + graph.log_tail(name)
+                )
+            executor.spin_once(timeout_sec=0.05)
+        graph.launch(plants)
         progress.show(
             f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}); '
             f'waiting for discovery',
