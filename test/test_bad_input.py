@@ -9,15 +9,11 @@ reach the node. `-p NODE:NAME:=VALUE` is the form that overrides a file.
 
 from __future__ import annotations
 
-import contextlib
-from collections.abc import Iterator
-
 import pytest
-import rclpy
 from rcl_interfaces.srv import GetParameters, SetParameters
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
+
+from test.conftest import ros_node
 
 PLANT = ('mill_plant.plant_node', 'plant_node', 'plant')
 CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller', 'x_controller')
@@ -54,24 +50,6 @@ def test_bad_startup_parameter_exits_2_with_one_line(start_node, node, arg, para
     assert code == 2, err
     assert len(lines) == 1, err
     assert lines[0].startswith(f'{executable}: error: invalid parameter {param}='), lines[0]
-
-
-@contextlib.contextmanager
-def ros_node(name: str) -> Iterator[tuple[Node, SingleThreadedExecutor]]:
-    """A node of the test process in its own context (environment from ros_env)."""
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node(name, context=context)
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        try:
-            yield node, executor
-        finally:
-            executor.shutdown()
-            node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
 
 
 class ParameterClient:

@@ -8,8 +8,7 @@ import time
 
 import pytest
 
-from test.conftest import wait_until
-from test.test_bad_input import ros_node
+from test.conftest import ros_node, wait_until
 
 
 def wait_until_in_graph(name: str) -> None:

@@ -7,13 +7,10 @@ file's `plant:` entry (rcl stores plain `-p` under `/**`, and node-specific valu
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
-from collections.abc import Iterator
 
 import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.ros import DATA_QOS, from_stamp, joint_state
 from rclpy.executors import SingleThreadedExecutor
@@ -21,7 +18,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from test.conftest import wait_until
+from test.conftest import ros_node, wait_until
 
 PLANT = 'mill_plant.plant_node'
 CONTROLLER = 'mill_controllers.axis_controller_node'
@@ -35,24 +32,6 @@ def plant_args(**values: str) -> list[str]:
     for name, value in values.items():
         args += ['-p', f'plant:{name}:={value}']
     return args
-
-
-@contextlib.contextmanager
-def ros_node(name: str) -> Iterator[tuple[Node, SingleThreadedExecutor]]:
-    """A node of the test process in its own context (environment from ros_env)."""
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node(name, context=context)
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        try:
-            yield node, executor
-        finally:
-            executor.shutdown()
-            node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
 
 
 class FakeController:
