@@ -10,10 +10,8 @@ reach the node. `-p NODE:NAME:=VALUE` is the form that overrides a file.
 from __future__ import annotations
 
 import pytest
-from rcl_interfaces.srv import GetParameters, SetParameters
-from rclpy.parameter import Parameter, parameter_value_to_python
 
-from test.conftest import ros_node
+from test.conftest import ParameterClient, ros_node
 
 PLANT = ('mill_plant.plant_node', 'plant_node', 'plant')
 CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller', 'x_controller')
@@ -50,35 +48,6 @@ def test_bad_startup_parameter_exits_2_with_one_line(start_node, node, arg, para
     assert code == 2, err
     assert len(lines) == 1, err
     assert lines[0].startswith(f'{executable}: error: invalid parameter {param}='), lines[0]
-
-
-class ParameterClient:
-    """set_parameters / get_parameters of one remote node, each call bounded in time."""
-
-    def __init__(self, node, executor, target: str) -> None:
-        self._executor = executor
-        self._set = node.create_client(SetParameters, f'/{target}/set_parameters')
-        self._get = node.create_client(GetParameters, f'/{target}/get_parameters')
-        for client in (self._set, self._get):
-            assert client.wait_for_service(timeout_sec=60), f'{client.srv_name} never appeared'
-
-    def _call(self, client, request):
-        future = client.call_async(request)
-        self._executor.spin_until_future_complete(future, timeout_sec=30)
-        assert future.done(), f'{client.srv_name} did not answer'
-        return future.result()
-
-    def set(self, name: str, value):
-        request = SetParameters.Request()
-        request.parameters = [Parameter(name, value=value).to_parameter_msg()]
-        response = self._call(self._set, request)
-        assert len(response.results) == 1
-        return response.results[0]
-
-    def get(self, *names: str) -> dict:
-        response = self._call(self._get, GetParameters.Request(names=list(names)))
-        values = zip(names, response.values, strict=True)
-        return {n: parameter_value_to_python(v) for n, v in values}
 
 
 def _assert_rejected(result, name: str) -> None:

@@ -23,3 +23,8 @@ def joint_command(axis: str) -> str:
 def estimate(axis: str) -> str:
     """Observer output of one axis."""
     return f'/mill/{axis}/estimate'
+
+
+def controller_state(axis: str) -> str:
+    """Internal state of an axis controller that has one (adaptive PI: estimates, gains)."""
+    return f'/mill/{axis}/controller_state'

@@ -129,6 +129,7 @@ class _VelocityPi:
     """Incremental PI on the table velocity; subclasses supply the gains."""
 
     PREFIX: ClassVar[str] = ''
+    OUTPUT_UNIT: ClassVar[str] = 'V'  # amplifier input voltage (Hatwesh eq. (1))
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
 
     def _init_loop(self, sample_period: float, values: Mapping[str, Any]) -> None:

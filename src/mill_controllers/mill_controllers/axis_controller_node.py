@@ -5,6 +5,11 @@ observer's estimate (/mill/<axis>/estimate) and the reference point of that
 time (/mill/reference, several points per message) by stamp, runs the
 selected control law and publishes the torque on /mill/<axis>/joint_command
 with the same stamp.
+
+Changing `controller` or any gain on the running node swaps the law without a bump
+(mill_controllers.switching): the switch sample still outputs the old law's value and the
+difference fades over `blend_time`; the switch is reported on /diagnostics. A law with
+internal estimates (adaptive_pi) publishes them on /mill/<axis>/controller_state.
 """
 
 from __future__ import annotations
@@ -13,8 +18,9 @@ import math
 import time
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, first, from_duration, from_stamp, joint_state
+from mill_common.ros import DATA_QOS, first, from_duration, from_stamp, joint_state, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AxisReference, Estimate
 from mill_common.stamp_join import StampJoin
@@ -26,6 +32,8 @@ from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_controllers.config import build_controller, parameter_specs
+from mill_controllers.registry import CONTROLLERS
+from mill_controllers.switching import BumplessSwitch, check_replacement
 
 INPUT_TOPICS = {'state': topics.state, 'estimate': topics.estimate}
 
@@ -33,7 +41,8 @@ INPUT_TOPICS = {'state': topics.state, 'estimate': topics.estimate}
 class AxisControllerNode(Node):
     def __init__(self) -> None:
         super().__init__('axis_controller')
-        self._law = None
+        self._law: BumplessSwitch | None = None
+        self._reported_switch = None
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         axis = self.axis = self.params.values['axis']
         self._join = StampJoin(('state', 'estimate', 'reference'))
@@ -41,6 +50,8 @@ class AxisControllerNode(Node):
         self._last_command: JointState | None = None
         self._waiting_since: float | None = None
         self._pub = self.create_publisher(JointState, topics.joint_command(axis), DATA_QOS)
+        self._state_pub = self.create_publisher(JointState, topics.controller_state(axis), DATA_QOS)
+        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.create_subscription(JointState, topics.state(axis), self._on_state, DATA_QOS)
         self.create_subscription(JointState, topics.estimate(axis), self._on_estimate, DATA_QOS)
         self.create_subscription(JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS)
@@ -51,9 +62,22 @@ class AxisControllerNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
-        if self._law is not None and values['axis'] != self.axis:
+        if self._law is None:
+            law = build_controller(values)
+            self._law = BumplessSwitch(law, values['sample_period'], values['blend_time'])
+            return
+        if values['axis'] != self.axis:
             raise ValueError('axis is fixed for the life of the node')
-        self._law = build_controller(values)
+        old = self.params.values
+        reason = check_replacement(
+            CONTROLLERS[old['controller']], CONTROLLERS[values['controller']]
+        )
+        if reason:
+            raise ValueError(reason)
+        law = build_controller(values)  # raises, with the reason, before anything changes
+        self._law.set_blend_time(values['sample_period'], values['blend_time'])
+        if any(values[k] != old[k] for k in values if k != 'blend_time'):
+            self._law.replace(law)
 
     # -- inputs ----------------------------------------------------------------------------
     def _fresh(self, ns: int) -> bool:
@@ -114,6 +138,40 @@ class AxisControllerNode(Node):
         self._last_ns = ns
         self._last_command = joint_state(ns, (self.axis,), effort=(torque,))
         self._pub.publish(self._last_command)
+        law = self._law.law
+        if hasattr(law, 'status'):
+            status = law.status()
+            self._state_pub.publish(
+                joint_state(ns, tuple(status), tuple(float(v) for v in status.values()))
+            )
+        if self._law.last_switch is not self._reported_switch:
+            self._reported_switch = self._law.last_switch
+            self._report_switch(ns)
+
+    def _report_switch(self, ns: int) -> None:
+        record = self._law.last_switch
+        name = self.params.values['controller']
+        self.get_logger().info(
+            f'switched to {name} at t = {record.time:.4f} s: output {record.old_output:.6g} '
+            f'(new law alone {record.new_output:.6g}), offset fades over '
+            f'{self.params.values["blend_time"]:g} s'
+        )
+        values = {
+            'controller': name,
+            'time': repr(record.time),
+            'old_output': repr(record.old_output),
+            'new_output': repr(record.new_output),
+        }
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.OK,
+            name=f'mill_controllers: {self.axis} switch',
+            message=f'switched to {name}',
+            hardware_id=f'axis_{self.axis}',
+            values=[KeyValue(key=k, value=v) for k, v in values.items()],
+        )
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = to_stamp(ns)
+        self._diag_pub.publish(array)
 
     def _report_waiting(self) -> None:
         pending = self._join.oldest_incomplete()

@@ -50,6 +50,7 @@ class CascadePi:
     """Maharof 2018 cascade P/PI with input-voltage disturbance compensation."""
 
     PREFIX: ClassVar[str] = 'cascade_pi'
+    OUTPUT_UNIT: ClassVar[str] = 'V'  # amplifier input voltage (Maharof eq. (1))
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
         ParamSpec('k_v', 225.0, 'position-loop proportional gain k_v, §4.1 [1/s]', positive),
         ParamSpec('k_p', 0.00661, 'velocity-loop proportional gain k_p, §4.1 [V·s/mm]', positive),

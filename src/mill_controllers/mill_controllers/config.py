@@ -9,6 +9,7 @@ from mill_common.parameters import (
     algorithm_specs,
     algorithm_values,
     axis_node_specs,
+    non_negative,
     one_of,
 )
 from mill_plant.rigid_axis import nominal_input_gain
@@ -27,6 +28,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'adrc',
                 'control law (see README: algorithms)',
                 one_of(*CONTROLLERS),
+            ),
+        )
+    )
+    specs.append(
+        (
+            'blend_time',
+            ParamSpec(
+                'blend_time',
+                0.05,
+                'after a run-time change of controller or gains, the time constant with which '
+                "the old law's output fades into the new one's [s]; 0 = at the next sample",
+                non_negative,
             ),
         )
     )
