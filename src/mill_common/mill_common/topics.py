@@ -28,3 +28,8 @@ def estimate(axis: str) -> str:
 def controller_state(axis: str) -> str:
     """Internal state of an axis controller that has one (adaptive PI: estimates, gains)."""
     return f'/mill/{axis}/controller_state'
+
+
+def observer_state(axis: str) -> str:
+    """Internal state of an observer that has one (rls: the identified model)."""
+    return f'/mill/{axis}/observer_state'

@@ -50,7 +50,6 @@ from mill_common.parameters import (
     ParamSpec,
     in_range,
     non_negative,
-    number,
     one_of,
     positive,
     positive_int,
@@ -58,7 +57,7 @@ from mill_common.parameters import (
     validate_all,
 )
 from mill_common.signals import AxisReference, Estimate
-from mill_observers.rls import FopdtEstimate, RlsEstimator
+from mill_observers.rls import RLS_PARAMETERS, FopdtEstimate, RlsEstimator
 
 # Hatwesh 2013 Table 1, x axis.
 HATWESH_PITCH = 0.012  # ball-screw pitch [m]
@@ -253,15 +252,6 @@ class MachinePi(_VelocityPi):
         return self._pi_step(e, self._kp, self._ki)
 
 
-def _pair(value: Any) -> str | None:
-    if not isinstance(value, list | tuple) or len(value) != 2:
-        return 'must be a list [low, high]'
-    reason = number(value[0]) or number(value[1])
-    if reason:
-        return reason
-    return None if value[0] < value[1] else 'must have low < high'
-
-
 class AdaptivePi(_VelocityPi):
     """Hatwesh 2013 self-tuning PI: RLS on the velocity loop + phase-margin re-tuning."""
 
@@ -280,33 +270,7 @@ class AdaptivePi(_VelocityPi):
             'desired phase margin φ_m (the machine PI has ≈ 63-76° on the nominal plant) [deg]',
             in_range(1.0, 89.0),
         ),
-        ParamSpec(
-            'forgetting',
-            0.9995,
-            'RLS forgetting factor λ (memory ≈ T/(1 − λ), 0.5 s at 0.25 ms) [-]',
-            in_range(0.9, 1.0),
-        ),
-        ParamSpec('initial_covariance', 1e4, 'RLS initial covariance P(0) = p0·I [-]', positive),
-        ParamSpec('covariance_limit', 1e8, 'RLS cap on trace(P) (wind-up guard) [-]', positive),
-        ParamSpec(
-            'input_taps',
-            2,
-            'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 '
-            'samples [-]',
-            positive_int,
-        ),
-        ParamSpec(
-            'a_bounds',
-            [0.0, 0.99999],
-            'projection box of the RLS pole a = e^{−T/τ} [-]',
-            _pair,
-        ),
-        ParamSpec(
-            'b_bounds',
-            [-1.0, 1.0],
-            'projection box of each RLS input coefficient b_i [(m/s)/V per sample]',
-            _pair,
-        ),
+        *RLS_PARAMETERS,
         ParamSpec(
             'warmup',
             400,

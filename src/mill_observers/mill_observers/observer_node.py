@@ -36,6 +36,7 @@ class ObserverNode(Node):
         self._last_estimate: JointState | None = None
         self._stalled_since: float | None = None
         self._pub = self.create_publisher(JointState, topics.estimate(axis), DATA_QOS)
+        self._state_pub = self.create_publisher(JointState, topics.observer_state(axis), DATA_QOS)
         self.create_subscription(JointState, topics.state(axis), self._on_state, DATA_QOS)
         self.create_subscription(JointState, topics.joint_command(axis), self._on_command, DATA_QOS)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -84,6 +85,10 @@ class ObserverNode(Node):
                 ns, (self.axis,), (est.position,), (est.velocity,), (est.disturbance,)
             )
             self._pub.publish(self._last_estimate)
+            if hasattr(self._observer, 'status'):
+                status = self._observer.status()
+                values = tuple(float(v) for v in status.values())
+                self._state_pub.publish(joint_state(ns, tuple(status), values))
 
     def _report_waiting(self) -> None:
         if self._stalled_since and time.monotonic() - self._stalled_since > 2.0:

@@ -12,12 +12,14 @@ from mill_observers.dfo import Dfo
 from mill_observers.gpi import GpiObserver
 from mill_observers.imbdo import Imbdo
 from mill_observers.imbdo_dfo import ImbdoDfo
+from mill_observers.rls_observer import RlsObserver
 
 OBSERVERS: dict[str, type] = {
     'gpi': GpiObserver,  # Beltrán 2013 eq. (13)-(18)
     'imbdo': Imbdo,  # Maharof 2018, inverse model + Q filter, estimate in V
     'dfo': Dfo,  # Maharof 2018 eq. (10)-(11), estimate in V
     'imbdo_dfo': ImbdoDfo,  # both, as in the paper
+    'rls': RlsObserver,  # Hatwesh 2013 eq. (10)-(13), FOPDT estimates on observer_state
 }
 
 

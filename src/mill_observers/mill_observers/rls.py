@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from mill_common.parameters import ParamSpec, in_range, number, positive, positive_int
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,46 @@ class FopdtEstimate:
     time_constant: float
     dead_time: float
     dead_time_samples: float
+
+
+def _pair(value: object) -> str | None:
+    if not isinstance(value, list | tuple) or len(value) != 2:
+        return 'must be a list [low, high]'
+    reason = number(value[0]) or number(value[1])
+    if reason:
+        return reason
+    return None if value[0] < value[1] else 'must have low < high'
+
+
+# Parameters of the estimator, shared by every user (adaptive_pi, the rls observer).
+RLS_PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec(
+        'forgetting',
+        0.9995,
+        'RLS forgetting factor λ (memory ≈ T/(1 − λ), 0.5 s at 0.25 ms) [-]',
+        in_range(0.9, 1.0),
+    ),
+    ParamSpec('initial_covariance', 1e4, 'RLS initial covariance P(0) = p0·I [-]', positive),
+    ParamSpec('covariance_limit', 1e8, 'RLS cap on trace(P) (wind-up guard) [-]', positive),
+    ParamSpec(
+        'input_taps',
+        2,
+        'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 samples [-]',
+        positive_int,
+    ),
+    ParamSpec(
+        'a_bounds',
+        [0.0, 0.99999],
+        'projection box of the RLS pole a = e^{−T/τ} [-]',
+        _pair,
+    ),
+    ParamSpec(
+        'b_bounds',
+        [-1.0, 1.0],
+        'projection box of each RLS input coefficient b_i [(m/s)/V per sample]',
+        _pair,
+    ),
+)
 
 
 class RlsEstimator:

@@ -9,12 +9,20 @@ from mill_observers.gpi import GpiObserver
 from mill_observers.imbdo import Imbdo
 from mill_observers.imbdo_dfo import ImbdoDfo
 from mill_observers.registry import OBSERVERS, make_observer, observer_class
+from mill_observers.rls_observer import RlsObserver
 
 B = 20.96
 
 
 def test_registered_names() -> None:
-    assert {'gpi': GpiObserver, 'imbdo': Imbdo, 'dfo': Dfo, 'imbdo_dfo': ImbdoDfo} == OBSERVERS
+    want = {
+        'gpi': GpiObserver,
+        'imbdo': Imbdo,
+        'dfo': Dfo,
+        'imbdo_dfo': ImbdoDfo,
+        'rls': RlsObserver,
+    }
+    assert want == OBSERVERS
     assert observer_class('gpi') is GpiObserver
 
 

@@ -1,0 +1,64 @@
+"""The RLS estimator of Hatwesh 2013 eq. (10)-(13) as an observer node's core (ROS-free).
+
+For a controller that wants model estimates from outside (or for monitoring a drive's
+dynamics while another law runs): each sample the velocity v(k) = (y(k) − y(k−1))/T and
+the command u(k) update y(k) = a y(k−1) + Σ b_i u(k−i) (mill_observers.rls), and
+`status()` gives the FOPDT read-out K, τ, θ_d with the RLS diagnostics; the observer node
+publishes it on /mill/<axis>/observer_state every sample.
+
+Estimate: position y, velocity v(k) (the backward difference, as the Hatwesh loops use),
+disturbance 0 (this observer estimates a model, not a disturbance).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from mill_common.parameters import ParamSpec, validate_all
+from mill_common.signals import Estimate
+
+from mill_observers.rls import RLS_PARAMETERS, RlsEstimator
+
+
+class RlsObserver:
+    """Identifies the velocity loop's FOPDT model online; passes the measurement through."""
+
+    PREFIX: ClassVar[str] = 'rls'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = RLS_PARAMETERS
+
+    def __init__(self, sample_period: float, **values: Any) -> None:
+        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
+        self._T = sample_period
+        self.rls = RlsEstimator(
+            sample_period,
+            n_b=v['input_taps'],
+            forgetting=v['forgetting'],
+            initial_covariance=v['initial_covariance'],
+            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
+            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
+            covariance_limit=v['covariance_limit'],
+        )
+        self._y: float | None = None
+        self._v = 0.0
+
+    @classmethod
+    def from_parameters(
+        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> RlsObserver:
+        del input_gain  # the model is identified, not assumed
+        return cls(sample_period, **values)
+
+    def correct(self, y: float) -> Estimate:
+        self._v = 0.0 if self._y is None else (y - self._y) / self._T
+        self._y = y
+        return Estimate(y, self._v, 0.0)
+
+    def predict(self, u: float) -> None:
+        self.rls.update(self._v, u)  # u(k) enters the regressor of the next samples
+
+    def status(self) -> dict[str, float]:
+        m = self.rls.fopdt()
+        out = {'gain': m.gain, 'time_constant': m.time_constant, 'dead_time': m.dead_time}
+        out.update(self.rls.diagnostics())
+        return out

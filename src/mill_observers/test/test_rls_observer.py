@@ -1,0 +1,37 @@
+"""The rls observer identifies a known first-order velocity loop from position and command."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from mill_common.parameters import ParameterError
+from mill_observers.registry import make_observer
+
+T = 0.25e-3
+GAIN, TAU = 29.83, 0.05  # (m/s)/V and s: a Hatwesh-like velocity loop
+
+
+def test_converges_to_the_plants_gain_and_time_constant() -> None:
+    obs = make_observer('rls', 0.0, T, {'forgetting': 0.9999})
+    a = math.exp(-T / TAU)
+    rng = np.random.default_rng(3)
+    u_seq = np.repeat(rng.choice([-0.01, 0.01], size=400), 25)  # PRBS, 6.25 ms steps
+    x, v = 0.0, 0.0
+    for u in u_seq:
+        est = obs.correct(x)
+        obs.predict(float(u))
+        # exact ZOH sampling of τ v' = −v + K u, and x' = v
+        v_next = a * v + GAIN * (1 - a) * u
+        x += TAU * (v - v_next) + GAIN * u * T  # ∫ v dt over the sample
+        v = v_next
+    status = obs.status()
+    assert status['gain'] == pytest.approx(GAIN, rel=0.01)
+    assert status['time_constant'] == pytest.approx(TAU, rel=0.01)
+    assert est.disturbance == 0.0
+
+
+def test_bad_forgetting_is_refused() -> None:
+    with pytest.raises(ParameterError, match=r'rls\.forgetting'):
+        make_observer('rls', 0.0, T, {'forgetting': 1.5})
