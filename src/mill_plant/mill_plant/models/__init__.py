@@ -1,0 +1,1 @@
+"""Per-axis dynamic models of the milling-machine plant (ROS-free), see base.AxisModel."""

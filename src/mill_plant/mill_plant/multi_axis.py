@@ -1,0 +1,371 @@
+"""Three axes, each with its own dynamic model (mill_plant.models), coupled only through
+the cutting force. Drop-in for ThreeAxisPlant (same public API, input in each model's unit).
+
+Integration: fixed-step classical RK4 with `substeps` substeps per step; the cutting force
+of all three axes is evaluated in every RK4 stage from the stage positions/velocities. The
+input is held over the step (zero-order hold). A model with an input dead time T_d
+(transfer-function axis) sees the held input delayed by T_d: that delayed signal is
+piecewise constant and changes at known instants t_j + T_d; a substep containing such an
+instant is split there (pieces of one substep integrated by one RK4 step each), so the dead
+time is exact also when T_d is not a multiple of the step. Instants within 1e-9 substep of
+a substep boundary are taken at the boundary. The input before the start was 0.
+
+Coulomb friction (stick-slip), the same scheme as ThreeAxisPlant, on the coordinate
+FRICTION_DOF of a model (mill_plant.models.base): a mode frozen per substep piece (sliding
+±1, or stuck if at zero velocity the net force is within ±mu); after the piece a sliding
+coordinate whose velocity crossed zero is stopped at the linearly interpolated crossing.
+
+Load change: at the first step whose start time is >= load_change_time, every axis gets
+add_load(load_change_mass[i]) before the step is integrated (once; all axes or none: the
+loaded models are copies that replace the old ones, see `models`).
+
+Safety: a non-finite input on an axis never reaches the integrator; that axis is braked
+for the step (all its velocities 0, positions held), reported as faulted and its applied
+input is 0. Finite inputs are clipped to ±max_input (reported as saturated).
+
+The plant integrates deep copies of the given models; the caller's models never change.
+Plain float arithmetic in a fixed order: same inputs, bit-identical outputs.
+With three rigid models it reproduces ThreeAxisPlant.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Sequence
+
+from mill_plant.cutting import CuttingForceModel, Force3
+from mill_plant.models.base import AxisModel, State
+from mill_plant.three_axis import Bool3, StepReport
+
+Float3 = tuple[float, float, float]
+_INF3 = (math.inf, math.inf, math.inf)
+_SPLIT_TOL = 1e-9  # switch instants this close (in substeps) to a boundary snap to it
+
+
+class MultiAxisPlant:
+    """Axes x, y, z with per-axis models, integrated by fixed-step RK4."""
+
+    def __init__(
+        self,
+        models: Sequence[AxisModel],
+        cutting: CuttingForceModel,
+        initial_position: Sequence[float] = (0.0, 0.0, 0.0),
+        max_input: Sequence[float] = _INF3,
+        substeps: int = 4,
+        start_time: float = 0.0,
+        load_change_time: float = math.inf,
+        load_change_mass: Sequence[float] = (0.0, 0.0, 0.0),
+    ) -> None:
+        if len(models) != 3:
+            raise ValueError(f'models must have 3 entries (x, y, z), got {len(models)}')
+        for i, model in enumerate(models):
+            if not isinstance(model, AxisModel):
+                raise ValueError(f'models[{i}] must be an AxisModel, got {type(model).__name__}')
+            if not (math.isfinite(model.dead_time) and model.dead_time >= 0.0):
+                raise ValueError(f'models[{i}].dead_time must be >= 0, got {model.dead_time!r}')
+        if len(initial_position) != 3 or not all(math.isfinite(p) for p in initial_position):
+            raise ValueError(f'initial_position must be 3 finite numbers, got {initial_position!r}')
+        if len(max_input) != 3 or not all(
+            (m == math.inf or math.isfinite(m)) and m > 0.0 for m in max_input
+        ):
+            raise ValueError(f'max_input must be 3 numbers > 0 (inf allowed), got {max_input!r}')
+        if isinstance(substeps, bool) or not isinstance(substeps, int) or substeps < 1:
+            raise ValueError(f'substeps must be a whole number >= 1, got {substeps!r}')
+        if not math.isfinite(start_time):
+            raise ValueError(f'start_time must be finite, got {start_time!r}')
+        if math.isnan(load_change_time):
+            raise ValueError('load_change_time must be a number (inf = never), got nan')
+        if len(load_change_mass) != 3 or not all(math.isfinite(m) for m in load_change_mass):
+            raise ValueError(f'load_change_mass must be 3 finite numbers, got {load_change_mass!r}')
+
+        self._models: tuple[AxisModel, ...] = tuple(copy.deepcopy(m) for m in models)
+        self._cutting = cutting
+        self._max = tuple(float(m) for m in max_input)
+        self._substeps = substeps
+        self._t = float(start_time)
+        self._load_time = float(load_change_time)
+        self._load_mass = tuple(float(m) for m in load_change_mass)
+        self._load_done = False
+        self._n = tuple(m.N_DOF for m in self._models)
+        self._fdof = tuple(m.FRICTION_DOF for m in self._models)
+        self._delay = tuple(float(m.dead_time) for m in self._models)
+        self._bind()
+        self._axpy_fn = tuple(_axpy_2 if n == 1 else _axpy for n in self._n)
+        self._combine_fn = tuple(_combine_2 if n == 1 else _combine for n in self._n)
+        # Per delayed axis: (instant the input reaches the plant, input), oldest first.
+        self._history: list[list[tuple[float, float]]] = [
+            [(-math.inf, 0.0)] if d > 0.0 else [] for d in self._delay
+        ]
+        self._state: list[State] = [
+            m.initial_state(float(p)) for m, p in zip(self._models, initial_position, strict=True)
+        ]
+
+    def _bind(self) -> None:
+        """Cache the models' bound methods for the integration loop."""
+        self._deriv_fn = tuple(m.derivative for m in self._models)
+        self._pos_fn = tuple(m.position for m in self._models)
+        self._vel_fn = tuple(m.velocity for m in self._models)
+
+    def _change_load(self) -> None:
+        """Apply load_change_mass to all axes, all or nothing (ValueError names the mass)."""
+        loaded = tuple(copy.deepcopy(m) for m in self._models)
+        for model, mass in zip(loaded, self._load_mass, strict=True):
+            if mass != 0.0:
+                model.add_load(mass)
+        self._models = loaded
+        self._bind()
+        self._load_done = True
+
+    # ---- state -------------------------------------------------------------
+
+    @property
+    def time(self) -> float:
+        """Current time [s]."""
+        return self._t
+
+    @property
+    def position(self) -> Float3:
+        """Carriage positions (x, y, z) [m]."""
+        m, s = self._models, self._state
+        return (m[0].position(s[0]), m[1].position(s[1]), m[2].position(s[2]))
+
+    @property
+    def velocity(self) -> Float3:
+        """Carriage velocities [m/s]."""
+        m, s = self._models, self._state
+        return (m[0].velocity(s[0]), m[1].velocity(s[1]), m[2].velocity(s[2]))
+
+    @property
+    def states(self) -> tuple[tuple[float, ...], ...]:
+        """Full model states (layout in mill_plant.models.base), a copy."""
+        return tuple(tuple(s) for s in self._state)
+
+    @property
+    def models(self) -> tuple[AxisModel, ...]:
+        return self._models
+
+    @property
+    def substeps(self) -> int:
+        return self._substeps
+
+    @property
+    def load_changed(self) -> bool:
+        """True once the scheduled load change has been applied."""
+        return self._load_done
+
+    def cutting_force(self) -> Force3:
+        """Cutting force (F_cx, F_cy, F_cz) [N] at the current time and state."""
+        return self._cutting.force(self._t, self.position, self.velocity)
+
+    # ---- input conditioning --------------------------------------------------
+
+    def _condition(self, u: Sequence[float]) -> tuple[list[float], Bool3, Bool3]:
+        """Clip to +-max_input; flag non-finite entries as faulted (input 0 there)."""
+        if len(u) != 3:
+            raise ValueError(f'input must have 3 entries (x, y, z), got {len(u)}')
+        out = [0.0, 0.0, 0.0]
+        sat = [False, False, False]
+        fault = [False, False, False]
+        for i in range(3):
+            value = float(u[i])
+            limit = self._max[i]
+            if not math.isfinite(value):
+                fault[i] = True
+            elif value > limit:
+                out[i] = limit
+                sat[i] = True
+            elif value < -limit:
+                out[i] = -limit
+                sat[i] = True
+            else:
+                out[i] = value
+        return out, (sat[0], sat[1], sat[2]), (fault[0], fault[1], fault[2])
+
+    def _delayed(self, i: int, t: float) -> float:
+        """Input of delayed axis i acting at time t (right-continuous)."""
+        value = 0.0
+        for arrival, u in self._history[i]:
+            if arrival > t:
+                break
+            value = u
+        return value
+
+    def _mode(self, i: int, y: State, u: float, f: float) -> float:
+        """Frozen friction mode of axis i (mill_plant.models.base): +-1.0 sliding, 0.0 stuck."""
+        j = self._fdof[i]
+        if j is None:
+            return 1.0
+        v = y[self._n[i] + j]
+        if v > 0.0:
+            return 1.0
+        if v < 0.0:
+            return -1.0
+        model = self._models[i]
+        net = model.stick_force(y, u, f)
+        mu = model.coulomb_friction
+        if net > mu:
+            return 1.0
+        if net < -mu:
+            return -1.0
+        return 0.0
+
+    # ---- dynamics ------------------------------------------------------------
+
+    def step(self, u: Sequence[float], dt: float) -> StepReport:
+        """Advance by dt [s] with the input u (each axis in its model's unit) held."""
+        if not (math.isfinite(dt) and dt > 0.0):
+            raise ValueError(f'dt must be finite and > 0, got {dt!r}')
+        if not self._load_done and self._t >= self._load_time:
+            self._change_load()
+        uc, saturated, faulted = self._condition(u)
+        t0 = self._t
+        states = self._state
+        for i in range(3):
+            if faulted[i]:  # braked: stopped now, derivative zero below
+                n = self._n[i]
+                states[i] = states[i][:n] + [0.0] * n
+            if self._delay[i] > 0.0:
+                self._history[i].append((t0 + self._delay[i], uc[i]))
+        n_sub = self._substeps
+        h = dt / n_sub
+        tol = _SPLIT_TOL * h
+        switches = sorted(
+            {s for hist in self._history for s, _ in hist if t0 + tol < s < t0 + dt - tol}
+        )
+        for k in range(n_sub):
+            a = t0 + k * h
+            cuts = [s for s in switches if a + tol < s < a + h - tol]
+            if not cuts:
+                states = self._rk4(states, a, h, self._inputs(uc, a + 0.5 * h), faulted)
+                continue
+            starts = [a]
+            for s in cuts:
+                if s - starts[-1] > tol:
+                    starts.append(s)
+            ends = [*starts[1:], a + h]
+            for start, end in zip(starts, ends, strict=True):
+                length = end - start
+                states = self._rk4(
+                    states, start, length, self._inputs(uc, start + 0.5 * length), faulted
+                )
+        self._state = states
+        self._t = t0 + dt
+        for hist in self._history:
+            while len(hist) > 1 and hist[1][0] <= self._t:
+                del hist[0]
+        return StepReport(saturated, faulted, (uc[0], uc[1], uc[2]))
+
+    def _inputs(self, uc: list[float], t_mid: float) -> list[float]:
+        """Input acting on each axis over a piece whose midpoint is t_mid."""
+        return [self._delayed(i, t_mid) if self._delay[i] > 0.0 else uc[i] for i in range(3)]
+
+    def _rk4(
+        self, y1: list[State], t: float, h: float, uu: list[float], faulted: Bool3
+    ) -> list[State]:
+        """One classical RK4 step of length h from t with inputs uu; friction modes frozen.
+
+        The three axes are written out (bound methods, plain lists): this is the hot loop.
+        """
+        force = self._cutting.force
+        q0, q1, q2 = self._pos_fn
+        w0, w1, w2 = self._vel_fn
+        half = 0.5 * h
+        sixth = h / 6.0
+        ya, yb, yc = y1
+        ua, ub, uc = uu
+
+        f = force(t, (q0(ya), q1(yb), q2(yc)), (w0(ya), w1(yb), w2(yc)))
+        sa, sb, sc = (0.0 if faulted[i] else self._mode(i, y1[i], uu[i], f[i]) for i in range(3))
+        da, db, dc = (_zeros if faulted[i] else self._deriv_fn[i] for i in range(3))
+        xa, xb, xc = self._axpy_fn
+        ra, rb, rc = self._combine_fn
+        # stage 1
+        k1a, k1b, k1c = da(ya, ua, f[0], sa), db(yb, ub, f[1], sb), dc(yc, uc, f[2], sc)
+        y2a = xa(ya, half, k1a)
+        y2b = xb(yb, half, k1b)
+        y2c = xc(yc, half, k1c)
+        # stage 2
+        f = force(t + half, (q0(y2a), q1(y2b), q2(y2c)), (w0(y2a), w1(y2b), w2(y2c)))
+        k2a, k2b, k2c = da(y2a, ua, f[0], sa), db(y2b, ub, f[1], sb), dc(y2c, uc, f[2], sc)
+        y3a = xa(ya, half, k2a)
+        y3b = xb(yb, half, k2b)
+        y3c = xc(yc, half, k2c)
+        # stage 3
+        f = force(t + half, (q0(y3a), q1(y3b), q2(y3c)), (w0(y3a), w1(y3b), w2(y3c)))
+        k3a, k3b, k3c = da(y3a, ua, f[0], sa), db(y3b, ub, f[1], sb), dc(y3c, uc, f[2], sc)
+        y4a = xa(ya, h, k3a)
+        y4b = xb(yb, h, k3b)
+        y4c = xc(yc, h, k3c)
+        # stage 4
+        f = force(t + h, (q0(y4a), q1(y4b), q2(y4c)), (w0(y4a), w1(y4b), w2(y4c)))
+        k4a, k4b, k4c = da(y4a, ua, f[0], sa), db(y4b, ub, f[1], sb), dc(y4c, uc, f[2], sc)
+        out = [
+            ra(ya, sixth, k1a, k2a, k3a, k4a),
+            rb(yb, sixth, k1b, k2b, k3b, k4b),
+            rc(yc, sixth, k1c, k2c, k3c, k4c),
+        ]
+        # Stop a sliding coordinate whose velocity crossed zero (module docstring).
+        for i, mode in enumerate((sa, sb, sc)):
+            j = self._fdof[i]
+            if j is None or mode == 0.0:
+                continue
+            new = out[i]
+            jv = self._n[i] + j
+            if mode * new[jv] < 0.0:
+                v_old = y1[i][jv]
+                theta = v_old / (v_old - new[jv])  # fraction of the piece at the crossing
+                new[j] = y1[i][j] + 0.5 * v_old * theta * h
+                new[jv] = 0.0
+        return out
+
+    def disturbance(self, u: Sequence[float]) -> Float3:
+        """Lumped disturbance xi_i = x_i'' - b_i u_i [m/s²] now, with this input applied.
+
+        x_i'' is the actual carriage acceleration (with the input acting now: for a
+        dead-time axis the delayed one), b_i = input_gain() and u_i the clipped input. A
+        stuck carriage has x'' = 0. An axis with a non-finite input (braked): NaN.
+        """
+        uc, _, faulted = self._condition(u)
+        fc = self.cutting_force()
+        out = [math.nan, math.nan, math.nan]
+        for i in range(3):
+            if faulted[i]:
+                continue
+            model = self._models[i]
+            y = self._state[i]
+            ui = self._delayed(i, self._t) if self._delay[i] > 0.0 else uc[i]
+            mode = self._mode(i, y, ui, fc[i])
+            acc = model.velocity(model.derivative(y, ui, fc[i], mode))
+            out[i] = acc - model.input_gain() * uc[i]
+        return (out[0], out[1], out[2])
+
+
+def _zeros(state: Sequence[float], u: float, force: float, mode: float) -> State:
+    """Derivative of a braked axis."""
+    return [0.0] * len(state)
+
+
+# RK4 helpers on plain lists; the 2-state versions are written out (hot loop, ~4x faster).
+def _axpy(y: State, c: float, k: State) -> State:
+    """y + c k."""
+    return [a + c * b for a, b in zip(y, k, strict=True)]
+
+
+def _axpy_2(y: State, c: float, k: State) -> State:
+    return [y[0] + c * k[0], y[1] + c * k[1]]
+
+
+def _combine(y: State, sixth: float, a: State, b: State, c: State, d: State) -> State:
+    """RK4 update y + h/6 (k1 + 2 k2 + 2 k3 + k4)."""
+    return [
+        yi + sixth * (ai + 2.0 * bi + 2.0 * ci + di)
+        for yi, ai, bi, ci, di in zip(y, a, b, c, d, strict=True)
+    ]
+
+
+def _combine_2(y: State, sixth: float, a: State, b: State, c: State, d: State) -> State:
+    return [
+        y[0] + sixth * (a[0] + 2.0 * b[0] + 2.0 * c[0] + d[0]),
+        y[1] + sixth * (a[1] + 2.0 * b[1] + 2.0 * c[1] + d[1]),
+    ]
