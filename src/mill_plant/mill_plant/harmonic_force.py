@@ -1,0 +1,222 @@
+"""Harmonic cutting force of Maharof 2018 §3 and eq. (5) (ROS-free).
+
+    F(t) = w · [F̄ + Σ_i A_i sin(2π m_i f_0 t + θ_i)]   for start_time ≤ t < end_time, else 0,
+
+with w the per-axis weights (x, y, z), F̄ the mean, and one eq. (5) term
+d(t) = A' sin(ωt + θ) per harmonic ω_i = 2π m_i f_0. Time t is the absolute simulation time,
+so the phases θ_i refer to t = 0 whatever start_time is. Sign as in cutting.py (Beltrán 2013
+eq. (1)): a positive F_cx resists motion in +x.
+
+Readings (see also /work/shared/papers/README.md):
+
+- Base frequency: f_0 = spindle_speed/60 · teeth, exactly as the DFO (mill_observers/dfo.py)
+  so that the force's harmonics are the observer's resonators. The paper cuts at a stated
+  1500 rpm and finds 26/52/78 Hz (once "58 Hz", a misprint); no integer reading of 1500 rpm
+  gives 26 Hz, and 1560 rpm × 1 (once per revolution, e.g. run-out of the 10 mm cutter) does.
+  Defaults: spindle_speed = 1560 rpm, teeth = 1, harmonics = [1, 2, 3] → 26/52/78 Hz.
+- Amplitudes: the measured force (Kistler, fig. 2) is not published. They are synthesised
+  backwards from the only numbers the paper gives at those frequencies, Table 2's FFT of the
+  tracking error of the plain cascade P/PI: 3.158, 0.4511, 0.3711 µm at 26, 52, 78 Hz, read
+  as single-sided peak amplitudes. The closed loop of eq. (1) with the §4.1 gains (k_v = 225,
+  k_p = 0.00661, k_i = 0.12075, T_d = 1.2 ms), y/d = G/(1 + G (k_p + k_i/s)(s + k_v)) with d an
+  input-equivalent voltage, has |y/d| = 0.592, 0.457, 0.360 mm/V there, so the disturbance
+  was 5.34, 0.987, 1.03 mV, an acceleration A·d = 0.417, 0.077, 0.081 m/s² of the paper's
+  table. The same acceleration of the suite's x carriage (Beltrán 2013 Table 1,
+  m_e = m + J/a² = 94.4 kg) needs 39.3, 7.3, 7.6 N: the defaults (checked in the tests).
+- Phases: not published; default 0.
+- Mean: not published (an FFT of the error shows no DC). Default 45 N: the smallest multiple
+  of 5 N that keeps the default force one-signed (its harmonic part spans ±41.1 N with zero
+  phases), i.e. a feed force that always resists +x, as a cutting force does.
+- Axes: the paper's cut is a straight line along x and only the x axis is studied: the
+  default weights are (1, 0, 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    non_negative,
+    number,
+    number_list,
+    positive,
+    positive_int,
+    positive_or_inf,
+    validate_all,
+)
+
+from mill_plant.cutting import Force3
+
+PREFIX = 'harmonic'
+
+MAHAROF_SPINDLE_SPEED = 1560.0  # rpm, 26 Hz once per revolution (module docstring)
+MAHAROF_TEETH = 1
+MAHAROF_HARMONICS = (1.0, 2.0, 3.0)  # 26/52/78 Hz
+SYNTHESISED_AMPLITUDES = (39.3, 7.3, 7.6)  # N, back-computed from Table 2 (module docstring)
+SYNTHESISED_MEAN = 45.0  # N
+
+
+def _multiples(value: Any) -> str | None:
+    reason = number_list(each=positive)(value)
+    if reason:
+        return reason
+    if not value:
+        return 'must list at least one harmonic'
+    if len(set(value)) != len(value):
+        return 'must not repeat a harmonic'
+    return None
+
+
+def _finite_list(value: Any) -> str | None:
+    return number_list(each=number)(value)
+
+
+def _amplitudes(value: Any) -> str | None:
+    return number_list(each=non_negative)(value)
+
+
+PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec(
+        'spindle_speed',
+        MAHAROF_SPINDLE_SPEED,
+        "spindle speed n; base harmonic f_0 = n/60·teeth (1560 rpm × 1 = the paper's 26 Hz) [rpm]",
+        positive,
+    ),
+    ParamSpec(
+        'teeth',
+        MAHAROF_TEETH,
+        'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
+        'flute count = tooth passing) [-]',
+        positive_int,
+    ),
+    ParamSpec(
+        'harmonics',
+        list(MAHAROF_HARMONICS),
+        'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz) [-]',
+        _multiples,
+    ),
+    ParamSpec(
+        'amplitudes',
+        list(SYNTHESISED_AMPLITUDES),
+        'amplitude A_i of each harmonic, eq. (5) (synthesised from Table 2) [N]',
+        _amplitudes,
+    ),
+    ParamSpec(
+        'phases',
+        [0.0] * len(MAHAROF_HARMONICS),
+        'phase θ_i of each harmonic at t = 0, eq. (5) [rad]',
+        _finite_list,
+    ),
+    ParamSpec('mean', SYNTHESISED_MEAN, 'mean (DC) force F̄ [N]', number),
+    ParamSpec(
+        'axis_weights',
+        [1.0, 0.0, 0.0],
+        'weight of the force on x, y, z (F_axis = weight · F(t)) [-]',
+        number_list(3),
+    ),
+    ParamSpec('start_time', 0.0, 'the force acts from this time [s]', non_negative),
+    ParamSpec(
+        'end_time',
+        math.inf,
+        'the force acts until this time (> start_time; .inf = for ever) [s]',
+        positive_or_inf,
+    ),
+)
+
+
+class HarmonicForce:
+    """Mean plus harmonics of the spindle frequency on chosen axes (a CuttingForceModel)."""
+
+    def __init__(
+        self,
+        *,
+        spindle_speed: float = MAHAROF_SPINDLE_SPEED,
+        teeth: int = MAHAROF_TEETH,
+        harmonics: Sequence[float] = MAHAROF_HARMONICS,
+        amplitudes: Sequence[float] = SYNTHESISED_AMPLITUDES,
+        phases: Sequence[float] | None = None,
+        mean: float = SYNTHESISED_MEAN,
+        axis_weights: Sequence[float] = (1.0, 0.0, 0.0),
+        start_time: float = 0.0,
+        end_time: float = math.inf,
+    ) -> None:
+        """Validate every value; ParameterError names the parameter ('harmonic.<name>')."""
+        v = validate_all(
+            PARAMETERS,
+            {
+                'spindle_speed': spindle_speed,
+                'teeth': teeth,
+                'harmonics': list(harmonics),
+                'amplitudes': list(amplitudes),
+                'phases': [0.0] * len(harmonics) if phases is None else list(phases),
+                'mean': mean,
+                'axis_weights': list(axis_weights),
+                'start_time': start_time,
+                'end_time': end_time,
+            },
+            prefix=PREFIX + '.',
+        )
+        n = len(v['harmonics'])
+        for name in ('amplitudes', 'phases'):
+            if len(v[name]) != n:
+                raise ParameterError(
+                    f'{PREFIX}.{name}',
+                    v[name],
+                    f'must have one entry per harmonic ({n}), got {len(v[name])}',
+                )
+        if not v['end_time'] > v['start_time']:
+            raise ParameterError(
+                f'{PREFIX}.end_time',
+                v['end_time'],
+                f'must be > start_time = {v["start_time"]}',
+            )
+        self.spindle_speed: float = float(v['spindle_speed'])
+        self.teeth: int = v['teeth']
+        self.harmonics: tuple[float, ...] = tuple(float(m) for m in v['harmonics'])
+        self.amplitudes: tuple[float, ...] = tuple(float(a) for a in v['amplitudes'])
+        self.phases: tuple[float, ...] = tuple(float(p) for p in v['phases'])
+        self.mean: float = float(v['mean'])
+        w = [float(x) for x in v['axis_weights']]
+        self.axis_weights: tuple[float, float, float] = (w[0], w[1], w[2])
+        self.start_time: float = float(v['start_time'])
+        self.end_time: float = float(v['end_time'])
+        # f_0 = n/60 · teeth, the same base frequency as the DFO (module docstring)
+        self.base_frequency: float = self.spindle_speed / 60.0 * self.teeth
+        self._omegas = tuple(2.0 * math.pi * m * self.base_frequency for m in self.harmonics)
+
+    @property
+    def frequencies(self) -> tuple[float, ...]:
+        """Frequencies m_i f_0 of the harmonics [Hz]."""
+        return tuple(m * self.base_frequency for m in self.harmonics)
+
+    def profile(self, t: float) -> float:
+        """Unweighted force F(t) [N] (zero outside [start_time, end_time))."""
+        if not self.start_time <= t < self.end_time:
+            return 0.0
+        # Maharof 2018 eq. (5), one term per harmonic: F̄ + Σ A_i sin(ω_i t + θ_i)
+        return self.mean + math.fsum(
+            a * math.sin(w * t + p)
+            for a, w, p in zip(self.amplitudes, self._omegas, self.phases, strict=True)
+        )
+
+    def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
+        """(F_cx, F_cy, F_cz) [N] at time t; position and velocity do not matter."""
+        f = self.profile(t)
+        wx, wy, wz = self.axis_weights
+        return (wx * f, wy * f, wz * f)
+
+
+def from_parameters(values: Mapping[str, Any]) -> HarmonicForce:
+    """Build from a mapping keyed by PARAMETERS names (no prefix; missing names take defaults).
+
+    A missing 'phases' means zero phase for every harmonic. Raises ParameterError naming the
+    parameter as 'harmonic.<name>'.
+    """
+    v = validate_all(PARAMETERS, values, prefix=PREFIX + '.')
+    if 'phases' not in values:
+        v['phases'] = None
+    return HarmonicForce(**v)
