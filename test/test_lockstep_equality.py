@@ -53,3 +53,43 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
     assert summary['offline_max_difference'] <= 1e-9
     # 8 node processes + the runner
     assert len(summary['peak_rss_mb']) == 9
+
+
+# (scenario, variant, duration [s], samples): each paper scenario, distributed against
+# offline. Hatwesh runs past its load change at t = 1 s.
+PAPER_RUNS = [
+    ('chavez_conde', 'sliding_gpi', 1.0, 1001),
+    ('maharof', 'pi_imbdo_dfo', 0.3, 3001),
+    ('hatwesh', 'adaptive_pi', 1.1, 4401),
+]
+
+
+@pytest.mark.system
+@pytest.mark.parametrize(('name', 'variant', 'duration', 'samples'), PAPER_RUNS)
+def test_paper_scenario_runs_equal_offline(ros_env, tmp_path, name, variant, duration, samples):
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'mill_bringup.runner',
+            name,
+            '--variant',
+            variant,
+            '--duration',
+            str(duration),
+            '--compare-offline',
+            '--quiet',
+            '--output',
+            str(out),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / variant / 'summary.json').read_text())
+    assert summary['samples'] == samples
+    assert summary['missing_samples'] == {}
+    assert summary['offline_max_difference'] <= 1e-9

@@ -22,6 +22,7 @@ from mill_plant.config import build_plant
 from mill_plant.sensor import quantize
 from mill_trajectory.config import build_job
 
+from mill_bringup import papers
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.metrics import RunRecord, format_summary, summarize
 
@@ -104,19 +105,40 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('--controller', help='shortcut for *_controller.controller=NAME')
     parser.add_argument('--duration', type=float, help='end the job after this time [s]')
     parser.add_argument('--skip', type=float, default=1.0, help='metrics from this time on [s]')
+    parser.add_argument(
+        '--variant', help="run only this one of the scenario's variants (default: all of them)"
+    )
     args = parser.parse_args(argv)
+    records = {}
     try:
         scen = scenario_mod.load(args.scenario)
         apply_cli_overrides(scen, args)
-        t0 = time.monotonic()
-        rec = simulate(scen)
+        for name, variant in variants(scen, args.variant).items():
+            t0 = time.monotonic()
+            rec = records[name] = simulate(variant)
+            wall = time.monotonic() - t0
+            if name:
+                print(f'variant {name}:')
+            print(format_summary(summarize(rec, args.skip), args.skip))
+            print(f'{rec.t[-1]:.3f} s simulated in {wall:.2f} s wall')
     except scenario_mod.ScenarioError as exc:
         print(f'offline_sim: error: {exc}', file=sys.stderr)
         return 2
-    wall = time.monotonic() - t0
-    print(format_summary(summarize(rec, args.skip), args.skip))
-    print(f'{rec.t[-1]:.3f} s simulated in {wall:.2f} s wall')
+    text = papers.report(scen.paper, records)
+    if text:
+        print(text)
     return 0
+
+
+def variants(
+    scen: scenario_mod.Scenario, only: str | None = None
+) -> dict[str, scenario_mod.Scenario]:
+    """The configurations to run: every variant of the scenario, one, or the scenario itself."""
+    if only:
+        return {only: scen.variant(only)}
+    if not scen.variants:
+        return {'': scen}
+    return {name: scen.variant(name) for name in scen.variants}
 
 
 def apply_cli_overrides(scen: scenario_mod.Scenario, args: argparse.Namespace) -> None:

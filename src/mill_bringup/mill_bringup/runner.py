@@ -34,10 +34,11 @@ from mill_common.env import ros_environment
 from mill_common.timebase import period_ns, seconds
 from mill_trajectory.config import build_job
 
+from mill_bringup import papers
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.bag import BagError
 from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
-from mill_bringup.offline import apply_cli_overrides, job_steps, simulate
+from mill_bringup.offline import apply_cli_overrides, job_steps, simulate, variants
 
 JOB_STATUS = 'mill_trajectory: job'
 PLANT_STATUS = 'mill_plant: lockstep'
@@ -453,6 +454,9 @@ def main(argv: list[str] | None = None) -> int:
         'exist (default: RUN_DIR/bag)',
     )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress line')
+    parser.add_argument(
+        '--variant', help="run only this one of the scenario's variants (default: all of them)"
+    )
     args = parser.parse_args(argv)
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
@@ -462,30 +466,47 @@ def main(argv: list[str] | None = None) -> int:
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
         run_dir.mkdir(parents=True, exist_ok=True)
-        record_bag = None
-        if args.record is not None:
-            record_bag = Path(args.record) if args.record else run_dir / 'bag'
-            if record_bag.exists():
-                raise RunError(f'--record: {record_bag} exists already; a bag is never overwritten')
         print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
-        result = run(
-            scen,
-            run_dir,
-            skip=args.skip,
-            stall_timeout=args.stall_timeout,
-            quiet=args.quiet,
-            domain_id=args.domain_id,
-            compare_offline=args.compare_offline,
-            record_bag=record_bag,
-        )
+        records = {}
+        for name, variant in variants(scen, args.variant).items():
+            variant_dir = run_dir / name if name else run_dir
+            variant_dir.mkdir(parents=True, exist_ok=True)
+            record_bag = None
+            if args.record is not None:
+                record_bag = Path(args.record) if args.record else variant_dir / 'bag'
+                if name and args.record:
+                    record_bag = record_bag / name
+                if record_bag.exists():
+                    raise RunError(
+                        f'--record: {record_bag} exists already; a bag is never overwritten'
+                    )
+            if name:
+                print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
+            result = run(
+                variant,
+                variant_dir,
+                skip=args.skip,
+                stall_timeout=args.stall_timeout,
+                quiet=args.quiet,
+                domain_id=args.domain_id,
+                compare_offline=args.compare_offline,
+                record_bag=record_bag,
+            )
+            records[name] = result.record
+            (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
+            if name:
+                print(f'variant {name}:')
+            print(format_result(result, args.skip))
     except (scenario_mod.ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
         return 130
-    (run_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
-    print(format_result(result, args.skip))
+    text = papers.report(scen.paper, records)
+    if text:
+        print(text)
+        (run_dir / 'paper.txt').write_text(text + '\n')
     return 0
 
 

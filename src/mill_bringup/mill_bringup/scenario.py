@@ -61,6 +61,9 @@ class Scenario:
     nodes: list[NodeLaunch]
     raw: dict[str, Any]
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
+    # Configurations compared by one run: name -> overrides (`variants:` in the file).
+    variants: dict[str, list[str]] = field(default_factory=dict)
+    paper: str = ''  # which paper's metrics the run prints (mill_bringup.papers)
 
     @property
     def name(self) -> str:
@@ -97,6 +100,17 @@ class Scenario:
             except ParameterError as exc:
                 raise ScenarioError(f'{name}: {exc}') from None
         return values
+
+    def variant(self, name: str) -> Scenario:
+        """A copy of this scenario with the overrides of variant `name` applied."""
+        if name not in self.variants:
+            known = ', '.join(self.variants) or 'none'
+            raise ScenarioError(f'scenario {self.name} has no variant {name!r} (has: {known})')
+        copy = Scenario(self.path, self.description, self.nodes, self.raw, paper=self.paper)
+        copy.overrides = {node: dict(values) for node, values in self.overrides.items()}
+        for text in self.variants[name]:
+            copy.add_override(text)
+        return copy
 
     def add_override(self, text: str) -> None:
         """NODE.NAME=VALUE, NODE may be a glob (`*_controller.controller=pd`)."""
@@ -158,4 +172,12 @@ def load(name_or_path: str) -> Scenario:
         if parts[1] not in CONFIG_MODULES:
             raise ScenarioError(f'{path}: unknown package {parts[1]!r} in {line!r}')
         nodes.append(NodeLaunch(*parts))
-    return Scenario(path, str(entry.get('description', path.stem)), nodes, raw)
+    scen = Scenario(path, str(entry.get('description', path.stem)), nodes, raw)
+    scen.paper = str(entry.get('paper', ''))
+    for line in entry.get('variants') or []:
+        # "name NODE.NAME=VALUE ..." (a string list, so that rcl can read the file too)
+        name, *overrides = str(line).split()
+        scen.variants[name] = overrides
+    for name in scen.variants:
+        scen.variant(name)  # every override must name a node of the scenario
+    return scen

@@ -23,15 +23,37 @@ from mill_common.parameters import (
 from mill_common.signals import AXES
 
 from mill_plant.cutting import NoCutting, StepForce
+from mill_plant.harmonic_force import PARAMETERS as HARMONIC_PARAMETERS
+from mill_plant.harmonic_force import from_parameters as harmonic_force
 from mill_plant.kline_force import KlineCuttingForce
-from mill_plant.rigid_axis import BELTRAN_TABLE1, RigidAxisParams
+from mill_plant.models.base import AxisModel
+from mill_plant.models.flexible import FlexibleAxisModel
+from mill_plant.models.rigid import RigidAxisModel
+from mill_plant.models.transfer_function import TransferFunctionAxisModel
+from mill_plant.models.velocity_drive import VelocityDriveAxisModel
+from mill_plant.multi_axis import MultiAxisPlant
+from mill_plant.rigid_axis import RigidAxisParams
 from mill_plant.three_axis import ThreeAxisPlant
 
-CUTTING_MODELS = ('kline', 'step', 'none')
+CUTTING_MODELS = ('kline', 'step', 'harmonic', 'none')
+
+# The axis_model parameter value -> class (one file per model in mill_plant.models).
+AXIS_MODELS: dict[str, type[AxisModel]] = {
+    'rigid': RigidAxisModel,  # Beltrán 2013 eq. (1)-(3); Chávez-Conde eq. (1)-(3) with gravity
+    'flexible': FlexibleAxisModel,  # Chávez-Conde eq. (4)-(6)
+    'transfer_function': TransferFunctionAxisModel,  # Maharof 2018 eq. (1), input in V
+    'velocity_drive': VelocityDriveAxisModel,  # Hatwesh 2013 eq. (1)-(6), input in V
+}
+_RIGID = ('mass', 'screw_inertia', 'pitch', 'cart_damping', 'screw_damping', 'coulomb_friction')
 
 
-def _table(field: str) -> list[float]:
-    return [float(getattr(BELTRAN_TABLE1[a], field)) for a in AXES]
+def _axis_models(value: Any) -> str | None:
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        return 'must list 3 model names (x, y, z)'
+    for name in value:
+        if name not in AXIS_MODELS:
+            return f'must name models among {", ".join(AXIS_MODELS)}, got {name!r}'
+    return None
 
 
 def _axes(value: Any) -> str | None:
@@ -50,31 +72,18 @@ def _three(description: str, defaults: list[float], each=number) -> ParamSpec:
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    # Paper defaults: Beltrán 2013 Table 1 and the cutting data of its force section.
-    model = [
-        ('mass', _three('carriage mass m per axis x, y, z [kg]', _table('mass'), positive)),
+    # The rigid model's parameters keep their plain names (mass, pitch, ...): Beltrán 2013
+    # Table 1 by default; the other models' parameters live under their prefix.
+    model = [(spec.name, spec) for spec in RigidAxisModel.PARAMETERS if spec.name in _RIGID]
+    model += [
         (
-            'screw_inertia',
-            _three('ball-screw inertia J per axis [kg m^2]', _table('screw_inertia'), positive),
-        ),
-        ('pitch', _three('ball-screw pitch p per axis [m/rev]', _table('pitch'), positive)),
-        (
-            'cart_damping',
-            _three('guideway damping c_b per axis [N s/m]', _table('cart_damping'), non_negative),
-        ),
-        (
-            'screw_damping',
+            'max_torque',
             _three(
-                'screw-bearing damping c_t per axis, translational [N s/m]',
-                _table('screw_damping'),
-                non_negative,
+                "drive input limit per axis, in the axis model's input unit [N m or V]",
+                [10.0] * 3,
+                positive,
             ),
         ),
-        (
-            'coulomb_friction',
-            _three('Coulomb friction mu per axis [N]', _table('coulomb_friction'), non_negative),
-        ),
-        ('max_torque', _three('drive torque limit per axis [N m]', [10.0] * 3, positive)),
         (
             'initial_position',
             _three('axis positions at t = 0 [m]', [-0.075, -0.105, -0.005]),
@@ -85,6 +94,46 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         specs.append((name, ParamSpec(name, spec.default, spec.description, spec.check, True)))
     ro = True
     specs += [
+        (
+            'axis_model',
+            ParamSpec(
+                'axis_model',
+                ['rigid'] * 3,
+                'dynamic model per axis x, y, z: ' + ', '.join(AXIS_MODELS),
+                _axis_models,
+                ro,
+            ),
+        ),
+        (
+            'gravity',
+            ParamSpec(
+                'gravity',
+                False,
+                'the weight of the carried mass acts on the vertical z axis (Chávez-Conde eq. 3)',
+                boolean,
+                ro,
+            ),
+        ),
+        (
+            'load_change.time',
+            ParamSpec(
+                'time',
+                0.0,
+                'time of a step change of the carried mass (workpiece or fixture) [s]',
+                non_negative,
+                ro,
+            ),
+        ),
+        (
+            'load_change.mass',
+            ParamSpec(
+                'mass',
+                [0.0, 0.0, 0.0],
+                'mass added per axis x, y, z at load_change.time [kg]; all 0 = no change',
+                number_list(3),
+                ro,
+            ),
+        ),
         (
             'axes',
             ParamSpec('axes', list(AXES), 'axes under control; the others are braked', _axes, ro),
@@ -177,6 +226,22 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             'step.start_time',
             ParamSpec('start_time', 1.0, 'time the step force starts [s]', non_negative, ro),
         ),
+        *[
+            (
+                f'harmonic.{spec.name}',
+                ParamSpec(spec.name, spec.default, spec.description, spec.check, ro),
+            )
+            for spec in HARMONIC_PARAMETERS
+        ],
+        *[
+            (
+                f'{cls.PREFIX}.{spec.name}',
+                ParamSpec(spec.name, spec.default, spec.description, spec.check, ro),
+            )
+            for cls in AXIS_MODELS.values()
+            if cls is not RigidAxisModel
+            for spec in cls.PARAMETERS
+        ],
         (
             'publish_ground_truth',
             ParamSpec(
@@ -232,25 +297,45 @@ def build_cutting(values: dict[str, Any]):
         )
     if model == 'step':
         return StepForce(tuple(values['step.force']), values['step.start_time'])
+    if model == 'harmonic':
+        return harmonic_force(_prefixed(values, 'harmonic'))
     return NoCutting()
 
 
-def build_plant(values: dict[str, Any]) -> ThreeAxisPlant:
-    axes = [
-        RigidAxisParams(
-            mass=values['mass'][i],
-            screw_inertia=values['screw_inertia'][i],
-            pitch=values['pitch'][i],
-            cart_damping=values['cart_damping'][i],
-            screw_damping=values['screw_damping'][i],
-            coulomb_friction=values['coulomb_friction'][i],
+def _prefixed(values: dict[str, Any], prefix: str) -> dict[str, Any]:
+    cut = len(prefix) + 1
+    return {k[cut:]: v for k, v in values.items() if k.startswith(prefix + '.')}
+
+
+def _load_changes(values: dict[str, Any]) -> bool:
+    return any(m != 0.0 for m in values['load_change.mass'])
+
+
+def build_axis_model(values: dict[str, Any], axis: int) -> AxisModel:
+    cls = AXIS_MODELS[values['axis_model'][axis]]
+    own = {n: values[n] for n in _RIGID} if cls is RigidAxisModel else _prefixed(values, cls.PREFIX)
+    gravity = values['gravity'] and axis == 2
+    return cls.from_parameters(axis, own, gravity)
+
+
+def build_plant(values: dict[str, Any]) -> ThreeAxisPlant | MultiAxisPlant:
+    """Three rigid axes: the Beltrán plant (fast, unrolled); any other mix: MultiAxisPlant."""
+    rigid_only = all(m == 'rigid' for m in values['axis_model'])
+    if rigid_only and not values['gravity'] and not _load_changes(values):
+        axes = [RigidAxisParams(**{n: values[n][i] for n in _RIGID}) for i in range(len(AXES))]
+        return ThreeAxisPlant(
+            axes,
+            build_cutting(values),
+            initial_position=tuple(values['initial_position']),
+            max_torque=tuple(values['max_torque']),
+            substeps=values['substeps'],
         )
-        for i in range(len(AXES))
-    ]
-    return ThreeAxisPlant(
-        axes,
+    return MultiAxisPlant(
+        [build_axis_model(values, i) for i in range(len(AXES))],
         build_cutting(values),
         initial_position=tuple(values['initial_position']),
-        max_torque=tuple(values['max_torque']),
+        max_input=tuple(values['max_torque']),
         substeps=values['substeps'],
+        load_change_time=values['load_change.time'] if _load_changes(values) else math.inf,
+        load_change_mass=tuple(values['load_change.mass']),
     )

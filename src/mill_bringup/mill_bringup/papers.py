@@ -1,0 +1,212 @@
+"""Each paper's own metrics, computed from the runs of a scenario's variants. ROS-free.
+
+A scenario names its paper (`paper:` in its `mill_scenario` entry) and the configurations
+it compares (`variants:`); the runner and the offline simulator run every variant and print
+`report(paper, records)`: the metrics the paper reports, beside the paper's own figures or
+claims, and a verdict per claim that is computed, never written in.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from mill_bringup.metrics import RunRecord
+
+X = 0  # all three papers' experiments run on the x axis
+
+
+def amplitude(t: np.ndarray, x: np.ndarray, f: float) -> float:
+    """Single-sided amplitude of the f [Hz] component of x(t) (one DFT bin, no window)."""
+    return float(2.0 * abs(np.mean(x * np.exp(-2j * math.pi * f * t))))
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x * x)))
+
+
+def _verdict(holds: bool) -> str:
+    return 'agrees' if holds else 'DISAGREES'
+
+
+@dataclass(frozen=True)
+class Window:
+    start: float
+    end: float = math.inf
+
+    def mask(self, t: np.ndarray) -> np.ndarray:
+        return (t >= self.start) & (t < self.end)
+
+
+# --- Maharof 2018 ---------------------------------------------------------------------------
+
+# Table 1 (RMSE, MTE [mm]) and Table 2 (FFT of the error at 26/52/78 Hz [µm]).
+MAHAROF_TABLES = {
+    'pi': (0.1016, 0.1477, (3.1580, 0.4511, 0.3711)),
+    'pi_imbdo': (0.1017, 0.1465, (1.1770, 0.3368, 0.2681)),
+    'pi_dfo': (0.0997, 0.1414, (0.6882, 0.3158, 0.2453)),
+    'pi_imbdo_dfo': (0.0978, 0.1391, (0.6703, 0.2941, 0.2412)),
+}
+MAHAROF_FREQUENCIES = (26.0, 52.0, 78.0)
+# After the start transient; 2 s is a whole number of periods of 0.5, 26, 52 and 78 Hz.
+MAHAROF_WINDOW = Window(2.0, 4.0)
+
+
+def maharof_metrics(rec: RunRecord) -> tuple[float, float, tuple[float, ...]]:
+    """RMSE [mm], MTE [mm] and the error's amplitude at 26/52/78 Hz [µm] over the window."""
+    w = MAHAROF_WINDOW.mask(rec.t)
+    e = -rec.tracking_error[w, X]  # reference − position, as the paper
+    t = rec.t[w]
+    amps = tuple(amplitude(t, e, f) * 1e6 for f in MAHAROF_FREQUENCIES)
+    return _rms(e) * 1e3, float(np.max(np.abs(e))) * 1e3, amps
+
+
+def maharof(records: Mapping[str, RunRecord]) -> str:
+    lines = [
+        'Maharof 2018, x axis, 10 mm sine at 0.5 Hz with the harmonic cutting force, '
+        f't in [{MAHAROF_WINDOW.start:g}, {MAHAROF_WINDOW.end:g}) s; ours (paper):',
+        f'{"configuration":<14} {"RMSE [mm]":>18} {"MTE [mm]":>18}   '
+        + '   '.join(f'{f:g} Hz [µm]'.rjust(17) for f in MAHAROF_FREQUENCIES),
+    ]
+    ours = {}
+    for name, rec in records.items():
+        if rec.t[-1] < MAHAROF_WINDOW.end - (rec.t[1] - rec.t[0]) * 1.5:
+            lines.append(f'{name:<14} run ends before the window: no paper metrics')
+            continue
+        rmse, mte, amps = ours[name] = maharof_metrics(rec)
+        paper = MAHAROF_TABLES.get(name)
+        p = paper or (math.nan, math.nan, (math.nan,) * 3)
+        lines.append(
+            f'{name:<14} {rmse:8.4f} ({p[0]:7.4f}) {mte:8.4f} ({p[1]:7.4f})   '
+            + '   '.join(f'{a:7.4f} ({pa:7.4f})' for a, pa in zip(amps, p[2], strict=True))
+        )
+    if {'pi', 'pi_imbdo_dfo'} <= ours.keys():
+        base, both = ours['pi'], ours['pi_imbdo_dfo']
+        lines.append(
+            'claim "IMBDO + DFO gives the lowest RMSE and MTE": '
+            + _verdict(all(both[0] <= v[0] and both[1] <= v[1] for v in ours.values()))
+        )
+        cut = [1 - b / a for a, b in zip(base[2], both[2], strict=True)]
+        lines.append(
+            'claim "IMBDO + DFO reduces every harmonic peak (paper: −78.8/−34.8/−35.0 %)": '
+            + ' / '.join(f'{-100 * c:+.1f} %' for c in cut)
+            + ' — '
+            + _verdict(all(c > 0 for c in cut))
+        )
+    return '\n'.join(lines)
+
+
+# --- Chávez-Conde -------------------------------------------------------------------------
+
+CHAVEZ_WINDOW = Window(0.0)
+
+
+def tracking_metrics(rec: RunRecord, window: Window = CHAVEZ_WINDOW) -> tuple[float, float]:
+    """max |e| and RMS e of the x axis [mm] over the window."""
+    e = rec.tracking_error[window.mask(rec.t), X]
+    return float(np.max(np.abs(e))) * 1e3, _rms(e) * 1e3
+
+
+def chavez_conde(records: Mapping[str, RunRecord]) -> str:
+    lines = [
+        'Chávez-Conde, x axis, Bézier 0 -> 10 mm in 3 s with friction and cutting force:',
+        f'{"controller":<14} {"max |e| [mm]":>14} {"RMS e [mm]":>12}',
+    ]
+    ours = {}
+    for name, rec in records.items():
+        peak, rms = ours[name] = tracking_metrics(rec)
+        lines.append(f'{name:<14} {peak:14.6f} {rms:12.6f}')
+    if {'gpi', 'sliding_gpi'} <= ours.keys():
+        holds = ours['sliding_gpi'][1] < ours['gpi'][1] and ours['sliding_gpi'][0] < ours['gpi'][0]
+        lines.append('claim "the sliding-mode GPI reduces the tracking error": ' + _verdict(holds))
+    return '\n'.join(lines)
+
+
+# --- Hatwesh 2013 -------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class MoveMetrics:
+    overshoot: float  # beyond the target, % of the move length
+    settling_time: float  # after the end of the move, until |e| stays within the band [s]
+    iae: float  # ∫|e| dt over the move and its settling window [mm·s]
+
+
+def move_metrics(rec: RunRecord, start: float, end: float, settle: float, band: float):
+    """Metrics of one rest-to-rest move of x from `start` to `end` [s], settling window after.
+
+    band: the settling band as a fraction of the move length.
+    """
+    t, y, r = rec.t, rec['position'][:, X], rec['reference'][:, X]
+    move = (t >= start) & (t < end + settle)
+    length = r[t < end + settle][-1] - r[t >= start][0]
+    e = r - y
+    direction = math.copysign(1.0, length)
+    target = r[move][-1]
+    overshoot = max(0.0, float(np.max((y[move] - target) * direction))) / abs(length) * 100
+    after = (t >= end) & (t < end + settle)
+    outside = np.nonzero(np.abs(e[after]) > band * abs(length))[0]
+    settling = 0.0 if outside.size == 0 else float(t[after][outside[-1]] - end) + (t[1] - t[0])
+    iae = float(np.sum(np.abs(e[move])) * (t[1] - t[0])) * 1e3
+    return MoveMetrics(overshoot, settling, iae)
+
+
+# The two identical moves of the Hatwesh scenario (config/hatwesh.yaml): before and after
+# the inertia step. Times [s]: move start, move end, and the settling window after it.
+HATWESH_MOVES = {'before': (0.0, 0.5, 0.5), 'after': (1.5, 2.0, 0.5)}
+HATWESH_BAND = 1e-4
+
+
+def hatwesh(records: Mapping[str, RunRecord]) -> str:
+    lines = [
+        'Hatwesh 2013, x axis velocity loop, the same move before and after a load-inertia '
+        'step (settling band 0.01 % of the move, 1 µm):',
+        f'{"controller":<14} {"move":<7} {"overshoot [%]":>14} {"settling [ms]":>14} '
+        f'{"IAE [mm s]":>11}',
+    ]
+    ratios, after = {}, {}
+    last_end = max(end + settle for _, end, settle in HATWESH_MOVES.values())
+    for name, rec in records.items():
+        if rec.t[-1] < last_end - (rec.t[1] - rec.t[0]) * 1.5:
+            lines.append(f'{name:<14} run ends before the second move: no paper metrics')
+            continue
+        m = {k: move_metrics(rec, *v, HATWESH_BAND) for k, v in HATWESH_MOVES.items()}
+        for k, v in m.items():
+            lines.append(
+                f'{name:<14} {k:<7} {v.overshoot:14.3f} {v.settling_time * 1e3:14.2f} {v.iae:11.6f}'
+            )
+        ratios[name] = m['after'].iae / m['before'].iae
+        after[name] = m['after'].iae
+    if {'machine_pi', 'adaptive_pi'} <= ratios.keys():
+        lines.append(
+            'IAE after / before the inertia step: '
+            + ', '.join(f'{k} {v:.3f}' for k, v in ratios.items())
+        )
+        holds = ratios['adaptive_pi'] <= ratios['machine_pi']
+        lines.append(
+            'claim "the adaptive PI keeps its performance after the inertia change, '
+            'where the fixed machine PI loses some": ' + _verdict(holds)
+        )
+        better = after['adaptive_pi'] <= after['machine_pi']
+        lines.append(
+            "and after the change the adaptive PI's IAE is "
+            + ('lower' if better else 'still HIGHER')
+            + " than the machine PI's"
+        )
+    return '\n'.join(lines)
+
+
+REPORTS: dict[str, Callable[[Mapping[str, RunRecord]], str]] = {
+    'maharof': maharof,
+    'chavez_conde': chavez_conde,
+    'hatwesh': hatwesh,
+}
+
+
+def report(paper: str, records: Mapping[str, RunRecord]) -> str:
+    """The paper's metrics of every variant; '' for a scenario without a paper report."""
+    fn = REPORTS.get(paper)
+    return fn(records) if fn else ''
