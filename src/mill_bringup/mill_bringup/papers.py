@@ -144,7 +144,7 @@ def chavez_conde(records: Mapping[str, RunRecord]) -> str:
 @dataclass(frozen=True)
 class MoveMetrics:
     overshoot: float  # beyond the target, % of the move length
-    settling_time: float  # after the end of the move, until |e| stays within the band [s]
+    settling_time: float  # after the end of the move, until |e| stays in the band [s] (inf: never)
     iae: float  # ∫|e| dt over the move and its settling window [mm·s]
 
 
@@ -162,7 +162,12 @@ def move_metrics(rec: RunRecord, start: float, end: float, settle: float, band: 
     overshoot = max(0.0, float(np.max((y[move] - target) * direction))) / abs(length) * 100
     after = (t >= end) & (t < end + settle)
     outside = np.nonzero(np.abs(e[after]) > band * abs(length))[0]
-    settling = 0.0 if outside.size == 0 else float(t[after][outside[-1]] - end) + (t[1] - t[0])
+    if outside.size == 0:
+        settling = 0.0
+    elif outside[-1] == np.count_nonzero(after) - 1:
+        settling = math.inf  # still outside the band at the end of the window
+    else:
+        settling = float(t[after][outside[-1]] - end) + (t[1] - t[0])
     iae = float(np.sum(np.abs(e[move])) * (t[1] - t[0])) * 1e3
     return MoveMetrics(overshoot, settling, iae)
 
