@@ -121,6 +121,7 @@ def chavez_conde(records: Mapping[str, RunRecord]) -> str:
     for name, rec in records.items():
         peak, rms = ours[name] = tracking_metrics(rec)
         u = rec['torque'][:, X]
+        u = u[np.isfinite(u)]  # a distributed record may lack the last command
         top = float(np.max(np.abs(u)))
         at_top = float(np.mean(np.abs(u) >= top * (1 - 1e-9))) * 100
         chatter = _rms(np.diff(u))
