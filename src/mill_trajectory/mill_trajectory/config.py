@@ -12,6 +12,7 @@ from mill_common.parameters import (
     ParamSpec,
     algorithm_specs,
     algorithm_values,
+    boolean,
     in_range,
     non_negative,
     one_of,
@@ -50,6 +51,27 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         (
             'settle_time',
             ParamSpec('settle_time', 0.0, 'time held at the end of the path [s]', non_negative),
+        ),
+    ]
+    specs += [
+        (
+            'feed_override.enabled',
+            ParamSpec(
+                'enabled',
+                False,
+                'follow /mill/feed_override: the path speed is scaled by the latest override '
+                '(the reference is then sent for one clock period at a time)',
+                boolean,
+                True,
+            ),
+        ),
+        (
+            'feed_override.min',
+            ParamSpec('min', 0.0, 'smallest accepted feed override [-]', in_range(0.0, 10.0)),
+        ),
+        (
+            'feed_override.max',
+            ParamSpec('max', 1.5, 'largest accepted feed override [-]', in_range(0.0, 10.0)),
         ),
     ]
     return specs + algorithm_specs(TRAJECTORIES.values())

@@ -5,6 +5,12 @@ tick; point i holds positions, velocities and accelerations of x, y, z at
 stamp + i T, time_from_start = i T, for `preview_time`), so the controllers
 have the reference of every sample until the next tick. The job status goes
 to /diagnostics ("running" with progress, then "done" at the job's end).
+
+With feed_override.enabled the path speed follows /mill/feed_override (JointState,
+position[0] = override, 1 = programmed feed), clamped to [feed_override.min,
+feed_override.max]; a non-finite value is ignored and the last one held; both are reported
+on /diagnostics as a WARN. Each sample's reference is then computed once, in order, with
+the override in effect when its tick arrives (mill_trajectory.feed_override).
 """
 
 from __future__ import annotations
@@ -21,10 +27,12 @@ from mill_common.timebase import period_ns, seconds
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
 from mill_trajectory.config import build_job, parameter_specs
+from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
 
 JOB_STATUS_NAME = 'mill_trajectory: job'
 
@@ -33,6 +41,7 @@ class TrajectoryNode(Node):
     def __init__(self) -> None:
         super().__init__('trajectory')
         self._path = None
+        self._scaled = None
         self._job_end = 0.0
         self._done_sent = False
         self._next_report = 0.0
@@ -40,32 +49,45 @@ class TrajectoryNode(Node):
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
+        if self._scaled is not None:
+            self.create_subscription(JointState, topics.FEED_OVERRIDE, self._on_override, 10)
         self.get_logger().info(
             f'{self.params.values["trajectory"]} path, job ends at t = {self._job_end:.3f} s'
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
+        if values['feed_override.min'] > values['feed_override.max']:
+            raise ValueError('feed_override.min must not exceed feed_override.max')
+        if self._scaled is not None:
+            # The path time has advanced under the overrides: only the range may change.
+            self._override.minimum = values['feed_override.min']
+            self._override.maximum = values['feed_override.max']
+            return
+        self._override = FeedOverride(values['feed_override.min'], values['feed_override.max'])
         job = build_job(values)
         self._path, self._job_end = job.trajectory, job.end_time
         self._dt_ns = period_ns(values['sample_period'])
         self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
         self._done_sent = False
+        self._scaled = None
+        if values['feed_override.enabled']:
+            self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns))
+
+    def _on_override(self, msg: JointState) -> None:
+        offered = msg.position[0] if len(msg.position) else math.nan
+        accepted = self._override.accept(float(offered))
+        if accepted.problem:
+            self.get_logger().warning(accepted.problem)
+            self._report(self.get_clock().now().nanoseconds * 1e-9, 'running', accepted.problem)
 
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
-        out = JointTrajectory()
-        out.header.stamp = to_stamp(ns)
-        out.joint_names = list(AXES)
-        for i in range(self._points):
-            sample = self._path.sample(seconds(ns + i * self._dt_ns))
-            point = JointTrajectoryPoint()
-            point.positions = list(sample.position)
-            point.velocities = list(sample.velocity)
-            point.accelerations = list(sample.acceleration)
-            point.time_from_start = Duration(nanoseconds=i * self._dt_ns).to_msg()
-            out.points.append(point)
-        self._ref_pub.publish(out)
+        if self._scaled is not None:
+            self._publish_scaled(ns)
+            t = self._scaled.path_time
+        else:
+            self._publish_chunk(ns)
         if t >= self._job_end and not self._done_sent:
             self._done_sent = True
             self._report(t, 'done')
@@ -73,16 +95,48 @@ class TrajectoryNode(Node):
             self._next_report = t + 1.0
             self._report(t, 'running')
 
-    def _report(self, t: float, state: str) -> None:
+    def _publish_scaled(self, ns: int) -> None:
+        # Each sample once and in order: its path time depends on all earlier overrides.
+        first = max(ns // self._dt_ns, self._scaled.sample_index)
+        last = ns // self._dt_ns + self._points
+        if first >= last:
+            return
+        out = JointTrajectory()
+        out.header.stamp = to_stamp(first * self._dt_ns)
+        out.joint_names = list(AXES)
+        for k in range(first, last):
+            sample = self._scaled.sample(self._override.value)
+            out.points.append(self._point(sample, (k - first) * self._dt_ns))
+        self._ref_pub.publish(out)
+
+    def _point(self, sample, offset_ns: int) -> JointTrajectoryPoint:
+        point = JointTrajectoryPoint()
+        point.positions = list(sample.position)
+        point.velocities = list(sample.velocity)
+        point.accelerations = list(sample.acceleration)
+        point.time_from_start = Duration(nanoseconds=offset_ns).to_msg()
+        return point
+
+    def _publish_chunk(self, ns: int) -> None:
+        out = JointTrajectory()
+        out.header.stamp = to_stamp(ns)
+        out.joint_names = list(AXES)
+        for i in range(self._points):
+            sample = self._path.sample(seconds(ns + i * self._dt_ns))
+            out.points.append(self._point(sample, i * self._dt_ns))
+        self._ref_pub.publish(out)
+
+    def _report(self, t: float, state: str, problem: str | None = None) -> None:
         status = DiagnosticStatus(
-            level=DiagnosticStatus.OK,
+            level=DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
             name=JOB_STATUS_NAME,
-            message=f'job {state}',
+            message=problem or f'job {state}',
             hardware_id='mill',
             values=[
                 KeyValue(key='state', value=state),
                 KeyValue(key='time', value=repr(t)),
                 KeyValue(key='end_time', value=repr(self._job_end)),
+                KeyValue(key='feed_override', value=repr(self._override.value)),
             ],
         )
         array = DiagnosticArray(status=[status])
