@@ -121,10 +121,12 @@ def chavez_conde(records: Mapping[str, RunRecord]) -> str:
     for name, rec in records.items():
         peak, rms = ours[name] = tracking_metrics(rec)
         u = rec['torque'][:, X]
-        u = u[np.isfinite(u)]  # a distributed record may lack the last command
-        top = float(np.max(np.abs(u)))
-        at_top = float(np.mean(np.abs(u) >= top * (1 - 1e-9))) * 100
-        chatter = _rms(np.diff(u))
+        u = u[np.isfinite(u)]  # the runner's record has no commands: offline only
+        top = at_top = chatter = math.nan
+        if u.size:
+            top = float(np.max(np.abs(u)))
+            at_top = float(np.mean(np.abs(u) >= top * (1 - 1e-9))) * 100
+            chatter = _rms(np.diff(u))
         lines.append(
             f'{name:<22} {peak:14.6f} {rms:12.6f} {top:16.4f} {at_top:11.2f} {chatter:15.6f}'
         )

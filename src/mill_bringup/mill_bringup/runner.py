@@ -466,20 +466,23 @@ def main(argv: list[str] | None = None) -> int:
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
         run_dir.mkdir(parents=True, exist_ok=True)
+        runs = variants(scen, args.variant)
+        bags: dict[str, Path | None] = {}
+        for name in runs:
+            bags[name] = None
+            if args.record is not None:
+                bag = Path(args.record) if args.record else (run_dir / name) / 'bag'
+                bags[name] = bag / name if name and args.record else bag
+                if bags[name].exists():
+                    raise RunError(
+                        f'--record: {bags[name]} exists already; a bag is never overwritten'
+                    )
         print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
         records = {}
-        for name, variant in variants(scen, args.variant).items():
+        for name, variant in runs.items():
             variant_dir = run_dir / name if name else run_dir
             variant_dir.mkdir(parents=True, exist_ok=True)
-            record_bag = None
-            if args.record is not None:
-                record_bag = Path(args.record) if args.record else variant_dir / 'bag'
-                if name and args.record:
-                    record_bag = record_bag / name
-                if record_bag.exists():
-                    raise RunError(
-                        f'--record: {record_bag} exists already; a bag is never overwritten'
-                    )
+            record_bag = bags[name]
             if name:
                 print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
             result = run(
