@@ -9,6 +9,7 @@ from mill_common.parameters import (
     algorithm_specs,
     algorithm_values,
     axis_node_specs,
+    non_negative,
     one_of,
 )
 from mill_plant.rigid_axis import nominal_input_gain
@@ -21,6 +22,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
     specs = axis_node_specs()
     specs.append(
         ('observer', ParamSpec('observer', 'gpi', 'observer algorithm', one_of(*OBSERVERS)))
+    )
+    specs.append(
+        (
+            'blend_time',
+            ParamSpec(
+                'blend_time',
+                0.05,
+                'after a run-time change of observer or gains, the time constant with which the '
+                "estimate moves from the old observer's last value to the new one's [s]",
+                non_negative,
+            ),
+        )
     )
     return specs + algorithm_specs(OBSERVERS.values())
 

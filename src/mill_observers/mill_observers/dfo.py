@@ -130,6 +130,7 @@ class Dfo:
     """
 
     PREFIX: ClassVar[str] = 'dfo'
+    DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (*plant_specs(), *dfo_specs())
 
     def __init__(

@@ -135,6 +135,7 @@ class Imbdo:
     """
 
     PREFIX: ClassVar[str] = 'imbdo'
+    DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
         *plant_specs(),
         ParamSpec(

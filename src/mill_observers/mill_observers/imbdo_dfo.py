@@ -34,6 +34,7 @@ class ImbdoDfo:
     """Maharof 2018 combined observer; disturbance = d̂_D + d̂_I [V] (subtract it from u)."""
 
     PREFIX: ClassVar[str] = 'imbdo_dfo'
+    DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
         *plant_specs(),
         *(s for s in Imbdo.PARAMETERS if s.name in _IMBDO_ONLY),

@@ -22,6 +22,8 @@ from sensor_msgs.msg import JointState
 
 from mill_common import topics
 from mill_observers.config import build_observer, parameter_specs
+from mill_observers.registry import OBSERVERS
+from mill_observers.switching import EstimateBlend
 
 
 class ObserverNode(Node):
@@ -48,8 +50,23 @@ class ObserverNode(Node):
     def _configure(self, values: dict[str, Any]) -> None:
         if self._observer is not None and values['axis'] != self.axis:
             raise ValueError('axis is fixed for the life of the node')
-        # A rebuilt observer restarts from the next measurement.
+        # A rebuilt observer restarts from the next measurement; its estimate continues the
+        # old one's and fades into its own over blend_time (mill_observers.switching).
+        if self._observer is not None:
+            old = self.params.values['observer']
+            units = [
+                getattr(OBSERVERS[n], 'DISTURBANCE_UNIT', 'm/s²') for n in (old, values['observer'])
+            ]
+            if units[0] != units[1]:
+                raise ValueError(
+                    f'{values["observer"]} estimates the disturbance in {units[1]} but the running '
+                    f'{old} in {units[0]}: the controller cannot use both'
+                )
         self._observer = build_observer(values)
+        blend = EstimateBlend(values['sample_period'], values['blend_time'])
+        if self._last_ns is not None:  # a switch while running: continue the estimate
+            blend.resumed(self._blend).switch()
+        self._blend = blend
         if self._last_ns is not None:
             self._last_ns = None
             self._commands.clear()
@@ -78,7 +95,7 @@ class ObserverNode(Node):
                     self._stalled_since = self._stalled_since or time.monotonic()
                     return  # y(k) arrived before u(k-1): wait for it
                 self._observer.predict(u)
-            est = self._observer.correct(self._states.pop(ns))
+            est = self._blend(self._observer.correct(self._states.pop(ns)))
             self._last_ns = ns
             self._stalled_since = None
             self._last_estimate = joint_state(
