@@ -29,9 +29,19 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
-from mill_common.parameters import ParameterError, ParamSpec, validate_all
+from mill_common.parameters import ParameterError, ParamSpec, non_negative, validate_all
 
 State = list[float]
+
+STANDARD_GRAVITY = 9.80665  # [m/s^2]
+
+# Every model offers g; it is used only on an axis built with gravity (the vertical z).
+GRAVITY_SPEC = ParamSpec(
+    'gravity_acceleration',
+    STANDARD_GRAVITY,
+    'g [m/s^2], used on an axis built with gravity (Chávez-Conde eq. (3))',
+    non_negative,
+)
 
 
 class AxisModel(ABC):

@@ -39,8 +39,13 @@ from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec, non_negative, positive
 
-from mill_plant.models.base import AxisModel, State, check_mass_change, validated
-from mill_plant.models.rigid import STANDARD_GRAVITY
+from mill_plant.models.base import (
+    GRAVITY_SPEC,
+    AxisModel,
+    State,
+    check_mass_change,
+    validated,
+)
 
 _A = 0.01 / (2.0 * math.pi)  # Chávez-Conde: a = 0.01 m / 2π
 _C_ROT = 2.5 * _A * _A / 4.0  # a quarter of c_t a² [N·m·s/rad]
@@ -79,12 +84,7 @@ class FlexibleAxisModel(AxisModel):
         ParamSpec(
             'coulomb_friction', 0.3, 'Coulomb friction mu_3 on the carriage [N]', non_negative
         ),
-        ParamSpec(
-            'gravity_acceleration',
-            STANDARD_GRAVITY,
-            'g [m/s^2], used on an axis built with gravity',
-            non_negative,
-        ),
+        GRAVITY_SPEC,
     )
 
     def __init__(self, gravity: bool = False, **values: float) -> None:

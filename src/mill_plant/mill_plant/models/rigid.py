@@ -19,10 +19,15 @@ from typing import Any, ClassVar
 
 from mill_common.parameters import Check, ParamSpec, non_negative, number_list, positive
 
-from mill_plant.models.base import AxisModel, State, check_mass_change, validated
+from mill_plant.models.base import (
+    GRAVITY_SPEC,
+    STANDARD_GRAVITY,
+    AxisModel,
+    State,
+    check_mass_change,
+    validated,
+)
 from mill_plant.rigid_axis import BELTRAN_TABLE1, RigidAxisParams
-
-STANDARD_GRAVITY = 9.80665
 
 
 def _table(field: str) -> list[float]:
@@ -56,12 +61,7 @@ class RigidAxisModel(AxisModel):
             non_negative,
         ),
         _three('coulomb_friction', 'coulomb_friction', 'Coulomb friction mu [N]', non_negative),
-        ParamSpec(
-            'gravity_acceleration',
-            STANDARD_GRAVITY,
-            'g [m/s^2], used on an axis built with gravity (Chávez-Conde eq. (3))',
-            non_negative,
-        ),
+        GRAVITY_SPEC,
     )
 
     def __init__(

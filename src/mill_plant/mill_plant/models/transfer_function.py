@@ -31,8 +31,13 @@ from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec, non_negative, positive
 
-from mill_plant.models.base import AxisModel, State, check_mass_change, validated
-from mill_plant.models.rigid import STANDARD_GRAVITY
+from mill_plant.models.base import (
+    GRAVITY_SPEC,
+    AxisModel,
+    State,
+    check_mass_change,
+    validated,
+)
 
 M_PER_MM = 1e-3
 
@@ -64,12 +69,7 @@ class TransferFunctionAxisModel(AxisModel):
             '(default A x 10 kg, our reading)',
             positive,
         ),
-        ParamSpec(
-            'gravity_acceleration',
-            STANDARD_GRAVITY,
-            'g [m/s^2], used on an axis built with gravity',
-            non_negative,
-        ),
+        GRAVITY_SPEC,
     )
 
     def __init__(self, gravity: bool = False, **values: float) -> None:

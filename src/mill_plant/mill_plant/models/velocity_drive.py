@@ -29,8 +29,7 @@ from typing import Any, ClassVar
 
 from mill_common.parameters import Check, ParamSpec, non_negative, number_list, positive
 
-from mill_plant.models.base import AxisModel, State, validated
-from mill_plant.models.rigid import STANDARD_GRAVITY
+from mill_plant.models.base import GRAVITY_SPEC, STANDARD_GRAVITY, AxisModel, State, validated
 
 
 def _three(name: str, default: list[float], description: str, check: Check) -> ParamSpec:
@@ -65,12 +64,7 @@ class VelocityDriveAxisModel(AxisModel):
             '(not in the paper)',
             non_negative,
         ),
-        ParamSpec(
-            'gravity_acceleration',
-            STANDARD_GRAVITY,
-            'g [m/s^2], used on an axis built with gravity',
-            non_negative,
-        ),
+        GRAVITY_SPEC,
     )
 
     def __init__(
