@@ -69,7 +69,6 @@ def test_switch_output_is_the_old_laws_and_the_new_law_takes_over(new: str) -> N
     u, u_old, e, k = run(make(new), switch_at=1.5)
     # At the switch the command moves exactly as the old law would have moved it.
     assert u[k] == u_old[k]
-    assert abs(u[k] - u[k - 1]) == abs(u_old[k] - u_old[k - 1])
     # Alone, the new law would have jumped far more than that in the same sample.
     record = SWITCHES[-1]
     assert record.time == pytest.approx(k * T) and record.old_output == u[k]
