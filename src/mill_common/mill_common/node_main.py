@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import sys
+import time
 from collections.abc import Callable, Sequence
 
 from mill_common.env import ros_environment
@@ -77,6 +79,25 @@ def install_stop_handlers() -> list[int]:
     return stop
 
 
+def deliver_before_exit(node: object, timeout: float = 1.0) -> None:
+    """Wait (bounded) until every subscriber acknowledged what the node published.
+
+    Destroying a writer drops the samples still in flight, so a recorder could miss the
+    last step of a node stopped right after publishing it (seen once in CI: the state of
+    one axis of the final step). Publishers without reliable readers return at once.
+    """
+    from rclpy.duration import Duration
+
+    deadline = time.monotonic() + timeout
+    for pub in list(node.publishers):
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return
+        # A publisher whose context is already gone has nothing left to deliver.
+        with contextlib.suppress(Exception):
+            pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
+
+
 def _user_args(argv: Sequence[str]) -> list[str]:
     args = list(argv[1:])
     return args[: args.index('--ros-args')] if '--ros-args' in args else args
@@ -137,6 +158,7 @@ def run_node(
         # break the teardown; CPython keeps SIG_IGN through interpreter exit.
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if node is not None:
+            deliver_before_exit(node)
             node.destroy_node()
         if rclpy.ok():
             rclpy.try_shutdown()
