@@ -22,7 +22,6 @@ scipy.signal convention), the denominator monic and the numerator padded to its 
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -151,38 +150,3 @@ def hold_input(u_k: float, u_prev: float, beta: float, T: float) -> tuple[float,
     """(u0, slope) of the β-FROH reconstruction u(kT + τ) = u0 + slope·τ over [0, T)."""
     # β-FROH: u(kT + τ) = u_k + β (u_k − u_{k−1}) τ / T
     return float(u_k), float(beta) * (float(u_k) - float(u_prev)) / float(T)
-
-
-def clamped_pieces(
-    u0: float, slope: float, duration: float, lo: float, hi: float
-) -> list[tuple[float, float, float]]:
-    """Split u0 + slope·τ on [0, duration] into affine pieces clamped to [lo, hi].
-
-    Returns [(length, start value, slope)]: a piece outside the range becomes a constant
-    at the bound, so the reconstructed input never leaves [lo, hi].
-    """
-    if lo > hi:
-        raise ValueError(f'empty range [{lo}, {hi}]')
-    cuts = {0.0, float(duration)}
-    if slope != 0.0:
-        for bound in (lo, hi):
-            if math.isfinite(bound):
-                tau = (bound - u0) / slope
-                if 0.0 < tau < duration:
-                    cuts.add(tau)
-    edges = sorted(cuts)
-    pieces = []
-    for a, b in itertools.pairwise(edges):
-        if b <= a:
-            continue
-        mid = u0 + slope * 0.5 * (a + b)
-        start = u0 + slope * a
-        if mid > hi:
-            pieces.append((b - a, hi, 0.0))
-        elif mid < lo:
-            pieces.append((b - a, lo, 0.0))
-        else:
-            pieces.append((b - a, min(hi, max(lo, start)), slope))
-    if not pieces:
-        pieces.append((float(duration), min(hi, max(lo, u0)), 0.0))
-    return pieces

@@ -43,9 +43,15 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_plant.force_process import AffineLti, ForceProcessModel, ForceProcessPlant
+from mill_plant.force_process import (
+    AffineLti,
+    DrivenForceProcess,
+    ForceProcessModel,
+    ForceProcessPlant,
+    clamped_pieces,
+)
 
-from mill_controllers.froh import DiscreteTF, clamped_pieces, froh_discretize, hold_input
+from mill_controllers.froh import DiscreteTF, froh_discretize, hold_input
 
 # --- polynomials (numpy arrays, highest power first) ------------------------------------
 
@@ -546,8 +552,8 @@ def simpson(times: np.ndarray, values: np.ndarray) -> float:
     )
 
 
-class HeldPlant:
-    """A force-process plant seen through a β-FROH and a clamp on the reconstructed feed.
+class HeldPlant(DrivenForceProcess):
+    """A force-process plant seen through a β-FROH and the drive's clamp on the feed.
 
     advance(u_k, beta) applies u(kT + τ) = u_k + β(u_k − u_{k−1})τ/T over one period,
     clamped to [lo, hi] (the plant never sees a feed outside the range), and returns the
@@ -563,15 +569,9 @@ class HeldPlant:
         hi: float = math.inf,
         spacing: float | None = None,
     ) -> None:
-        self.plant = plant
-        self.lo = float(lo)
-        self.hi = float(hi)
+        super().__init__(plant, lo, hi, spacing)
         self.T = plant.model.sample_period
-        self.spacing = float(spacing) if spacing else self.T / 16.0
         self.u_prev = 0.0
-
-    def clamp(self, u: float) -> float:
-        return min(self.hi, max(self.lo, float(u)))
 
     def advance(
         self,
@@ -585,16 +585,16 @@ class HeldPlant:
         pieces (only with keep_trace and a reference): [(times, F_p, F_pm)].
         """
         u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
+        self.u_prev = float(u_k)
         cost = 0.0
         trace = []
-        for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
-            if reference is None:
+        if reference is None:  # no grid needed: one exact step per clamped piece
+            for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
                 self.plant.step(start, sl, length)
-                continue
-            for times, force in self.plant.trace(start, sl, length, self.spacing):
-                f_ref = reference.values(times)
-                cost += simpson(times, (force - f_ref) ** 2)
-                if keep_trace:
-                    trace.append((times, force, f_ref))
-        self.u_prev = float(u_k)
+            return self.plant.force, cost, trace
+        for times, force in self.apply(u0, slope, self.T):
+            f_ref = reference.values(times)
+            cost += simpson(times, (force - f_ref) ** 2)
+            if keep_trace:
+                trace.append((times, force, f_ref))
         return self.plant.force, cost, trace

@@ -9,7 +9,6 @@ import pytest
 import scipy.signal
 from mill_controllers.froh import (
     as_state_space,
-    clamped_pieces,
     froh_discretize,
     hold_input,
 )
@@ -101,20 +100,6 @@ def test_hold_input_is_the_beta_reconstruction() -> None:
     assert u0 == 5.0
     assert u0 + slope * 0.1 == pytest.approx(5.0 - 0.3 * 2.0)
     assert hold_input(5.0, 3.0, 0.0, 0.1) == (5.0, 0.0)
-
-
-@pytest.mark.parametrize(('u0', 'slope'), [(5.0, 200.0), (5.0, -200.0), (25.0, -400.0), (3.0, 0.0)])
-def test_clamped_pieces_stay_in_range_and_follow_the_ramp_inside(u0: float, slope: float) -> None:
-    lo, hi, dur = 0.0, 12.0, 0.1
-    pieces = clamped_pieces(u0, slope, dur, lo, hi)
-    assert sum(p[0] for p in pieces) == pytest.approx(dur)
-    t = 0.0
-    for length, start, sl in pieces:
-        for tau in np.linspace(0.0, length, 7):
-            value = start + sl * tau
-            assert lo - 1e-9 <= value <= hi + 1e-9
-            assert value == pytest.approx(min(hi, max(lo, u0 + slope * (t + tau))), abs=1e-9)
-        t += length
 
 
 def test_beta_outside_range_is_refused() -> None:
