@@ -26,30 +26,13 @@ import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
-from mill_controllers.model_reference import (
-    ContinuousReference,
-    ForceControlDesigner,
-    HeldPlant,
-    ModelReferenceForceController,
-    SampleHold,
-)
-from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
-
-
-class ForceController(Protocol):
-    @property
-    def active_beta(self) -> float: ...
-
-    def set_depth(self, depth: float) -> None: ...
-
-    def update(self, force_reference: float, force_measured: float) -> float: ...
-
-    def record_applied(self, feed: float) -> None: ...
+from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
+from mill_controllers.model_reference import ContinuousReference, ForceControlDesigner, simpson
+from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
 
 
 def _number_or_inf(value: Any) -> str | None:
@@ -110,23 +93,42 @@ def make_controller(
     model: ForceProcessModel,
     loop: Mapping[str, Any] | None = None,
     values: Mapping[str, Any] | None = None,
-) -> ForceController:
+) -> ForceLaw:
     """'fixed' (values['beta']), 'scheme1' or 'scheme2', with the loop's feed range."""
     lv = loop_values(loop)
     lo = lv['override_min'] * lv['nominal_feed']
     hi = lv['override_max'] * lv['nominal_feed']
-    values = dict(values or {})
-    if kind == 'fixed':
-        return ModelReferenceForceController.from_parameters(model, values)
-    if kind == 'scheme1':
-        return MultiModelScheme1(model, values, lo, hi)
-    if kind == 'scheme2':
-        return MultiModelScheme2(model, values, lo, hi)
-    raise ValueError(f"controller kind must be 'fixed', 'scheme1' or 'scheme2', got {kind!r}")
+    return build_law(kind, model, dict(values or {}), lo, hi)
+
+
+class _Corrupted:
+    """A law whose feed command is replaced at chosen samples (tests of the clamp/hold)."""
+
+    def __init__(self, law: ForceLaw, overrides: Mapping[int, float], nominal: float) -> None:
+        self.law = law
+        self.overrides = dict(overrides)
+        self.nominal = nominal
+        self.k = 0
+
+    @property
+    def active_beta(self) -> float:
+        return self.law.active_beta
+
+    def set_depth(self, depth: float) -> None:
+        self.law.set_depth(depth)
+
+    def update(self, force_reference: float, force_measured: float) -> float:
+        u = self.law.update(force_reference, force_measured)
+        bad = self.overrides.get(self.k)
+        self.k += 1
+        return u if bad is None else bad * self.nominal
+
+    def record_applied(self, feed: float) -> None:
+        self.law.record_applied(feed)
 
 
 def simulate(
-    controller: ForceController,
+    controller: ForceLaw,
     model: ForceProcessModel,
     loop: Mapping[str, Any] | None = None,
     nan_samples: Sequence[int] = (),
@@ -137,6 +139,9 @@ def simulate(
 
     override_corruption {k: value} replaces the controller's override at k (tests of the
     clamp/hold path); the applied override is what the plant sees.
+
+    The data flow is the distributed one (mill_bringup.force_job): the force sample at
+    t_k, the override o_k and its β-hold slope, the drive's clamped feed, the next sample.
     """
     lv = loop_values(loop)
     T = model.sample_period
@@ -145,65 +150,37 @@ def simulate(
     o_lo, o_hi = lv['override_min'], lv['override_max']
     if not o_lo <= o_hi:
         raise ValueError(f'override range [{o_lo}, {o_hi}] is empty')
-    held = HeldPlant(
+    if override_corruption:
+        controller = _Corrupted(controller, override_corruption, nominal)
+    feed_loop = ForceFeedLoop(controller, model, nominal, o_lo, o_hi)
+    drive = DrivenForceProcess(
         ForceProcessPlant(model), o_lo * nominal, o_hi * nominal, T / lv['intersample_intervals']
     )
     designer = ForceControlDesigner(model)
     f_ref = ContinuousReference(designer.damping, designer.omega_n)
-    hold = SampleHold(0.0)
     nan_set = set(nan_samples)
-    corrupt = dict(override_corruption or {})
     r_val = lv['reference_force']
-    rec = {
-        key: np.zeros(n)
-        for key in (
-            't',
-            'reference',
-            'force',
-            'feed_command',
-            'feed',
-            'override',
-            'beta',
-            'depth',
-            'interval_cost',
-        )
-    }
+    keys = ('t', 'reference', 'force', 'feed_command', 'feed', 'override', 'beta', 'depth')
+    rec = {key: np.zeros(n) for key in (*keys, 'interval_cost')}
     fine = []
-    last_override = 0.0
     for k in range(n):
-        t = held.plant.time
-        measured = held.plant.force
-        if k in nan_set:
-            measured = math.nan
-        y = hold(measured)
-        depth = model.depth_at(t)
-        controller.set_depth(depth)
-        u = controller.update(r_val, y)
-        override = u / nominal
-        if k in corrupt:
-            override = corrupt[k]
-        override = min(o_hi, max(o_lo, override)) if math.isfinite(override) else last_override
-        last_override = override
-        feed = override * nominal
-        controller.record_applied(feed)
-        beta = controller.active_beta
+        t = drive.plant.time
+        measured = math.nan if k in nan_set else drive.plant.force
+        cmd = feed_loop.step(t, r_val, measured)
+        feed = cmd.override * nominal
         f_ref.begin(r_val)
-        _, cost, trace = held.advance(feed, beta, f_ref, keep_trace)
+        cost = 0.0
+        for times, force in drive.apply(feed, cmd.slope * nominal, T):
+            f_pm = f_ref.values(times)
+            cost += simpson(times, (force - f_pm) ** 2)
+            if keep_trace:
+                fine.append((times, force, f_pm))
         f_ref.advance(T)
-        for key, value in (
-            ('t', t),
-            ('reference', r_val),
-            ('force', y),
-            ('feed_command', u),
-            ('feed', feed),
-            ('override', override),
-            ('beta', beta),
-            ('depth', depth),
-            ('interval_cost', cost),
-        ):
+        values = (t, r_val, cmd.force, cmd.feed_command, feed, cmd.override, cmd.beta)
+        for key, value in zip(keys, (*values, model.depth_at(t)), strict=True):
             rec[key][k] = value
-        fine.extend(trace)
-    return LoopRecord(**rec, fine=fine, held_samples=hold.held)
+        rec['interval_cost'][k] = cost
+    return LoopRecord(**rec, fine=fine, held_samples=feed_loop.held_samples)
 
 
 def run(

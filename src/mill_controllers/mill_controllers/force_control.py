@@ -1,0 +1,198 @@
+"""Cutting-force control by adaptive feed (Rubio 2013), ROS-free: choice, parameters, one sample.
+
+The `force_controller` parameter picks the law (registry below); `ForceFeedLoop` turns one
+force sample into the feed override of that sample, the same way in the force-controller
+node and in the offline loop (mill_bringup.force_loop):
+
+1. a non-finite force sample is replaced by the last finite one (counted as held);
+2. the law gets the known depth a_dc(t_k) and returns the feed command f_c,k [mm/s];
+3. the override o_k = f_c,k / nominal_feed is clamped to [override_min, override_max]; a
+   non-finite one holds the last override; the law is told the feed actually applied;
+4. the β-hold of the active β gives the override's slope over the sample,
+   ȯ = β(o_k − o_{k−1})/T, so the path speed follows u_k + β(u_k − u_{k−1})τ/T.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any, Protocol
+
+from mill_common.parameters import ParamSpec, algorithm_specs, one_of, positive
+from mill_plant.force_process import ForceProcessModel
+
+from mill_controllers.froh import hold_input
+from mill_controllers.model_reference import ModelReferenceForceController, SampleHold
+from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
+
+
+class ForceLaw(Protocol):
+    @property
+    def active_beta(self) -> float: ...
+
+    def set_depth(self, depth: float) -> None: ...
+
+    def update(self, force_reference: float, force_measured: float) -> float: ...
+
+    def record_applied(self, feed: float) -> None: ...
+
+
+# The force_controller parameter value -> class (one file per algorithm).
+FORCE_CONTROLLERS: dict[str, type] = {
+    'fixed': ModelReferenceForceController,  # Rubio 2013 fig. 1, eq. (4)-(11), one β
+    'scheme1': MultiModelScheme1,  # Rubio 2013 §3.2.1, eq. (13)
+    'scheme2': MultiModelScheme2,  # Rubio 2013 §3.2.2
+}
+FORCE_COMPONENTS = ('resultant', 'x', 'y', 'z')
+
+
+def _override_bound(value: Any) -> str | None:
+    if not isinstance(value, int | float) or isinstance(value, bool) or not 0 <= value <= 10:
+        return 'must be a number in [0, 10]'
+    return None
+
+
+def parameter_specs() -> list[tuple[str, ParamSpec]]:
+    specs = [
+        (
+            'force_controller',
+            ParamSpec(
+                'force_controller',
+                'fixed',
+                'force law: fixed (one β), scheme1 or scheme2 (Rubio 2013 multi-model)',
+                one_of(*FORCE_CONTROLLERS),
+                True,
+            ),
+        ),
+        (
+            'reference_force',
+            ParamSpec('reference_force', 1200.0, 'reference peak force F_r [N]', positive),
+        ),
+        (
+            'nominal_feed',
+            ParamSpec(
+                'nominal_feed',
+                10.0,
+                'programmed feed of the path [mm/s]: override 1 means this feed',
+                positive,
+                True,
+            ),
+        ),
+        (
+            'override.min',
+            ParamSpec('min', 0.0, 'smallest feed override sent [-]', _override_bound, True),
+        ),
+        (
+            'override.max',
+            ParamSpec('max', 2.0, 'largest feed override sent [-]', _override_bound, True),
+        ),
+        (
+            'force_component',
+            ParamSpec(
+                'force_component',
+                'resultant',
+                'what of /mill/cutting_force is the controlled force: the resultant |F| '
+                'or one component',
+                one_of(*FORCE_COMPONENTS),
+                True,
+            ),
+        ),
+    ]
+    # The process model and the law's design are built once (read-only): a law's memory
+    # belongs to its design, so a new design means a new node.
+    model = [
+        (f'{ForceProcessModel.PREFIX}.{s.name}', replace(s, read_only=True))
+        for s in ForceProcessModel.PARAMETERS
+    ]
+    laws = [(n, replace(s, read_only=True)) for n, s in algorithm_specs(FORCE_CONTROLLERS.values())]
+    return specs + model + laws
+
+
+def own_values(prefix: str, values: Mapping[str, Any]) -> dict[str, Any]:
+    """The values under `prefix.` without the prefix."""
+    head = prefix + '.'
+    return {k[len(head) :]: v for k, v in values.items() if k.startswith(head)}
+
+
+def build_model(values: Mapping[str, Any]) -> ForceProcessModel:
+    return ForceProcessModel.from_parameters(own_values(ForceProcessModel.PREFIX, values))
+
+
+def build_law(
+    kind: str, model: ForceProcessModel, values: Mapping[str, Any], feed_min: float, feed_max: float
+) -> ForceLaw:
+    """The law `kind` with its own values (names without prefix) and the feed range [mm/s]."""
+    if kind not in FORCE_CONTROLLERS:
+        raise ValueError(f'force_controller must be one of {", ".join(FORCE_CONTROLLERS)}')
+    if kind == 'fixed':
+        return ModelReferenceForceController.from_parameters(model, values)
+    return FORCE_CONTROLLERS[kind].from_parameters(model, values, feed_min, feed_max)
+
+
+@dataclass(frozen=True)
+class OverrideCommand:
+    """The override of one sample and how it came about."""
+
+    override: float  # o_k, in range [-]
+    slope: float  # ȯ over the sample from the β-hold [1/s]
+    feed_command: float  # the law's f_c,k [mm/s] (before the clamp)
+    beta: float  # active β over the sample
+    force: float  # the force the law used [N] (the last finite one)
+    held: bool  # the force sample was not finite
+    clamped: bool  # the law's override was outside the range or not finite
+
+
+class ForceFeedLoop:
+    """One force sample in, one feed override (value and β-hold slope) out."""
+
+    def __init__(
+        self,
+        law: ForceLaw,
+        model: ForceProcessModel,
+        nominal_feed: float,
+        override_min: float,
+        override_max: float,
+    ) -> None:
+        if not override_min <= override_max:
+            raise ValueError(f'override range [{override_min}, {override_max}] is empty')
+        self.law = law
+        self.model = model
+        self.T = model.sample_period
+        self.nominal_feed = float(nominal_feed)
+        self.lo = float(override_min)
+        self.hi = float(override_max)
+        self._hold = SampleHold(0.0)
+        self._last = 0.0  # the override before the first sample: at rest
+
+    @classmethod
+    def from_parameters(cls, values: Mapping[str, Any]) -> ForceFeedLoop:
+        model = build_model(values)
+        kind = values['force_controller']
+        nominal = values['nominal_feed']
+        lo, hi = values['override.min'], values['override.max']
+        prefix = FORCE_CONTROLLERS[kind].PREFIX
+        law = build_law(kind, model, own_values(prefix, values), lo * nominal, hi * nominal)
+        return cls(law, model, nominal, lo, hi)
+
+    @property
+    def held_samples(self) -> int:
+        return self._hold.held
+
+    @property
+    def feed_range(self) -> tuple[float, float]:
+        """[mm/s] the override range allows."""
+        return self.lo * self.nominal_feed, self.hi * self.nominal_feed
+
+    def step(self, t: float, reference: float, measured: float) -> OverrideCommand:
+        y = self._hold(measured)
+        held = not math.isfinite(measured)
+        self.law.set_depth(self.model.depth_at(t))  # the depth is known (Rubio 2013 §2)
+        u = self.law.update(reference, y)
+        wanted = u / self.nominal_feed
+        override = min(self.hi, max(self.lo, wanted)) if math.isfinite(wanted) else self._last
+        self.law.record_applied(override * self.nominal_feed)
+        beta = self.law.active_beta
+        _, slope = hold_input(override, self._last, beta, self.T)
+        self._last = override
+        return OverrideCommand(override, slope, u, beta, y, held, override != wanted)
