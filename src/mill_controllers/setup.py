@@ -19,6 +19,7 @@ setup(
     entry_points={
         'console_scripts': [
             'axis_controller = mill_controllers.axis_controller_node:main',
+            'force_controller_node = mill_controllers.force_controller_node:main',
         ],
     },
 )

@@ -19,6 +19,7 @@ setup(
     entry_points={
         'console_scripts': [
             'plant_node = mill_plant.plant_node:main',
+            'force_process_node = mill_plant.force_process_node:main',
         ],
     },
 )

@@ -22,7 +22,7 @@ from mill_plant.config import build_plant
 from mill_plant.sensor import quantize
 from mill_trajectory.config import build_job
 
-from mill_bringup import papers
+from mill_bringup import force_job, papers
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.metrics import RunRecord, format_summary, summarize
 
@@ -114,6 +114,9 @@ def main(argv: list[str] | None = None) -> int:
         scen = scenario_mod.load(args.scenario)
         apply_cli_overrides(scen, args)
         for name, variant in variants(scen, args.variant).items():
+            if force_job.is_force_job(variant):
+                print(force_job.format_offline(variant.name, force_job.simulate_offline(variant)))
+                continue
             t0 = time.monotonic()
             rec = records[name] = simulate(variant)
             wall = time.monotonic() - t0

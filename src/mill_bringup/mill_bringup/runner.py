@@ -34,7 +34,7 @@ from mill_common.env import ros_environment
 from mill_common.timebase import period_ns, seconds
 from mill_trajectory.config import build_job
 
-from mill_bringup import papers
+from mill_bringup import force_job, papers
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.bag import BagError
 from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
@@ -485,6 +485,23 @@ def main(argv: list[str] | None = None) -> int:
             record_bag = bags[name]
             if name:
                 print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
+            if force_job.is_force_job(variant):
+                if record_bag is not None:
+                    raise RunError(
+                        '--record is not available for a force job yet: start the `recorder` '
+                        'node beside it'
+                    )
+                forced = force_job.run(
+                    variant,
+                    variant_dir,
+                    quiet=args.quiet,
+                    domain_id=args.domain_id,
+                    compare_offline=args.compare_offline,
+                    stall_timeout=args.stall_timeout,
+                )
+                (variant_dir / 'summary.json').write_text(json.dumps(forced.to_json(), indent=2))
+                print(force_job.format_result(forced))
+                continue
             result = run(
                 variant,
                 variant_dir,
@@ -500,7 +517,7 @@ def main(argv: list[str] | None = None) -> int:
             if name:
                 print(f'variant {name}:')
             print(format_result(result, args.skip))
-    except (scenario_mod.ScenarioError, RunError, BagError) as exc:
+    except (scenario_mod.ScenarioError, RunError, BagError, force_job.ForceJobError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
         return 1
     except KeyboardInterrupt:

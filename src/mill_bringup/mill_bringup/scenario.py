@@ -41,6 +41,22 @@ CONFIG_MODULES = {
     'mill_controllers': 'mill_controllers.config',
     'mill_observers': 'mill_observers.config',
 }
+# Executables whose parameters are not their package's main node's: module, function.
+EXECUTABLE_SPECS = {
+    ('mill_plant', 'force_process_node'): ('mill_plant.config', 'force_process_specs'),
+    ('mill_controllers', 'force_controller_node'): (
+        'mill_controllers.force_control',
+        'parameter_specs',
+    ),
+}
+
+
+def parameter_specs_of(launch: NodeLaunch) -> list[tuple[str, ParamSpec]]:
+    """The parameter specs of the node this launch entry starts."""
+    module_name, function = EXECUTABLE_SPECS.get(
+        (launch.package, launch.executable), (CONFIG_MODULES[launch.package], 'parameter_specs')
+    )
+    return getattr(importlib.import_module(module_name), function)()
 
 
 class ScenarioError(ValueError):
@@ -90,8 +106,7 @@ class Scenario:
     def parameters(self, name: str) -> dict[str, Any]:
         """Validated parameter values of one node, as its node would hold them."""
         launch = self.node(name)
-        module = importlib.import_module(CONFIG_MODULES[launch.package])
-        specs: list[tuple[str, ParamSpec]] = module.parameter_specs()
+        specs = parameter_specs_of(launch)
         raw = self.raw_parameters(name)
         values = {}
         for full, spec in specs:

@@ -23,3 +23,14 @@ def step_ns(k: int, dt_ns: int) -> int:
 def seconds(ns: int) -> float:
     """Time in seconds of a stamp in nanoseconds."""
     return ns / 1e9
+
+
+def sample_stamp_ns(k: int, period_s: float) -> int:
+    """Stamp of sample k for a period that is no whole number of ns (one spindle turn):
+    the nearest ns to k·T, without drift."""
+    return round(k * period_s * 1e9)
+
+
+def sample_index(ns: int, period_s: float) -> int:
+    """The sample k whose stamp (sample_stamp_ns) is ns."""
+    return round(ns / (period_s * 1e9))

@@ -6,6 +6,10 @@ REFERENCE = '/mill/reference'
 CUTTING_FORCE = '/mill/cutting_force'
 GROUND_TRUTH = '/mill/ground_truth'
 FEED_OVERRIDE = '/mill/feed_override'
+# The force between samples (force-process plant: the sensor stream on a fine grid).
+CUTTING_FORCE_TRACE = '/mill/cutting_force/trace'
+# Force controller: force used, reference, feed command, override, active β, depth.
+FORCE_CONTROL_STATE = '/mill/force_control/state'
 CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'
 

@@ -7,6 +7,7 @@ the same plant from the same scenario file through `build_plant`.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Any
 
 from mill_common.parameters import (
@@ -339,3 +340,68 @@ def build_plant(values: dict[str, Any]) -> ThreeAxisPlant | MultiAxisPlant:
         load_change_time=values['load_change.time'] if _load_changes(values) else math.inf,
         load_change_mass=tuple(values['load_change.mass']),
     )
+
+
+def _feed_limits(value: Any) -> str | None:
+    reason = number_list(2)(value)
+    if reason:
+        return reason
+    if not value[0] <= value[1]:
+        return 'needs lowest <= highest [mm/s]'
+    return None
+
+
+def force_process_specs() -> list[tuple[str, ParamSpec]]:
+    """Parameters of the force-process plant node (Rubio 2013 eq. (1)-(3))."""
+    from mill_plant.force_process import ForceProcessModel
+
+    lockstep = {name: spec for name, spec in parameter_specs()}
+    specs = [
+        (
+            'feed_axis',
+            ParamSpec(
+                'feed_axis',
+                'x',
+                'axis whose reference velocity [m/s] is the feed command',
+                one_of(*AXES),
+                True,
+            ),
+        ),
+        (
+            'feed_limits',
+            ParamSpec(
+                'feed_limits',
+                [0.0, 20.0],
+                "the drive's feed range [lowest, highest] [mm/s]: the reconstructed "
+                'command is clamped to it',
+                _feed_limits,
+                True,
+            ),
+        ),
+        (
+            'trace_intervals',
+            ParamSpec(
+                'trace_intervals',
+                32,
+                'grid intervals per sample of the force published on /mill/cutting_force/trace',
+                positive_int,
+                True,
+            ),
+        ),
+        ('lockstep_timeout', lockstep['lockstep_timeout']),
+        ('startup_timeout', lockstep['startup_timeout']),
+        (
+            'min_subscribers',
+            ParamSpec(
+                'min_subscribers',
+                1,
+                'subscribers /mill/cutting_force needs before the first step (the controller)',
+                positive_int,
+            ),
+        ),
+    ]
+    model = [
+        (f'{ForceProcessModel.PREFIX}.{s.name}', replace(s, read_only=True))
+        for s in ForceProcessModel.PARAMETERS
+    ]
+    return specs + model

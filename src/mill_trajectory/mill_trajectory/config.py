@@ -66,6 +66,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
         (
+            'feed_override.lockstep',
+            ParamSpec(
+                'lockstep',
+                False,
+                'answer each /mill/feed_override stamped t_k with the reference of sample k '
+                '(one point, with the override ramp of a β-hold) instead of answering /clock; '
+                'for a force controller in lockstep with its plant',
+                boolean,
+                True,
+            ),
+        ),
+        (
             'feed_override.min',
             ParamSpec('min', 0.0, 'smallest accepted feed override [-]', in_range(0.0, 10.0)),
         ),

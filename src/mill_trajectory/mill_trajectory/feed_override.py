@@ -6,7 +6,8 @@ p(τ) of any Trajectory and the override o(k) held over sample k:
     τ(k+1) = τ(k) + o(k)·T,
     x_ref(k) = p(τ(k)),  ẋ_ref(k) = o(k)·p'(τ(k)),  ẍ_ref(k) = o(k)²·p''(τ(k))
 
-(o held constant within a sample, so no do/dt term). o = 1 is the programmed feed, 0
+(o held constant within a sample, so no do/dt term; with a ramp ȯ over the sample, from a
+β-hold, ẍ_ref gains ȯ·p'(τ(k)) and τ advances by ȯT²/2 more). o = 1 is the programmed feed, 0
 stops on the path. Values outside [minimum, maximum] are clamped and a non-finite value
 holds the last accepted override; `accept` says which happened so the node can report it.
 """
@@ -65,14 +66,19 @@ class TimeScaledPath:
     def sample_index(self) -> int:
         return self._k
 
-    def sample(self, override: float) -> TrajectorySample:
-        """Reference of the current sample k with override o(k); then moves on to k+1."""
+    def sample(self, override: float, slope: float = 0.0) -> TrajectorySample:
+        """Reference of the current sample k with override o(k); then moves on to k+1.
+
+        slope ȯ [1/s]: the override ramps as o(k) + ȯ·τ over the sample (a β-hold);
+        the path time then advances by o·T + ȯ·T²/2 and ẍ_ref gains ȯ·p'.
+        """
         s = self.path.sample(self._tau)
         o = override
         self._k += 1
-        self._tau += o * self._T
+        self._tau += o * self._T + 0.5 * slope * self._T * self._T
+        v, a = s.velocity, s.acceleration
         return TrajectorySample(
             s.position,
-            (o * s.velocity[0], o * s.velocity[1], o * s.velocity[2]),
-            (o * o * s.acceleration[0], o * o * s.acceleration[1], o * o * s.acceleration[2]),
+            (o * v[0], o * v[1], o * v[2]),
+            tuple(o * o * a[i] + slope * v[i] for i in range(3)),
         )

@@ -7,7 +7,9 @@ Each entry of the `segments` string array is one segment; targets are absolute [
     "dwell D"          hold the current point for D [s]
 
 The program starts at `start` at t = 0; end_time is the sum of the segment durations. Before
-t = 0 (and at t = 0) it holds `start` at rest, from end_time on the last target at rest.
+t = 0 it holds `start` at rest, from end_time on the last target at rest. Each segment owns
+its start instant (right-continuous), t = 0 included: a program that opens with a linear
+segment moves at its feed from t = 0 (a cut already under way, as in the force job).
 
 Readings:
 
@@ -225,7 +227,7 @@ class ProgramTrajectory:
         return (*self._starts, self.end_time)
 
     def sample(self, t: float) -> TrajectorySample:
-        if t <= 0.0 or not self._pieces:
+        if t < 0.0 or not self._pieces:
             return TrajectorySample(self.start, _ZERO, _ZERO)
         if t >= self.end_time:
             return TrajectorySample(self.end_point, _ZERO, _ZERO)

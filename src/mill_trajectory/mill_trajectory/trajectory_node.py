@@ -11,6 +11,11 @@ position[0] = override, 1 = programmed feed), clamped to [feed_override.min,
 feed_override.max]; a non-finite value is ignored and the last one held; both are reported
 on /diagnostics as a WARN. Each sample's reference is then computed once, in order, with
 the override in effect when its tick arrives (mill_trajectory.feed_override).
+
+With feed_override.lockstep the node answers overrides instead of ticks: an override stamped
+t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
+point stamped t_k, with the override's ramp velocity[0] (a β-hold) applied over the sample.
+Each newer stamp gets the next sample, in order; a repeated override gets the same answer.
 """
 
 from __future__ import annotations
@@ -48,8 +53,14 @@ class TrajectoryNode(Node):
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
-        self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
-        if self._scaled is not None:
+        self._answer: tuple[int, JointTrajectory] | None = None
+        if self.params.values['feed_override.lockstep']:
+            self.create_subscription(
+                JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
+            )
+        else:
+            self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
+        if self._scaled is not None and not self.params.values['feed_override.lockstep']:
             self.create_subscription(JointState, topics.FEED_OVERRIDE, self._on_override, 10)
         self.get_logger().info(
             f'{self.params.values["trajectory"]} path, job ends at t = {self._job_end:.3f} s'
@@ -66,10 +77,16 @@ class TrajectoryNode(Node):
         self._override = FeedOverride(values['feed_override.min'], values['feed_override.max'])
         job = build_job(values)
         self._path, self._job_end = job.trajectory, job.end_time
-        self._dt_ns = period_ns(values['sample_period'])
-        self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
         self._done_sent = False
         self._scaled = None
+        if values['feed_override.lockstep']:
+            if not values['feed_override.enabled']:
+                raise ValueError('feed_override.lockstep needs feed_override.enabled')
+            # Samples are stamped by the override's sender: T need not be whole ns here.
+            self._scaled = TimeScaledPath(self._path, values['sample_period'])
+            return
+        self._dt_ns = period_ns(values['sample_period'])
+        self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
         if values['feed_override.enabled']:
             self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns))
 
@@ -80,6 +97,33 @@ class TrajectoryNode(Node):
             self.get_logger().warning(accepted.problem)
             self._report(self.get_clock().now().nanoseconds * 1e-9, 'running', accepted.problem)
 
+    def _on_override_lockstep(self, msg: JointState) -> None:
+        ns = from_stamp(msg.header.stamp)
+        if self._answer is not None and ns <= self._answer[0]:
+            if ns == self._answer[0]:
+                self._ref_pub.publish(self._answer[1])  # a repeat: the same sample again
+            return
+        offered = msg.position[0] if len(msg.position) else math.nan
+        slope = msg.velocity[0] if len(msg.velocity) else 0.0
+        accepted = self._override.accept(float(offered))
+        problem = accepted.problem
+        if not math.isfinite(slope):
+            problem = f'non-finite override slope {slope} ignored'
+            slope = 0.0
+        if accepted.value != offered:
+            slope = 0.0  # a clamped or held override does not ramp
+        t = self._scaled.path_time
+        if problem:
+            self.get_logger().warning(problem)
+            self._report(t, 'running', problem)
+        out = JointTrajectory()
+        out.header.stamp = msg.header.stamp
+        out.joint_names = list(AXES)
+        out.points.append(self._point(self._scaled.sample(accepted.value, slope), 0))
+        self._ref_pub.publish(out)
+        self._answer = (ns, out)
+        self._job_status(t)
+
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
@@ -88,6 +132,9 @@ class TrajectoryNode(Node):
             t = self._scaled.path_time
         else:
             self._publish_chunk(ns)
+        self._job_status(t)
+
+    def _job_status(self, t: float) -> None:
         if t >= self._job_end and not self._done_sent:
             self._done_sent = True
             self._report(t, 'done')

@@ -1,0 +1,145 @@
+"""Force controller node (Rubio 2013): cutting force in, feed override out.
+
+Subscribes to /mill/cutting_force and acts once per control period T (one spindle
+revolution of its process model): on the first force sample stamped at or after the next
+control instant it runs the chosen law (`force_controller`: fixed β, scheme1, scheme2;
+mill_controllers.force_control) and publishes on /mill/feed_override a JointState stamped
+like that force sample: position[0] = the override o_k (1 = programmed feed), velocity[0] =
+its β-hold slope over the sample [1/s]. A trajectory in lockstep answers each override with
+the reference of that sample; any other user of the feed-override input may ignore the slope.
+
+A non-finite force sample is replaced by the last finite one, and an override outside
+[override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
+trajectory, and both are reported on /diagnostics as a WARN. The force, reference, feed
+command, override, active β and depth go to /mill/force_control/state every sample.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
+from mill_common.node_main import run_node
+from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
+from mill_common.ros_params import NodeParameters
+from mill_common.timebase import sample_index, sample_stamp_ns
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+
+from mill_common import topics
+from mill_controllers.force_control import ForceFeedLoop, OverrideCommand, parameter_specs
+
+STATUS_NAME = 'mill_controllers: force'
+STATE_NAMES = ('force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+
+
+class ForceControllerNode(Node):
+    def __init__(self) -> None:
+        super().__init__('force_controller')
+        self._loop: ForceFeedLoop | None = None
+        self.params = NodeParameters(self, parameter_specs(), self._configure)
+        self._next_k = 0  # the next control instant
+        self._last: tuple[int, JointState] | None = None  # last force stamp and its answer
+        self._clamped = 0
+        self._beta = self._loop.law.active_beta
+        self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
+        self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
+        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self.create_subscription(WrenchStamped, topics.CUTTING_FORCE, self._on_force, DATA_QOS)
+        v = self.params.values
+        self.get_logger().info(
+            f'force controller {v["force_controller"]} (β = {self._beta:g}), '
+            f'F_r = {v["reference_force"]:g} N, T = {self._loop.T * 1e3:.4f} ms, override in '
+            f'[{self._loop.lo:g}, {self._loop.hi:g}] of {v["nominal_feed"]:g} mm/s'
+        )
+
+    def _configure(self, values: dict[str, Any]) -> None:
+        if values['override.min'] > values['override.max']:
+            raise ValueError('override.min must not exceed override.max')
+        if self._loop is None:
+            self._loop = ForceFeedLoop.from_parameters(values)
+        # reference_force, the only changeable value, is read at every sample
+
+    def _measure(self, msg: WrenchStamped) -> float:
+        f = msg.wrench.force
+        which = self.params.values['force_component']
+        if which == 'resultant':
+            return math.sqrt(f.x * f.x + f.y * f.y + f.z * f.z)
+        return float(getattr(f, which))
+
+    def _on_force(self, msg: WrenchStamped) -> None:
+        ns = from_stamp(msg.header.stamp)
+        T = self._loop.T
+        if self._last is not None and ns == self._last[0]:
+            self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
+            return
+        if ns < sample_stamp_ns(self._next_k, T):
+            return  # between control instants
+        k = sample_index(ns, T)
+        measured = self._measure(msg)
+        reference = self.params.values['reference_force']
+        cmd = self._loop.step(k * T, reference, measured)
+        out = joint_state(ns, ('override',), position=(cmd.override,), velocity=(cmd.slope,))
+        self._override_pub.publish(out)
+        self._last = (ns, out)
+        self._next_k = k + 1
+        depth = self._loop.model.depth_at(k * T)
+        state = (cmd.force, reference, cmd.feed_command, cmd.override, cmd.beta, depth)
+        self._state_pub.publish(joint_state(ns, STATE_NAMES, position=state))
+        self._report(ns, cmd, measured)
+
+    def _report(self, ns: int, cmd: OverrideCommand, measured: float) -> None:
+        problems = []
+        if cmd.held:
+            problems.append(f'non-finite force sample {measured}: holding {cmd.force:g} N')
+        if cmd.clamped:
+            self._clamped += 1
+            wanted = cmd.feed_command / self._loop.nominal_feed
+            problems.append(
+                f'override {wanted:g} outside [{self._loop.lo:g}, {self._loop.hi:g}]: '
+                f'sent {cmd.override:g}'
+            )
+        switched = cmd.beta != self._beta
+        self._beta = cmd.beta
+        if problems:
+            for p in problems:
+                self.get_logger().warning(p, throttle_duration_sec=1.0)
+            self._publish_status(ns, DiagnosticStatus.WARN, '; '.join(problems), cmd)
+        elif switched or ns == 0:
+            self._publish_status(ns, DiagnosticStatus.OK, f'active β = {cmd.beta:g}', cmd)
+
+    def _publish_status(self, ns: int, level: bytes, message: str, cmd: OverrideCommand) -> None:
+        values = {
+            'force_controller': self.params.values['force_controller'],
+            'active_beta': cmd.beta,
+            'override': cmd.override,
+            'held_samples': self._loop.held_samples,
+            'clamped_samples': self._clamped,
+        }
+        status = DiagnosticStatus(
+            level=level,
+            name=STATUS_NAME,
+            message=message,
+            hardware_id='mill_controllers',
+            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        )
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = to_stamp(ns)
+        self._diag_pub.publish(array)
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_node(
+        ForceControllerNode,
+        'force_controller_node',
+        'Cutting-force control by adaptive feed (Rubio 2013): /mill/cutting_force in, '
+        '/mill/feed_override out.',
+        parameter_specs(),
+        argv,
+    )
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
