@@ -34,3 +34,17 @@ def test_path_time_advances_by_the_override() -> None:
     assert s.velocity[0] == pytest.approx(0.005, rel=1e-12)
     stop = scaled.sample(0.0)
     assert stop.velocity[0] == 0.0 and scaled.path_time == pytest.approx(0.5, rel=1e-12)
+
+
+def test_a_ramping_override_adds_its_slope_to_the_acceleration() -> None:
+    from mill_trajectory.program import ProgramTrajectory
+
+    path = ProgramTrajectory.from_parameters(
+        {'start': [0.0, 0.0, 0.0], 'segments': ['linear 1.0 0 0 0.01']}
+    )
+    scaled = TimeScaledPath(path, 0.1)
+    s0 = scaled.sample(0.5, 2.0)  # o = 0.5 + 2τ over the sample (a β-hold ramp)
+    assert s0.velocity[0] == pytest.approx(0.005) and s0.acceleration[0] == pytest.approx(0.02)
+    # the path time advanced by ∫ o dτ = 0.5·0.1 + 2·0.1²/2
+    assert scaled.path_time == pytest.approx(0.06)
+    assert scaled.sample(0.7).position[0] == pytest.approx(0.01 * 0.06)

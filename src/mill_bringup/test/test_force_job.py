@@ -1,0 +1,65 @@
+"""Force-job scenarios and the J_c analysis of a recorded force stream (ROS-free)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from mill_bringup.force_job import (
+    continuous_cost,
+    design_of,
+    force_job,
+    is_force_job,
+    simulate_offline,
+    smooth_pieces,
+)
+
+from mill_bringup import scenario
+
+RUBIO = ('rubio_zoh', 'rubio_beta_neg0.3', 'rubio_scheme1', 'rubio_scheme2')
+
+
+@pytest.mark.parametrize('name', RUBIO)
+def test_rubio_scenarios_are_consistent_force_jobs(name: str) -> None:
+    scen = scenario.load(name)
+    assert is_force_job(scen)
+    job = force_job(scen)
+    assert job.samples == 120 and job.period == 60.0 / 715.0
+    assert job.controller_values['reference_force'] == 1200.0
+
+
+def test_cost_from_the_stream_equals_the_loop_cost() -> None:
+    scen = scenario.load('rubio_beta_neg0.3')
+    rec = simulate_offline(scen)
+    design = design_of(force_job(scen))
+    j_c = continuous_cost(rec.trace_ns, rec.trace_force, 1200.0, design.damping, design.omega_n)
+    assert j_c == pytest.approx(rec.j_c, rel=1e-7)
+    # a stream that follows the reference model exactly costs nothing
+    times = np.linspace(0.0, 1.0, 65)
+    from mill_controllers.model_reference import ContinuousReference
+
+    ref = ContinuousReference(design.damping, design.omega_n)
+    ref.begin(1200.0)
+    exact = ref.values(times)
+    ns = np.rint(times * 1e9).astype(np.int64)
+    assert continuous_cost(ns, exact, 1200.0, design.damping, design.omega_n) < 1e-12
+    assert continuous_cost(ns, exact + 10.0, 1200.0, design.damping, design.omega_n) == (
+        pytest.approx(100.0, rel=1e-9)
+    )
+
+
+def test_pieces_split_at_repeated_points() -> None:
+    ns = np.array([0, 10, 20, 20, 30, 40, 41, 50, 60])
+    pieces = smooth_pieces(ns, np.arange(9.0))
+    assert [len(t) for t, _ in pieces] == [3, 3, 3]
+    assert pieces[1][1].tolist() == [3.0, 4.0, 5.0]
+
+
+def test_plant_and_controller_must_share_the_process_model() -> None:
+    scen = scenario.load('rubio_zoh')
+    scen.add_override('force_controller.force_process.flutes=2')
+    with pytest.raises(scenario.ScenarioError, match='flutes'):
+        force_job(scen)
+    scen = scenario.load('rubio_zoh')
+    scen.add_override('force_process.feed_limits=[0.0, 30.0]')
+    with pytest.raises(scenario.ScenarioError, match='feed_limits'):
+        force_job(scen)

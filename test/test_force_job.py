@@ -1,0 +1,131 @@
+"""The Rubio 2013 force job across processes (issue 4), in a private domain on loopback.
+
+- One point of the J_c sweep (β = −0.3) and scheme 1 run distributed: the force samples,
+  overrides and active β equal the offline loop's, and J_c computed from the recorded force
+  stream equals the offline J_c.
+- The force controller node driven by hand: a NaN force sample is held and an override the
+  law wants outside the range (0.3: too slow for the reference force) is clamped; neither
+  reaches /mill/feed_override, and both are reported on /diagnostics.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from geometry_msgs.msg import WrenchStamped
+from mill_bringup.force_job import simulate_offline
+from mill_common.ros import DATA_QOS, to_stamp
+from mill_common.timebase import sample_stamp_ns
+from mill_controllers.force_control import ForceFeedLoop, parameter_specs
+from sensor_msgs.msg import JointState
+
+from mill_bringup import scenario
+from mill_common import topics
+from test.conftest import ros_node, wait_until
+
+T = 60.0 / 715.0
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('name', ['rubio_beta_neg0.3', 'rubio_scheme1'])
+def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: str) -> None:
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', name),
+            *('--compare-offline', '--quiet', '--output', str(out)),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['samples'] == 120  # 10 s of 715 rpm revolutions
+    d = summary['differences']
+    assert d['force'] <= 1e-9 and d['override'] <= 1e-12 and d['slope'] <= 1e-9
+    assert d['beta'] == 0.0 and d['feed_command'] <= 1e-9
+    assert d['j_c_relative'] <= 1e-6
+    offline = simulate_offline(scenario.load(name))
+    assert summary['j_c'] == pytest.approx(offline.j_c, rel=1e-6)
+    # scheme 1 switches (β 0 → −1 on this job); the run published every switch
+    assert summary['beta_switches'] == int(np.count_nonzero(np.diff(offline.beta)))
+    if name == 'rubio_scheme1':
+        assert summary['beta_switches'] >= 1
+
+
+def _force(ns: int, value: float) -> WrenchStamped:
+    msg = WrenchStamped()
+    msg.header.stamp = to_stamp(ns)
+    msg.wrench.force.x = value
+    return msg
+
+
+@pytest.mark.system
+def test_nan_force_is_held_and_overrides_are_clamped(start_node) -> None:
+    ctrl = start_node(
+        'mill_controllers.force_controller_node',
+        'force_controller',
+        *('-p', 'force_controller:force_control.beta:=-0.3'),
+        *('-p', 'force_controller:override.max:=0.3'),
+        params_file=False,
+    )
+    overrides: dict[int, tuple[float, float]] = {}
+    warnings: list[str] = []
+
+    def on_override(msg: JointState) -> None:
+        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        overrides[ns] = (msg.position[0], msg.velocity[0])
+
+    def on_diagnostics(msg: DiagnosticArray) -> None:
+        warnings.extend(s.message for s in msg.status if s.level == DiagnosticStatus.WARN)
+
+    with ros_node('force_tester') as (node, executor):
+        node.create_subscription(JointState, topics.FEED_OVERRIDE, on_override, DATA_QOS)
+        node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, on_diagnostics, 100)
+        force = node.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
+
+        def spin_until(predicate, timeout: float = 30.0) -> bool:
+            def step() -> bool:
+                executor.spin_once(timeout_sec=0.01)
+                return predicate()
+
+            return wait_until(step, timeout, step=0.0)
+
+        assert spin_until(
+            lambda: (
+                force.get_subscription_count() > 0
+                and node.count_publishers(topics.FEED_OVERRIDE) > 0
+            ),
+            60,
+        ), 'force controller never matched'
+        spin_until(lambda: False, 0.5)
+
+        def sample(k: int, value: float) -> tuple[float, float]:
+            ns = sample_stamp_ns(k, T)
+            force.publish(_force(ns, value))
+            assert spin_until(lambda: ns in overrides), f'no override for sample {k}'
+            return overrides[ns]
+
+        forces = [0.0, 600.0, math.nan, 1200.0, 1500.0]
+        got = [sample(k, f) for k, f in enumerate(forces)]
+        assert spin_until(lambda: any('non-finite force' in w for w in warnings))
+        assert any('outside [0, 0.3]' in w for w in warnings), warnings
+    assert ctrl.alive()
+    # The same samples through the same loop offline, with the NaN replaced by 600 N.
+    values = {name: spec.default for name, spec in parameter_specs()}
+    values.update({'force_control.beta': -0.3, 'override.max': 0.3})
+    held, plain = ForceFeedLoop.from_parameters(values), ForceFeedLoop.from_parameters(values)
+    want = [held.step(k * T, 1200.0, f) for k, f in enumerate(forces)]
+    same = [plain.step(k * T, 1200.0, f) for k, f in enumerate([0.0, 600.0, 600.0, 1200.0, 1500.0])]
+    assert got == [(c.override, c.slope) for c in want] == [(c.override, c.slope) for c in same]
+    # 3 mm/s cannot make 1200 N: the law asks for more and gets the range's top
+    assert any(c.override == 0.3 and c.feed_command > 3.0 for c in want)
+    assert all(0.0 <= o <= 0.3 and math.isfinite(s) for o, s in got)
