@@ -98,6 +98,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 True,
             ),
         ),
+        (
+            'force_measure',
+            ParamSpec(
+                'force_measure',
+                'peak',
+                'force the law gets at a control instant: the peak |force| of the samples '
+                'heard since the last instant (Rubio 2013 F_p: the peak force of each '
+                'revolution), or the sample at the instant',
+                one_of('peak', 'sample'),
+                True,
+            ),
+        ),
     ]
     # The process model and the law's design are built once (read-only): a law's memory
     # belongs to its design, so a new design means a new node.

@@ -3,10 +3,12 @@
 Subscribes to /mill/cutting_force and acts once per control period T (one spindle
 revolution of its process model): on the first force sample stamped at or after the next
 control instant it runs the chosen law (`force_controller`: fixed β, scheme1, scheme2;
-mill_controllers.force_control) and publishes on /mill/feed_override a JointState stamped
-like that force sample: position[0] = the override o_k (1 = programmed feed), velocity[0] =
-its β-hold slope over the sample [1/s]. A trajectory in lockstep answers each override with
-the reference of that sample; any other user of the feed-override input may ignore the slope.
+mill_controllers.force_control) on the peak force heard since the last instant
+(`force_measure`: peak, or the sample at the instant). It publishes on /mill/feed_override
+a JointState stamped like that force sample: position[0] = the override o_k (1 = programmed
+feed), velocity[0] = its β-hold slope over the sample [1/s]. A trajectory in lockstep
+answers each override with the reference of that sample; any other user of the
+feed-override input may ignore the slope.
 
 A non-finite force sample is replaced by the last finite one, and an override outside
 [override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
@@ -43,6 +45,7 @@ class ForceControllerNode(Node):
         self._next_k = 0  # the next control instant
         self._last: tuple[int, JointState] | None = None  # last force stamp and its answer
         self._clamped = 0
+        self._peak = -0.0  # the largest |force| heard since the last control instant
         self._beta = self._loop.law.active_beta
         self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
@@ -75,10 +78,14 @@ class ForceControllerNode(Node):
         if self._last is not None and ns == self._last[0]:
             self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
             return
+        value = self._measure(msg)
+        if math.isfinite(self._peak) and (math.isnan(value) or abs(value) > abs(self._peak)):
+            self._peak = value  # a NaN in the window stays: the law holds the last force
         if ns < sample_stamp_ns(self._next_k, T):
             return  # between control instants
         k = sample_index(ns, T)
-        measured = self._measure(msg)
+        measured = self._peak if self.params.values['force_measure'] == 'peak' else value
+        self._peak = -0.0
         reference = self.params.values['reference_force']
         cmd = self._loop.step(k * T, reference, measured)
         out = joint_state(ns, ('override',), position=(cmd.override,), velocity=(cmd.slope,))
