@@ -34,8 +34,9 @@ from typing import Any
 
 import numpy as np
 from mill_common.env import ros_environment
+from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
-from mill_controllers.force_control import FORCE_CONTROLLERS, build_law, own_values
+from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import (
     DESIGN_PARAMETERS,
     ContinuousReference,
@@ -94,8 +95,8 @@ def force_job(scen: scenario_mod.Scenario) -> ForceJob:
     pv = scen.parameters(plant)
     cv = scen.parameters(controller)
     tv = scen.parameters(trajectories[0].name)
-    model_p = own_values(ForceProcessModel.PREFIX, pv)
-    model_c = own_values(ForceProcessModel.PREFIX, cv)
+    model_p = algorithm_values(ForceProcessModel, pv)
+    model_c = algorithm_values(ForceProcessModel, cv)
     if model_p != model_c:
         diff = sorted(k for k in model_p if model_p[k] != model_c.get(k))
         raise scenario_mod.ScenarioError(
@@ -174,7 +175,7 @@ class ForceRecord:
 def design_of(job: ForceJob) -> ForceControlDesigner:
     """The controller's reference model (ξ, ω_n) for J_c."""
     kind = job.controller_values['force_controller']
-    values = own_values(FORCE_CONTROLLERS[kind].PREFIX, job.controller_values)
+    values = algorithm_values(FORCE_CONTROLLERS[kind], job.controller_values)
     return ForceControlDesigner(job.model, **{p.name: values[p.name] for p in DESIGN_PARAMETERS})
 
 
@@ -192,7 +193,7 @@ def simulate_offline(scen: scenario_mod.Scenario, nan_samples: Sequence[int] = (
     law = build_law(
         kind,
         job.model,
-        own_values(FORCE_CONTROLLERS[kind].PREFIX, cv),
+        algorithm_values(FORCE_CONTROLLERS[kind], cv),
         cv['override.min'] * nominal,
         cv['override.max'] * nominal,
     )
@@ -205,14 +206,12 @@ def simulate_offline(scen: scenario_mod.Scenario, nan_samples: Sequence[int] = (
         'intersample_intervals': job.trace_intervals,
     }
     rec = simulate(law, job.model, loop, nan_samples=nan_samples, keep_trace=True)
-    previous = np.concatenate([[0.0], rec.override[:-1]])
-    slope = rec.beta * (rec.override - previous) / job.period  # the β-hold's ramp
     ns = [np.rint(times * 1e9).astype(np.int64) for times, _, _ in rec.fine]
     return ForceRecord(
         rec.t,
         rec.force,
         rec.override,
-        slope,
+        rec.slope,
         rec.beta,
         rec.feed_command,
         np.concatenate(ns) if ns else np.zeros(0, dtype=np.int64),
@@ -365,9 +364,10 @@ def run(
         graph.launch([x for x in scen.nodes if x.name != job.plant])
         deadline = time.monotonic() + startup_timeout
         upstream = (topics.FEED_OVERRIDE, topics.REFERENCE)
-        while any(monitor.count_publishers(t) < 1 for t in upstream[:1]):
+        while any(monitor.count_publishers(t) < 1 for t in upstream):
             if time.monotonic() > deadline:
-                raise ForceJobError(f'no publisher appeared on {topics.FEED_OVERRIDE}')
+                missing = [t for t in upstream if monitor.count_publishers(t) < 1]
+                raise ForceJobError(f'no publisher appeared on {", ".join(missing)}')
             spin()
         graph.launch([scen.node(job.plant)])
         progress.show(f'started {len(graph.procs)} processes; waiting for discovery', force=True)

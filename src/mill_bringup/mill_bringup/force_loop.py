@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
-from mill_controllers.model_reference import ContinuousReference, ForceControlDesigner, simpson
+from mill_controllers.model_reference import ContinuousReference, simpson
 from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
 
 
@@ -66,6 +66,7 @@ class LoopRecord:
     feed_command: np.ndarray  # controller output [mm/s]
     feed: np.ndarray  # applied feed [mm/s]
     override: np.ndarray  # applied override [-]
+    slope: np.ndarray  # its β-hold ramp over [t_k, t_k+1) [1/s]
     beta: np.ndarray  # active β over [t_k, t_k+1)
     depth: np.ndarray  # a_dc(t_k) [mm]
     interval_cost: np.ndarray  # ∫ over [t_k, t_k+1) of (F_p − F_pm)² [N²·s]
@@ -106,6 +107,7 @@ class _Corrupted:
 
     def __init__(self, law: ForceLaw, overrides: Mapping[int, float], nominal: float) -> None:
         self.law = law
+        self.designer = law.designer
         self.overrides = dict(overrides)
         self.nominal = nominal
         self.k = 0
@@ -156,11 +158,11 @@ def simulate(
     drive = DrivenForceProcess(
         ForceProcessPlant(model), o_lo * nominal, o_hi * nominal, T / lv['intersample_intervals']
     )
-    designer = ForceControlDesigner(model)
-    f_ref = ContinuousReference(designer.damping, designer.omega_n)
+    # J_c compares with the law's own reference model eq. (7)
+    f_ref = ContinuousReference(controller.designer.damping, controller.designer.omega_n)
     nan_set = set(nan_samples)
     r_val = lv['reference_force']
-    keys = ('t', 'reference', 'force', 'feed_command', 'feed', 'override', 'beta', 'depth')
+    keys = ('t', 'reference', 'force', 'feed_command', 'feed', 'override', 'slope', 'beta', 'depth')
     rec = {key: np.zeros(n) for key in (*keys, 'interval_cost')}
     fine = []
     for k in range(n):
@@ -176,7 +178,7 @@ def simulate(
             if keep_trace:
                 fine.append((times, force, f_pm))
         f_ref.advance(T)
-        values = (t, r_val, cmd.force, cmd.feed_command, feed, cmd.override, cmd.beta)
+        values = (t, r_val, cmd.force, cmd.feed_command, feed, cmd.override, cmd.slope, cmd.beta)
         for key, value in zip(keys, (*values, model.depth_at(t)), strict=True):
             rec[key][k] = value
         rec['interval_cost'][k] = cost

@@ -19,15 +19,27 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
-from mill_common.parameters import ParamSpec, algorithm_specs, one_of, positive
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_specs,
+    algorithm_values,
+    one_of,
+    positive,
+)
 from mill_plant.force_process import ForceProcessModel
 
 from mill_controllers.froh import hold_input
-from mill_controllers.model_reference import ModelReferenceForceController, SampleHold
+from mill_controllers.model_reference import (
+    ForceControlDesigner,
+    ModelReferenceForceController,
+    SampleHold,
+)
 from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
 
 
 class ForceLaw(Protocol):
+    designer: ForceControlDesigner  # its reference model eq. (7) is what J_c compares with
+
     @property
     def active_beta(self) -> float: ...
 
@@ -121,14 +133,8 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
     return specs + model + laws
 
 
-def own_values(prefix: str, values: Mapping[str, Any]) -> dict[str, Any]:
-    """The values under `prefix.` without the prefix."""
-    head = prefix + '.'
-    return {k[len(head) :]: v for k, v in values.items() if k.startswith(head)}
-
-
 def build_model(values: Mapping[str, Any]) -> ForceProcessModel:
-    return ForceProcessModel.from_parameters(own_values(ForceProcessModel.PREFIX, values))
+    return ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, values))
 
 
 def build_law(
@@ -183,18 +189,13 @@ class ForceFeedLoop:
         kind = values['force_controller']
         nominal = values['nominal_feed']
         lo, hi = values['override.min'], values['override.max']
-        prefix = FORCE_CONTROLLERS[kind].PREFIX
-        law = build_law(kind, model, own_values(prefix, values), lo * nominal, hi * nominal)
+        own = algorithm_values(FORCE_CONTROLLERS[kind], values)
+        law = build_law(kind, model, own, lo * nominal, hi * nominal)
         return cls(law, model, nominal, lo, hi)
 
     @property
     def held_samples(self) -> int:
         return self._hold.held
-
-    @property
-    def feed_range(self) -> tuple[float, float]:
-        """[mm/s] the override range allows."""
-        return self.lo * self.nominal_feed, self.hi * self.nominal_feed
 
     def step(self, t: float, reference: float, measured: float) -> OverrideCommand:
         y = self._hold(measured)

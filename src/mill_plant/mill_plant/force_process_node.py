@@ -29,6 +29,7 @@ from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 from mill_common.node_main import request_exit, run_node
+from mill_common.parameters import algorithm_values
 from mill_common.ros import DATA_QOS, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
@@ -82,10 +83,7 @@ class ForceProcessNode(Node):
     def _configure(self, values: dict[str, Any]) -> None:
         if self._drive is not None:
             return  # the model is read-only; the others are read where used
-        prefix = ForceProcessModel.PREFIX + '.'
-        model = ForceProcessModel.from_parameters(
-            {k[len(prefix) :]: v for k, v in values.items() if k.startswith(prefix)}
-        )
+        model = ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, values))
         self._T = model.sample_period
         lo, hi = values['feed_limits']
         self._drive = DrivenForceProcess(
