@@ -10,8 +10,12 @@ reach the node. `-p NODE:NAME:=VALUE` is the form that overrides a file.
 from __future__ import annotations
 
 import pytest
+from mill_common.ros import DATA_QOS, joint_state
+from mill_common.signals import FopdtEstimate
+from sensor_msgs.msg import JointState
 
-from test.conftest import ParameterClient, ros_node
+from mill_common import topics
+from test.conftest import ParameterClient, ros_node, wait_until
 
 PLANT = ('mill_plant.plant_node', 'plant_node', 'plant')
 CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller', 'x_controller')
@@ -93,3 +97,34 @@ def test_observer_rejects_bad_changes_at_run_time(start_node) -> None:
         assert params.set('gpi.zeta_o', 0.9).successful
         assert params.get('gpi.zeta_o') == {'gpi.zeta_o': 0.9}
     assert observer.alive()
+
+
+@pytest.mark.system
+def test_switch_to_a_law_needing_a_model_waits_for_one(start_node) -> None:
+    """adaptive_pi with model_source observer designs with the rls observer's estimate: a
+    switch to it is refused with the reason while no estimate has arrived, accepted after."""
+
+    controller = start_node(
+        CONTROLLER[0], 'x_controller', '-p', 'x_controller:controller:=machine_pi'
+    )
+    with ros_node('param_tester') as (node, executor):
+        params = ParameterClient(node, executor, 'x_controller')
+        assert params.set('adaptive_pi.model_source', 'observer').successful  # not running
+        refused = params.set('controller', 'adaptive_pi')
+        assert not refused.successful
+        assert topics.observer_state('x') in refused.reason, refused.reason
+        assert params.get('controller') == {'controller': 'machine_pi'}
+        assert controller.alive()
+
+        pub = node.create_publisher(JointState, topics.observer_state('x'), DATA_QOS)
+        assert wait_until(lambda: pub.get_subscription_count() > 0, 30)
+        status = FopdtEstimate(29.0, 2.0, 1.25e-4, 0.5, 500).as_status()
+        pub.publish(joint_state(0, tuple(status), tuple(status.values())))
+
+        def accepted() -> bool:
+            executor.spin_once(timeout_sec=0.05)
+            return params.set('controller', 'adaptive_pi').successful
+
+        assert wait_until(accepted, 30)
+        assert params.get('controller') == {'controller': 'adaptive_pi'}
+    assert controller.alive()

@@ -56,11 +56,13 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
 
 
 # (scenario, variant, duration [s], samples): each paper scenario, distributed against
-# offline. Hatwesh runs past its load change at t = 1 s.
+# offline. Hatwesh runs past its load change at t = 1 s, once with the adaptive PI's own
+# estimator and once designing with the rls observer node's estimate (a fourth topic joined).
 PAPER_RUNS = [
     ('chavez_conde', 'sliding_gpi', 1.0, 1001),
     ('maharof', 'pi_imbdo_dfo', 0.3, 3001),
     ('hatwesh', 'adaptive_pi', 1.1, 4401),
+    ('hatwesh', 'adaptive_pi_rls', 1.1, 4401),
 ]
 
 

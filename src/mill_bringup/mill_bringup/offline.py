@@ -48,20 +48,8 @@ def simulate(
     job = build_job(tv)
     dt_ns = period_ns(pv['sample_period'])
     dt = seconds(dt_ns)
-    controllers: dict[int, object] = {}
-    observers: dict[int, object] = {}
-    for node in scen.nodes_of('mill_controllers'):
-        values = scen.parameters(node.name)
-        controllers[axis_index(values['axis'])] = build_controller(values)
-    for node in scen.nodes_of('mill_observers'):
-        values = scen.parameters(node.name)
-        observers[axis_index(values['axis'])] = build_observer(values)
+    controllers, observers = build_axis_cores(scen)
     active = [i for i, a in enumerate(AXES) if a in pv['axes']]
-    missing = [AXES[i] for i in active if i not in controllers or i not in observers]
-    if missing:
-        raise scenario_mod.ScenarioError(
-            f'scenario {scen.name}: axes {missing} lack a controller or an observer'
-        )
     resolution = pv['sensor_resolution']
 
     n = job_steps(job.end_time, dt_ns)
@@ -92,6 +80,41 @@ def simulate(
         if progress and k % 1000 == 0:
             progress(t, job.end_time)
     return rec
+
+
+def build_axis_cores(scen: scenario_mod.Scenario) -> tuple[dict[int, object], dict[int, object]]:
+    """Controller and observer cores by axis index, checked to fit together.
+
+    ScenarioError if an active axis lacks one, or if a controller designs with the
+    observer's model estimate (adaptive_pi model_source observer) and the observer of its
+    axis estimates none.
+    """
+    pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
+    controllers: dict[int, object] = {}
+    observers: dict[int, object] = {}
+    names: dict[int, str] = {}
+    for node in scen.nodes_of('mill_controllers'):
+        values = scen.parameters(node.name)
+        controllers[axis_index(values['axis'])] = build_controller(values)
+    for node in scen.nodes_of('mill_observers'):
+        values = scen.parameters(node.name)
+        i = axis_index(values['axis'])
+        observers[i] = build_observer(values)
+        names[i] = f'{node.name} (observer {values["observer"]})'
+    active = [i for i, a in enumerate(AXES) if a in pv['axes']]
+    missing = [AXES[i] for i in active if i not in controllers or i not in observers]
+    if missing:
+        raise scenario_mod.ScenarioError(
+            f'scenario {scen.name}: axes {missing} lack a controller or an observer'
+        )
+    for i in active:
+        wants = getattr(controllers[i], 'needs_model', False)
+        if wants and not getattr(type(observers[i]), 'PROVIDES_MODEL', False):
+            raise scenario_mod.ScenarioError(
+                f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
+                f'model estimate, but {names[i]} estimates none (use observer rls)'
+            )
+    return controllers, observers
 
 
 def main(argv: list[str] | None = None) -> int:

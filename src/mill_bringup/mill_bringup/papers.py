@@ -185,19 +185,19 @@ def hatwesh(records: Mapping[str, RunRecord]) -> str:
     lines = [
         'Hatwesh 2013, x axis velocity loop, the same move before and after a load-inertia '
         'step (settling band 0.01 % of the move, 1 µm):',
-        f'{"controller":<14} {"move":<7} {"overshoot [%]":>14} {"settling [ms]":>14} '
+        f'{"controller":<16} {"move":<7} {"overshoot [%]":>14} {"settling [ms]":>14} '
         f'{"IAE [mm s]":>11}',
     ]
     ratios, after = {}, {}
     last_end = max(end + settle for _, end, settle in HATWESH_MOVES.values())
     for name, rec in records.items():
         if rec.t[-1] < last_end - (rec.t[1] - rec.t[0]) * 1.5:
-            lines.append(f'{name:<14} run ends before the second move: no paper metrics')
+            lines.append(f'{name:<16} run ends before the second move: no paper metrics')
             continue
         m = {k: move_metrics(rec, *v, HATWESH_BAND) for k, v in HATWESH_MOVES.items()}
         for k, v in m.items():
             lines.append(
-                f'{name:<14} {k:<7} {v.overshoot:14.3f} {v.settling_time * 1e3:14.2f} {v.iae:11.6f}'
+                f'{name:<16} {k:<7} {v.overshoot:14.3f} {v.settling_time * 1e3:14.2f} {v.iae:11.6f}'
             )
         ratios[name] = m['after'].iae / m['before'].iae
         after[name] = m['after'].iae

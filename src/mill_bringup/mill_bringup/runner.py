@@ -38,7 +38,13 @@ from mill_bringup import force_job, papers
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.bag import BagError
 from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
-from mill_bringup.offline import apply_cli_overrides, job_steps, simulate, variants
+from mill_bringup.offline import (
+    apply_cli_overrides,
+    build_axis_cores,
+    job_steps,
+    simulate,
+    variants,
+)
 
 JOB_STATUS = 'mill_trajectory: job'
 PLANT_STATUS = 'mill_plant: lockstep'
@@ -202,9 +208,10 @@ def run(
     compare_offline: bool = False,
     record_bag: Path | None = None,
 ) -> RunResult:
-    # Validate every node's parameters before starting anything.
+    # Validate every node's parameters, and that the axes' cores fit, before starting anything.
     for node in scen.nodes:
         scen.parameters(node.name)
+    build_axis_cores(scen)
     # The runner's monitor listens to every state topic too: the plant waits for it
     # (controller, observer, monitor), so the first samples reach the record.
     for node in scen.nodes_of('mill_plant'):

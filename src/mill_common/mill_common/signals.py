@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 AXES: tuple[str, ...] = ('x', 'y', 'z')
@@ -35,3 +36,44 @@ class Estimate:
     position: float
     velocity: float
     disturbance: float
+    # An identified plant model, from observers that estimate one (rls); None otherwise.
+    model: FopdtEstimate | None = None
+
+
+@dataclass(frozen=True)
+class FopdtEstimate:
+    """First-order-plus-dead-time model K e^{−θ_d s}/(τ s + 1) identified online.
+
+    gain K [output per input unit], time_constant τ [s], dead_time θ_d [s] (and in
+    samples), updates: how many samples the estimator has used so far.
+    """
+
+    gain: float
+    time_constant: float
+    dead_time: float
+    dead_time_samples: float
+    updates: int = 0
+
+    def as_status(self) -> dict[str, float]:
+        """The fields as a name → value map (how observer_state messages carry them)."""
+        return {
+            'gain': self.gain,
+            'time_constant': self.time_constant,
+            'dead_time': self.dead_time,
+            'dead_time_samples': self.dead_time_samples,
+            'updates': float(self.updates),
+        }
+
+    @classmethod
+    def from_status(cls, values: Mapping[str, float]) -> FopdtEstimate | None:
+        """Read back `as_status()`'s map; None if it lacks a field (another observer's)."""
+        try:
+            return cls(
+                values['gain'],
+                values['time_constant'],
+                values['dead_time'],
+                values['dead_time_samples'],
+                int(values['updates']),
+            )
+        except KeyError:
+            return None

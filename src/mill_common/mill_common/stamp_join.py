@@ -1,7 +1,8 @@
 """Join inputs that arrive on different topics by their stamp. ROS-free.
 
-A lockstep node acts when every input of one sample has arrived, in whatever
-order DDS delivered them.
+A lockstep node acts when every required input of one sample has arrived, in whatever
+order DDS delivered them. Inputs of other slots that arrived in time are handed over too;
+the required set can change between samples (a new control law that needs one more input).
 """
 
 from __future__ import annotations
@@ -11,16 +12,29 @@ from typing import Any
 
 class StampJoin:
     def __init__(self, slots: tuple[str, ...]) -> None:
-        self.slots = slots
+        self.slots = tuple(slots)
         self._pending: dict[int, dict[str, Any]] = {}
+
+    def require(self, slots: tuple[str, ...]) -> tuple[int, dict[str, Any]] | None:
+        """Change the required slots; returns (stamp, inputs) of the oldest sample this
+        completes, if any."""
+        self.slots = tuple(slots)
+        for ns in sorted(self._pending):
+            if self._complete(self._pending[ns]):
+                return ns, self._take(ns)
+        return None
 
     def put(self, slot: str, ns: int, value: Any) -> dict[str, Any] | None:
         """Store one input; return all inputs of that stamp once complete (and forget them)."""
         entry = self._pending.setdefault(ns, {})
         entry[slot] = value
-        if len(entry) < len(self.slots):
-            return None
-        del self._pending[ns]
+        return self._take(ns) if self._complete(entry) else None
+
+    def _complete(self, entry: dict[str, Any]) -> bool:
+        return all(s in entry for s in self.slots)
+
+    def _take(self, ns: int) -> dict[str, Any]:
+        entry = self._pending.pop(ns)
         # Anything older than a completed sample can never complete: drop it.
         for old in [s for s in self._pending if s < ns]:
             del self._pending[old]

@@ -15,3 +15,19 @@ def test_reports_missing_slot():
     join.put('state', 5, 0.0)
     join.put('reference', 5, 0.0)
     assert join.oldest_incomplete() == (5, ['estimate'])
+
+
+def test_optional_slot_is_handed_over_and_can_become_required():
+    join = StampJoin(('a', 'b'))
+    join.put('m', 1, 'm1')
+    join.put('a', 1, 'a1')
+    assert join.put('b', 1, 'b1') == {'a': 'a1', 'b': 'b1', 'm': 'm1'}
+    join.put('a', 2, 'a2')
+    join.put('b', 3, 'b3')
+    assert join.require(('a', 'b', 'm')) is None  # nothing is complete yet
+    assert join.put('b', 2, 'b2') is None  # now waits for m
+    assert join.oldest_incomplete() == (2, ['m'])
+    assert join.put('m', 2, 'm2') == {'a': 'a2', 'b': 'b2', 'm': 'm2'}
+    # Dropping a requirement completes a waiting sample at once.
+    join.put('a', 3, 'a3')
+    assert join.require(('a', 'b')) == (3, {'a': 'a3', 'b': 'b3'})

@@ -27,8 +27,13 @@ phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"):
     ∠L(jω_gc) = −π/2 − ω_gc θ = −π + φ_m  ⇒  ω_gc = (π/2 − φ_m)/θ,
     |L(jω_gc)| = 1                       ⇒  K_i = ω_gc/K,  K_p = τ ω_gc/K.
 
-Until the estimator has had `warmup` updates and gives a usable model (0 < a < 1,
-K > 0), the initial gains are used.
+Until the estimator has had `warmup` updates and gives a usable model (0 < a < 1, i.e.
+0 < τ < ∞, and K > 0), the initial gains are used.
+
+model_source 'observer': the law runs no estimator of its own and designs with est.model,
+the FOPDT estimate of the observer node (observer `rls`, published on
+/mill/<axis>/observer_state). The rls observer's estimate at sample k has used the same
+samples as the internal one, so both sources give the same commands (a test checks this).
 
 MachinePi: the fixed gains of Hatwesh Table 1, K_p = 1.5735, K_i = 5.4976 at 0.25 ms. The
 paper does not state their velocity unit. On the x axis of Table 1 (K_a K_t = 21.87 N·m/V,
@@ -270,6 +275,13 @@ class AdaptivePi(_VelocityPi):
             'desired phase margin φ_m (the machine PI has ≈ 63-76° on the nominal plant) [deg]',
             in_range(1.0, 89.0),
         ),
+        ParamSpec(
+            'model_source',
+            'internal',
+            "plant model for the design: 'internal' = the law's own RLS (the parameters "
+            "below), 'observer' = the FOPDT estimate of the observer node (observer: rls)",
+            one_of('internal', 'observer'),
+        ),
         *RLS_PARAMETERS,
         ParamSpec(
             'warmup',
@@ -296,6 +308,7 @@ class AdaptivePi(_VelocityPi):
         a_bounds: tuple[float, float] | list[float] = (0.0, 0.99999),
         b_bounds: tuple[float, float] | list[float] = (-1.0, 1.0),
         warmup: int = 400,
+        model_source: str = 'internal',
     ) -> None:
         del input_gain  # voltage output; the plant is identified online
         v = validate_all(
@@ -314,6 +327,7 @@ class AdaptivePi(_VelocityPi):
                 'a_bounds': list(a_bounds),
                 'b_bounds': list(b_bounds),
                 'warmup': warmup,
+                'model_source': model_source,
             },
             prefix=self.PREFIX + '.',
         )
@@ -324,6 +338,8 @@ class AdaptivePi(_VelocityPi):
         self._warmup = v['warmup']
         self._w_gc = math.nan
         self._adapted = False
+        self._external = v['model_source'] == 'observer'
+        self._model: FopdtEstimate | None = None  # the model of the current design
         self.rls = RlsEstimator(
             self._T,
             n_b=v['input_taps'],
@@ -337,27 +353,41 @@ class AdaptivePi(_VelocityPi):
     def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
         """Voltage [V]; identifies the plant from (v(k), u(k)) and re-tunes every sample."""
         v = self._measure(t, y, ref, est)
-        self._retune()
+        if self._external:
+            if est.model is None:
+                raise ValueError(
+                    'adaptive_pi.model_source is observer but the estimate carries no model '
+                    '(the observer must be rls)'
+                )
+            self._model = est.model
+        else:
+            self._model = self.rls.fopdt()
+        self._retune(self._model)
         u = self._pi_step(self._error(y, ref, v), self._kp, self._ki)
-        self.rls.update(v, u)  # u(k) enters the regressor of the next samples
+        if not self._external:
+            self.rls.update(v, u)  # u(k) enters the regressor of the next samples
         return u
 
-    def _retune(self) -> None:
-        if self.rls.diagnostics()['updates'] < self._warmup:
+    def _retune(self, model: FopdtEstimate) -> None:
+        if model.updates < self._warmup:
             return
-        model = self.rls.fopdt()
-        a = float(self.rls.theta[0])
-        if not (0.0 < a < 1.0 and model.gain > 0.0):
-            return  # keep the last gains
+        if not (0.0 < model.time_constant < math.inf and model.gain > 0.0):
+            return  # no usable model (pole a = e^{−T/τ} outside (0, 1)): keep the last gains
         self._kp, self._ki, self._w_gc = phase_margin_pi(model, self._phi_m, 0.5 * self._T)
         self._adapted = True
 
     def reset(self) -> None:
         super().reset()
         self.rls.reset()
+        self._model = None
         self._kp, self._ki = self._kp0, self._ki0
         self._adapted = False
         self._w_gc = math.nan
+
+    @property
+    def needs_model(self) -> bool:
+        """True if compute() needs est.model (model_source 'observer')."""
+        return self._external
 
     # --- published state -------------------------------------------------------------
 
@@ -377,12 +407,12 @@ class AdaptivePi(_VelocityPi):
         return self._w_gc
 
     def model(self) -> FopdtEstimate:
-        """Current FOPDT estimate: K [(m/s)/V], τ [s], θ_d [s]."""
-        return self.rls.fopdt()
+        """The FOPDT estimate of the last design: K [(m/s)/V], τ [s], θ_d [s]."""
+        return self._model if self._model is not None else self.rls.fopdt()
 
     def status(self) -> dict[str, float]:
-        """Everything worth publishing: estimates, gains, RLS diagnostics."""
-        m = self.rls.fopdt()
+        """Everything worth publishing: estimates, gains, RLS diagnostics (own RLS only)."""
+        m = self.model()
         out = {
             'k_p': self._kp,
             'k_i': self._ki,
@@ -392,5 +422,8 @@ class AdaptivePi(_VelocityPi):
             'time_constant': m.time_constant,
             'dead_time': m.dead_time,
         }
-        out.update(self.rls.diagnostics())
+        if self._external:
+            out['updates'] = float(m.updates)
+        else:
+            out.update(self.rls.diagnostics())
         return out

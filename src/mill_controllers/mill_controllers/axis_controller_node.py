@@ -4,7 +4,9 @@ For every sample it joins the measured position (/mill/<axis>/state), the
 observer's estimate (/mill/<axis>/estimate) and the reference point of that
 time (/mill/reference, several points per message) by stamp, runs the
 selected control law and publishes the torque on /mill/<axis>/joint_command
-with the same stamp.
+with the same stamp. A law that designs with the observer's identified model
+(adaptive_pi with model_source 'observer') also waits for that sample's
+/mill/<axis>/observer_state.
 
 Changing `controller` or any gain on the running node swaps the law without a bump
 (mill_controllers.switching): the switch sample still outputs the old law's value and the
@@ -16,13 +18,14 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, first, from_duration, from_stamp, joint_state, to_stamp
 from mill_common.ros_params import NodeParameters
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, Estimate, FopdtEstimate
 from mill_common.stamp_join import StampJoin
 from mill_common.timebase import seconds
 from rclpy.clock import Clock, ClockType
@@ -35,7 +38,16 @@ from mill_controllers.config import build_controller, parameter_specs
 from mill_controllers.registry import CONTROLLERS
 from mill_controllers.switching import BumplessSwitch, check_replacement
 
-INPUT_TOPICS = {'state': topics.state, 'estimate': topics.estimate}
+INPUTS = ('state', 'estimate', 'reference')
+
+
+def needs_model(law: object) -> bool:
+    """Whether the law designs with the observer's model estimate (Estimate.model)."""
+    return bool(getattr(law, 'needs_model', False))
+
+
+def required_inputs(law: object) -> tuple[str, ...]:
+    return (*INPUTS, 'model') if needs_model(law) else INPUTS
 
 
 class AxisControllerNode(Node):
@@ -45,7 +57,8 @@ class AxisControllerNode(Node):
         self._reported_switch = None
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         axis = self.axis = self.params.values['axis']
-        self._join = StampJoin(('state', 'estimate', 'reference'))
+        self._join = StampJoin(required_inputs(self._law.law))
+        self._model_seen = False  # a model estimate has arrived on observer_state
         self._last_ns = -1
         self._last_command: JointState | None = None
         self._waiting_since: float | None = None
@@ -55,6 +68,9 @@ class AxisControllerNode(Node):
         self.create_subscription(JointState, topics.state(axis), self._on_state, DATA_QOS)
         self.create_subscription(JointState, topics.estimate(axis), self._on_estimate, DATA_QOS)
         self.create_subscription(JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS)
+        self.create_subscription(
+            JointState, topics.observer_state(axis), self._on_observer_state, DATA_QOS
+        )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'axis {axis}: controller {self.params.values["controller"]}, '
@@ -75,9 +91,17 @@ class AxisControllerNode(Node):
         if reason:
             raise ValueError(reason)
         law = build_controller(values)  # raises, with the reason, before anything changes
+        if needs_model(law) and not self._model_seen:
+            raise ValueError(
+                f"{values['controller']} designs with the observer's model estimate, and none "
+                f'has arrived on {topics.observer_state(self.axis)} (run the rls observer)'
+            )
         self._law.set_blend_time(values['sample_period'], values['blend_time'])
         if any(values[k] != old[k] for k in values if k != 'blend_time'):
             self._law.replace(law)
+            ready = self._join.require(required_inputs(law))
+            if ready is not None:  # a sample that waited only for the old law's extra input
+                self._act(*ready)
 
     # -- inputs ----------------------------------------------------------------------------
     def _fresh(self, ns: int) -> bool:
@@ -117,17 +141,30 @@ class AxisControllerNode(Node):
             )
             self._offer('reference', ns, ref)
 
+    def _on_observer_state(self, msg: JointState) -> None:
+        model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
+        if model is None:
+            return  # another observer's state: no model in it
+        self._model_seen = True
+        ns = from_stamp(msg.header.stamp)
+        if ns > self._last_ns:
+            self._offer('model', ns, model)
+
     def _offer(self, slot: str, ns: int, value: Any) -> None:
         inputs = self._join.put(slot, ns, value)
         if inputs is None:
             if self._waiting_since is None:
                 self._waiting_since = time.monotonic()
             return
+        self._act(ns, inputs)
+
+    def _act(self, ns: int, inputs: dict[str, Any]) -> None:
         self._waiting_since = None
+        est = inputs['estimate']
+        if 'model' in inputs:
+            est = replace(est, model=inputs['model'])
         try:
-            torque = self._law.compute(
-                seconds(ns), inputs['state'], inputs['reference'], inputs['estimate']
-            )
+            torque = self._law.compute(seconds(ns), inputs['state'], inputs['reference'], est)
         except ValueError as exc:
             # Never forward a non-finite command; the plant's lockstep timeout names us.
             self.get_logger().error(f'no command for t = {seconds(ns):.4f} s: {exc}')
@@ -184,6 +221,7 @@ class AxisControllerNode(Node):
             'state': topics.state(self.axis),
             'estimate': topics.estimate(self.axis),
             'reference': topics.REFERENCE,
+            'model': topics.observer_state(self.axis),
         }
         detail = ', '.join(
             f'{names[m]} ({self.count_publishers(names[m])} publishers)' for m in missing

@@ -10,6 +10,7 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, Estimate
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi, phase_margin_pi
+from mill_observers.registry import make_observer
 from mill_observers.rls import FopdtEstimate
 
 # Hatwesh 2013 Table 1, x axis
@@ -113,3 +114,45 @@ def test_parameters_are_checked() -> None:
     with pytest.raises(ParameterError, match='velocity_unit'):
         MachinePi.from_parameters(0.0, T, {'velocity_unit': 'furlong/s'})
     assert MachinePi(0.0, T).gains_si == pytest.approx((1.5735 / PITCH, 5.4976 / PITCH))
+
+
+def test_model_from_the_rls_observer_gives_the_same_commands() -> None:
+    """model_source 'observer' + the rls observer = the law with its own RLS, bit for bit,
+    through the inertia change (the estimate of sample k has used the same samples)."""
+    own = AdaptivePi(0.0, T)
+    outside = AdaptivePi(0.0, T, model_source='observer')
+    observer = make_observer('rls', 0.0, T, {})
+    assert outside.needs_model and not own.needs_model
+    a = np.array([[0.0, PITCH / (2 * math.pi)], [0.0, -B / J]])
+    ad, bd = {}, {}
+    for inertia in (J, 3 * J):
+        a[1, 1] = -B / inertia
+        b = np.array([[0.0], [KA * KT / inertia]])
+        ad[inertia], bd[inertia], *_ = scipy.signal.cont2discrete(
+            (a.copy(), b, np.eye(2), np.zeros((2, 1))), T, 'zoh'
+        )
+    x = np.zeros(2)
+    adapted_at = None
+    for k in range(round(1.0 / T)):
+        t = k * T
+        inertia = J if t < 0.5 else 3 * J
+        ref = AxisReference(0.0, 0.05 if (t % 0.2) < 0.1 else -0.05, 0.0)
+        u_own = own.compute(t, x[0], ref, Estimate(x[0], 0.0, 0.0))
+        est = observer.correct(x[0])
+        u = outside.compute(t, x[0], ref, est)
+        observer.predict(u)
+        assert u == u_own, k
+        if adapted_at is None and outside.adapted:
+            adapted_at = k
+        x = ad[inertia] @ x + bd[inertia][:, 0] * u
+    # The first sample has no regressor yet: the 400th (warmup) update comes with sample 400
+    # and designs the gains from sample 401 on.
+    assert adapted_at == 401
+    assert outside.gains == own.gains
+    assert outside.status()['gain'] == own.status()['gain']
+
+
+def test_model_source_observer_needs_a_model_in_the_estimate() -> None:
+    ctrl = AdaptivePi(0.0, T, model_source='observer')
+    with pytest.raises(ValueError, match='rls'):
+        ctrl.compute(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0.0, 0.0, 0.0))

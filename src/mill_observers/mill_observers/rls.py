@@ -32,20 +32,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from mill_common.parameters import ParamSpec, in_range, number, positive, positive_int
+from mill_common.signals import FopdtEstimate
 
-
-@dataclass(frozen=True)
-class FopdtEstimate:
-    """Gain K [y-unit per u-unit], time constant τ [s], dead time θ_d [s] (and in samples)."""
-
-    gain: float
-    time_constant: float
-    dead_time: float
-    dead_time_samples: float
+__all__ = ['RLS_PARAMETERS', 'FopdtEstimate', 'RlsEstimator']
 
 
 def _pair(value: object) -> str | None:
@@ -207,7 +199,7 @@ class RlsEstimator:
             d = min(max(d, 0.0), float(self._m - 1))
         else:
             d = 0.0
-        return FopdtEstimate(gain, tau, d * self._T, d)
+        return FopdtEstimate(gain, tau, d * self._T, d, self._updates)
 
     def diagnostics(self) -> dict[str, float]:
         """Convergence diagnostics: updates, last a-priori error, its forgetting-weighted RMS,

@@ -7,7 +7,10 @@ the command u(k) update y(k) = a y(k−1) + Σ b_i u(k−i) (mill_observers.rls)
 publishes it on /mill/<axis>/observer_state every sample.
 
 Estimate: position y, velocity v(k) (the backward difference, as the Hatwesh loops use),
-disturbance 0 (this observer estimates a model, not a disturbance).
+disturbance 0 (this observer estimates a model, not a disturbance), and `model`: the
+FOPDT read-out from the samples before k. That is the model the adaptive PI designs with at
+sample k, so `adaptive_pi.model_source: observer` with this observer computes the same
+commands as the adaptive PI with its own estimator (same RLS parameters).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ class RlsObserver:
     """Identifies the velocity loop's FOPDT model online; passes the measurement through."""
 
     PREFIX: ClassVar[str] = 'rls'
+    PROVIDES_MODEL: ClassVar[bool] = True  # Estimate.model is set (controllers may ask)
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = RLS_PARAMETERS
 
     def __init__(self, sample_period: float, **values: Any) -> None:
@@ -52,13 +56,12 @@ class RlsObserver:
     def correct(self, y: float) -> Estimate:
         self._v = 0.0 if self._y is None else (y - self._y) / self._T
         self._y = y
-        return Estimate(y, self._v, 0.0)
+        return Estimate(y, self._v, 0.0, self.rls.fopdt())
 
     def predict(self, u: float) -> None:
         self.rls.update(self._v, u)  # u(k) enters the regressor of the next samples
 
     def status(self) -> dict[str, float]:
-        m = self.rls.fopdt()
-        out = {'gain': m.gain, 'time_constant': m.time_constant, 'dead_time': m.dead_time}
+        out = self.rls.fopdt().as_status()
         out.update(self.rls.diagnostics())
         return out

@@ -47,6 +47,8 @@ class EstimateBlend:
         elif self._dv or self._dxi:
             self._dv *= self._decay
             self._dxi *= self._decay
-        out = Estimate(est.position, est.velocity + self._dv, est.disturbance + self._dxi)
+        out = Estimate(
+            est.position, est.velocity + self._dv, est.disturbance + self._dxi, est.model
+        )
         self._last = out
         return out

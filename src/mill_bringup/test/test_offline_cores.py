@@ -1,0 +1,31 @@
+"""The offline simulator's axis cores: a controller that designs with the observer's model
+must be paired with an observer that estimates one."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from mill_bringup.offline import build_axis_cores, simulate
+
+from mill_bringup import scenario
+
+
+def test_a_model_hungry_controller_without_the_rls_observer_is_refused() -> None:
+    scen = scenario.load('hatwesh').variant('adaptive_pi_rls')
+    build_axis_cores(scen)  # rls observer: fits
+    scen.add_override('x_observer.observer=dfo')
+    with pytest.raises(scenario.ScenarioError, match=r'x_observer \(observer dfo\).*rls'):
+        build_axis_cores(scen)
+
+
+def test_the_rls_observer_model_gives_the_same_run_as_the_own_estimator() -> None:
+    runs = {}
+    for name in ('adaptive_pi', 'adaptive_pi_rls'):
+        scen = scenario.load('hatwesh').variant(name)
+        scen.add_override('trajectory.duration=0.3')
+        runs[name] = simulate(scen)
+    a, b = runs['adaptive_pi'].signals, runs['adaptive_pi_rls'].signals
+    assert len(runs['adaptive_pi'].t) == 1201
+    for signal in ('torque', 'position'):  # the x axis; y and z are not simulated (nan)
+        assert np.array_equal(a[signal][:, 0], b[signal][:, 0])
+    assert np.ptp(a['position'][:, 0]) > 1e-3  # a real move (the gains adapt from 0.1 s on)
