@@ -333,7 +333,7 @@ def run(
     env = ros_environment(domain_id=domain_id)
     os.environ.update(env)
     import rclpy
-    from mill_common.node_main import install_stop_handlers, make_executor
+    from mill_common.node_main import install_stop_handlers, make_executor, release_node
     from rclpy.signals import SignalHandlerOptions
 
     from mill_common import topics
@@ -343,6 +343,7 @@ def run(
     stop = install_stop_handlers()
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     graph = None
+    monitor = executor = None
     try:
         monitor = _monitor(feed_axis)
         executor = make_executor()
@@ -405,6 +406,7 @@ def run(
         if graph is not None:
             graph.stop()
         progress.done()
+        release_node(executor, monitor)
         rclpy.try_shutdown()
         for sig, handler in previous.items():
             signal.signal(sig, handler)

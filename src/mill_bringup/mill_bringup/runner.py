@@ -225,7 +225,7 @@ def run(
     env = ros_environment(domain_id=domain_id)
     os.environ.update(env)
     import rclpy
-    from mill_common.node_main import install_stop_handlers, make_executor
+    from mill_common.node_main import install_stop_handlers, make_executor, release_node
     from rclpy.signals import SignalHandlerOptions
 
     from mill_bringup.monitor import Monitor, RecordOptions, plant_status
@@ -245,6 +245,7 @@ def run(
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     graph = None
     monitor = None
+    executor = None
     bag = None
 
     def spin() -> None:
@@ -347,6 +348,7 @@ def run(
         if monitor is not None:
             monitor.close_recording()  # on every way out: the bag is closed and valid
         progress.done()
+        release_node(executor, monitor)
         rclpy.try_shutdown()
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -79,6 +79,20 @@ def install_stop_handlers() -> list[int]:
     return stop
 
 
+def release_node(executor: object | None, node: object | None) -> None:
+    """Destroy a node (and its executor) now, before its context is shut down.
+
+    rclpy's shutdown leaves nodes alive until garbage collection, and their DDS readers
+    with them: the monitor of a finished run would still count as a subscriber of the next
+    run's plant in the same domain, which would then start before the new monitor had
+    matched and lose the first samples for it.
+    """
+    if executor is not None:
+        executor.shutdown()
+    if node is not None:
+        node.destroy_node()
+
+
 def deliver_before_exit(node: object, timeout: float = 1.0) -> None:
     """Wait (bounded) until every subscriber acknowledged what the node published.
 
