@@ -28,6 +28,7 @@ from typing import Any
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
+from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
 from mill_common.ros import DATA_QOS, from_stamp, to_stamp
@@ -55,13 +56,14 @@ class ForceProcessNode(Node):
         v = self.params.values
         self._axis = AXES.index(v['feed_axis'])
         self._k = 0
-        self._started = False
         self._feed = (0.0, 0.0)  # last applied (u0, slope) [mm/s, mm/s²]
         self._faults = 0
         self._wall_start = time.monotonic()
-        self._last_progress = self._wall_start
-        self._ready_since: float | None = None
-        self._retry_at = 0.0
+        self._lockstep = LockstepWatchdog(
+            self._wall_start,
+            lambda: self.params.values['startup_timeout'],
+            lambda: self.params.values['lockstep_timeout'],
+        )
 
         self._clock_pub = self.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
         self._force_pub = self.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
@@ -107,12 +109,12 @@ class ForceProcessNode(Node):
         self._force_pub.publish(self._wrench(ns, self._drive.plant.force))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
-        if not self._started or from_stamp(msg.header.stamp) != self._stamp_ns():
+        if not self._lockstep.started or from_stamp(msg.header.stamp) != self._stamp_ns():
             return  # a repeat of an answered sample, or before the start
         u0, slope = self._command(msg)
         self._publish_trace(self._drive.apply(u0, slope, self._T))
         self._k += 1
-        self._last_progress = time.monotonic()
+        self._lockstep.progressed(time.monotonic())
         if self._k % max(1, round(1.0 / self._T)) == 0:
             self._publish_status(DiagnosticStatus.OK, 'running')
         self._publish_sample()
@@ -165,28 +167,15 @@ class ForceProcessNode(Node):
         return missing
 
     def _watchdog(self) -> None:
-        now = time.monotonic()
-        if not self._started:
-            missing = self._missing_peers()
-            if missing:
-                self._ready_since = None
-                if now - self._wall_start > self.params.values['startup_timeout']:
-                    request_exit(self, 3, 'peers never appeared: ' + '; '.join(missing))
-                return
-            if self._ready_since is None:
-                self._ready_since = now
-            if now - self._ready_since < 0.5:
-                return  # let discovery settle on the subscribers' side too
-            self._started = True
-            self._last_progress = now
-            self._retry_at = now + 1.0
+        action = self._lockstep.tick(time.monotonic(), self._missing_peers, self._k == 0)
+        if action is Action.START:
             self.get_logger().info('all peers matched: starting lockstep')
             self._publish_sample()
-            return
-        if self._k == 0 and now > self._retry_at:
-            self._retry_at = now + 1.0  # a peer may have matched just after sample 0
+        elif action is Action.OFFER_AGAIN:
             self._publish_sample()
-        if now - self._last_progress > self.params.values['lockstep_timeout']:
+        elif action is Action.PEERS_MISSING:
+            request_exit(self, 3, 'peers never appeared: ' + '; '.join(self._missing_peers()))
+        elif action is Action.STALLED:
             infos = self.get_publishers_info_by_topic(topics.REFERENCE)
             nodes = sorted({i.node_name for i in infos})
             who = f'from {", ".join(nodes)}' if nodes else 'and no node publishes it'

@@ -16,6 +16,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
+from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.ros import DATA_QOS, first, joint_state, to_stamp
 from mill_common.ros_params import NodeParameters
@@ -44,17 +45,18 @@ class PlantNode(Node):
         self._dt = seconds(self._dt_ns)
         self._clock_every = max(1, round(v['clock_period'] * 1e9 / self._dt_ns))
         self._k = 0
-        self._started = False
         self._commands: dict[str, float] = {}
         self._faults = dict.fromkeys(AXES, 0)
         self._saturations = dict.fromkeys(AXES, 0)
         self._wall_start = time.monotonic()
-        self._last_progress = self._wall_start
         self._last_publish_wall = self._wall_start
         self._wait_sum = 0.0
         self._wait_max = 0.0
-        self._ready_since: float | None = None
-        self._retry_at = 0.0
+        self._lockstep = LockstepWatchdog(
+            self._wall_start,
+            lambda: self.params.values['startup_timeout'],
+            lambda: self.params.values['lockstep_timeout'],
+        )
 
         self._clock_pub = self.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
         self._state_pubs = {
@@ -104,7 +106,7 @@ class PlantNode(Node):
 
     def _on_command(self, axis: str, msg: JointState) -> None:
         ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if not self._started or ns != self._stamp_ns():
+        if not self._lockstep.started or ns != self._stamp_ns():
             return  # a repeat of an answered step, or before the start
         try:
             value = first(msg.effort, 'effort')
@@ -140,7 +142,7 @@ class PlantNode(Node):
             if report.saturated[i]:
                 self._saturations[axis] += 1
         self._k += 1
-        self._last_progress = now
+        self._lockstep.progressed(now)
         if self._k % max(1, round(1.0 / self._dt)) == 0:
             self._publish_status(DiagnosticStatus.OK, 'running')
         self._publish_step()
@@ -174,29 +176,15 @@ class PlantNode(Node):
         return missing
 
     def _watchdog(self) -> None:
-        now = time.monotonic()
-        if not self._started:
-            missing = self._missing_peers()
-            if missing:
-                self._ready_since = None
-                if now - self._wall_start > self.params.values['startup_timeout']:
-                    request_exit(self, 3, 'peers never appeared: ' + '; '.join(missing))
-                return
-            if self._ready_since is None:
-                self._ready_since = now
-            if now - self._ready_since < 0.5:
-                return  # let discovery settle on the subscribers' side too
-            self._started = True
-            self._last_progress = now
-            self._retry_at = now + 1.0
+        action = self._lockstep.tick(time.monotonic(), self._missing_peers, self._k == 0)
+        if action is Action.START:
             self.get_logger().info('all peers matched: starting lockstep')
             self._publish_step()
-            return
-        if self._k == 0 and now > self._retry_at:
-            # A peer may have matched a moment after step 0 went out: offer it again.
-            self._retry_at = now + 1.0
+        elif action is Action.OFFER_AGAIN:
             self._publish_step()
-        if now - self._last_progress > self.params.values['lockstep_timeout']:
+        elif action is Action.PEERS_MISSING:
+            request_exit(self, 3, 'peers never appeared: ' + '; '.join(self._missing_peers()))
+        elif action is Action.STALLED:
             request_exit(self, 3, self._timeout_message())
 
     def _timeout_message(self) -> str:

@@ -1,0 +1,72 @@
+"""Start-up and liveness of the node that clocks a lockstep run (ROS-free).
+
+The clock node (the plant, the force process) calls `tick` from a steady-time timer:
+
+- before the start it waits until no peer is missing, then another `settle` seconds so
+  that discovery settles on the subscribers' side too (a writer that has matched a reader
+  does not mean the reader has matched the writer), then says START;
+- while step 0 is unanswered it says OFFER_AGAIN every `retry` seconds: a peer may have
+  matched just after step 0 went out;
+- PEERS_MISSING when peers are still missing after `startup_timeout`, STALLED when no step
+  has completed (`progressed`) for `lockstep_timeout`: the node ends with a message.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+
+
+class Action(enum.Enum):
+    WAIT = 'wait'
+    START = 'start'
+    OFFER_AGAIN = 'offer again'
+    PEERS_MISSING = 'peers missing'
+    STALLED = 'stalled'
+
+
+class LockstepWatchdog:
+    def __init__(
+        self,
+        now: float,
+        startup_timeout: Callable[[], float],
+        lockstep_timeout: Callable[[], float],
+        settle: float = 0.5,
+        retry: float = 1.0,
+    ) -> None:
+        # Timeouts are read at each tick: they are run-time parameters of the node.
+        self._startup_timeout = startup_timeout
+        self._lockstep_timeout = lockstep_timeout
+        self._settle = settle
+        self._retry = retry
+        self._created = now
+        self._ready_since: float | None = None
+        self._retry_at = 0.0
+        self._last_progress = now
+        self.started = False
+
+    def progressed(self, now: float) -> None:
+        """A step has completed."""
+        self._last_progress = now
+
+    def tick(self, now: float, missing_peers: Callable[[], list[str]], at_step_0: bool) -> Action:
+        if not self.started:
+            if missing_peers():
+                self._ready_since = None
+                if now - self._created > self._startup_timeout():
+                    return Action.PEERS_MISSING
+                return Action.WAIT
+            if self._ready_since is None:
+                self._ready_since = now
+            if now - self._ready_since < self._settle:
+                return Action.WAIT
+            self.started = True
+            self._last_progress = now
+            self._retry_at = now + self._retry
+            return Action.START
+        if now - self._last_progress > self._lockstep_timeout():
+            return Action.STALLED
+        if at_step_0 and now > self._retry_at:
+            self._retry_at = now + self._retry
+            return Action.OFFER_AGAIN
+        return Action.WAIT
