@@ -4,6 +4,7 @@
     benchmark --duration 53.334  # the whole job
     benchmark --record --repeat 3                 # cost of recording every topic
     benchmark --record --duration 53.334 --repeat 1 --round-trips 0
+    benchmark --cores            # the algorithm cores alone, offline, µs per call
 
 Prints steps per second and the real-time factor of the distributed job at
 the scenario's sample rate, the peak RSS of every process of the graph, and,
@@ -15,6 +16,10 @@ With --record, the job runs --repeat times without and --repeat times with
 recording every topic to a rosbag2 bag (`run_scenario --record`), alternating,
 and prints the slowdown of the median steps per second, the bag size per
 simulated second and the time `report` takes on the last bag.
+
+With --cores, no ROS: the scenario runs in the offline simulator and the time spent in
+each role's core (trajectory, observer, controller, plant) is printed per call: the
+Python work one message triggers, against the transport's cost per message above.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
 from mill_bringup import scenario as scenario_mod
+from mill_bringup.offline import CoreTimes, simulate
 from mill_bringup.runner import RunError, run
 
 
@@ -125,6 +131,37 @@ def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
     return result, figures
 
 
+def time_cores(name: str, duration: float) -> int:
+    """Print the µs per call of each role's core over `duration` s of the scenario."""
+    try:
+        scen = scenario_mod.load(name)
+        for node in scen.nodes_of('mill_trajectory'):
+            scen.add_override(f'{node.name}.duration={duration!r}')
+        times = CoreTimes()
+        t0 = time.perf_counter()
+        rec = simulate(scen, times=times)
+        wall = time.perf_counter() - t0
+    except scenario_mod.ScenarioError as exc:
+        print(f'benchmark: error: {exc}', file=sys.stderr)
+        return 1
+    algorithms = {
+        'observer': sorted(
+            {scen.parameters(n.name)['observer'] for n in scen.nodes_of('mill_observers')}
+        ),
+        'controller': sorted(
+            {scen.parameters(n.name)['controller'] for n in scen.nodes_of('mill_controllers')}
+        ),
+    }
+    print(
+        f'{scen.name}: the cores alone, {len(rec.t)} samples offline in {wall:.2f} s '
+        f'({len(rec.t) / wall:.0f} samples/s); time per call:'
+    )
+    for role, us in times.per_call_us().items():
+        what = ', '.join(algorithms.get(role, ()))
+        print(f'  {role:<10} {us:8.2f} us   {what}')
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='benchmark',
@@ -145,7 +182,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         '--repeat', type=int, default=3, help='runs with and without recording (--record)'
     )
+    parser.add_argument(
+        '--cores',
+        action='store_true',
+        help='time the algorithm cores alone (offline, no ROS) and print µs per call',
+    )
     args = parser.parse_args(argv)
+    if args.cores:
+        return time_cores(args.scenario, args.duration)
     if args.executor:
         os.environ['MILL_EXECUTOR'] = args.executor
     executor = os.environ.get('MILL_EXECUTOR', 'events')

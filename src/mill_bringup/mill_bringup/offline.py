@@ -37,9 +37,46 @@ def job_steps(end_time: float, dt_ns: int) -> int:
     return k + 1
 
 
+class CoreTimes:
+    """Time spent in each role's core during a simulation (`benchmark --cores`).
+
+    perf_counter, not process_time: the cores take about a µs, and reading the process's
+    CPU clock costs a system call of about that much. Per call means per sample and axis
+    (the observer's correct and predict together), per sample for the plant and trajectory.
+    """
+
+    ROLES = ('trajectory', 'observer', 'controller', 'plant')
+
+    def __init__(self) -> None:
+        self.seconds = dict.fromkeys(self.ROLES, 0.0)
+        self.calls = dict.fromkeys(self.ROLES, 0)
+        self._t = time.perf_counter()
+
+    def start(self) -> None:
+        self._t = time.perf_counter()
+
+    def lap(self, role: str, call: bool = True) -> None:
+        now = time.perf_counter()
+        self.seconds[role] += now - self._t
+        self.calls[role] += call
+        self._t = now
+
+    def per_call_us(self) -> dict[str, float]:
+        return {r: 1e6 * self.seconds[r] / max(self.calls[r], 1) for r in self.ROLES}
+
+
+class _NoTimes:
+    def start(self) -> None:
+        pass
+
+    def lap(self, role: str, call: bool = True) -> None:
+        pass
+
+
 def simulate(
     scen: scenario_mod.Scenario,
     progress: Callable[[float, float], None] | None = None,
+    times: CoreTimes | None = None,
 ) -> RunRecord:
     plant_name = scen.nodes_of('mill_plant')[0].name
     pv = scen.parameters(plant_name)
@@ -56,14 +93,20 @@ def simulate(
     rec = RunRecord.empty(n, dt)
     s = rec.signals
     torque = [math.nan] * len(AXES)
+    clock = times or _NoTimes()
     for k in range(n):
         t = seconds(k * dt_ns)
+        clock.start()
         ref = job.trajectory.sample(t)
+        clock.lap('trajectory')
         position = plant.position
         for i in active:
             y = quantize(position[i], resolution)
+            clock.start()
             est = observers[i].correct(y)
+            clock.lap('observer')
             torque[i] = controllers[i].compute(t, y, ref.axis(i), est)
+            clock.lap('controller')
             s['position'][k, i] = y
             s['reference'][k, i] = ref.position[i]
             s['reference_velocity'][k, i] = ref.velocity[i]
@@ -74,9 +117,12 @@ def simulate(
         s['true_velocity'][k] = plant.velocity
         s['true_disturbance'][k] = plant.disturbance(u)
         s['force'][k] = plant.cutting_force()
+        clock.start()
         plant.step(u, dt)
+        clock.lap('plant')
         for i in active:
             observers[i].predict(torque[i])
+            clock.lap('observer', call=False)  # the second half of the correct call's sample
         if progress and k % 1000 == 0:
             progress(t, job.end_time)
     return rec

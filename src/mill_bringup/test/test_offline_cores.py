@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.offline import build_axis_cores, simulate
+from mill_bringup.offline import CoreTimes, build_axis_cores, simulate
 
 from mill_bringup import scenario
 
@@ -29,3 +29,16 @@ def test_the_rls_observer_model_gives_the_same_run_as_the_own_estimator() -> Non
     for signal in ('torque', 'position'):  # the x axis; y and z are not simulated (nan)
         assert np.array_equal(a[signal][:, 0], b[signal][:, 0])
     assert np.ptp(a['position'][:, 0]) > 1e-3  # a real move (the gains adapt from 0.1 s on)
+
+
+def test_core_times_count_every_call_and_change_nothing() -> None:
+    scen = scenario.load('slotting')
+    scen.add_override('trajectory.duration=0.05')
+    times = CoreTimes()
+    timed = simulate(scen, times=times)
+    plain = simulate(scen)
+    n = len(timed.t)
+    assert n == 51
+    assert times.calls == {'trajectory': n, 'observer': 3 * n, 'controller': 3 * n, 'plant': n}
+    assert all(us > 0.0 for us in times.per_call_us().values())
+    assert np.array_equal(timed.signals['position'], plain.signals['position'])
