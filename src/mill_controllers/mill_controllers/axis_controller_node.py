@@ -81,6 +81,7 @@ class AxisControllerNode(Node):
         if self._law is None:
             law = build_controller(values)
             self._law = BumplessSwitch(law, values['sample_period'], values['blend_time'])
+            self._law_name = values['controller']
             return
         if values['axis'] != self.axis:
             raise ValueError('axis is fixed for the life of the node')
@@ -99,6 +100,7 @@ class AxisControllerNode(Node):
         self._law.set_blend_time(values['sample_period'], values['blend_time'])
         if any(values[k] != old[k] for k in values if k != 'blend_time'):
             self._law.replace(law)
+            self._law_name = values['controller']  # params.values changes after we return
             ready = self._join.require(required_inputs(law))
             if ready is not None:  # a sample that waited only for the old law's extra input
                 self._act(*ready)
@@ -187,7 +189,7 @@ class AxisControllerNode(Node):
 
     def _report_switch(self, ns: int) -> None:
         record = self._law.last_switch
-        name = self.params.values['controller']
+        name = self._law_name
         self.get_logger().info(
             f'switched to {name} at t = {record.time:.4f} s: output {record.old_output:.6g} '
             f'(new law alone {record.new_output:.6g}), offset fades over '
