@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
@@ -52,3 +53,24 @@ def first(values: Sequence[float], what: str) -> float:
     if len(values) < 1:
         raise ValueError(f'message has no {what} value')
     return float(values[0])
+
+
+def diagnostic_array(
+    ns: int,
+    level: bytes,
+    name: str,
+    message: str,
+    hardware_id: str,
+    values: Mapping[str, object],
+) -> DiagnosticArray:
+    """One DiagnosticStatus in an array stamped ns; values as text (floats exact: str = repr)."""
+    status = DiagnosticStatus(
+        level=level,
+        name=name,
+        message=message,
+        hardware_id=hardware_id,
+        values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+    )
+    array = DiagnosticArray(status=[status])
+    array.header.stamp = to_stamp(ns)
+    return array

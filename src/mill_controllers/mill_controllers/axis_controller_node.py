@@ -21,9 +21,16 @@ import time
 from dataclasses import replace
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, first, from_duration, from_stamp, joint_state, to_stamp
+from mill_common.ros import (
+    DATA_QOS,
+    diagnostic_array,
+    first,
+    from_duration,
+    from_stamp,
+    joint_state,
+)
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AxisReference, Estimate, FopdtEstimate
 from mill_common.stamp_join import StampJoin
@@ -201,16 +208,16 @@ class AxisControllerNode(Node):
             'old_output': repr(record.old_output),
             'new_output': repr(record.new_output),
         }
-        status = DiagnosticStatus(
-            level=DiagnosticStatus.OK,
-            name=f'mill_controllers: {self.axis} switch',
-            message=f'switched to {name}',
-            hardware_id=f'axis_{self.axis}',
-            values=[KeyValue(key=k, value=v) for k, v in values.items()],
+        self._diag_pub.publish(
+            diagnostic_array(
+                ns,
+                DiagnosticStatus.OK,
+                f'mill_controllers: {self.axis} switch',
+                f'switched to {name}',
+                f'axis_{self.axis}',
+                values,
+            )
         )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = to_stamp(ns)
-        self._diag_pub.publish(array)
 
     def _report_waiting(self) -> None:
         pending = self._join.oldest_incomplete()

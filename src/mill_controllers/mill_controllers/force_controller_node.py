@@ -21,10 +21,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
+from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import sample_index, sample_stamp_ns
 from rclpy.node import Node
@@ -125,16 +125,9 @@ class ForceControllerNode(Node):
             'held_samples': self._loop.held_samples,
             'clamped_samples': self._clamped,
         }
-        status = DiagnosticStatus(
-            level=level,
-            name=STATUS_NAME,
-            message=message,
-            hardware_id='mill_controllers',
-            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        self._diag_pub.publish(
+            diagnostic_array(ns, level, STATUS_NAME, message, 'mill_controllers', values)
         )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = to_stamp(ns)
-        self._diag_pub.publish(array)
 
 
 def main(argv: list[str] | None = None) -> int:

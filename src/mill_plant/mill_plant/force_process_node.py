@@ -26,12 +26,12 @@ import time
 from typing import Any
 
 from builtin_interfaces.msg import Duration
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
-from mill_common.ros import DATA_QOS, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import sample_stamp_ns
@@ -198,16 +198,9 @@ class ForceProcessNode(Node):
             'faults': self._faults,
             'wall_s': time.monotonic() - self._wall_start,
         }
-        status = DiagnosticStatus(
-            level=level,
-            name=STATUS_NAME,
-            message=message,
-            hardware_id='mill_plant',
-            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        self._diag_pub.publish(
+            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, 'mill_plant', values)
         )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = to_stamp(self._stamp_ns())
-        self._diag_pub.publish(array)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -14,11 +14,11 @@ import math
 import time
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
-from mill_common.ros import DATA_QOS, first, joint_state, to_stamp
+from mill_common.ros import DATA_QOS, diagnostic_array, first, joint_state, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
@@ -213,16 +213,9 @@ class PlantNode(Node):
         for axis in AXES:
             values[f'{axis}.faults'] = self._faults[axis]
             values[f'{axis}.saturations'] = self._saturations[axis]
-        status = DiagnosticStatus(
-            level=level,
-            name=STATUS_NAME,
-            message=message,
-            hardware_id='mill_plant',
-            values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
+        self._diag_pub.publish(
+            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, 'mill_plant', values)
         )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = to_stamp(self._stamp_ns())
-        self._diag_pub.publish(array)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,9 +23,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
@@ -174,21 +174,22 @@ class TrajectoryNode(Node):
         self._ref_pub.publish(out)
 
     def _report(self, t: float, state: str, problem: str | None = None) -> None:
-        status = DiagnosticStatus(
-            level=DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
-            name=JOB_STATUS_NAME,
-            message=problem or f'job {state}',
-            hardware_id='mill',
-            values=[
-                KeyValue(key='state', value=state),
-                KeyValue(key='time', value=repr(t)),
-                KeyValue(key='end_time', value=repr(self._job_end)),
-                KeyValue(key='feed_override', value=repr(self._override.value)),
-            ],
+        values = {
+            'state': state,
+            'time': t,
+            'end_time': self._job_end,
+            'feed_override': self._override.value,
+        }
+        self._diag_pub.publish(
+            diagnostic_array(
+                self.get_clock().now().nanoseconds,
+                DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
+                JOB_STATUS_NAME,
+                problem or f'job {state}',
+                'mill',
+                values,
+            )
         )
-        array = DiagnosticArray(status=[status])
-        array.header.stamp = self.get_clock().now().to_msg()
-        self._diag_pub.publish(array)
 
 
 def main(argv: list[str] | None = None) -> int:
