@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
-from mill_bringup.force_job import simulate_offline
+from mill_bringup.jobs import job_for, simulate
 from mill_common.ros import DATA_QOS, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs
@@ -33,12 +33,12 @@ T = 60.0 / 715.0
 
 
 @pytest.mark.system
-@pytest.mark.parametrize('name', ['rubio_beta_neg0.3', 'rubio_scheme1'])
+@pytest.mark.parametrize('name', ['beta_neg0.3', 'scheme1'])
 def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: str) -> None:
     out = tmp_path / 'run'
     proc = subprocess.run(
         [
-            *(sys.executable, '-m', 'mill_bringup.runner', name),
+            *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', name),
             *('--compare-offline', '--quiet', '--output', str(out)),
         ],
         env=ros_env,
@@ -47,7 +47,7 @@ def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: 
         timeout=300,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
-    summary = json.loads((out / 'summary.json').read_text())
+    summary = json.loads((out / name / 'summary.json').read_text())
     assert summary['samples'] == 120  # 10 s of 715 rpm revolutions
     d = summary['differences']
     # Same arithmetic on both sides, except the feed's trip through the reference in m/s
@@ -57,11 +57,11 @@ def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: 
     # The recorded stream has whole-ns stamps: each grid time moves by <= 0.5 ns of a
     # T/32 = 2.6 ms spacing (2e-7), which bounds the change of the Simpson sums.
     assert d['j_c_relative'] <= 1e-6
-    offline = simulate_offline(scenario.load(name))
+    offline = simulate(job_for(scenario.load('rubio').variant(name)))
     assert summary['j_c'] == pytest.approx(offline.j_c, rel=1e-6)
     # scheme 1 switches (β 0 → −1 on this job); the run published every switch
     assert summary['beta_switches'] == int(np.count_nonzero(np.diff(offline.beta)))
-    if name == 'rubio_scheme1':
+    if name == 'scheme1':
         assert summary['beta_switches'] >= 1
 
 

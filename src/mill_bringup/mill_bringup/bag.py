@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 import yaml
 from mill_common.signals import AXES
+from mill_common.timebase import job_steps
 
 from mill_bringup.metrics import RunRecord
 from mill_common import topics as topic_names
@@ -849,12 +850,6 @@ class BagRun:
     message_count: int
     size_bytes: int
     notes: list[str] = field(default_factory=list)
-
-
-def job_steps(end_time: float, dt_ns: int) -> int:
-    from mill_bringup.offline import job_steps as steps
-
-    return steps(end_time, dt_ns)
 
 
 def read_run(path: str | Path) -> BagRun:

@@ -38,7 +38,8 @@ from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
 from mill_bringup import scenario as scenario_mod
-from mill_bringup.offline import CoreTimes, simulate
+from mill_bringup.jobs import job_for, simulate
+from mill_bringup.offline import CoreTimes
 from mill_bringup.runner import RunError, run
 
 
@@ -71,6 +72,7 @@ def _rates(values: list[float], fmt: str = '.0f') -> str:
 
 def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
     """Runs without and with recording, alternating; the bag's size and the report's time."""
+    job = job_for(scen)
     plain, recorded = [], []
     plain_cpu, recorded_cpu = [], []
     result = None
@@ -85,7 +87,7 @@ def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
                 file=sys.stderr,
             )
             r = run(
-                scen,
+                job,
                 run_dir,
                 quiet=True,
                 domain_id=env['ROS_DOMAIN_ID'],
@@ -139,7 +141,7 @@ def time_cores(name: str, duration: float) -> int:
             scen.add_override(f'{node.name}.duration={duration!r}')
         times = CoreTimes()
         t0 = time.perf_counter()
-        rec = simulate(scen, times=times)
+        rec = simulate(job_for(scen), times=times)
         wall = time.perf_counter() - t0
     except scenario_mod.ScenarioError as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
@@ -214,7 +216,7 @@ def main(argv: list[str] | None = None) -> int:
             if args.record:
                 result, recording = measure_recording(scen, Path(tmp), env, max(1, args.repeat))
             else:
-                result = run(scen, Path(tmp), quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+                result = run(job_for(scen), Path(tmp), quiet=True, domain_id=env['ROS_DOMAIN_ID'])
     except (scenario_mod.ScenarioError, RunError, TimeoutError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1

@@ -25,7 +25,6 @@ import argparse
 import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -33,6 +32,9 @@ from mill_common.parameters import ParamSpec, number, positive, positive_int, va
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_controllers.model_reference import ContinuousReference, simpson
 from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
+
+from mill_bringup.force_record import ForceRecord
+from mill_bringup.simulation import run_samples
 
 
 def _number_or_inf(value: Any) -> str | None:
@@ -54,35 +56,6 @@ LOOP_PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec('override_max', 2.0, 'highest feed override [-] (200 %)', _number_or_inf),
     ParamSpec('intersample_intervals', 32, 'grid intervals per sample for J_c [-]', positive_int),
 )
-
-
-@dataclass
-class LoopRecord:
-    """Samples (index k) and the continuous cost of one run."""
-
-    t: np.ndarray
-    reference: np.ndarray
-    force: np.ndarray  # force the controller used [N] (held over NaN samples)
-    feed_command: np.ndarray  # controller output [mm/s]
-    feed: np.ndarray  # applied feed [mm/s]
-    override: np.ndarray  # applied override [-]
-    slope: np.ndarray  # its β-hold ramp over [t_k, t_k+1) [1/s]
-    beta: np.ndarray  # active β over [t_k, t_k+1)
-    depth: np.ndarray  # a_dc(t_k) [mm]
-    interval_cost: np.ndarray  # ∫ over [t_k, t_k+1) of (F_p − F_pm)² [N²·s]
-    fine: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
-    held_samples: int = 0
-
-    @property
-    def j_c(self) -> float:
-        """Rubio 2013 eq. (14) over the job [N²·s]."""
-        return float(self.interval_cost.sum())
-
-    def fine_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(t, F_p, F_pm) on the J_c grid (needs keep_trace=True)."""
-        if not self.fine:
-            return np.zeros(0), np.zeros(0), np.zeros(0)
-        return tuple(np.concatenate([p[i] for p in self.fine]) for i in range(3))  # type: ignore[return-value]
 
 
 def loop_values(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
@@ -129,6 +102,91 @@ class _Corrupted:
         self.law.record_applied(feed)
 
 
+class ForceLoopSimulation:
+    """The closed force loop one revolution at a time (see the module doc).
+
+    nan_samples: k whose force measurement is NaN (sensor dropout); override_corruption
+    {k: value} replaces the controller's override at k (tests of the clamp/hold path).
+    The data flow is the distributed one (mill_bringup.jobs.force): the force sample at
+    t_k, the override o_k and its β-hold slope, the drive's clamped feed, the next sample.
+    """
+
+    def __init__(
+        self,
+        controller: ForceLaw,
+        model: ForceProcessModel,
+        loop: Mapping[str, Any] | None = None,
+        nan_samples: Sequence[int] = (),
+        override_corruption: Mapping[int, float] | None = None,
+        keep_trace: bool = False,
+    ) -> None:
+        lv = loop_values(loop)
+        T = model.sample_period
+        self.samples = max(1, math.ceil(lv['job_duration'] / T - 1e-9))
+        self.nominal = lv['nominal_feed']
+        o_lo, o_hi = lv['override_min'], lv['override_max']
+        if not o_lo <= o_hi:
+            raise ValueError(f'override range [{o_lo}, {o_hi}] is empty')
+        if override_corruption:
+            controller = _Corrupted(controller, override_corruption, self.nominal)
+        self.model = model
+        self.period = T
+        self.feed_loop = ForceFeedLoop(controller, model, self.nominal, o_lo, o_hi)
+        self.drive = DrivenForceProcess(
+            ForceProcessPlant(model),
+            o_lo * self.nominal,
+            o_hi * self.nominal,
+            T / lv['intersample_intervals'],
+        )
+        # J_c compares with the law's own reference model eq. (7)
+        self.f_ref = ContinuousReference(controller.designer.damping, controller.designer.omega_n)
+        self.nan_set = set(nan_samples)
+        self.reference = lv['reference_force']
+        self.keep_trace = keep_trace
+        self.rec = ForceRecord.empty(self.samples, T)
+        self.rec.feed = np.full(self.samples, np.nan)
+        self.rec.interval_cost = np.full(self.samples, np.nan)
+        self.rec.measured = np.full(self.samples, np.nan)
+        self.trace: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def step(self, k: int) -> None:
+        rec, drive = self.rec, self.drive
+        t = drive.plant.time
+        measured = math.nan if k in self.nan_set else drive.plant.force
+        cmd = self.feed_loop.step(t, self.reference, measured)
+        feed = cmd.override * self.nominal
+        self.f_ref.begin(self.reference)
+        cost = 0.0
+        for times, force in drive.apply(feed, cmd.slope * self.nominal, self.period):
+            f_pm = self.f_ref.values(times)
+            cost += simpson(times, (force - f_pm) ** 2)
+            if self.keep_trace:
+                rec.fine.append((times, force, f_pm))
+                self.trace.append((times, force))
+        self.f_ref.advance(self.period)
+        rec.reference[k] = self.reference
+        rec.measured[k] = measured
+        rec.force[k] = cmd.force
+        rec.feed_command[k] = cmd.feed_command
+        rec.feed[k] = feed
+        rec.override[k] = cmd.override
+        rec.slope[k] = cmd.slope
+        rec.beta[k] = cmd.beta
+        rec.depth[k] = self.model.depth_at(t)
+        rec.interval_cost[k] = cost
+
+    def record(self) -> ForceRecord:
+        rec = self.rec
+        rec.held_samples = self.feed_loop.held_samples
+        rec.j_c = float(np.sum(rec.interval_cost))
+        if self.trace:
+            rec.trace_ns = np.concatenate(
+                [np.rint(t * 1e9).astype(np.int64) for t, _ in self.trace]
+            )
+            rec.trace_force = np.concatenate([f for _, f in self.trace])
+        return rec
+
+
 def simulate(
     controller: ForceLaw,
     model: ForceProcessModel,
@@ -136,53 +194,10 @@ def simulate(
     nan_samples: Sequence[int] = (),
     override_corruption: Mapping[int, float] | None = None,
     keep_trace: bool = False,
-) -> LoopRecord:
-    """Run the job; nan_samples: k whose force measurement is NaN (sensor dropout).
-
-    override_corruption {k: value} replaces the controller's override at k (tests of the
-    clamp/hold path); the applied override is what the plant sees.
-
-    The data flow is the distributed one (mill_bringup.force_job): the force sample at
-    t_k, the override o_k and its β-hold slope, the drive's clamped feed, the next sample.
-    """
-    lv = loop_values(loop)
-    T = model.sample_period
-    n = max(1, math.ceil(lv['job_duration'] / T - 1e-9))
-    nominal = lv['nominal_feed']
-    o_lo, o_hi = lv['override_min'], lv['override_max']
-    if not o_lo <= o_hi:
-        raise ValueError(f'override range [{o_lo}, {o_hi}] is empty')
-    if override_corruption:
-        controller = _Corrupted(controller, override_corruption, nominal)
-    feed_loop = ForceFeedLoop(controller, model, nominal, o_lo, o_hi)
-    drive = DrivenForceProcess(
-        ForceProcessPlant(model), o_lo * nominal, o_hi * nominal, T / lv['intersample_intervals']
-    )
-    # J_c compares with the law's own reference model eq. (7)
-    f_ref = ContinuousReference(controller.designer.damping, controller.designer.omega_n)
-    nan_set = set(nan_samples)
-    r_val = lv['reference_force']
-    keys = ('t', 'reference', 'force', 'feed_command', 'feed', 'override', 'slope', 'beta', 'depth')
-    rec = {key: np.zeros(n) for key in (*keys, 'interval_cost')}
-    fine = []
-    for k in range(n):
-        t = drive.plant.time
-        measured = math.nan if k in nan_set else drive.plant.force
-        cmd = feed_loop.step(t, r_val, measured)
-        feed = cmd.override * nominal
-        f_ref.begin(r_val)
-        cost = 0.0
-        for times, force in drive.apply(feed, cmd.slope * nominal, T):
-            f_pm = f_ref.values(times)
-            cost += simpson(times, (force - f_pm) ** 2)
-            if keep_trace:
-                fine.append((times, force, f_pm))
-        f_ref.advance(T)
-        values = (t, r_val, cmd.force, cmd.feed_command, feed, cmd.override, cmd.slope, cmd.beta)
-        for key, value in zip(keys, (*values, model.depth_at(t)), strict=True):
-            rec[key][k] = value
-        rec['interval_cost'][k] = cost
-    return LoopRecord(**rec, fine=fine, held_samples=feed_loop.held_samples)
+) -> ForceRecord:
+    """Run the whole job offline (ForceLoopSimulation through the one offline loop)."""
+    sim = ForceLoopSimulation(controller, model, loop, nan_samples, override_corruption, keep_trace)
+    return run_samples(sim, sim.samples)
 
 
 def run(
@@ -192,7 +207,7 @@ def run(
     loop: Mapping[str, Any] | None = None,
     values: Mapping[str, Any] | None = None,
     keep_trace: bool = False,
-) -> LoopRecord:
+) -> ForceRecord:
     model = model or ForceProcessModel()
     values = dict(values or {})
     if kind == 'fixed':
@@ -223,7 +238,7 @@ def paper_cases(
     model: ForceProcessModel | None = None,
     loop: Mapping[str, Any] | None = None,
     scheme_values: Mapping[str, Any] | None = None,
-) -> dict[str, LoopRecord]:
+) -> dict[str, ForceRecord]:
     """The four runs of Rubio 2013 §5 on the same job."""
     out = {}
     for name, (kind, beta) in PAPER_CASES.items():
@@ -260,7 +275,7 @@ def plot_cost_vs_beta(
     plt.close(fig)
 
 
-def claims(costs: Mapping[float, float], cases: Mapping[str, LoopRecord]) -> str:
+def claims(costs: Mapping[float, float], cases: Mapping[str, ForceRecord]) -> str:
     """Rubio 2013's three claims, each with the figures and a computed verdict."""
     zoh = cases['ZOH (β = 0)'].j_c
     negative = {b: c for b, c in costs.items() if b < 0}
@@ -270,7 +285,7 @@ def claims(costs: Mapping[float, float], cases: Mapping[str, LoopRecord]) -> str
         (
             'negative β gives lower J_c than ZOH',
             all(c < zoh for c in negative.values()),
-            f'every β < 0 of the sweep below ZOH; best β = {best_b:+.2f}: '
+            f'every β < 0 run below ZOH; best β = {best_b:+.2f}: '
             f'{100 * (negative[best_b] / zoh - 1):+.2f} %',
         ),
         ('scheme 1 is no worse than ZOH', s1 <= zoh, f'{100 * (s1 / zoh - 1):+.2f} %'),

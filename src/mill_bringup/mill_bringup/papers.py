@@ -11,9 +11,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from mill_bringup.force_loop import claims
+from mill_bringup.force_record import ForceRecord
 from mill_bringup.metrics import RunRecord
 
 X = 0  # all three papers' experiments run on the x axis
@@ -220,14 +223,41 @@ def hatwesh(records: Mapping[str, RunRecord]) -> str:
     return '\n'.join(lines)
 
 
-REPORTS: dict[str, Callable[[Mapping[str, RunRecord]], str]] = {
+# --- Rubio 2013 ---------------------------------------------------------------------------
+
+# The variants of config/rubio.yaml the claims compare: fixed-β holds and the two schemes.
+RUBIO_CASES = {'zoh': 'ZOH (β = 0)', 'scheme1': 'scheme 1', 'scheme2': 'scheme 2'}
+
+
+def rubio(records: Mapping[str, ForceRecord]) -> str:
+    """J_c of every variant against ZOH, and the paper's three claims with computed verdicts."""
+    if 'zoh' not in records:
+        return ''
+    zoh = records['zoh'].j_c
+    lines = [
+        'Rubio 2013, peak cutting force held at F_r by the feed (J_c of eq. 14, against ZOH):',
+        f'{"variant":<14} {"J_c [N² s]":>12} {"vs ZOH [%]":>11} {"active β":>20}',
+    ]
+    for name, rec in records.items():
+        betas = ', '.join(f'{b:g}' for b in dict.fromkeys(rec.beta.tolist()))
+        lines.append(f'{name:<14} {rec.j_c:12.6g} {100 * (rec.j_c / zoh - 1):+11.2f} {betas:>20}')
+    # Fixed holds: one β over the whole job.
+    fixed = {float(rec.beta[0]): rec.j_c for rec in records.values() if np.ptp(rec.beta) == 0}
+    cases = {label: records[name] for name, label in RUBIO_CASES.items() if name in records}
+    if len(cases) == len(RUBIO_CASES) and any(b < 0 for b in fixed):
+        lines.append(claims(fixed, cases))
+    return '\n'.join(lines)
+
+
+REPORTS: dict[str, Callable[[Mapping[str, Any]], str]] = {
     'maharof': maharof,
     'chavez_conde': chavez_conde,
     'hatwesh': hatwesh,
+    'rubio': rubio,
 }
 
 
-def report(paper: str, records: Mapping[str, RunRecord]) -> str:
+def report(paper: str, records: Mapping[str, Any]) -> str:
     """The paper's metrics of every variant; '' for a scenario without a paper report."""
     fn = REPORTS.get(paper)
     return fn(records) if fn else ''

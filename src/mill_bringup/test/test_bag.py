@@ -27,8 +27,8 @@ from mill_bringup.bag import (
     recover,
     typestore,
 )
+from mill_bringup.jobs import job_for, simulate
 from mill_bringup.metrics import SIGNALS, summarize
-from mill_bringup.offline import simulate
 from mill_bringup.report import amplitude_at, amplitude_spectrum, max_window_rms
 from mill_common.signals import AXES
 from mill_trajectory.config import build_job
@@ -241,7 +241,7 @@ def foreign_bag(tmp_path: Path, storage: str, feed: bool = False):
 
     scen = scenario.load('slotting')
     scen.add_override('trajectory.duration=0.4')
-    rec = simulate(scen)
+    rec = simulate(job_for(scen))
     job = build_job(scen.parameters('trajectory'))
     n = rec.t.size
     dt_ns = 1_000_000

@@ -4,33 +4,30 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.force_job import (
-    continuous_cost,
-    design_of,
-    force_job,
-    is_force_job,
-    simulate_offline,
-    smooth_pieces,
-)
+from mill_bringup.force_record import continuous_cost, smooth_pieces
+from mill_bringup.jobs import ForceJob, job_for, simulate
 
 from mill_bringup import scenario
 
-RUBIO = ('rubio_zoh', 'rubio_beta_neg0.3', 'rubio_scheme1', 'rubio_scheme2')
+RUBIO = ('zoh', 'beta_neg0.3', 'scheme1', 'scheme2')
+
+
+def rubio(variant: str) -> scenario.Scenario:
+    return scenario.load('rubio').variant(variant)
 
 
 @pytest.mark.parametrize('name', RUBIO)
-def test_rubio_scenarios_are_consistent_force_jobs(name: str) -> None:
-    scen = scenario.load(name)
-    assert is_force_job(scen)
-    job = force_job(scen)
+def test_rubio_variants_are_consistent_force_jobs(name: str) -> None:
+    job = job_for(rubio(name))
+    assert isinstance(job, ForceJob)
     assert job.samples == 120 and job.period == 60.0 / 715.0
     assert job.controller_values['reference_force'] == 1200.0
 
 
 def test_cost_from_the_stream_equals_the_loop_cost() -> None:
-    scen = scenario.load('rubio_beta_neg0.3')
-    rec = simulate_offline(scen)
-    design = design_of(force_job(scen))
+    job = job_for(rubio('beta_neg0.3'))
+    rec = simulate(job)
+    design = job.design()
     j_c = continuous_cost(rec.trace_ns, rec.trace_force, 1200.0, design.damping, design.omega_n)
     assert j_c == pytest.approx(rec.j_c, rel=1e-7)
     # a stream that follows the reference model exactly costs nothing
@@ -55,19 +52,19 @@ def test_pieces_split_at_repeated_points() -> None:
 
 
 def test_plant_and_controller_must_share_the_process_model() -> None:
-    scen = scenario.load('rubio_zoh')
+    scen = rubio('zoh')
     scen.add_override('force_controller.force_process.flutes=2')
     with pytest.raises(scenario.ScenarioError, match='flutes'):
-        force_job(scen)
-    scen = scenario.load('rubio_zoh')
+        job_for(scen)
+    scen = rubio('zoh')
     scen.add_override('force_process.feed_limits=[0.0, 30.0]')
     with pytest.raises(scenario.ScenarioError, match='feed_limits'):
-        force_job(scen)
+        job_for(scen)
 
 
 def test_state_windows_average_a_recorded_run(tmp_path) -> None:
     from mill_bringup.bag import BagWriter, typestore
-    from mill_bringup.force_job import main, state_windows
+    from mill_bringup.force_windows import main, state_windows
 
     from mill_common import topics
 

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mill_bringup.force_loop import (
-    LoopRecord,
     main,
     make_controller,
     paper_cases,
@@ -17,13 +16,14 @@ from mill_bringup.force_loop import (
     simulate,
     sweep,
 )
+from mill_bringup.force_record import ForceRecord
 from mill_plant.force_process import ForceProcessModel
 
 CONSTANT = ForceProcessModel(depth_profile=[0.0, 2.0])
 
 
 @pytest.fixture(scope='module')
-def cases() -> dict[str, LoopRecord]:
+def cases() -> dict[str, ForceRecord]:
     return paper_cases()
 
 
@@ -100,19 +100,19 @@ def test_main_prints_the_table(tmp_path: Path) -> None:
 # --- the paper's claims on its job (default depth profile, F_r = 1200 N) ---------------------
 
 
-def test_claim_negative_beta_beats_zoh(cases: dict[str, LoopRecord]) -> None:
+def test_claim_negative_beta_beats_zoh(cases: dict[str, ForceRecord]) -> None:
     zoh = cases['ZOH (β = 0)'].j_c
     assert cases['β = −0.3'].j_c < zoh
     assert np.all(sweep([-1.0, -0.6, -0.1]) < zoh)
     assert np.all(sweep([0.2, 1.0]) > zoh)
 
 
-def test_claim_scheme1_no_worse_than_zoh(cases: dict[str, LoopRecord]) -> None:
+def test_claim_scheme1_no_worse_than_zoh(cases: dict[str, ForceRecord]) -> None:
     assert cases['scheme 1'].j_c <= cases['ZOH (β = 0)'].j_c
 
 
 def test_claim_scheme2_not_better_than_zoh_holds_only_to_within_a_tenth_of_a_percent(
-    cases: dict[str, LoopRecord],
+    cases: dict[str, ForceRecord],
 ) -> None:
     """Our finding: scheme 2 stays within ±0.05 of β = 0 and ties with the ZOH (it is
     0.05 % better here), so 'not better' holds only in the sense of 'no real gain'."""

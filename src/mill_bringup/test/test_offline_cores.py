@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.offline import CoreTimes, build_axis_cores, simulate
+from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.axis import build_axis_cores
+from mill_bringup.offline import CoreTimes
 
 from mill_bringup import scenario
 
@@ -23,7 +25,7 @@ def test_the_rls_observer_model_gives_the_same_run_as_the_own_estimator() -> Non
     for name in ('adaptive_pi', 'adaptive_pi_rls'):
         scen = scenario.load('hatwesh').variant(name)
         scen.add_override('trajectory.duration=0.3')
-        runs[name] = simulate(scen)
+        runs[name] = simulate(job_for(scen))
     a, b = runs['adaptive_pi'].signals, runs['adaptive_pi_rls'].signals
     assert len(runs['adaptive_pi'].t) == 1201
     for signal in ('torque', 'position'):  # the x axis; y and z are not simulated (nan)
@@ -35,8 +37,8 @@ def test_core_times_count_every_call_and_change_nothing() -> None:
     scen = scenario.load('slotting')
     scen.add_override('trajectory.duration=0.05')
     times = CoreTimes()
-    timed = simulate(scen, times=times)
-    plain = simulate(scen)
+    timed = simulate(job_for(scen), times=times)
+    plain = simulate(job_for(scen))
     n = len(timed.t)
     assert n == 51
     assert times.calls == {'trajectory': n, 'observer': 3 * n, 'controller': 3 * n, 'plant': n}

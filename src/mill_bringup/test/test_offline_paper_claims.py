@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mill_bringup.jobs import job_for, simulate
 from mill_bringup.metrics import summarize
-from mill_bringup.offline import simulate
 
 from mill_bringup import scenario
 
@@ -15,7 +15,7 @@ def run(*overrides: str):
     scen = scenario.load('slotting')
     for text in overrides:
         scen.add_override(text)
-    return simulate(scen)
+    return simulate(job_for(scen))
 
 
 def test_disturbance_compensation_beats_pd_by_100_times_on_every_axis():
@@ -50,7 +50,7 @@ def test_step_disturbance_estimated_within_5_percent_in_30_ms(axis):
 
 
 def variant_record(name: str, variant: str):
-    return simulate(scenario.load(name).variant(variant))
+    return simulate(job_for(scenario.load(name).variant(variant)))
 
 
 def test_every_scenario_and_variant_loads() -> None:

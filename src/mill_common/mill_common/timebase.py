@@ -6,6 +6,8 @@ times from the same step, so both go through these functions.
 
 from __future__ import annotations
 
+import math
+
 
 def period_ns(period_s: float) -> int:
     """Sample period in whole nanoseconds; ValueError unless it is positive and exact to 1 ns."""
@@ -18,6 +20,16 @@ def period_ns(period_s: float) -> int:
 def step_ns(k: int, dt_ns: int) -> int:
     """Stamp of sample k in nanoseconds."""
     return k * dt_ns
+
+
+def job_steps(end_time: float, dt_ns: int) -> int:
+    """Samples of a job: k = 0 .. the first k with t_k >= end_time (when the job is done)."""
+    k = max(0, math.ceil(end_time * 1e9 / dt_ns) - 1)
+    while seconds(k * dt_ns) < end_time:
+        k += 1
+    while k > 0 and seconds((k - 1) * dt_ns) >= end_time:
+        k -= 1
+    return k + 1
 
 
 def seconds(ns: int) -> float:

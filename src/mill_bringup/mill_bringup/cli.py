@@ -1,0 +1,67 @@
+"""Command-line options every scenario command shares (run_scenario, offline_sim, benchmark)."""
+
+from __future__ import annotations
+
+import argparse
+
+from mill_bringup.scenario import Scenario, ScenarioError, load
+
+
+def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument('scenario', nargs='?', default='slotting', help='name or YAML file')
+    parser.add_argument(
+        '--param',
+        '-p',
+        action='append',
+        default=[],
+        metavar='NODE.NAME=VALUE',
+        help='override a node parameter; NODE may be a glob',
+    )
+    parser.add_argument(
+        '--controller', help='the law of every axis controller (shortcut for -p, e.g. pd)'
+    )
+    parser.add_argument('--duration', type=float, help='end the job after this time [s]')
+    parser.add_argument(
+        '--skip',
+        type=float,
+        default=1.0,
+        help='metrics over t >= SKIP (start transient excluded) [s]',
+    )
+    parser.add_argument(
+        '--variant', help="run only this one of the scenario's variants (default: all of them)"
+    )
+
+
+def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
+    """--param, --controller and --duration."""
+    for text in args.param:
+        scen.add_override(text)
+    if args.controller:
+        axis_controllers = [
+            n for n in scen.nodes_of('mill_controllers') if n.executable == 'axis_controller'
+        ]
+        if not axis_controllers:
+            raise ScenarioError(f'--controller: scenario {scen.name} has no axis controller')
+        for node in axis_controllers:
+            scen.add_override(f'{node.name}.controller={args.controller}')
+    if args.duration is not None:
+        if not args.duration > 0:
+            raise ScenarioError(f'--duration must be > 0, got {args.duration}')
+        for node in scen.nodes_of('mill_trajectory'):
+            scen.add_override(f'{node.name}.duration={args.duration!r}')
+
+
+def variants(scen: Scenario, only: str | None = None) -> dict[str, Scenario]:
+    """The configurations to run: every variant of the scenario, one, or the scenario itself."""
+    if only:
+        return {only: scen.variant(only)}
+    if not scen.variants:
+        return {'': scen}
+    return {name: scen.variant(name) for name in scen.variants}
+
+
+def load_scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Scenario]]:
+    """The scenario named on the command line with its overrides, and the runs it asks for."""
+    scen = load(args.scenario)
+    apply_overrides(scen, args)
+    return scen, variants(scen, args.variant)

@@ -1,0 +1,156 @@
+"""The record of one cutting-force job (Rubio 2013) and its continuous-time cost. ROS-free.
+
+Samples k = 0..n−1 (t_k = kT, T one spindle revolution) and the force stream over the job.
+The offline loop fills every field; a distributed run or a bag fills what travels on the
+topics (no applied feed, no per-sample cost) and J_c comes from the recorded stream:
+
+    J_c = Σ_j ∫ (F_p(τ) − F_pm(τ))² dτ [N²·s]        (Rubio 2013 eq. (14))
+
+F_pm the continuous response of the reference model eq. (7) to the reference step at t = 0,
+integrated by Simpson's rule on each smooth piece of the stream (the plant repeats a point
+where the force jumps or kinks: a depth change, a clamp corner, a sample boundary).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from mill_common.timebase import sample_stamp_ns
+from mill_controllers.model_reference import ContinuousReference, simpson
+
+from mill_bringup.bag import decode
+from mill_common import topics
+
+# /mill/force_control/state: force used, reference, feed command, override, active β, depth
+STATE_FIELDS = ('force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+
+
+def _nan(n: int) -> np.ndarray:
+    return np.full(n, np.nan)
+
+
+@dataclass
+class ForceRecord:
+    """One force job, sample by sample, and the force between samples."""
+
+    t: np.ndarray
+    reference: np.ndarray  # F_r [N]
+    force: np.ndarray  # force the law used at t_k [N] (the last finite one)
+    feed_command: np.ndarray  # the law's f_c,k [mm/s]
+    override: np.ndarray  # applied override o_k [-]
+    slope: np.ndarray  # its β-hold slope over [t_k, t_k+1) [1/s]
+    beta: np.ndarray  # active β over [t_k, t_k+1)
+    depth: np.ndarray  # a_dc(t_k) [mm]
+    feed: np.ndarray | None = None  # applied feed [mm/s] (offline only)
+    interval_cost: np.ndarray | None = None  # ∫ over [t_k, t_k+1) of (F_p − F_pm)² (offline)
+    measured: np.ndarray | None = None  # F_p(t_k) as the plant measured it [N]
+    trace_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    trace_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    fine: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
+    held_samples: int = 0
+    j_c: float = math.nan
+
+    @classmethod
+    def empty(cls, n: int, period: float) -> ForceRecord:
+        arrays = {name: _nan(n) for name in STATE_FIELDS}
+        return cls(t=np.arange(n) * period, **arrays, slope=_nan(n))
+
+    def fine_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, F_p, F_pm) on the J_c grid (offline, with keep_trace)."""
+        if not self.fine:
+            return np.zeros(0), np.zeros(0), np.zeros(0)
+        t, f, fm = (np.concatenate([p[i] for p in self.fine]) for i in range(3))
+        return t, f, fm
+
+
+def smooth_pieces(stamps_ns: np.ndarray, values: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Split a force stream where a point is repeated (stamps at most 1 ns apart)."""
+    stamps_ns = np.asarray(stamps_ns, dtype=np.int64)
+    values = np.asarray(values, dtype=float)
+    cuts = np.flatnonzero(np.diff(stamps_ns) <= 1) + 1
+    pieces = []
+    for s, v in zip(np.split(stamps_ns, cuts), np.split(values, cuts), strict=True):
+        if len(s) >= 2:
+            pieces.append((s / 1e9, v))
+    return pieces
+
+
+def continuous_cost(
+    stamps_ns: np.ndarray,
+    forces: np.ndarray,
+    reference_force: float,
+    damping: float,
+    omega_n: float,
+) -> float:
+    """Rubio 2013 eq. (14) from a recorded force stream [N²·s] (see the module doc)."""
+    # Rubio 2013 eq. (14): J_c = Σ_j ∫_{(j−1)T}^{jT} (F_p(τ) − F_pm(τ))² dτ
+    f_ref = ContinuousReference(damping, omega_n)
+    f_ref.reset(0.0, 0.0)
+    f_ref.begin(reference_force)
+    total = 0.0
+    for times, force in smooth_pieces(stamps_ns, forces):
+        total += simpson(times, (force - f_ref.values(times)) ** 2)
+    return total
+
+
+FORCE_TOPICS = {
+    topics.CUTTING_FORCE: 'geometry_msgs/msg/WrenchStamped',
+    topics.CUTTING_FORCE_TRACE: 'trajectory_msgs/msg/JointTrajectory',
+    topics.FEED_OVERRIDE: 'sensor_msgs/msg/JointState',
+    topics.FORCE_CONTROL_STATE: 'sensor_msgs/msg/JointState',
+}
+
+
+def _ns(stamp: object) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)  # type: ignore[attr-defined]
+
+
+def record_from_messages(
+    raw: Mapping[str, Sequence[bytes]], n: int, period: float, feed_axis: str
+) -> tuple[ForceRecord, dict[str, int]]:
+    """Serialized force-job messages -> record of samples 0..n−1 and its force stream.
+
+    A message belongs to sample k when its stamp is sample_stamp_ns(k, T); the stream
+    keeps the trace points up to the end of the last sample. Also returns, per topic,
+    how many samples are missing.
+    """
+    rec = ForceRecord.empty(n, period)
+    index = {sample_stamp_ns(k, period): k for k in range(n)}
+    seen: dict[str, set[int]] = {t: set() for t in FORCE_TOPICS}
+    measured = _nan(n)
+    end_ns = sample_stamp_ns(n, period)
+    trace: list[tuple[int, float]] = []
+    for topic, msgtype in FORCE_TOPICS.items():
+        for data in raw.get(topic, ()):
+            msg = decode(msgtype, data)
+            ns = _ns(msg.header.stamp)
+            k = index.get(ns)
+            if topic == topics.CUTTING_FORCE_TRACE:
+                if k is not None:
+                    seen[topic].add(k)
+                for p in msg.points:
+                    at = ns + _ns(p.time_from_start)
+                    if at <= end_ns:
+                        trace.append((at, float(p.positions[0])))
+                continue
+            if k is None:
+                continue
+            seen[topic].add(k)
+            if topic == topics.CUTTING_FORCE:
+                measured[k] = float(getattr(msg.wrench.force, feed_axis))
+            elif topic == topics.FEED_OVERRIDE:
+                rec.override[k] = msg.position[0]
+                rec.slope[k] = msg.velocity[0] if len(msg.velocity) else 0.0
+            else:
+                values = dict(zip(STATE_FIELDS, msg.position, strict=False))
+                for name in ('force', 'reference', 'feed_command', 'beta', 'depth'):
+                    getattr(rec, name)[k] = values.get(name, math.nan)
+    trace.sort(key=lambda p: p[0])  # stable: a repeated time keeps its left value first
+    rec.measured = measured
+    rec.trace_ns = np.array([p[0] for p in trace], dtype=np.int64)
+    rec.trace_force = np.array([p[1] for p in trace])
+    missing = {t: n - len(ks) for t, ks in seen.items()}
+    return rec, {t: m for t, m in missing.items() if m}

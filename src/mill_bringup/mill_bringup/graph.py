@@ -1,0 +1,203 @@
+"""The node processes of a scenario: launch, supervise, stop; and the progress display.
+
+Each node runs as `ros2 run` would start it (`python -m MODULE --ros-args -r __node:=NAME
+--params-file SCENARIO --params-file OVERRIDES`), in its own session, with its output in
+RUN_DIR/logs/NAME.log. A node dies with the process that started it, whatever ends that
+process (Linux PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.metadata
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError
+
+PR_SET_PDEATHSIG = 1
+
+
+class GraphError(RuntimeError):
+    """A node of the graph ended or never appeared; str() says which and why."""
+
+
+def module_of(package: str, executable: str) -> str:
+    """The Python module behind a package's console script (what `ros2 run` would start)."""
+    for ep in importlib.metadata.entry_points(group='console_scripts'):
+        if ep.name == executable and ep.value.startswith(package + '.'):
+            return ep.value.split(':')[0]
+    raise ScenarioError(f'{package} has no executable {executable!r}')
+
+
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time of a live process [s] (/proc/PID/stat), 0 if unreadable."""
+    try:
+        fields = Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+    except (OSError, IndexError, ValueError):
+        return 0.0
+
+
+def vm_hwm_mb(pid: int) -> float:
+    """Peak resident memory of a live process [MB] (VmHWM), NaN if unreadable."""
+    try:
+        for line in Path(f'/proc/{pid}/status').read_text().splitlines():
+            if line.startswith('VmHWM:'):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return float('nan')
+
+
+def _die_with_parent() -> None:
+    """In the child before exec: SIGTERM when the parent dies (Linux; elsewhere nothing)."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    except (OSError, AttributeError):
+        pass
+
+
+class Graph:
+    """The scenario's node processes."""
+
+    def __init__(self, scen: Scenario, run_dir: Path, env: dict[str, str]) -> None:
+        self.scen = scen
+        self.procs: dict[str, subprocess.Popen[bytes]] = {}
+        self.logs: dict[str, Path] = {}
+        self._log_dir = run_dir / 'logs'
+        self._log_dir.mkdir(parents=True, exist_ok=True)
+        self._overrides = run_dir / 'overrides.yaml'
+        self._env = env
+
+    def launch(self, nodes: Iterable[NodeLaunch]) -> None:
+        """Start these nodes of the scenario, each in its own process."""
+        # Written at each launch: the job may have adjusted the scenario since the last one.
+        self._overrides.write_text(
+            yaml.safe_dump({n: {'ros__parameters': p} for n, p in self.scen.overrides.items()})
+        )
+        for node in nodes:
+            cmd = [
+                sys.executable,
+                '-m',
+                module_of(node.package, node.executable),
+                '--ros-args',
+                '-r',
+                f'__node:={node.name}',
+                '--params-file',
+                str(self.scen.path),
+                '--params-file',
+                str(self._overrides),
+            ]
+            self.logs[node.name] = self._log_dir / f'{node.name}.log'
+            with open(self.logs[node.name], 'w') as log:
+                self.procs[node.name] = subprocess.Popen(
+                    cmd,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    env=self._env,
+                    start_new_session=True,
+                    preexec_fn=_die_with_parent,
+                )
+
+    def exited(self) -> dict[str, int]:
+        return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
+
+    def check(self, when: str) -> None:
+        """GraphError naming the first node that has exited, with the end of its log."""
+        exited = self.exited()
+        if exited:
+            name, code = next(iter(exited.items()))
+            raise GraphError(f'node {name} exited with code {code} {when}:\n' + self.log_tail(name))
+
+    def cpu(self) -> float:
+        """CPU seconds used so far by the node processes and this process."""
+        return time.process_time() + sum(cpu_seconds(p.pid) for p in self.procs.values())
+
+    def peak_rss(self) -> dict[str, float]:
+        return {n: vm_hwm_mb(p.pid) for n, p in self.procs.items() if p.poll() is None}
+
+    def log_tail(self, name: str, lines: int = 6) -> str:
+        try:
+            text = self.logs[name].read_text().strip().splitlines()
+        except OSError:
+            return ''
+        return '\n'.join('    ' + t for t in text[-lines:])
+
+    def stop(self, grace: float = 5.0) -> None:
+        """SIGINT to every node; SIGKILL to the process group of any still alive after grace."""
+        for p in self.procs.values():
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+        deadline = time.monotonic() + grace
+        for p in self.procs.values():
+            try:
+                p.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.wait()
+
+
+class Progress:
+    """One live bar with the ETA on a terminal (tqdm), a plain line every 5 s otherwise."""
+
+    def __init__(self, total: float, unit: str = 's', quiet: bool = False) -> None:
+        self.total = total
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self._bar: Any = None
+        self._next = 0.0
+        self._value = 0.0
+        self._started = time.monotonic()
+        self._unit = unit
+
+    def note(self, text: str) -> None:
+        """A message between progress updates."""
+        if self.quiet:
+            return
+        if self._bar is not None:
+            self._bar.write(text, file=sys.stderr)
+        else:
+            print(text, file=sys.stderr, flush=True)
+
+    def update(self, value: float, extra: str = '') -> None:
+        if self.quiet or not value > self._value:
+            return
+        if self.tty:
+            if self._bar is None:
+                from tqdm import tqdm
+
+                self._bar = tqdm(
+                    total=round(self.total, 3),
+                    unit=self._unit,
+                    file=sys.stderr,
+                    dynamic_ncols=True,
+                    bar_format='{l_bar}{bar}| {n:.2f}/{total:.2f} {unit} '
+                    '[{elapsed}<{remaining}{postfix}]',
+                )
+            self._bar.update(round(value - self._value, 3))
+            if extra:
+                self._bar.set_postfix_str(extra, refresh=False)
+            self._value = value
+            return
+        self._value = value
+        now = time.monotonic()
+        if now >= self._next:
+            self._next = now + 5.0
+            share = 100.0 * value / self.total if self.total > 0 else 100.0
+            line = f'{value:.2f} / {self.total:.2f} {self._unit} ({share:.0f} %)'
+            print(line + (f', {extra}' if extra else ''), file=sys.stderr, flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None

@@ -1,0 +1,134 @@
+"""What the job pipeline asks of a kind of job. ROS-free.
+
+A scenario runs one kind of job: the three-axis motion job (`axis`: plant, trajectory,
+observers, controllers) or the cutting-force job of Rubio 2013 (`force`: force process,
+force controller, trajectory). The runner, the offline simulator, `--record` and `report`
+are written once against this interface; everything that differs between the kinds sits
+in one class per kind (mill_bringup.jobs.axis, mill_bringup.jobs.force):
+
+- which node clocks the job (it starts last, once the others are heard), which topics
+  must have a publisher before it starts, and which topics the monitor keeps;
+- when the job is complete and when its last messages have arrived;
+- the record: from the messages of a run (or a bag), or from the offline simulation,
+  sample by sample (`Simulation.step`), by the one loop in `simulate`;
+- the summary of a record, and the differences of two records of the same job.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, ClassVar, Generic, Protocol, TypeVar
+
+from mill_bringup.scenario import NodeLaunch, Scenario
+from mill_bringup.simulation import CoreTimer, Simulation, run_samples
+
+R = TypeVar('R')
+
+
+class MessageSource(Protocol):
+    """What a job reads of a running graph (the runner's monitor)."""
+
+    def latest_stamp_ns(self, topic: str) -> int:
+        """Stamp of the newest message on topic [ns], -1 if none."""
+        ...
+
+    def messages(self, topic: str) -> Sequence[bytes]:
+        """Serialized messages heard on topic, in arrival order."""
+        ...
+
+
+class Job(ABC, Generic[R]):
+    """One scenario configuration, checked: its samples, its graph, its record."""
+
+    KIND: ClassVar[str]
+    CLOCK: ClassVar[tuple[str, str]]  # (package, executable) of the node that clocks the job
+    # How long to wait, after the job is complete, for its last messages [s].
+    SETTLE_TIMEOUT: ClassVar[float] = 5.0
+
+    def __init__(self, scen: Scenario) -> None:
+        self.scenario = scen
+
+    @classmethod
+    def runs(cls, scen: Scenario) -> bool:
+        """Whether the scenario is a job of this kind (its clock node is in the launch list)."""
+        return any((n.package, n.executable) == cls.CLOCK for n in scen.nodes)
+
+    # -- what it is ------------------------------------------------------------------------
+    @property
+    @abstractmethod
+    def samples(self) -> int:
+        """Samples k = 0 .. samples − 1 make up the job."""
+
+    @property
+    @abstractmethod
+    def sim_time(self) -> float:
+        """Machine time from the first to the last sample [s]."""
+
+    @property
+    def clock_nodes(self) -> list[NodeLaunch]:
+        return [n for n in self.scenario.nodes if (n.package, n.executable) == self.CLOCK]
+
+    # -- the distributed run ---------------------------------------------------------------
+    @abstractmethod
+    def prepare_graph(self, monitored: bool) -> None:
+        """Adjust the scenario before launch (the clock node waits for the monitor too)."""
+
+    @abstractmethod
+    def upstream_topics(self) -> list[str]:
+        """Topics that must have a publisher before the clock node starts."""
+
+    @abstractmethod
+    def monitor_topics(self) -> dict[str, str]:
+        """Topic -> message type the monitor keeps (serialized) to build the record."""
+
+    def recorded_topics(self) -> dict[str, str]:
+        """Topics of the contract a bag records besides the monitored ones."""
+        return {}
+
+    def sim_time_stamps(self) -> bool:
+        """Whether the graph runs on sim time (the bag's log time is then the stamp)."""
+        return True
+
+    @abstractmethod
+    def progress(self, source: MessageSource) -> float:
+        """Machine time the run has reached [s] (−inf before the first sample)."""
+
+    @abstractmethod
+    def complete(self, source: MessageSource) -> bool:
+        """Every sample of the job has been produced."""
+
+    def settled(self, source: MessageSource) -> bool:
+        """The last messages that follow a complete job have arrived."""
+        return False
+
+    @abstractmethod
+    def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[R, dict[str, int]]:
+        """The record from a run's serialized messages, and samples missing per topic."""
+
+    # -- offline ---------------------------------------------------------------------------
+    @abstractmethod
+    def simulation(self, times: CoreTimer | None = None) -> Simulation[R]:
+        """The job in one process, the same calls in the same order as the graph."""
+
+    # -- results ---------------------------------------------------------------------------
+    @abstractmethod
+    def summary(self, rec: R, skip: float) -> str:
+        """Text summary of a record (metrics after `skip` seconds)."""
+
+    @abstractmethod
+    def summary_json(self, rec: R, skip: float) -> dict[str, Any]:
+        """The same as JSON-ready values."""
+
+    @abstractmethod
+    def differences(self, rec: R, other: R) -> dict[str, float]:
+        """Largest difference per signal between two records of this job (inf: a gap)."""
+
+
+def simulate(
+    job: Job[R],
+    progress: Callable[[int, int], None] | None = None,
+    times: CoreTimer | None = None,
+) -> R:
+    """The job offline: the record the distributed run of the same scenario gives."""
+    return run_samples(job.simulation(times), job.samples, progress)

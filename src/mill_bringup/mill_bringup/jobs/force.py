@@ -1,0 +1,196 @@
+"""The cutting-force job of Rubio 2013: force process, force controller, trajectory.
+
+Lockstep per spindle revolution k (t_k the nearest ns to kT): the force process publishes
+the force sample F_p(t_k); the force controller answers with the override o_k and its
+β-hold slope; the trajectory (`feed_override.lockstep`) answers with the reference of
+sample k, whose velocity and acceleration are the feed command and its ramp; the force
+process integrates the revolution and publishes the force over it
+(/mill/cutting_force/trace). The job is ⌈duration/T⌉ samples; J_c of eq. (14) comes from
+the recorded force stream (mill_bringup.force_record).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from mill_common.parameters import algorithm_values
+from mill_common.timebase import sample_stamp_ns
+from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
+from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
+from mill_plant.force_process import ForceProcessModel
+
+from mill_bringup.force_loop import ForceLoopSimulation
+from mill_bringup.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
+from mill_bringup.force_record import record_from_messages as force_record_from_messages
+from mill_bringup.jobs.base import Job, MessageSource
+from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.simulation import CoreTimer
+from mill_common import topics
+
+CONTROLLER = ('mill_controllers', 'force_controller_node')
+COMPARED = ('force', 'override', 'slope', 'beta', 'feed_command')
+
+
+def _only(scen: Scenario, key: tuple[str, str]) -> str:
+    names = [n.name for n in scen.nodes if (n.package, n.executable) == key]
+    if len(names) != 1:
+        raise ScenarioError(
+            f'a force job needs exactly one {key[0]} {key[1]} node, scenario {scen.name} has '
+            f'{len(names)}'
+        )
+    return names[0]
+
+
+class ForceJob(Job[ForceRecord]):
+    KIND = 'force'
+    CLOCK = ('mill_plant', 'force_process_node')
+
+    def __init__(self, scen: Scenario) -> None:
+        super().__init__(scen)
+        for node in scen.nodes:
+            scen.parameters(node.name)
+        self.plant = _only(scen, self.CLOCK)
+        self.controller = _only(scen, CONTROLLER)
+        trajectories = scen.nodes_of('mill_trajectory')
+        if len(trajectories) != 1:
+            raise ScenarioError('a force job needs exactly one trajectory node')
+        self.trajectory = trajectories[0].name
+        pv = scen.parameters(self.plant)
+        cv = self.controller_values = scen.parameters(self.controller)
+        tv = scen.parameters(self.trajectory)
+        model_p = algorithm_values(ForceProcessModel, pv)
+        model_c = algorithm_values(ForceProcessModel, cv)
+        if model_p != model_c:
+            diff = sorted(k for k in model_p if model_p[k] != model_c.get(k))
+            raise ScenarioError(
+                f'plant and force controller disagree on force_process.{", ".join(diff)}'
+            )
+        self.model = ForceProcessModel.from_parameters(model_p)
+        if not (tv['feed_override.enabled'] and tv['feed_override.lockstep']):
+            raise ScenarioError(
+                'the trajectory of a force job needs feed_override.enabled and .lockstep'
+            )
+        if abs(tv['sample_period'] - self.period) > 1e-12 * self.period:
+            raise ScenarioError(
+                f'trajectory sample_period {tv["sample_period"]!r} s is not one spindle '
+                f'revolution, 60/S_s = {self.period!r} s'
+            )
+        lo, hi = cv['override.min'] * cv['nominal_feed'], cv['override.max'] * cv['nominal_feed']
+        if list(pv['feed_limits']) != [lo, hi]:
+            raise ScenarioError(
+                f"plant feed_limits {pv['feed_limits']} differ from the controller's override "
+                f'range times nominal_feed, [{lo:g}, {hi:g}] mm/s'
+            )
+        if not tv['duration'] > 0:
+            raise ScenarioError('a force job needs the trajectory duration > 0 [s]')
+        self._samples = max(1, math.ceil(tv['duration'] / self.period - 1e-9))
+        self.trace_intervals = pv['trace_intervals']
+        self.feed_axis = pv['feed_axis']
+
+    @property
+    def period(self) -> float:
+        return self.model.sample_period
+
+    @property
+    def samples(self) -> int:
+        return self._samples
+
+    @property
+    def sim_time(self) -> float:
+        return self._samples * self.period  # the last revolution ends the job
+
+    def design(self) -> ForceControlDesigner:
+        """The controller's design; its reference model (ξ, ω_n) is what J_c compares with."""
+        kind = self.controller_values['force_controller']
+        values = algorithm_values(FORCE_CONTROLLERS[kind], self.controller_values)
+        return ForceControlDesigner(
+            self.model, **{p.name: values[p.name] for p in DESIGN_PARAMETERS}
+        )
+
+    # -- the distributed run ---------------------------------------------------------------
+    def prepare_graph(self, monitored: bool) -> None:
+        # The force samples need two listeners: the controller and the monitor.
+        if monitored:
+            self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 2)
+
+    def upstream_topics(self) -> list[str]:
+        return [topics.FEED_OVERRIDE, topics.REFERENCE]
+
+    def monitor_topics(self) -> dict[str, str]:
+        return dict(FORCE_TOPICS)
+
+    def progress(self, source: MessageSource) -> float:
+        ns = source.latest_stamp_ns(topics.CUTTING_FORCE)
+        return ns / 1e9 if ns >= 0 else -math.inf
+
+    def complete(self, source: MessageSource) -> bool:
+        # The force after the n-th revolution: every revolution of the job is integrated.
+        return source.latest_stamp_ns(topics.CUTTING_FORCE) >= sample_stamp_ns(
+            self._samples, self.period
+        )
+
+    def settled(self, source: MessageSource) -> bool:
+        last = sample_stamp_ns(self._samples - 1, self.period)
+        follow = (topics.CUTTING_FORCE_TRACE, topics.FEED_OVERRIDE, topics.FORCE_CONTROL_STATE)
+        return all(source.latest_stamp_ns(t) >= last for t in follow)
+
+    def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[ForceRecord, dict[str, int]]:
+        rec, missing = force_record_from_messages(raw, self._samples, self.period, self.feed_axis)
+        design = self.design()
+        rec.j_c = continuous_cost(
+            rec.trace_ns,
+            rec.trace_force,
+            self.controller_values['reference_force'],
+            design.damping,
+            design.omega_n,
+        )
+        return rec, missing
+
+    # -- offline ---------------------------------------------------------------------------
+    def simulation(self, times: CoreTimer | None = None) -> ForceLoopSimulation:
+        cv = self.controller_values
+        kind = cv['force_controller']
+        nominal = cv['nominal_feed']
+        law = build_law(
+            kind,
+            self.model,
+            algorithm_values(FORCE_CONTROLLERS[kind], cv),
+            cv['override.min'] * nominal,
+            cv['override.max'] * nominal,
+        )
+        loop = {
+            'reference_force': cv['reference_force'],
+            'job_duration': self._samples * self.period,
+            'nominal_feed': nominal,
+            'override_min': cv['override.min'],
+            'override_max': cv['override.max'],
+            'intersample_intervals': self.trace_intervals,
+        }
+        return ForceLoopSimulation(law, self.model, loop, keep_trace=True)
+
+    # -- results ---------------------------------------------------------------------------
+    def summary(self, rec: ForceRecord, skip: float) -> str:
+        return (
+            f'J_c (Rubio 2013 eq. 14) = {rec.j_c:.6g} N²·s; override: mean '
+            f'{np.nanmean(rec.override):.4f}, range [{np.nanmin(rec.override):.4f}, '
+            f'{np.nanmax(rec.override):.4f}]; active β: '
+            + ', '.join(f'{b:g}' for b in dict.fromkeys(rec.beta.tolist()))
+        )
+
+    def summary_json(self, rec: ForceRecord, skip: float) -> dict[str, Any]:
+        return {
+            'j_c': rec.j_c,
+            'mean_override': float(np.nanmean(rec.override)),
+            'beta_switches': int(np.count_nonzero(np.diff(rec.beta))),
+        }
+
+    def differences(self, rec: ForceRecord, other: ForceRecord) -> dict[str, float]:
+        out = {}
+        for key in COMPARED:
+            a, b = getattr(rec, key), getattr(other, key)
+            out[key] = float(np.max(np.abs(a - b))) if a.shape == b.shape else math.inf
+        out['j_c_relative'] = abs(rec.j_c - other.j_c) / abs(other.j_c)
+        return out
