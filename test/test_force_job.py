@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
-from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_common.ros import DATA_QOS, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs

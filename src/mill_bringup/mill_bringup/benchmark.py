@@ -38,7 +38,8 @@ from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
 from mill_bringup import scenario as scenario_mod
-from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
 from mill_bringup.runner import RunError, run
 

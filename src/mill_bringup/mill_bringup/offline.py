@@ -19,7 +19,8 @@ from typing import Any
 
 from mill_bringup import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
-from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.scenario import ScenarioError
 
 

@@ -35,7 +35,8 @@ from mill_bringup import papers
 from mill_bringup.bag import BagError
 from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.graph import Graph, GraphError, Progress
-from mill_bringup.jobs import Job, job_for, simulate
+from mill_bringup.jobs.base import Job, simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.scenario import ScenarioError
 
 

@@ -27,7 +27,8 @@ from mill_bringup.bag import (
     recover,
     typestore,
 )
-from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.metrics import SIGNALS, summarize
 from mill_bringup.report import amplitude_at, amplitude_spectrum, max_window_rms
 from mill_common.signals import AXES

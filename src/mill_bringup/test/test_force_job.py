@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from mill_bringup.force_record import continuous_cost, smooth_pieces
-from mill_bringup.jobs import ForceJob, job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.force import ForceJob
+from mill_bringup.jobs.registry import job_for
 
 from mill_bringup import scenario
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.jobs import job_for, simulate
 from mill_bringup.jobs.axis import build_axis_cores
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
 
 from mill_bringup import scenario

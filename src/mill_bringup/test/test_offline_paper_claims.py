@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.jobs import job_for, simulate
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.metrics import summarize
 
 from mill_bringup import scenario
