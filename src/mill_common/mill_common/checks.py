@@ -1,0 +1,147 @@
+"""Checks every incoming message passes before a node uses it. ROS-free.
+
+A node never lets a bad message reach its core: it takes the values it needs out of a
+message with `joint_values` (the joint must be named, the arrays long enough, the values
+finite), checks the stamp with a `StampCheck` (on the sample grid in lockstep, newer than
+the last accepted, not ahead of what the node expects) and the sender with `owner_check`.
+Each failure is a `Rejected` with a one-line reason; the node drops the message, counts it
+(`DropCounter`) and reports it, rate-limited, on /diagnostics — it never crashes and never
+waits for a message that can never come.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class Rejected:
+    """Why a message was dropped, in one line."""
+
+    reason: str
+
+
+def joint_values(
+    names: Sequence[str],
+    arrays: Mapping[str, Sequence[float]],
+    joint: str,
+    fields: Sequence[str],
+) -> tuple[float, ...] | Rejected:
+    """The values of `joint` in the named arrays of a JointState-like message.
+
+    The joint must appear in `names`, each array in `fields` must have an entry for it,
+    and every entry must be finite.
+    """
+    names = list(names)
+    if joint not in names:
+        return Rejected(f'no joint {joint!r} in name {names}')
+    i = names.index(joint)
+    out = []
+    for name in fields:
+        values = arrays[name]
+        if len(values) <= i:
+            return Rejected(f'{name} has {len(values)} entries, joint {joint!r} needs {i + 1}')
+        v = float(values[i])
+        if not math.isfinite(v):
+            return Rejected(f'{name} of joint {joint!r} is {v}')
+        out.append(v)
+    return tuple(out)
+
+
+def point_values(
+    joint_names: Sequence[str],
+    point: Mapping[str, Sequence[float]],
+    joints: Sequence[str],
+    required: Sequence[str],
+    optional: Sequence[str] = (),
+) -> dict[str, tuple[float, ...]] | Rejected:
+    """Values of `joints` in one trajectory point (arrays in the order of `joint_names`).
+
+    Every joint must be named; `required` arrays must hold all of them, finite;
+    `optional` arrays may be empty (then zeros) but, if given, must be complete and finite.
+    """
+    names = list(joint_names)
+    missing = [j for j in joints if j not in names]
+    if missing:
+        return Rejected(f'no joint {missing[0]!r} in joint_names {names}')
+    index = [names.index(j) for j in joints]
+    out: dict[str, tuple[float, ...]] = {}
+    for name in (*required, *optional):
+        values = point[name]
+        if not len(values) and name in optional:
+            out[name] = tuple(0.0 for _ in joints)
+            continue
+        if len(values) < len(names):
+            return Rejected(f'{name} has {len(values)} entries for {len(names)} joint names')
+        picked = tuple(float(values[i]) for i in index)
+        bad = [v for v in picked if not math.isfinite(v)]
+        if bad:
+            return Rejected(f'{name} holds {bad[0]}')
+        out[name] = picked
+    return out
+
+
+@dataclass
+class StampCheck:
+    """Sane stamps on one input.
+
+    period_ns: the sample grid in lockstep (stamps must be whole multiples), None in real
+    time. A stamp older than the newest accepted one is in the past; the same stamp again
+    is a repeat (the caller decides whether a repeat of identical content is harmless).
+    """
+
+    period_ns: int | None
+    newest: int | None = None
+
+    def check(self, ns: int) -> Rejected | None:
+        if ns < 0:
+            return Rejected(f'negative stamp {ns} ns')
+        if self.period_ns is not None and ns % self.period_ns:
+            return Rejected(
+                f'stamp {ns / 1e9:.9f} s is off the sample grid of {self.period_ns / 1e6:g} ms'
+            )
+        if self.newest is not None and ns < self.newest:
+            return Rejected(
+                f'stamp {ns / 1e9:.6f} s is in the past (newest {self.newest / 1e9:.6f} s)'
+            )
+        return None
+
+    def accept(self, ns: int) -> None:
+        if self.newest is None or ns > self.newest:
+            self.newest = ns
+
+    def is_repeat(self, ns: int) -> bool:
+        return self.newest is not None and ns == self.newest
+
+
+def owner_check(frame_id: str, owner: str) -> Rejected | None:
+    """The sender named in header.frame_id must be the input's owner ('' owner: anyone)."""
+    if not owner or frame_id == owner:
+        return None
+    return Rejected(f'sent by {frame_id or "an unnamed publisher"!r}, not by its owner {owner!r}')
+
+
+@dataclass
+class DropCounter:
+    """Rejected messages per input, with the last reason, and when to report them again."""
+
+    interval: float = 1.0  # [s] between reports of one input
+    counts: dict[str, int] = field(default_factory=dict)
+    last_reason: dict[str, str] = field(default_factory=dict)
+    _reported: dict[str, float] = field(default_factory=dict)
+
+    def drop(self, topic: str, rejected: Rejected, now: float) -> bool:
+        """Count one dropped message; True when it should be reported now (rate limit)."""
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+        self.last_reason[topic] = rejected.reason
+        last = self._reported.get(topic)
+        if last is None or now - last >= self.interval:
+            self._reported[topic] = now
+            return True
+        return False
+
+    @property
+    def total(self) -> int:
+        return sum(self.counts.values())
