@@ -23,8 +23,11 @@ import pytest
 import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
-from mill_bringup.bag import cdr_stamp_ns, joint_state_cdr, open_bag, read_run, recover
+from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
+from mill_bag.reader import open_bag
+from mill_bag.recover import recover
 from mill_bringup.metrics import summarize
+from mill_bringup.run_record import read_run
 from mill_common.ros import DATA_QOS, joint_state, to_stamp
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node

@@ -490,7 +490,9 @@ def state_windows(
 ) -> list[tuple[float, float, int, float, float]]:
     """(start, end, samples, mean force [N], mean override) of /mill/force_control/state
     per time window [edges[i], edges[i+1]) of a recorded run."""
-    from mill_bringup.bag import joint_state_cdr, open_bag
+    from mill_bag.cdr import joint_state_cdr
+    from mill_bag.reader import open_bag
+
     from mill_common import topics
 
     rows = []

@@ -2,7 +2,7 @@
 
 Subscriptions take the serialized bytes (no Python message per sample while
 the run goes on); messages are decoded once at the end by the same function
-that reads bags (`mill_bringup.bag.record_from_raw`), so the runner's summary and
+that reads bags (`mill_bringup.run_record.record_from_raw`), so the runner's summary and
 the report of the run's bag are computed by the same code.
 
 With `record=RecordOptions(...)` a TopicRecorder writes every topic of the
@@ -18,6 +18,8 @@ from pathlib import Path
 
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY, JOINT_STATE, JOINT_TRAJECTORY, WRENCH_STAMPED
 from mill_common.ros import DATA_QOS
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -25,16 +27,8 @@ from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
-from mill_bringup.bag import (
-    CLOCK,
-    DIAGNOSTIC_ARRAY,
-    JOINT_STATE,
-    JOINT_TRAJECTORY,
-    WRENCH_STAMPED,
-    cdr_stamp_ns,
-    record_from_raw,
-)
 from mill_bringup.metrics import RunRecord
+from mill_bringup.run_record import record_from_raw
 from mill_common import topics
 
 TYPE_NAMES = {

@@ -26,7 +26,7 @@ written every `flush_period` (<= 1 s) of wall time: each write closes an MCAP
 chunk, hands it to the OS and refreshes metadata.yaml. SIGINT or SIGTERM close
 the bag (summary, footer, final metadata.yaml); a hard kill loses at most the
 messages of the last `flush_period` and leaves a bag that `report` reads as it
-is and `python -m mill_bringup.bag recover` makes complete.
+is and `python -m mill_bag recover` makes complete.
 """
 
 from __future__ import annotations
@@ -41,21 +41,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.errors import BagError
+from mill_bag.types import message_definition, sim_stamped
+from mill_bag.writer import COMPRESSIONS, BagWriter, TopicInfo
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import ParamSpec, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-
-from mill_bringup.bag import (
-    COMPRESSIONS,
-    BagError,
-    BagWriter,
-    TopicInfo,
-    cdr_stamp_ns,
-    message_definition,
-    sim_stamped,
-)
 
 DEPTH = 2000  # as the data topics' own depth: a busy recorder must not drop samples
 

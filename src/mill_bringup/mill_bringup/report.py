@@ -19,10 +19,10 @@ Per run and axis, over t >= --skip (the start transient excluded):
 
 max |e|, RMS e and the RMS of xi_hat - xi and of xi come from
 `mill_bringup.metrics.summarize` on a RunRecord built by
-`mill_bringup.bag.build_record`: the code the runner uses for the summary it
+`mill_bringup.run_record.build_record`: the code the runner uses for the summary it
 prints, so both agree on the same run.
 
-The bag is read by topic names and types only (see mill_bringup.bag), so a
+The bag is read by topic names and types only (see mill_bringup.run_record), so a
 bag from `ros2 bag record` with these topics works too.
 """
 
@@ -40,9 +40,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from mill_bag.errors import BagError
 
-from mill_bringup.bag import BagError, BagRun, read_run
 from mill_bringup.metrics import AxisMetrics, format_summary, summarize
+from mill_bringup.run_record import BagRun, read_run
 
 ZOOM = 0.1  # length of the zoomed time windows of the plots [s]
 

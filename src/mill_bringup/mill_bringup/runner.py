@@ -30,13 +30,13 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from mill_bag.errors import BagError
 from mill_common.env import ros_environment
 from mill_common.timebase import period_ns, seconds
 from mill_trajectory.config import build_job
 
 from mill_bringup import force_job, papers
 from mill_bringup import scenario as scenario_mod
-from mill_bringup.bag import BagError
 from mill_bringup.metrics import AxisMetrics, RunRecord, format_summary, summarize
 from mill_bringup.offline import (
     apply_cli_overrides,
