@@ -313,7 +313,7 @@ class FakePlant:
 
 def start_recorder(start_node, bag: Path):
     return start_node(
-        'mill_bringup.recorder',
+        'mill_bag.recorder',
         'recorder',
         '-p',
         f'output:={bag}',
@@ -432,7 +432,7 @@ def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
 @pytest.mark.system
 def test_recorder_and_report_help(ros_env):
     for module, expected in (
-        ('mill_bringup.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
+        ('mill_bag.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
         ('mill_bringup.report', ['--out', '--skip', '--freqs', '--window']),
     ):
         done = subprocess.run(

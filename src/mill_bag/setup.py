@@ -17,6 +17,8 @@ setup(
     description='rosbag2 bags in MCAP storage: write, read (also truncated files), recover, and a generic topic recorder node.',
     license='Apache-2.0',
     entry_points={
-        'console_scripts': [],
+        'console_scripts': [
+            'recorder = mill_bag.recorder:main',
+        ],
     },
 )

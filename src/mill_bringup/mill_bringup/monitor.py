@@ -19,6 +19,7 @@ from pathlib import Path
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.recorder import TopicRecorder
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY, JOINT_STATE, JOINT_TRAJECTORY, WRENCH_STAMPED
 from mill_common.ros import DATA_QOS
 from rclpy.node import Node
@@ -59,8 +60,6 @@ class Monitor(Node):
         self._types: dict[str, str] = {}
         self.recorder = None
         if record is not None:
-            from mill_bringup.recorder import TopicRecorder
-
             self.recorder = TopicRecorder(
                 self, record.path, sim_time=record.sim_time, compression=record.compression
             )

@@ -11,7 +11,7 @@ the graph when the trajectory reports the job done, and prints per-axis
 tracking and disturbance-estimation errors, wall time and real-time factor.
 Logs and summary.json go to the run directory (--output). With --record the
 monitor also writes every topic of the graph to a rosbag2 bag in MCAP storage
-(see mill_bringup.recorder); `report BAG` analyses it.
+(see mill_bag.recorder); `report BAG` analyses it.
 """
 
 from __future__ import annotations
