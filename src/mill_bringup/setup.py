@@ -25,7 +25,7 @@ setup(
             'run_scenario = mill_bringup.runner:main',
             'offline_sim = mill_bringup.offline:main',
             'benchmark = mill_bringup.benchmark:main',
-            'report = mill_bringup.report:main',
+            'report = mill_bringup.report.cli:main',
         ],
     },
 )

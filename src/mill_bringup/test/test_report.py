@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 from mill_bag.types import STRING, typestore
 from mill_bag.writer import BagWriter
-from mill_bringup.report import amplitude_at, amplitude_spectrum, analyse, feed_text, max_window_rms
+from mill_bringup.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
+from mill_bringup.report.text import feed_text
 from mill_bringup.run_record import read_run
 
 TS = typestore()
