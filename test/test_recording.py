@@ -23,8 +23,11 @@ import pytest
 import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
-from mill_bringup.bag import cdr_stamp_ns, joint_state_cdr, open_bag, read_run, recover
+from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
+from mill_bag.reader import open_bag
+from mill_bag.recover import recover
 from mill_bringup.metrics import summarize
+from mill_bringup.run_record import read_run
 from mill_common.ros import DATA_QOS, joint_state, to_stamp
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -310,7 +313,7 @@ class FakePlant:
 
 def start_recorder(start_node, bag: Path):
     return start_node(
-        'mill_bringup.recorder',
+        'mill_bag.recorder',
         'recorder',
         '-p',
         f'output:={bag}',
@@ -429,7 +432,7 @@ def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
 @pytest.mark.system
 def test_recorder_and_report_help(ros_env):
     for module, expected in (
-        ('mill_bringup.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
+        ('mill_bag.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
         ('mill_bringup.report', ['--out', '--skip', '--freqs', '--window']),
     ):
         done = subprocess.run(

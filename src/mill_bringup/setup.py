@@ -18,15 +18,14 @@ setup(
     zip_safe=True,
     maintainer='mill developers',
     maintainer_email='mill@example.com',
-    description='Scenario runner, offline simulator, metrics, recorder, bag reports, benchmark and launch files for mill.',
+    description='Scenario runner, offline simulator, metrics, bag reports, benchmark and launch files for mill.',
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
             'run_scenario = mill_bringup.runner:main',
             'offline_sim = mill_bringup.offline:main',
             'benchmark = mill_bringup.benchmark:main',
-            'recorder = mill_bringup.recorder:main',
-            'report = mill_bringup.report:main',
+            'report = mill_bringup.report.cli:main',
         ],
     },
 )

@@ -18,10 +18,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from mill_bag.types import decode
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.model_reference import ContinuousReference, simpson
 
-from mill_bringup.bag import decode
 from mill_common import topics
 
 # /mill/force_control/state: force used, reference, feed command, override, active β, depth

@@ -16,8 +16,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from mill_bag.cdr import joint_state_cdr
+from mill_bag.reader import open_bag
 
-from mill_bringup.bag import joint_state_cdr, open_bag
 from mill_common import topics
 
 

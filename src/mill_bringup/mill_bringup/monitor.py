@@ -17,12 +17,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.recorder import TopicRecorder, message_class
+from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
 from mill_common.ros import DATA_QOS
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-from mill_bringup.bag import CLOCK, DIAGNOSTIC_ARRAY, cdr_stamp_ns
-from mill_bringup.recorder import TopicRecorder, message_class
 from mill_common import topics
 
 

@@ -29,10 +29,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mill_bag.errors import BagError
 from mill_common.env import ros_environment
 
 from mill_bringup import papers
-from mill_bringup.bag import BagError
 from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.graph import Graph, GraphError, Progress
 from mill_bringup.jobs.base import Job, simulate

@@ -65,7 +65,8 @@ def test_plant_and_controller_must_share_the_process_model() -> None:
 
 
 def test_state_windows_average_a_recorded_run(tmp_path) -> None:
-    from mill_bringup.bag import BagWriter, typestore
+    from mill_bag.types import typestore
+    from mill_bag.writer import BagWriter
     from mill_bringup.force_windows import main, state_windows
 
     from mill_common import topics

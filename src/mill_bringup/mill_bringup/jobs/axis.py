@@ -22,9 +22,9 @@ from mill_plant.config import build_plant
 from mill_plant.sensor import quantize
 from mill_trajectory.config import build_job
 
-from mill_bringup.bag import record_from_raw
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.metrics import RunRecord, format_summary, summarize
+from mill_bringup.run_record import record_from_raw
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics

@@ -3,18 +3,18 @@
     recorder --ros-args -p output:=runs/bag1                       # every topic
     recorder --ros-args -p output:=bag1 -p "topics:=['/mill/x/state', '/clock']"
     recorder --ros-args -p output:=bag1 -p regex:='^/mill/' -p use_sim_time:=true
-    ros2 run mill_bringup recorder --ros-args -p output:=bag1      # with a full ROS install
+    ros2 run mill_bag recorder --ros-args -p output:=bag1          # with a full ROS install
 
 `TopicRecorder` is the reusable part: it subscribes to topics of any node with
 serialized (raw) subscriptions, so a message is never decoded, and writes each
 message as it arrived (CDR) with its topic type and the publishers' offered QoS.
-The runner's monitor uses it to record a run in its own process
-(`run_scenario --record`), sharing the subscriptions it has anyway.
+A node that has raw subscriptions of its own feeds them in with `tap` instead of
+subscribing twice (mill's run monitor records a run that way, `run_scenario --record`).
 
 Timestamps. Each message gets two: the MCAP log time (the one rosbag2 readers
 use) and the publish time. When the graph runs on sim time (`use_sim_time`),
 the log time is the message's own stamp for messages whose first field is a
-std_msgs/Header (and Clock.clock for /clock), i.e. k T for the mill topics, and
+std_msgs/Header (and Clock.clock for /clock), i.e. k T on a graph stepped in lockstep, and
 the latest such stamp seen for other messages (/rosout, /parameter_events).
 Without sim time it is the wall-clock receive time, as `ros2 bag record`
 stores it. The publish time is always the wall-clock receive time (the
@@ -25,8 +25,12 @@ Durability. Messages are buffered in memory by the subscription callbacks and
 written every `flush_period` (<= 1 s) of wall time: each write closes an MCAP
 chunk, hands it to the OS and refreshes metadata.yaml. SIGINT or SIGTERM close
 the bag (summary, footer, final metadata.yaml); a hard kill loses at most the
-messages of the last `flush_period` and leaves a bag that `report` reads as it
-is and `python -m mill_bringup.bag recover` makes complete.
+messages of the last `flush_period` and leaves a bag that `mill_bag.reader` reads
+as it is and `python -m mill_bag recover` makes complete.
+
+Helpers used from mill_common, all generic (no topic, no run): node_main (run_node:
+--help from the parameter specs, one-line start-up errors, SIGINT/SIGTERM, spin;
+request_exit), parameters (ParamSpec and checks), ros_params (NodeParameters).
 """
 
 from __future__ import annotations
@@ -47,15 +51,10 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from mill_bringup.bag import (
-    COMPRESSIONS,
-    BagError,
-    BagWriter,
-    TopicInfo,
-    cdr_stamp_ns,
-    message_definition,
-    sim_stamped,
-)
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.errors import BagError
+from mill_bag.types import message_definition, sim_stamped
+from mill_bag.writer import COMPRESSIONS, BagWriter, TopicInfo
 
 DEPTH = 2000  # as the data topics' own depth: a busy recorder must not drop samples
 

@@ -1,0 +1,29 @@
+"""rosbag2 bags in MCAP storage, as `ros2 bag record -s mcap` writes them in Jazzy.
+
+    BAG/metadata.yaml        rosbag2_bagfile_information, version 9
+    BAG/BAG_0.mcap           profile "ros2"; schema encoding ros2msg, message encoding cdr;
+                             channel metadata offered_qos_profiles (YAML) and topic_type_hash
+
+The file format is left to maintained libraries: `mcap` writes the MCAP files and,
+when reading, parses their schema, channel and chunk records (decompression, CRC);
+`rosbags` provides the message definitions, type hashes and the CDR decoder, and
+reads sqlite3 bags. This package adds the rosbag2 layout around them. It knows
+nothing of mill (no mill topic names, no runs); what a bag of a mill run means is
+`mill_bringup.run_record`.
+
+Modules (each imports only those above it):
+
+    errors     BagError: str() says in one line why a bag cannot be written or read
+    cdr        cdr_stamp_ns (a message's leading stamp), joint_state_cdr (fast JointState)
+    types      message-type names, the typestore, definitions and RIHS01 hashes, decode()
+    writer     BagWriter, TopicInfo, metadata.yaml; flush() closes an MCAP chunk
+    reader     open_bag -> Bag; read() yields (topic, type, log_time, publish_time, data),
+               a file without footer (a killed recording) up to its last complete chunk
+    recover    recover(): rewrite such a file as a complete bag
+    recorder   TopicRecorder (raw subscriptions of any node -> BagWriter) and the
+               `recorder` node; the only module that needs rclpy
+
+    python -m mill_bag recover BAG     # complete the file a SIGKILL left
+
+Everything but `recorder` is ROS-free (no rclpy), so bags are read without a graph.
+"""

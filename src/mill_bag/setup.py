@@ -1,0 +1,24 @@
+from setuptools import find_packages, setup
+
+package_name = 'mill_bag'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='mill developers',
+    maintainer_email='mill@example.com',
+    description='rosbag2 bags in MCAP storage: write, read (also truncated files), recover, and a generic topic recorder node.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'recorder = mill_bag.recorder:main',
+        ],
+    },
+)

@@ -1,0 +1,334 @@
+"""What a bag of a mill run means: its messages -> RunRecord, and the run's job and plant status.
+
+The mill knowledge about bags lives here; the bag format itself is mill_bag (which
+knows no mill topic). `build_record` is the one place where messages become
+signals: the runner's monitor (live, `record_from_raw` on the serialized messages it
+kept) and `read_run` (a bag, for `report`) both call it, with the same `summarize`
+after it, so the runner's summary and the report of its bag agree exactly.
+
+`read_run` reads a bag by topic names and types only (the contract of
+mill_common.topics): the sample period is the greatest common divisor of the state
+stamps and the job length comes from the trajectory's job status on /diagnostics,
+so a bag from `ros2 bag record` with these topics works as well as ours.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.errors import BagError
+from mill_bag.reader import Bag, open_bag
+from mill_bag.types import (
+    DIAGNOSTIC_ARRAY,
+    JOINT_STATE,
+    JOINT_TRAJECTORY,
+    WRENCH_STAMPED,
+    decode,
+)
+from mill_common.signals import AXES
+from mill_common.timebase import job_steps
+
+from mill_bringup.metrics import RunRecord
+from mill_common import topics as topic_names
+
+
+def record_topics(axes: Sequence[str]) -> dict[str, str]:
+    """Topics (and types) a RunRecord is built from."""
+    out = {}
+    for axis in axes:
+        out[topic_names.state(axis)] = JOINT_STATE
+        out[topic_names.estimate(axis)] = JOINT_STATE
+        out[topic_names.joint_command(axis)] = JOINT_STATE
+    out[topic_names.REFERENCE] = JOINT_TRAJECTORY
+    out[topic_names.GROUND_TRUTH] = JOINT_STATE
+    out[topic_names.CUTTING_FORCE] = WRENCH_STAMPED
+    return out
+
+
+def _ns(time_msg: Any) -> int:
+    return time_msg.sec * 1_000_000_000 + time_msg.nanosec
+
+
+def build_record(
+    messages: Iterable[tuple[str, Any]],
+    axes: Sequence[str],
+    n: int,
+    dt_ns: int,
+    listened: Iterable[str],
+) -> tuple[RunRecord, dict[str, int]]:
+    """Decoded messages (topic, message) -> RunRecord of n samples at t = k T.
+
+    The one place where messages become signals: the runner's monitor and the
+    bag reader both call it. A message belongs to sample k when its header stamp
+    is exactly k T (0 <= k < n); a repeated stamp overwrites with the same values.
+    Also returns, per listened per-sample topic, how many of the n samples are missing.
+    """
+    rec = RunRecord.empty(n, dt_ns / 1e9)
+    s = rec.signals
+    seen: dict[str, set[int]] = {t: set() for t in listened if t != topic_names.REFERENCE}
+    position, torque, force = s['position'], s['torque'], s['force']
+    est_v, est_d = s['estimate_velocity'], s['estimate_disturbance']
+    ref_p, ref_v = s['reference'], s['reference_velocity']
+    true_v, true_d = s['true_velocity'], s['true_disturbance']
+
+    def on_state(k, msg, i):
+        position[k, i] = msg.position[0]
+
+    def on_estimate(k, msg, i):
+        est_v[k, i] = msg.velocity[0]
+        est_d[k, i] = msg.effort[0]
+
+    def on_command(k, msg, i):
+        torque[k, i] = msg.effort[0]
+
+    def on_truth(k, msg, _i):
+        for j, name in enumerate(msg.name):
+            i = AXES.index(name)
+            true_v[k, i] = msg.velocity[j]
+            true_d[k, i] = msg.effort[j]
+
+    def on_force(k, msg, _i):
+        f = msg.wrench.force
+        force[k] = (f.x, f.y, f.z)
+
+    handlers: dict[str, tuple] = {
+        topic_names.GROUND_TRUTH: (on_truth, None),
+        topic_names.CUTTING_FORCE: (on_force, None),
+    }
+    for axis in axes:
+        i = AXES.index(axis)
+        handlers[topic_names.state(axis)] = (on_state, i)
+        handlers[topic_names.estimate(axis)] = (on_estimate, i)
+        handlers[topic_names.joint_command(axis)] = (on_command, i)
+
+    for topic, msg in messages:
+        k, rem = divmod(_ns(msg.header.stamp), dt_ns)
+        if rem != 0 or not 0 <= k < n:
+            continue
+        if topic == topic_names.REFERENCE:
+            for point in msg.points:
+                kp = k + _ns(point.time_from_start) // dt_ns
+                if kp >= n:
+                    break
+                for j, name in enumerate(msg.joint_names):
+                    if name in axes:
+                        i = AXES.index(name)
+                        ref_p[kp, i] = point.positions[j]
+                        ref_v[kp, i] = point.velocities[j]
+            continue
+        handler = handlers.get(topic)
+        if handler is None:
+            continue
+        handler[0](k, msg, handler[1])
+        if topic in seen:
+            seen[topic].add(k)
+    missing = {t: n - len(ks) for t, ks in seen.items()}
+    return rec, missing
+
+
+def record_from_raw(
+    raw: dict[str, list[bytes]],
+    types: dict[str, str],
+    axes: Sequence[str],
+    n: int,
+    dt_ns: int,
+    workers: int = 1,
+) -> tuple[RunRecord, dict[str, int]]:
+    """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
+    reader both call. With workers > 1 the topics are split between forked processes, each
+    running build_record on its share; every (sample, axis) value comes from one topic, so
+    the merged record is the one a single call gives."""
+    listened = list(raw)
+    if workers <= 1:
+        messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
+        return build_record(messages, axes, n, dt_ns, listened)
+    import multiprocessing
+
+    global _SHARED  # read by the forked workers, not pickled
+    groups: list[list[str]] = [[] for _ in range(workers)]
+    loads = [0] * workers
+    for topic in sorted(listened, key=lambda t: -len(raw[t])):
+        i = loads.index(min(loads))
+        groups[i].append(topic)
+        loads[i] += len(raw[topic])
+    _SHARED = (raw, types, list(axes), n, dt_ns)
+    try:
+        with multiprocessing.get_context('fork').Pool(workers) as pool:
+            parts = pool.map(_record_part, [g for g in groups if g])
+    finally:
+        _SHARED = None
+    rec = RunRecord.empty(n, dt_ns / 1e9)
+    missing: dict[str, int] = {}
+    for signals, part_missing in parts:
+        for name, values in signals.items():
+            have = ~np.isnan(values)
+            rec.signals[name][have] = values[have]
+        missing.update(part_missing)
+    return rec, missing
+
+
+_SHARED: tuple | None = None
+
+
+def _record_part(topics_part: list[str]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
+    raw, types, axes, n, dt_ns = _SHARED
+    messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
+    rec, missing = build_record(messages, axes, n, dt_ns, topics_part)
+    return rec.signals, missing
+
+
+# -- the run in a bag ------------------------------------------------------------------------
+
+
+@dataclass
+class BagRun:
+    """What a bag holds of a mill run: its RunRecord and what the report needs besides."""
+
+    bag: Bag
+    axes: list[str]
+    dt_ns: int
+    n: int
+    record: RunRecord
+    missing: dict[str, int]
+    end_time: float | None
+    job_end_source: str
+    state_wall_ns: np.ndarray | None  # wall time each sample of the first state arrived [ns]
+    plant_status: dict[str, str]
+    feed_override: list[tuple[int, float]] | None
+    message_count: int
+    size_bytes: int
+    notes: list[str] = field(default_factory=list)
+
+
+def read_run(path: str | Path) -> BagRun:
+    """Read a bag of a mill run into a RunRecord, by topic names and types only.
+
+    The sample period is the greatest common divisor of the state stamps; the
+    number of samples comes from the trajectory's job status on /diagnostics
+    (end_time, as the runner computes it), or, without it, from the last sample
+    every state topic has.
+    """
+    bag = open_bag(path)
+    wanted_types = record_topics(AXES)
+    raw: dict[str, list[bytes]] = {}
+    walls: dict[str, list[int | None]] = {}  # publish times of the state messages
+    statuses: list[Any] = []
+    feed: list[tuple[int, bytes]] = []
+    feed_type = ''
+    for topic, msgtype, log_time, publish_time, data in bag.read():
+        if topic in wanted_types:
+            if msgtype != wanted_types[topic]:
+                raise BagError(
+                    f'{bag.path}: topic {topic} has type {msgtype}, expected {wanted_types[topic]}'
+                )
+            raw.setdefault(topic, []).append(data)
+            if topic.endswith('/state'):
+                walls.setdefault(topic, []).append(publish_time)
+        elif topic == topic_names.DIAGNOSTICS and msgtype == DIAGNOSTIC_ARRAY:
+            statuses.append(decode(msgtype, data))
+        elif topic == topic_names.FEED_OVERRIDE:
+            feed_type = msgtype
+            feed.append((log_time, data))
+    total = sum(bag.counts.values())
+    if total == 0:
+        raise BagError(f'{bag.path} holds no messages')
+    axes = [a for a in AXES if topic_names.state(a) in raw]
+    if not axes:
+        present = ', '.join(sorted(bag.counts)) or 'none'
+        raise BagError(
+            f'{bag.path} holds no mill run: no /mill/<axis>/state topic '
+            f'(sensor_msgs/msg/JointState); its topics: {present}'
+        )
+    first = topic_names.state(axes[0])
+    first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
+    stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
+    diffs = np.diff(stamps)
+    dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
+    if dt_ns <= 0:
+        raise BagError(f'{bag.path}: fewer than two samples on {first}')
+    notes = []
+    end_time, source = _job_end(statuses)
+    if end_time is not None:
+        n = job_steps(end_time, dt_ns)
+    else:
+        last = min(max(cdr_stamp_ns(d) or 0 for d in raw[topic_names.state(a)]) for a in axes)
+        n = last // dt_ns + 1
+        source = 'last sample of every state topic (no job status on /diagnostics)'
+        notes.append('no job status on /diagnostics: every sample up to the last state is used')
+    listened = {t: raw[t] for t in record_topics(axes) if t in raw}
+    to_decode = sum(len(v) for v in listened.values())
+    workers = min(2, os.cpu_count() or 1) if to_decode > 100_000 else 1
+    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers)
+    # Wall-clock arrival of each sample of the first axis, where the storage has
+    # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
+    wall = None
+    pairs = [(s, w) for s, w in zip(first_stamps, walls[first], strict=True) if s is not None]
+    if pairs and any(w is not None and w != s for s, w in pairs):
+        by_stamp = {s: w for s, w in pairs if w is not None}
+        wall = np.array([by_stamp.get(k * dt_ns, -1) for k in range(n)], dtype=np.int64)
+    if bag.truncated:
+        notes.append(
+            'the bag was not closed (recorder killed?): read up to its last complete chunk'
+        )
+    feed_values = _feed_values(feed_type, feed, notes) if feed else None
+    size = sum(f.stat().st_size for f in bag.files)
+    return BagRun(
+        bag=bag,
+        axes=axes,
+        dt_ns=dt_ns,
+        n=n,
+        record=record,
+        missing={t: m for t, m in missing.items() if m},
+        end_time=end_time,
+        job_end_source=source,
+        state_wall_ns=wall,
+        plant_status=_plant_status(statuses),
+        feed_override=feed_values,
+        message_count=total,
+        size_bytes=size,
+        notes=notes,
+    )
+
+
+def _status_values(status: Any) -> dict[str, str]:
+    return {kv.key: kv.value for kv in status.values}
+
+
+def _job_end(statuses: list[Any]) -> tuple[float | None, str]:
+    for array in statuses:
+        for status in array.status:
+            if status.name == 'mill_trajectory: job':
+                values = _status_values(status)
+                if 'end_time' in values:
+                    return float(values['end_time']), 'job status on /diagnostics'
+    return None, ''
+
+
+def _plant_status(statuses: list[Any]) -> dict[str, str]:
+    for array in reversed(statuses):
+        for status in array.status:
+            if status.name == 'mill_plant: lockstep':
+                return _status_values(status) | {'message': status.message}
+    return {}
+
+
+def _feed_values(msgtype: str, feed: list, notes: list[str]) -> list[tuple[int, float]]:
+    out = []
+    for log_time, data in feed:
+        try:
+            msg = decode(msgtype, data)
+        except Exception:
+            notes.append(f'{topic_names.FEED_OVERRIDE}: cannot decode type {msgtype}')
+            return []
+        value = getattr(msg, 'data', None)
+        if value is None:
+            notes.append(f'{topic_names.FEED_OVERRIDE}: type {msgtype} has no numeric data')
+            return []
+        out.append((log_time, float(value)))
+    return out
