@@ -44,7 +44,7 @@ from mill_controllers.model_reference import (
     ForceControlDesigner,
     simpson,
 )
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
 
 from mill_bringup import scenario as scenario_mod
 

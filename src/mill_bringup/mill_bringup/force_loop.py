@@ -32,7 +32,8 @@ import numpy as np
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_controllers.model_reference import ContinuousReference, simpson
-from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_plant.force_drive import DrivenForceProcess
 
 
 def _number_or_inf(value: Any) -> str | None:

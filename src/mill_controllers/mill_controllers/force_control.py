@@ -26,7 +26,7 @@ from mill_common.parameters import (
     one_of,
     positive,
 )
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
 
 from mill_controllers.froh import hold_input
 from mill_controllers.model_reference import (

@@ -43,13 +43,13 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_plant.force_process import (
+from mill_models.force_process import (
     AffineLti,
-    DrivenForceProcess,
     ForceProcessModel,
     ForceProcessPlant,
     clamped_pieces,
 )
+from mill_plant.force_drive import DrivenForceProcess
 
 from mill_controllers.froh import DiscreteTF, froh_discretize, hold_input
 

@@ -57,7 +57,7 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 
 from mill_controllers.model_reference import (
     DESIGN_PARAMETERS,

@@ -12,7 +12,7 @@ from mill_controllers.froh import (
     froh_discretize,
     hold_input,
 )
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 
 MODEL = ForceProcessModel()
 T = MODEL.sample_period

@@ -19,7 +19,7 @@ from mill_controllers.model_reference import (
     solve_diophantine,
     sylvester_matrix,
 )
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
 
 MODEL = ForceProcessModel()
 T = MODEL.sample_period

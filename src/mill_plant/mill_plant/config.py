@@ -353,7 +353,7 @@ def _feed_limits(value: Any) -> str | None:
 
 def force_process_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters of the force-process plant node (Rubio 2013 eq. (1)-(3))."""
-    from mill_plant.force_process import ForceProcessModel
+    from mill_models.force_process import ForceProcessModel
 
     lockstep = {name: spec for name, spec in parameter_specs()}
     specs = [

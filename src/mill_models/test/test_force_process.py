@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_plant.force_process import (
+from mill_models.force_process import (
     DEFAULT_DEPTH_PROFILE,
     ForceProcessModel,
     ForceProcessPlant,
