@@ -38,13 +38,10 @@ from mill_common.env import ros_environment
 from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
-from mill_controllers.model_reference import (
-    DESIGN_PARAMETERS,
-    ContinuousReference,
-    ForceControlDesigner,
-    simpson,
-)
+from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
 from mill_models.force_process import ForceProcessModel
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference
 
 from mill_bringup import scenario as scenario_mod
 

@@ -31,8 +31,9 @@ from typing import Any
 import numpy as np
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
-from mill_controllers.model_reference import ContinuousReference, simpson
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference
 from mill_plant.force_drive import DrivenForceProcess
 
 
