@@ -27,8 +27,8 @@ from mill_common.parameters import (
     positive,
 )
 from mill_models.force_process import ForceProcessModel
+from mill_models.holds import hold_input
 
-from mill_controllers.froh import hold_input
 from mill_controllers.model_reference import (
     ForceControlDesigner,
     ModelReferenceForceController,

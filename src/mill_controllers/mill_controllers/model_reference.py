@@ -3,7 +3,7 @@
 Design, for a hold β (polynomials in z, highest power first):
 
 - plant H_β(z) = B(z)/A(z): the unit-gain force process 1/((τ_c s + 1)(τ_m s + 1))
-  discretised under the β-FROH (froh.py); the process gain K_p(a_dc) scales B and is
+  discretised under the β-FROH (mill_models.holds); the process gain K_p(a_dc) scales B and is
   applied at run time (S and T are divided by K_p; R does not depend on it);
 - reference model eq. (7) G_m(s) = ω_n²/(s² + 2ξω_n s + ω_n²) with ξ = 0.7 and
   ω_n = 2.5/T_r, T_r = 3 spindle periods = 3T (§2.3, §5: ω_n ≈ 9.93 rad/s at 715 rpm;
@@ -51,6 +51,7 @@ from mill_models.force_process import (
     ForceProcessPlant,
     clamped_pieces,
 )
+from mill_models.holds import DiscreteTF, froh_discretize, hold_input
 from mill_models.polynomials import degree, pad, solve_diophantine, split_numerator, trim
 from mill_models.quadrature import simpson
 from mill_models.reference_model import (
@@ -62,8 +63,6 @@ from mill_models.reference_model import (
     natural_frequency as rise_time_frequency,  # the __init__ argument shadows the name
 )
 from mill_plant.force_drive import DrivenForceProcess
-
-from mill_controllers.froh import DiscreteTF, froh_discretize, hold_input
 
 # --- design -----------------------------------------------------------------------------
 

@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 import scipy.signal
-from mill_controllers.froh import (
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.holds import (
     as_state_space,
     froh_discretize,
     hold_input,
 )
-from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 
 MODEL = ForceProcessModel()
 T = MODEL.sample_period

@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.signal
+
 from mill_models.force_process import affine_input_exponential
 
 StateSpace = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
