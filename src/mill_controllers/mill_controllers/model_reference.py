@@ -45,24 +45,13 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_models.force_process import (
-    AffineLti,
-    ForceProcessModel,
-    ForceProcessPlant,
-    clamped_pieces,
-)
-from mill_models.holds import DiscreteTF, froh_discretize, hold_input
+from mill_models.force_process import AffineLti, ForceProcessModel
+from mill_models.holds import DiscreteTF, froh_discretize
 from mill_models.polynomials import degree, pad, solve_diophantine, split_numerator, trim
-from mill_models.quadrature import simpson
-from mill_models.reference_model import (
-    ContinuousReference,
-    reference_model,
-    reference_state_space,
-)
 from mill_models.reference_model import (
     natural_frequency as rise_time_frequency,  # the __init__ argument shadows the name
 )
-from mill_plant.force_drive import DrivenForceProcess
+from mill_models.reference_model import reference_model, reference_state_space
 
 # --- design -----------------------------------------------------------------------------
 
@@ -376,66 +365,3 @@ class ModelReferenceForceController:
 
     def reset(self) -> None:
         self._ctrl.reset()
-
-
-class SampleHold:
-    """Pass finite samples, replace a non-finite one by the last finite (initial value first)."""
-
-    def __init__(self, initial: float = 0.0) -> None:
-        self._last = float(initial)
-        self.held = 0
-
-    def __call__(self, value: float) -> float:
-        if isinstance(value, int | float) and math.isfinite(value):
-            self._last = float(value)
-        else:
-            self.held += 1
-        return self._last
-
-
-class HeldPlant(DrivenForceProcess):
-    """A force-process plant seen through a β-FROH and the drive's clamp on the feed.
-
-    advance(u_k, beta) applies u(kT + τ) = u_k + β(u_k − u_{k−1})τ/T over one period,
-    clamped to [lo, hi] (the plant never sees a feed outside the range), and returns the
-    force at the end [N]; with a ContinuousReference it also integrates the squared error
-    ∫(F_p − F_pm)² over the period (Simpson on a grid, split where the input or the depth
-    changes slope or value).
-    """
-
-    def __init__(
-        self,
-        plant: ForceProcessPlant,
-        lo: float = -math.inf,
-        hi: float = math.inf,
-        spacing: float | None = None,
-    ) -> None:
-        super().__init__(plant, lo, hi, spacing)
-        self.T = plant.model.sample_period
-        self.u_prev = 0.0
-
-    def advance(
-        self,
-        u_k: float,
-        beta: float,
-        reference: ContinuousReference | None = None,
-        keep_trace: bool = False,
-    ) -> tuple[float, float, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
-        """(force at the end [N], ∫(F_p − F_pm)² dτ [N²·s] (0 without reference), pieces).
-
-        pieces (only with keep_trace and a reference): [(times, F_p, F_pm)].
-        """
-        u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
-        self.u_prev = float(u_k)
-        cost = 0.0
-        trace = []
-        if reference is None:  # no grid needed: one exact step per clamped piece
-            for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
-                self.plant.step(start, sl, length)
-            return self.plant.force, cost, trace
-        for times, force in self.apply(u0, slope, self.T):
-            f_ref = reference.values(times)
-            cost += simpson(times, (force - f_ref) ** 2)
-            if keep_trace:
-                trace.append((times, force, f_ref))
-        return self.plant.force, cost, trace

@@ -58,12 +58,12 @@ from mill_common.parameters import (
     validate_all,
 )
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.holds import HeldPlant
 from mill_models.reference_model import ContinuousReference
 
 from mill_controllers.model_reference import (
     DESIGN_PARAMETERS,
     ForceControlDesigner,
-    HeldPlant,
     RstController,
 )
 

@@ -12,7 +12,6 @@ from mill_controllers.model_reference import (
     ForceControlDesigner,
     ModelReferenceForceController,
     RstController,
-    SampleHold,
 )
 from mill_models.force_process import ForceProcessModel
 from mill_models.reference_model import reference_model
@@ -185,9 +184,3 @@ def test_bad_parameters_are_refused() -> None:
         ModelReferenceForceController(MODEL, observer_degree=-1)
     with pytest.raises(ValueError, match='gain'):
         RstController(ForceControlDesigner(MODEL).design(0.0), gain=0.0)
-
-
-def test_sample_hold_replaces_non_finite_samples() -> None:
-    hold = SampleHold(0.0)
-    assert [hold(v) for v in (5.0, math.nan, math.inf, 7.0, -math.inf)] == [5, 5, 5, 7, 7]
-    assert hold.held == 3

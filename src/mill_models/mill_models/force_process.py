@@ -147,41 +147,6 @@ class AffineLti:
         return out
 
 
-def clamped_pieces(
-    u0: float, slope: float, duration: float, lo: float, hi: float
-) -> list[tuple[float, float, float]]:
-    """Split u0 + slope·τ on [0, duration] into affine pieces clamped to [lo, hi].
-
-    Returns [(length, start value, slope)]: a piece outside the range becomes a constant
-    at the bound, so the reconstructed input never leaves [lo, hi].
-    """
-    if lo > hi:
-        raise ValueError(f'empty range [{lo}, {hi}]')
-    cuts = {0.0, float(duration)}
-    if slope != 0.0:
-        for bound in (lo, hi):
-            if math.isfinite(bound):
-                tau = (bound - u0) / slope
-                if 0.0 < tau < duration:
-                    cuts.add(tau)
-    edges = sorted(cuts)
-    pieces = []
-    for a, b in itertools.pairwise(edges):
-        if b <= a:
-            continue
-        mid = u0 + slope * 0.5 * (a + b)
-        start = u0 + slope * a
-        if mid > hi:
-            pieces.append((b - a, hi, 0.0))
-        elif mid < lo:
-            pieces.append((b - a, lo, 0.0))
-        else:
-            pieces.append((b - a, min(hi, max(lo, start)), slope))
-    if not pieces:
-        pieces.append((float(duration), min(hi, max(lo, u0)), 0.0))
-    return pieces
-
-
 class ForceProcessModel:
     """Parameters and derived quantities of Rubio 2013 eq. (1)-(3) (no state)."""
 

@@ -1,10 +1,24 @@
-"""Discretisation under a β fractional-order hold (β-FROH), Rubio 2013 eq. (4)-(6) (ROS-free).
+"""Holds: the β fractional-order hold of Rubio 2013 eq. (4)-(6), and the sample hold (ROS-free).
 
-The β-FROH reconstructs the input between samples as
+The β-FROH (β-hold) reconstructs the input between samples as
 
     u(kT + τ) = u_k + β·(u_k − u_{k−1})·τ/T,   0 ≤ τ < T,   β ∈ [−1, 1],
 
-β = 0 being the zero-order hold. Its transfer function is
+β = 0 being the zero-order hold. Everything the suite does with it is here:
+
+- hold_input: the reconstruction over one sample as (u0, slope);
+- clamped_pieces, clamped_trace: that affine input limited to a feed range, piece by piece,
+  and the force process driven by it (the drive's range, used by mill_plant.force_drive
+  and by HeldPlant);
+- froh_discretize (froh_matrices, froh_state_space): the discrete model H_β(z) of a
+  continuous plant under the hold, eq. (4)-(6), on which the force controller designs;
+- HeldPlant: a force-process plant seen through the hold and the feed clamp, one control
+  period at a time, with the squared error to the reference model integrated between the
+  samples (the shadow loops of the multi-model schemes and the models of the tests);
+- SampleHold: the other hold, for measurements: a non-finite sample is replaced by the
+  last finite one.
+
+The β-FROH's transfer function is
 h_β(s) = (1 − β e^{−sT} + β(1 − e^{−sT})/(Ts))·(1 − e^{−sT})/s (eq. (5) prints the last
 factor over Ts; with 1/s, as in eq. (6)'s h_o(s), β = 0 gives the usual ZOH).
 
@@ -22,6 +36,7 @@ scipy.signal convention), the denominator monic and the numerator padded to its 
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -29,7 +44,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.signal
 
-from mill_models.force_process import affine_input_exponential
+from mill_models.force_process import ForceProcessPlant, affine_input_exponential
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference
 
 StateSpace = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
@@ -149,5 +166,137 @@ def froh_discretize(system: Sequence, T: float, beta: float) -> DiscreteTF:
 
 def hold_input(u_k: float, u_prev: float, beta: float, T: float) -> tuple[float, float]:
     """(u0, slope) of the β-FROH reconstruction u(kT + τ) = u0 + slope·τ over [0, T)."""
-    # β-FROH: u(kT + τ) = u_k + β (u_k − u_{k−1}) τ / T
+    # Rubio 2013 eq. (5), the β-FROH in time: u(kT + τ) = u_k + β (u_k − u_{k−1}) τ / T
     return float(u_k), float(beta) * (float(u_k) - float(u_prev)) / float(T)
+
+
+def clamped_pieces(
+    u0: float, slope: float, duration: float, lo: float, hi: float
+) -> list[tuple[float, float, float]]:
+    """Split u0 + slope·τ on [0, duration] into affine pieces clamped to [lo, hi].
+
+    Returns [(length, start value, slope)]: a piece outside the range becomes a constant
+    at the bound, so the reconstructed input never leaves [lo, hi].
+    """
+    if lo > hi:
+        raise ValueError(f'empty range [{lo}, {hi}]')
+    cuts = {0.0, float(duration)}
+    if slope != 0.0:
+        for bound in (lo, hi):
+            if math.isfinite(bound):
+                tau = (bound - u0) / slope
+                if 0.0 < tau < duration:
+                    cuts.add(tau)
+    edges = sorted(cuts)
+    pieces = []
+    for a, b in itertools.pairwise(edges):
+        if b <= a:
+            continue
+        mid = u0 + slope * 0.5 * (a + b)
+        start = u0 + slope * a
+        if mid > hi:
+            pieces.append((b - a, hi, 0.0))
+        elif mid < lo:
+            pieces.append((b - a, lo, 0.0))
+        else:
+            pieces.append((b - a, min(hi, max(lo, start)), slope))
+    if not pieces:
+        pieces.append((float(duration), min(hi, max(lo, u0)), 0.0))
+    return pieces
+
+
+def clamped_trace(
+    plant: ForceProcessPlant,
+    u0: float,
+    slope: float,
+    duration: float,
+    lo: float,
+    hi: float,
+    spacing: float,
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Drive `plant` with u0 + slope·τ clamped to [lo, hi] for `duration` [s].
+
+    Returns the force on a grid [(times, forces)] per smooth piece (split at clamp corners
+    and depth changes) with spacing <= `spacing` (ForceProcessPlant.trace).
+    """
+    pieces = []
+    for length, start, sl in clamped_pieces(u0, slope, duration, lo, hi):
+        pieces.extend(plant.trace(start, sl, length, spacing))
+    return pieces
+
+
+class HeldPlant:
+    """A force-process plant seen through a β-FROH and the drive's clamp on the feed.
+
+    advance(u_k, beta) applies u(kT + τ) = u_k + β(u_k − u_{k−1})τ/T over one period,
+    clamped to [lo, hi] (the plant never sees a feed outside the range), and returns the
+    force at the end [N]; with a ContinuousReference it also integrates the squared error
+    ∫(F_p − F_pm)² over the period (Simpson on a grid, split where the input or the depth
+    changes slope or value).
+    """
+
+    def __init__(
+        self,
+        plant: ForceProcessPlant,
+        lo: float = -math.inf,
+        hi: float = math.inf,
+        spacing: float | None = None,
+    ) -> None:
+        if not lo <= hi:
+            raise ValueError(f'feed range [{lo}, {hi}] is empty')
+        self.plant = plant
+        self.lo = float(lo)
+        self.hi = float(hi)
+        self.spacing = float(spacing) if spacing else plant.model.sample_period / 16.0
+        self.T = plant.model.sample_period
+        self.u_prev = 0.0
+
+    def clamp(self, u: float) -> float:
+        return min(self.hi, max(self.lo, float(u)))
+
+    def apply(
+        self, u0: float, slope: float, duration: float
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Drive the plant with u0 + slope·τ, clamped, for `duration` (clamped_trace)."""
+        return clamped_trace(self.plant, u0, slope, duration, self.lo, self.hi, self.spacing)
+
+    def advance(
+        self,
+        u_k: float,
+        beta: float,
+        reference: ContinuousReference | None = None,
+        keep_trace: bool = False,
+    ) -> tuple[float, float, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+        """(force at the end [N], ∫(F_p − F_pm)² dτ [N²·s] (0 without reference), pieces).
+
+        pieces (only with keep_trace and a reference): [(times, F_p, F_pm)].
+        """
+        u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
+        self.u_prev = float(u_k)
+        cost = 0.0
+        trace = []
+        if reference is None:  # no grid needed: one exact step per clamped piece
+            for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
+                self.plant.step(start, sl, length)
+            return self.plant.force, cost, trace
+        for times, force in self.apply(u0, slope, self.T):
+            f_ref = reference.values(times)
+            cost += simpson(times, (force - f_ref) ** 2)
+            if keep_trace:
+                trace.append((times, force, f_ref))
+        return self.plant.force, cost, trace
+
+
+class SampleHold:
+    """Pass finite samples, replace a non-finite one by the last finite (initial value first)."""
+
+    def __init__(self, initial: float = 0.0) -> None:
+        self._last = float(initial)
+        self.held = 0
+
+    def __call__(self, value: float) -> float:
+        if isinstance(value, int | float) and math.isfinite(value):
+            self._last = float(value)
+        else:
+            self.held += 1
+        return self._last

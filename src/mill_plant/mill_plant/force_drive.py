@@ -13,7 +13,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from mill_models.force_process import ForceProcessPlant, clamped_pieces
+from mill_models.force_process import ForceProcessPlant
+from mill_models.holds import clamped_trace
 
 
 class DrivenForceProcess:
@@ -44,7 +45,4 @@ class DrivenForceProcess:
     def apply(
         self, u0: float, slope: float, duration: float
     ) -> list[tuple[np.ndarray, np.ndarray]]:
-        pieces = []
-        for length, start, sl in clamped_pieces(u0, slope, duration, self.lo, self.hi):
-            pieces.extend(self.plant.trace(start, sl, length, self.spacing))
-        return pieces
+        return clamped_trace(self.plant, u0, slope, duration, self.lo, self.hi, self.spacing)
