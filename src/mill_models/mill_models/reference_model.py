@@ -20,6 +20,7 @@ import numpy as np
 
 def natural_frequency(rise_time: float) -> float:
     """ω_n = 2.5/T_r [rad/s], Rubio 2013 §2.3."""
+    # Rubio 2013 §2.3: ω_n = 2.5/T_r (rise time T_r of the second-order model eq. (7))
     return 2.5 / rise_time
 
 
