@@ -49,6 +49,7 @@ def install_space(tmp_path_factory) -> Path:
 def test_every_package_builds_and_installs_its_executables(install_space):
     assert set(PACKAGES) == {
         'mill_common',
+        'mill_models',
         'mill_bag',
         'mill_plant',
         'mill_trajectory',

@@ -87,6 +87,7 @@ def test_all_packages_found() -> None:
         'mill_bringup',
         'mill_common',
         'mill_controllers',
+        'mill_models',
         'mill_observers',
         'mill_plant',
         'mill_trajectory',

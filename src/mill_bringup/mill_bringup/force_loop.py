@@ -9,7 +9,8 @@ Per sample k (t_k = kT, T = one spindle revolution):
    override_max] (a non-finite one holds the last applied override); the applied feed
    o_k·nominal_feed is reported back to the controller (its memory uses what was applied);
 4. the plant sees the active β-hold reconstruction u_k + β(u_k − u_{k−1})τ/T, itself
-   clamped to the feed range, integrated exactly (mill_plant.force_process).
+   clamped to the feed range, integrated exactly (mill_models.force_process,
+   mill_plant.force_drive).
 
 The continuous-time cost eq. (14), J_c = Σ_j ∫_{(j−1)T}^{jT} (F_p(τ) − F_pm(τ))² dτ [N²·s],
 compares the continuous force with the continuous response F_pm of eq. (7) to the
@@ -30,8 +31,10 @@ from typing import Any
 import numpy as np
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
-from mill_controllers.model_reference import ContinuousReference, simpson
-from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference
+from mill_plant.force_drive import DrivenForceProcess
 
 from mill_bringup.force_record import ForceRecord
 from mill_bringup.simulation import run_samples

@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from mill_bag.types import decode
 from mill_common.timebase import sample_stamp_ns
-from mill_controllers.model_reference import ContinuousReference, simpson
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference
 
 from mill_common import topics
 

@@ -34,7 +34,7 @@ def test_cost_from_the_stream_equals_the_loop_cost() -> None:
     assert j_c == pytest.approx(rec.j_c, rel=1e-7)
     # a stream that follows the reference model exactly costs nothing
     times = np.linspace(0.0, 1.0, 65)
-    from mill_controllers.model_reference import ContinuousReference
+    from mill_models.reference_model import ContinuousReference
 
     ref = ContinuousReference(design.damping, design.omega_n)
     ref.begin(1200.0)

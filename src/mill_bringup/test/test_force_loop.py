@@ -17,7 +17,7 @@ from mill_bringup.force_loop import (
     sweep,
 )
 from mill_bringup.force_record import ForceRecord
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
 
 CONSTANT = ForceProcessModel(depth_profile=[0.0, 2.0])
 

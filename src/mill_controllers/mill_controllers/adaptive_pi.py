@@ -17,7 +17,7 @@ Loop quantities:
 v is the backward difference of the measured position (velocity_source 'difference') or
 est.velocity ('estimate').
 
-AdaptivePi: an RlsEstimator (mill_observers.rls) identifies y(k) = a y(k−1) + Σ b_i u(k−i)
+AdaptivePi: an RlsEstimator (mill_models.rls) identifies y(k) = a y(k−1) + Σ b_i u(k−i)
 from (v, u) each sample; from its FOPDT read-out K, τ, θ_d the PI is re-tuned by the
 phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"):
 
@@ -61,8 +61,8 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
-from mill_common.signals import AxisReference, Estimate
-from mill_observers.rls import RLS_PARAMETERS, FopdtEstimate, RlsEstimator
+from mill_common.signals import AxisReference, Estimate, FopdtEstimate
+from mill_models.rls import RLS_PARAMETERS, RlsEstimator
 
 # Hatwesh 2013 Table 1, x axis.
 HATWESH_PITCH = 0.012  # ball-screw pitch [m]

@@ -12,7 +12,7 @@ from mill_common.parameters import (
     non_negative,
     one_of,
 )
-from mill_plant.rigid_axis import nominal_input_gain
+from mill_models.axis_data import nominal_input_gain
 
 from mill_controllers.base import AxisController
 from mill_controllers.registry import CONTROLLERS

@@ -26,14 +26,10 @@ from mill_common.parameters import (
     one_of,
     positive,
 )
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
+from mill_models.holds import SampleHold, hold_input
 
-from mill_controllers.froh import hold_input
-from mill_controllers.model_reference import (
-    ForceControlDesigner,
-    ModelReferenceForceController,
-    SampleHold,
-)
+from mill_controllers.model_reference import ForceControlDesigner, ModelReferenceForceController
 from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
 
 

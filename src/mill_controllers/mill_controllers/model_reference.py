@@ -3,11 +3,12 @@
 Design, for a hold β (polynomials in z, highest power first):
 
 - plant H_β(z) = B(z)/A(z): the unit-gain force process 1/((τ_c s + 1)(τ_m s + 1))
-  discretised under the β-FROH (froh.py); the process gain K_p(a_dc) scales B and is
+  discretised under the β-FROH (mill_models.holds); the process gain K_p(a_dc) scales B and is
   applied at run time (S and T are divided by K_p; R does not depend on it);
 - reference model eq. (7) G_m(s) = ω_n²/(s² + 2ξω_n s + ω_n²) with ξ = 0.7 and
-  ω_n = 2.5/T_r, T_r = 3 spindle periods = 3T (§2.3, §5: ω_n ≈ 9.93 rad/s at 715 rpm),
-  discretised with the same β-FROH: H_m,β(z) = B_m(z)/A_m(z), deg A_m = deg A = n;
+  ω_n = 2.5/T_r, T_r = 3 spindle periods = 3T (§2.3, §5: ω_n ≈ 9.93 rad/s at 715 rpm;
+  mill_models.reference_model), discretised with the same β-FROH:
+  H_m,β(z) = B_m(z)/A_m(z), deg A_m = deg A = n;
 - B = B⁺·B⁻: B⁺ (monic) holds the zeros inside `zero_cancel_radius` (1 = every stable
   zero, the paper's reading), B⁻ the rest and the leading coefficient; R = B⁺·R₁ (the
   papers README: eq. (10) prints R = B·R₁);
@@ -15,7 +16,8 @@ Design, for a hold β (polynomials in z, highest power first):
   values): by default n_o = 1 and τ_o = τ_c, an observer as fast as the fastest plant
   pole (e^{−T/τ_c} = e^{−4} ≈ 0.018, nearly deadbeat);
 - eq. (10): A·R₁ + B⁻·S = z^{deg B⁻}·A_m·A_o, solved with the Sylvester matrix of A and
-  B⁻ (deg S = n − 1, deg R₁ = deg B⁻ + n_o), so A·R + B·S = B⁺·z^{deg B⁻}·A_m·A_o;
+  B⁻ (deg S = n − 1, deg R₁ = deg B⁻ + n_o; mill_models.polynomials), so
+  A·R + B·S = B⁺·z^{deg B⁻}·A_m·A_o;
 - T = A_o·B_m/B⁻(1), so the closed loop B·T/(A·R + B·S) = B_m/A_m when every zero is
   cancelled (the case for the paper's plant at every β ∈ [−1, 1]); otherwise the model
   is B⁻(z)/(B⁻(1) z^{deg B⁻})·B_m/A_m (unit DC gain, the unstable zeros kept, causal).
@@ -43,106 +45,15 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_plant.force_process import (
-    AffineLti,
-    DrivenForceProcess,
-    ForceProcessModel,
-    ForceProcessPlant,
-    clamped_pieces,
+from mill_models.force_process import AffineLti, ForceProcessModel
+from mill_models.holds import DiscreteTF, froh_discretize
+from mill_models.polynomials import degree, pad, solve_diophantine, split_numerator, trim
+from mill_models.reference_model import (
+    natural_frequency as rise_time_frequency,  # the __init__ argument shadows the name
 )
-
-from mill_controllers.froh import DiscreteTF, froh_discretize, hold_input
-
-# --- polynomials (numpy arrays, highest power first) ------------------------------------
-
-
-def trim(p: Sequence[float], tol: float = 0.0) -> np.ndarray:
-    """Drop leading coefficients with |c| <= tol (keeps at least one coefficient)."""
-    p = np.atleast_1d(np.asarray(p, dtype=float))
-    nz = np.nonzero(np.abs(p) > tol)[0]
-    return p[nz[0] :].copy() if nz.size else np.zeros(1)
-
-
-def degree(p: Sequence[float]) -> int:
-    return len(trim(p)) - 1
-
-
-def pad(p: Sequence[float], length: int) -> np.ndarray:
-    """Left-pad with zeros to `length` coefficients (same polynomial)."""
-    p = trim(p)
-    if len(p) > length:
-        raise ValueError(f'polynomial of degree {len(p) - 1} does not fit {length} coefficients')
-    return np.concatenate([np.zeros(length - len(p)), p])
-
-
-def sylvester_matrix(a: Sequence[float], b: Sequence[float], deg_x: int, deg_y: int) -> np.ndarray:
-    """M with M·[x; y] = coefficients of a·x + b·y (deg x = deg_x, deg y = deg_y).
-
-    Columns are the shifted coefficient vectors z^{deg_x−i}·a and z^{deg_y−j}·b, rows the
-    powers of z from deg_x + deg a down to 0; square when deg b <= deg a and
-    deg_y = deg a − 1 (the Sylvester resultant matrix when also deg_x = deg b − 1).
-    """
-    a = trim(a)
-    b = trim(b)
-    rows = max(len(a) + deg_x, len(b) + deg_y)
-    m = np.zeros((rows, deg_x + 1 + deg_y + 1))
-    for i in range(deg_x + 1):
-        shift = deg_x - i  # column i multiplies z^{shift}
-        end = rows - shift
-        m[end - len(a) : end, i] = a
-    for j in range(deg_y + 1):
-        shift = deg_y - j
-        end = rows - shift
-        m[end - len(b) : end, deg_x + 1 + j] = b
-    return m
-
-
-def solve_diophantine(
-    a: Sequence[float], b: Sequence[float], c: Sequence[float]
-) -> tuple[np.ndarray, np.ndarray]:
-    """(x, y) with a·x + b·y = c, deg y = deg a − 1, deg x = deg c − deg a.
-
-    Needs a and b coprime and deg b <= deg x + 1 (else the system is not square);
-    solved with numpy.linalg.solve on the Sylvester matrix.
-    """
-    a = trim(a)
-    b = trim(b)
-    c = trim(c)
-    na = len(a) - 1
-    deg_x = len(c) - 1 - na
-    deg_y = na - 1
-    if deg_x < 0 or deg_y < 0:
-        raise ValueError('deg c must be >= deg a >= 1')
-    m = sylvester_matrix(a, b, deg_x, deg_y)
-    if m.shape[0] != m.shape[1]:
-        raise ValueError(f'Diophantine system is not square: {m.shape} (deg b too high)')
-    sol = np.linalg.solve(m, pad(c, m.shape[0]))
-    return sol[: deg_x + 1], sol[deg_x + 1 :]
-
-
-def split_numerator(b: Sequence[float], radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """B = B⁺·B⁻: B⁺ monic with the zeros |z| < radius, B⁻ the rest times the lead."""
-    b = trim(b)
-    zeros = np.roots(b)
-    inside = zeros[np.abs(zeros) < radius]
-    outside = zeros[np.abs(zeros) >= radius]
-    b_plus = np.real(np.poly(inside)) if inside.size else np.ones(1)
-    b_minus = b[0] * (np.real(np.poly(outside)) if outside.size else np.ones(1))
-    return np.atleast_1d(b_plus), np.atleast_1d(b_minus)
-
+from mill_models.reference_model import reference_model, reference_state_space
 
 # --- design -----------------------------------------------------------------------------
-
-
-def natural_frequency(rise_time: float) -> float:
-    """ω_n = 2.5/T_r [rad/s], Rubio 2013 §2.3."""
-    return 2.5 / rise_time
-
-
-def reference_model(damping: float, omega_n: float) -> tuple[np.ndarray, np.ndarray]:
-    """(num, den) in s of eq. (7)."""
-    # Rubio 2013 eq. (7): G_m(s) = ω_n² / (s² + 2ξω_n s + ω_n²)
-    return np.array([omega_n**2]), np.array([1.0, 2.0 * damping * omega_n, omega_n**2])
 
 
 @dataclass(frozen=True)
@@ -296,7 +207,7 @@ class ForceControlDesigner:
         self.damping: float = v['damping_ratio']
         rise_time = v['rise_time_periods'] * self.T
         wn = v['natural_frequency']
-        self.omega_n: float = wn if wn > 0 else 2.5 / rise_time
+        self.omega_n: float = wn if wn > 0 else rise_time_frequency(rise_time)
         tau_o = v['observer_time_constant'] or model.tau_c
         self.observer_pole = math.exp(-self.T / tau_o)
         self.observer = np.real(np.poly(np.full(v['observer_degree'], self.observer_pole)))
@@ -319,14 +230,6 @@ class ForceControlDesigner:
                 self._cache.clear()
             self._cache[key] = d
         return d
-
-
-def reference_state_space(damping: float, omega_n: float) -> tuple[np.ndarray, ...]:
-    """(A, B, C) of eq. (7), state [F_m, Ḟ_m], for its continuous response."""
-    a = np.array([[0.0, 1.0], [-(omega_n**2), -2.0 * damping * omega_n]])
-    b = np.array([0.0, omega_n**2])
-    c = np.array([1.0, 0.0])
-    return a, b, c
 
 
 # --- run time ---------------------------------------------------------------------------
@@ -462,139 +365,3 @@ class ModelReferenceForceController:
 
     def reset(self) -> None:
         self._ctrl.reset()
-
-
-class SampleHold:
-    """Pass finite samples, replace a non-finite one by the last finite (initial value first)."""
-
-    def __init__(self, initial: float = 0.0) -> None:
-        self._last = float(initial)
-        self.held = 0
-
-    def __call__(self, value: float) -> float:
-        if isinstance(value, int | float) and math.isfinite(value):
-            self._last = float(value)
-        else:
-            self.held += 1
-        return self._last
-
-
-class ContinuousReference:
-    """Continuous response F_pm(t) of eq. (7) to a reference held constant over each sample.
-
-    begin(r) fixes the input from the current time; values(times) evaluates the response
-    at absolute times in the current interval (closed form); advance(h) moves on by h.
-    """
-
-    def __init__(self, damping: float, omega_n: float) -> None:
-        self.a, self.b, self.c = reference_state_space(damping, omega_n)
-        self._x = np.zeros(2)
-        self._t = 0.0
-        self._r = 0.0
-        # e^{Aτ} = e^{mτ}[C(τ)·I + S(τ)·(A − m I)], m = tr A/2, q² = m² − det A
-        self._m = 0.5 * float(np.trace(self.a))
-        self._q = complex(self._m**2 - float(np.linalg.det(self.a))) ** 0.5
-
-    def reset(self, value: float = 0.0, t: float = 0.0) -> None:
-        """At rest at `value` [N] (steady state) at time t."""
-        self._x = np.array([float(value), 0.0])
-        self._t = float(t)
-        self._r = float(value)
-
-    @property
-    def time(self) -> float:
-        return self._t
-
-    @property
-    def state(self) -> np.ndarray:
-        return self._x.copy()
-
-    def set_state(self, state: Sequence[float], t: float) -> None:
-        self._x = np.asarray(state, dtype=float).reshape(2).copy()
-        self._t = float(t)
-
-    def begin(self, reference: float) -> None:
-        if not math.isfinite(reference):
-            raise ValueError(f'reference must be finite, got {reference!r}')
-        self._r = float(reference)
-
-    def _states(self, tau: np.ndarray) -> np.ndarray:
-        tau = np.asarray(tau, dtype=float)
-        q = self._q
-        qt = q * tau
-        cc = np.cosh(qt).real
-        ss = (np.sinh(qt) / q).real if abs(q) > 1e-12 else tau.copy()
-        em = np.exp(self._m * tau)
-        x_ss = np.array([self._r, 0.0])  # unit DC gain: steady state [r, 0]
-        dx = self._x - x_ss
-        n = self.a - self._m * np.eye(2)
-        nd = n @ dx
-        return x_ss[None, :] + em[:, None] * (cc[:, None] * dx[None, :] + ss[:, None] * nd)
-
-    def values(self, times: np.ndarray) -> np.ndarray:
-        """F_pm at absolute times (>= the interval start) [N]."""
-        tau = np.atleast_1d(np.asarray(times, dtype=float)) - self._t
-        return self._states(tau) @ self.c
-
-    def advance(self, h: float) -> None:
-        self._x = self._states(np.array([h]))[0]
-        self._t += h
-
-
-def simpson(times: np.ndarray, values: np.ndarray) -> float:
-    """Composite Simpson's rule on an equally spaced grid with an even number of intervals."""
-    n = len(times) - 1
-    if n < 2 or n % 2:
-        raise ValueError('simpson needs an even number (>= 2) of intervals')
-    h = (times[-1] - times[0]) / n
-    return float(
-        h / 3.0 * (values[0] + values[-1] + 4.0 * values[1:-1:2].sum() + 2.0 * values[2:-1:2].sum())
-    )
-
-
-class HeldPlant(DrivenForceProcess):
-    """A force-process plant seen through a β-FROH and the drive's clamp on the feed.
-
-    advance(u_k, beta) applies u(kT + τ) = u_k + β(u_k − u_{k−1})τ/T over one period,
-    clamped to [lo, hi] (the plant never sees a feed outside the range), and returns the
-    force at the end [N]; with a ContinuousReference it also integrates the squared error
-    ∫(F_p − F_pm)² over the period (Simpson on a grid, split where the input or the depth
-    changes slope or value).
-    """
-
-    def __init__(
-        self,
-        plant: ForceProcessPlant,
-        lo: float = -math.inf,
-        hi: float = math.inf,
-        spacing: float | None = None,
-    ) -> None:
-        super().__init__(plant, lo, hi, spacing)
-        self.T = plant.model.sample_period
-        self.u_prev = 0.0
-
-    def advance(
-        self,
-        u_k: float,
-        beta: float,
-        reference: ContinuousReference | None = None,
-        keep_trace: bool = False,
-    ) -> tuple[float, float, list[tuple[np.ndarray, np.ndarray, np.ndarray]]]:
-        """(force at the end [N], ∫(F_p − F_pm)² dτ [N²·s] (0 without reference), pieces).
-
-        pieces (only with keep_trace and a reference): [(times, F_p, F_pm)].
-        """
-        u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
-        self.u_prev = float(u_k)
-        cost = 0.0
-        trace = []
-        if reference is None:  # no grid needed: one exact step per clamped piece
-            for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
-                self.plant.step(start, sl, length)
-            return self.plant.force, cost, trace
-        for times, force in self.apply(u0, slope, self.T):
-            f_ref = reference.values(times)
-            cost += simpson(times, (force - f_ref) ** 2)
-            if keep_trace:
-                trace.append((times, force, f_ref))
-        return self.plant.force, cost, trace

@@ -3,7 +3,8 @@
 Both schemes run, beside the real loop, one *shadow loop* per candidate β_l: the
 controller designed for β_l (model_reference.py) closing the loop on a copy of the
 force-process model (the paper assumes the plant perfectly known, depth profile included)
-driven through the β_l hold, with the same feed clamp as the real loop. A supervisor
+driven through the β_l hold, with the same feed clamp as the real loop
+(mill_models.holds.HeldPlant). A supervisor
 chooses, by the index eq. (13), which design drives the real loop and which hold the
 feed reconstruction uses.
 
@@ -57,13 +58,13 @@ from mill_common.parameters import (
     positive,
     validate_all,
 )
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.holds import HeldPlant
+from mill_models.reference_model import ContinuousReference
 
 from mill_controllers.model_reference import (
     DESIGN_PARAMETERS,
-    ContinuousReference,
     ForceControlDesigner,
-    HeldPlant,
     RstController,
 )
 

@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, Estimate, FopdtEstimate
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi, phase_margin_pi
 from mill_observers.registry import make_observer
-from mill_observers.rls import FopdtEstimate
 
 # Hatwesh 2013 Table 1, x axis
 KA, KT, B, J = 15.7311, 1.39, 14e-4, 2.8828e-3

@@ -9,17 +9,12 @@ import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_controllers.model_reference import (
-    ContinuousReference,
     ForceControlDesigner,
     ModelReferenceForceController,
     RstController,
-    SampleHold,
-    reference_model,
-    simpson,
-    solve_diophantine,
-    sylvester_matrix,
 )
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
+from mill_models.reference_model import reference_model
 
 MODEL = ForceProcessModel()
 T = MODEL.sample_period
@@ -41,27 +36,6 @@ def test_reference_model_parameters_are_the_papers() -> None:
     assert d.omega_n == pytest.approx(2.5 / (3.0 * 60.0 / 715.0))
     num, den = reference_model(0.7, d.omega_n)
     assert np.polyval(num, 0.0) / np.polyval(den, 0.0) == 1.0
-
-
-def test_sylvester_solution_satisfies_the_equation() -> None:
-    a = np.array([1.0, -1.2, 0.35, -0.02])
-    b = np.array([0.4, 0.1, -0.05])
-    c = np.poly([0.5, 0.4, -0.2, 0.1, 0.0, 0.3])
-    x, y = solve_diophantine(a, b, c)
-    assert len(x) == 4 and len(y) == 3  # deg x = deg c − deg a, deg y = deg a − 1
-    np.testing.assert_allclose(np.polyadd(np.polymul(a, x), np.polymul(b, y)), c, atol=1e-13)
-    m = sylvester_matrix(a, b, 3, 2)
-    assert m.shape == (7, 7)
-    # the columns are the shifted coefficient vectors of a and b
-    np.testing.assert_array_equal(m[:4, 0], a)
-    np.testing.assert_array_equal(m[-3:, -1], b)
-
-
-def test_sylvester_system_is_singular_for_a_common_factor() -> None:
-    a = np.poly([0.5, 0.2])
-    b = np.poly([0.5])  # shares the root 0.5: no solution for a generic c
-    assert np.linalg.cond(sylvester_matrix(a, b, 1, 1)) > 1e14
-    assert np.linalg.cond(sylvester_matrix(a, np.poly([0.4]), 1, 1)) < 1e3
 
 
 @pytest.mark.parametrize('beta', BETAS)
@@ -210,28 +184,3 @@ def test_bad_parameters_are_refused() -> None:
         ModelReferenceForceController(MODEL, observer_degree=-1)
     with pytest.raises(ValueError, match='gain'):
         RstController(ForceControlDesigner(MODEL).design(0.0), gain=0.0)
-
-
-def test_sample_hold_replaces_non_finite_samples() -> None:
-    hold = SampleHold(0.0)
-    assert [hold(v) for v in (5.0, math.nan, math.inf, 7.0, -math.inf)] == [5, 5, 5, 7, 7]
-    assert hold.held == 3
-
-
-def test_continuous_reference_is_the_step_response_of_eq7() -> None:
-    d = ForceControlDesigner(MODEL)
-    ref = ContinuousReference(d.damping, d.omega_n)
-    ref.begin(1200.0)
-    t = np.linspace(0.0, 0.5, 51)
-    _, expected = scipy.signal.step(reference_model(d.damping, d.omega_n), T=t)
-    np.testing.assert_allclose(ref.values(t), 1200.0 * expected, atol=1e-8)
-    ref.advance(0.3)
-    ref.begin(1200.0)
-    np.testing.assert_allclose(ref.values(np.array([0.5])), 1200.0 * expected[-1], atol=1e-8)
-
-
-def test_simpson_is_exact_for_cubics() -> None:
-    t = np.linspace(0.0, 2.0, 5)
-    assert simpson(t, t**3 - t) == pytest.approx(4.0 - 2.0)
-    with pytest.raises(ValueError):
-        simpson(t[:4], t[:4])

@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_controllers.model_reference import HeldPlant, ModelReferenceForceController
+from mill_controllers.model_reference import ModelReferenceForceController
 from mill_controllers.multi_model import PAPER_BETAS, MultiModelScheme1, MultiModelScheme2
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.holds import HeldPlant
 
 MODEL = ForceProcessModel()
 LO, HI = 0.0, 20.0

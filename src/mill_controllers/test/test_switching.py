@@ -12,9 +12,9 @@ from mill_controllers.cascade_pi import CascadePi
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.switching import BumplessSwitch, check_replacement
+from mill_models.axis_data import BELTRAN_TABLE1, nominal_input_gain
 from mill_observers.gpi import GpiObserver
 from mill_plant.cutting import StepForce
-from mill_plant.rigid_axis import BELTRAN_TABLE1, nominal_input_gain
 from mill_plant.three_axis import ThreeAxisPlant
 from mill_trajectory.bezier import BezierRestToRest
 

@@ -2,7 +2,7 @@
 
 For a controller that wants model estimates from outside (or for monitoring a drive's
 dynamics while another law runs): each sample the velocity v(k) = (y(k) − y(k−1))/T and
-the command u(k) update y(k) = a y(k−1) + Σ b_i u(k−i) (mill_observers.rls), and
+the command u(k) update y(k) = a y(k−1) + Σ b_i u(k−i) (mill_models.rls), and
 `status()` gives the FOPDT read-out K, τ, θ_d with the RLS diagnostics; the observer node
 publishes it on /mill/<axis>/observer_state every sample.
 
@@ -20,8 +20,7 @@ from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec, validate_all
 from mill_common.signals import Estimate
-
-from mill_observers.rls import RLS_PARAMETERS, RlsEstimator
+from mill_models.rls import RLS_PARAMETERS, RlsEstimator
 
 
 class RlsObserver:

@@ -22,6 +22,7 @@ from mill_common.parameters import (
     positive_int,
 )
 from mill_common.signals import AXES
+from mill_models.axis_data import RigidAxisParams
 
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.harmonic_force import PARAMETERS as HARMONIC_PARAMETERS
@@ -33,7 +34,6 @@ from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
 from mill_plant.multi_axis import MultiAxisPlant
-from mill_plant.rigid_axis import RigidAxisParams
 from mill_plant.three_axis import ThreeAxisPlant
 
 CUTTING_MODELS = ('kline', 'step', 'harmonic', 'none')
@@ -353,7 +353,7 @@ def _feed_limits(value: Any) -> str | None:
 
 def force_process_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters of the force-process plant node (Rubio 2013 eq. (1)-(3))."""
-    from mill_plant.force_process import ForceProcessModel
+    from mill_models.force_process import ForceProcessModel
 
     lockstep = {name: spec for name, spec in parameter_specs()}
     specs = [

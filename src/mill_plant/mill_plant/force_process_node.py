@@ -35,6 +35,7 @@ from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import sample_stamp_ns
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock as ClockMsg
@@ -42,7 +43,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
 from mill_plant.config import force_process_specs
-from mill_plant.force_process import DrivenForceProcess, ForceProcessModel, ForceProcessPlant
+from mill_plant.force_drive import DrivenForceProcess
 
 STATUS_NAME = 'mill_plant: force process'
 MM_PER_M = 1000.0

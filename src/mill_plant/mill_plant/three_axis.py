@@ -41,8 +41,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from mill_models.axis_data import RigidAxisParams
+
 from mill_plant.cutting import CuttingForceModel, Force3
-from mill_plant.rigid_axis import RigidAxisParams
 
 Bool3 = tuple[bool, bool, bool]
 _INF3 = (math.inf, math.inf, math.inf)

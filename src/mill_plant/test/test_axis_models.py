@@ -9,6 +9,7 @@ import pytest
 import scipy.linalg
 import scipy.signal
 from mill_common.parameters import ParameterError
+from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel
@@ -16,7 +17,6 @@ from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
 from mill_plant.multi_axis import MultiAxisPlant
-from mill_plant.rigid_axis import BELTRAN_TABLE1, RigidAxisParams
 
 MODELS = (RigidAxisModel, FlexibleAxisModel, TransferFunctionAxisModel, VelocityDriveAxisModel)
 

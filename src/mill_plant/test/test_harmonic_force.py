@@ -7,13 +7,13 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError, validate_all
+from mill_models.axis_data import BELTRAN_TABLE1
 from mill_plant.harmonic_force import (
     PARAMETERS,
     SYNTHESISED_AMPLITUDES,
     HarmonicForce,
     from_parameters,
 )
-from mill_plant.rigid_axis import BELTRAN_TABLE1
 
 ORIGIN = (0.0, 0.0, 0.0)
 

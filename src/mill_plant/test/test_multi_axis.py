@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from mill_models.axis_data import BELTRAN_TABLE1
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.kline_force import KlineCuttingForce
 from mill_plant.models.flexible import FlexibleAxisModel
@@ -12,7 +13,6 @@ from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
 from mill_plant.multi_axis import MultiAxisPlant
-from mill_plant.rigid_axis import BELTRAN_TABLE1
 from mill_plant.three_axis import StepReport, ThreeAxisPlant
 
 AXES = [BELTRAN_TABLE1[a] for a in 'xyz']

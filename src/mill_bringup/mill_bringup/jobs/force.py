@@ -20,7 +20,7 @@ from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
-from mill_plant.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel
 
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.force_record import FORCE_TOPICS, ForceRecord, continuous_cost

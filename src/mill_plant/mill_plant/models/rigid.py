@@ -3,7 +3,7 @@
     m_e x'' + c_e x' + m g [vertical axis] + mu sign(x') = tau/a - F_c
 
 with m_e = m + J/a², a = p/2π and c_e = c_b + c_t (c_t read as translational, see
-mill_plant.rigid_axis, which holds eq. (2) and the Beltrán Table 1 defaults).
+mill_models.axis_data, which holds eq. (2) and the Beltrán Table 1 defaults).
 
 Gravity (Chávez-Conde eq. (3)): the weight m_3 g of the CARRIAGE mass (not m_e: the screw
 rotates, it is not lifted) acts on the z axis towards -z (z up; the tool plunges to -z).
@@ -18,6 +18,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from mill_common.parameters import Check, ParamSpec, non_negative, number_list, positive
+from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
 
 from mill_plant.models.base import (
     GRAVITY_SPEC,
@@ -27,7 +28,6 @@ from mill_plant.models.base import (
     check_mass_change,
     validated,
 )
-from mill_plant.rigid_axis import BELTRAN_TABLE1, RigidAxisParams
 
 
 def _table(field: str) -> list[float]:

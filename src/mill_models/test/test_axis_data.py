@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from mill_plant.rigid_axis import BELTRAN_TABLE1, RigidAxisParams, nominal_input_gain
+from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams, nominal_input_gain
 
 A = 0.003175 / (2.0 * math.pi)  # lead [m/rad], computed by hand from p
 

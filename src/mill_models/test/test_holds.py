@@ -1,4 +1,5 @@
-"""β-FROH discretisation, Rubio 2013 eq. (4)-(6): ZOH limit, eq. (6) identity, poles, hold."""
+"""β-FROH, Rubio 2013 eq. (4)-(6): ZOH limit, eq. (6) identity, poles, the reconstruction, the
+feed clamp, the held plant; and the sample hold."""
 
 from __future__ import annotations
 
@@ -7,12 +8,17 @@ import math
 import numpy as np
 import pytest
 import scipy.signal
-from mill_controllers.froh import (
+from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.holds import (
+    HeldPlant,
+    SampleHold,
     as_state_space,
+    clamped_pieces,
     froh_discretize,
     hold_input,
 )
-from mill_plant.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.quadrature import simpson
+from mill_models.reference_model import ContinuousReference, natural_frequency
 
 MODEL = ForceProcessModel()
 T = MODEL.sample_period
@@ -109,3 +115,51 @@ def test_beta_outside_range_is_refused() -> None:
         froh_discretize(PLANT_S, T, math.nan)
     with pytest.raises(ValueError, match='period'):
         froh_discretize(PLANT_S, 0.0, 0.0)
+
+
+@pytest.mark.parametrize(('u0', 'slope'), [(5.0, 200.0), (5.0, -200.0), (25.0, -400.0), (3.0, 0.0)])
+def test_clamped_pieces_stay_in_range_and_follow_the_ramp_inside(u0: float, slope: float) -> None:
+    lo, hi, dur = 0.0, 12.0, 0.1
+    pieces = clamped_pieces(u0, slope, dur, lo, hi)
+    assert sum(p[0] for p in pieces) == pytest.approx(dur)
+    t = 0.0
+    for length, start, sl in pieces:
+        for tau in np.linspace(0.0, length, 7):
+            value = start + sl * tau
+            assert lo - 1e-9 <= value <= hi + 1e-9
+            assert value == pytest.approx(min(hi, max(lo, u0 + slope * (t + tau))), abs=1e-9)
+        t += length
+
+
+@pytest.mark.parametrize('beta', [-0.5, 0.0, 1.0])
+def test_held_plant_applies_the_clamped_reconstruction(beta: float) -> None:
+    """advance() = plant steps over the clamped β-reconstruction; the cost is ∫(F_p − F_pm)²."""
+    model = ForceProcessModel(depth_profile=[0.0, 2.0, 0.3, 3.0])
+    lo, hi = 0.0, 8.0
+    held = HeldPlant(ForceProcessPlant(model), lo, hi)
+    traced = HeldPlant(ForceProcessPlant(model), lo, hi)
+    reference = ContinuousReference(0.7, natural_frequency(3.0 * T))
+    by_hand = ForceProcessPlant(model)
+    u_prev = 0.0
+    for uk in (6.0, 12.0, 1.0, -3.0, 5.0):
+        force, cost, pieces = held.advance(uk, beta)
+        assert cost == 0.0 and pieces == []
+        reference.begin(1000.0)
+        force2, cost2, pieces2 = traced.advance(uk, beta, reference, keep_trace=True)
+        reference.advance(T)
+        assert force2 == pytest.approx(force, rel=1e-12)
+        assert cost2 == pytest.approx(
+            sum(simpson(t, (f - fr) ** 2) for t, f, fr in pieces2), rel=1e-12
+        )
+        u0, slope = hold_input(uk, u_prev, beta, T)
+        for length, start, sl in clamped_pieces(u0, slope, T, lo, hi):
+            by_hand.step(start, sl, length)
+        assert force == pytest.approx(by_hand.force, rel=1e-12)
+        u_prev = uk
+    assert held.clamp(-1.0) == lo and held.clamp(9.0) == hi
+
+
+def test_sample_hold_replaces_non_finite_samples() -> None:
+    hold = SampleHold(0.0)
+    assert [hold(v) for v in (5.0, math.nan, math.inf, 7.0, -math.inf)] == [5, 5, 5, 7, 7]
+    assert hold.held == 3

@@ -1,4 +1,8 @@
-"""Rigid ball-screw axis of Beltrán 2013, eq. (1)-(3) and (5), with the Table 1 values.
+"""Nominal data of the rigid ball-screw axis, Beltrán 2013 eq. (1)-(3) and (5), Table 1.
+
+The plant integrates this axis (mill_plant.models.rigid, mill_plant.three_axis); the
+controllers and observers take their nominal input gain b from it (nominal_input_gain),
+so it lives in the model layer that every role package imports.
 
 One axis is a cart of mass m driven through a ball screw of inertia J and
 pitch p by a torque tau:

@@ -7,11 +7,10 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_plant.force_process import (
+from mill_models.force_process import (
     DEFAULT_DEPTH_PROFILE,
     ForceProcessModel,
     ForceProcessPlant,
-    clamped_pieces,
 )
 from scipy.integrate import solve_ivp
 
@@ -131,17 +130,3 @@ def test_non_finite_feed_is_refused_and_state_kept() -> None:
     with pytest.raises(ValueError, match='finite'):
         plant.step(1.0, math.inf, 0.01)
     np.testing.assert_array_equal(plant.state, x)
-
-
-@pytest.mark.parametrize(('u0', 'slope'), [(5.0, 200.0), (5.0, -200.0), (25.0, -400.0), (3.0, 0.0)])
-def test_clamped_pieces_stay_in_range_and_follow_the_ramp_inside(u0: float, slope: float) -> None:
-    lo, hi, dur = 0.0, 12.0, 0.1
-    pieces = clamped_pieces(u0, slope, dur, lo, hi)
-    assert sum(p[0] for p in pieces) == pytest.approx(dur)
-    t = 0.0
-    for length, start, sl in pieces:
-        for tau in np.linspace(0.0, length, 7):
-            value = start + sl * tau
-            assert lo - 1e-9 <= value <= hi + 1e-9
-            assert value == pytest.approx(min(hi, max(lo, u0 + slope * (t + tau))), abs=1e-9)
-        t += length

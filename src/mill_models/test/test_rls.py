@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from mill_observers.rls import RlsEstimator
+from mill_models.rls import RlsEstimator
 
 T = 0.25e-3
 

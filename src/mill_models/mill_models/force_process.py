@@ -27,6 +27,11 @@ Readings (papers README, "Rubio 2013"):
 Integration is exact: between two instants the input is affine, u(τ) = u0 + slope·τ (the
 β fractional-order hold reconstructs u_k + β(u_k − u_{k−1})·τ/T within a sample), so the
 augmented state [x; u; slope] evolves as ż = M z and z(τ + h) = expm(M h)·z(τ).
+
+Who uses it: the plant simulates the cut with ForceProcessPlant behind the drive's feed
+clamp (mill_plant.force_drive, mill_plant.force_process_node); the force controllers design
+with ForceProcessModel and run ForceProcessPlant copies as the shadow models of the
+multi-model schemes (mill_controllers.model_reference, mill_controllers.multi_model).
 """
 
 from __future__ import annotations
@@ -140,41 +145,6 @@ class AffineLti:
         else:
             out[1:] = z[:n]
         return out
-
-
-def clamped_pieces(
-    u0: float, slope: float, duration: float, lo: float, hi: float
-) -> list[tuple[float, float, float]]:
-    """Split u0 + slope·τ on [0, duration] into affine pieces clamped to [lo, hi].
-
-    Returns [(length, start value, slope)]: a piece outside the range becomes a constant
-    at the bound, so the reconstructed input never leaves [lo, hi].
-    """
-    if lo > hi:
-        raise ValueError(f'empty range [{lo}, {hi}]')
-    cuts = {0.0, float(duration)}
-    if slope != 0.0:
-        for bound in (lo, hi):
-            if math.isfinite(bound):
-                tau = (bound - u0) / slope
-                if 0.0 < tau < duration:
-                    cuts.add(tau)
-    edges = sorted(cuts)
-    pieces = []
-    for a, b in itertools.pairwise(edges):
-        if b <= a:
-            continue
-        mid = u0 + slope * 0.5 * (a + b)
-        start = u0 + slope * a
-        if mid > hi:
-            pieces.append((b - a, hi, 0.0))
-        elif mid < lo:
-            pieces.append((b - a, lo, 0.0))
-        else:
-            pieces.append((b - a, min(hi, max(lo, start)), slope))
-    if not pieces:
-        pieces.append((float(duration), min(hi, max(lo, u0)), 0.0))
-    return pieces
 
 
 class ForceProcessModel:
@@ -425,37 +395,3 @@ class ForceProcessPlant:
             raise ValueError(f'feed command must be finite, got u0={u0!r}, slope={slope!r}')
         if not (math.isfinite(duration) and duration >= 0.0):
             raise ParameterError('duration', duration, 'must be finite and >= 0')
-
-
-class DrivenForceProcess:
-    """The force process behind a feed drive whose feed is limited to [lo, hi] [mm/s].
-
-    apply(u0, slope, duration) applies u0 + slope·τ, clamped piece by piece (the drive
-    never runs outside its range), and returns the force on a grid [(times, forces)]
-    per smooth piece (split at clamp corners and depth changes) with spacing <= `spacing`.
-    """
-
-    def __init__(
-        self,
-        plant: ForceProcessPlant,
-        lo: float = -math.inf,
-        hi: float = math.inf,
-        spacing: float | None = None,
-    ) -> None:
-        if not lo <= hi:
-            raise ValueError(f'feed range [{lo}, {hi}] is empty')
-        self.plant = plant
-        self.lo = float(lo)
-        self.hi = float(hi)
-        self.spacing = float(spacing) if spacing else plant.model.sample_period / 16.0
-
-    def clamp(self, u: float) -> float:
-        return min(self.hi, max(self.lo, float(u)))
-
-    def apply(
-        self, u0: float, slope: float, duration: float
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
-        pieces = []
-        for length, start, sl in clamped_pieces(u0, slope, duration, self.lo, self.hi):
-            pieces.extend(self.plant.trace(start, sl, length, self.spacing))
-        return pieces

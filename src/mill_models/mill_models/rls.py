@@ -1,5 +1,8 @@
 """Recursive least squares with exponential forgetting, Hatwesh 2013 eq. (10)-(13) (ROS-free).
 
+Two role packages run this estimator: the adaptive PI (mill_controllers.adaptive_pi) with its
+own copy, and the rls observer (mill_observers.rls_observer); both take RLS_PARAMETERS.
+
 Model (reading of eq. (11)-(12)): a first-order plant with an input delay line,
 
     y(k) = a·y(k−1) + Σ_{i=1..m} b_i·u(k−i),      θ = [a, b_1, …, b_m],
@@ -37,7 +40,7 @@ import numpy as np
 from mill_common.parameters import ParamSpec, in_range, number, positive, positive_int
 from mill_common.signals import FopdtEstimate
 
-__all__ = ['RLS_PARAMETERS', 'FopdtEstimate', 'RlsEstimator']
+__all__ = ['RLS_PARAMETERS', 'RlsEstimator']
 
 
 def _pair(value: object) -> str | None:

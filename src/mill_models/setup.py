@@ -1,0 +1,22 @@
+from setuptools import find_packages, setup
+
+package_name = 'mill_models'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='mill developers',
+    maintainer_email='mill@example.com',
+    description='ROS-free model layer of mill: nominal axis data, force process, holds, polynomials, reference model, RLS.',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [],
+    },
+)
