@@ -99,7 +99,12 @@ class ObserverNode(Node):
             self._last_ns = ns
             self._stalled_since = None
             self._last_estimate = joint_state(
-                ns, (self.axis,), (est.position,), (est.velocity,), (est.disturbance,)
+                ns,
+                (self.axis,),
+                (est.position,),
+                (est.velocity,),
+                (est.disturbance,),
+                sender=self.get_name(),
             )
             self._pub.publish(self._last_estimate)
             if hasattr(self._observer, 'status'):

@@ -25,6 +25,7 @@ from mill_common.signals import AXES
 from mill_models.axis_data import RigidAxisParams
 
 from mill_plant.cutting import NoCutting, StepForce
+from mill_plant.drive_config import DRIVE_PARAMETERS
 from mill_plant.harmonic_force import PARAMETERS as HARMONIC_PARAMETERS
 from mill_plant.harmonic_force import from_parameters as harmonic_force
 from mill_plant.kline_force import KlineCuttingForce
@@ -277,6 +278,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
     ]
+    specs += list(DRIVE_PARAMETERS)
     return [
         (name, ParamSpec(name, s.default, s.description, s.check, s.read_only)) for name, s in specs
     ]

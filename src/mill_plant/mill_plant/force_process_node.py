@@ -168,7 +168,7 @@ class ForceProcessNode(Node):
         return missing
 
     def _watchdog(self) -> None:
-        action = self._lockstep.tick(time.monotonic(), self._missing_peers, self._k == 0)
+        action = self._lockstep.tick(time.monotonic(), self._missing_peers)
         if action is Action.START:
             self.get_logger().info('all peers matched: starting lockstep')
             self._publish_sample()

@@ -18,8 +18,7 @@ from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.config import build_controller
 from mill_observers.config import build_observer
-from mill_plant.config import build_plant
-from mill_plant.sensor import quantize
+from mill_plant.simulated_machine import SimulatedMachine
 from mill_trajectory.config import build_job
 
 from mill_bringup.jobs.base import Job, MessageSource
@@ -78,48 +77,45 @@ class AxisSimulation:
 
     def __init__(self, job: AxisJob, times: CoreTimer | None) -> None:
         scen = job.scenario
-        pv = scen.parameters(job.plant)
-        self.plant = build_plant(pv)
+        # The machine behind the plant node's front end: the same backend, the same calls.
+        self.machine = SimulatedMachine(scen.parameters(job.plant))
         self.path = build_job(scen.parameters(job.trajectory)).trajectory
         self.controllers, self.observers = build_axis_cores(scen)
-        self.active = [AXES.index(a) for a in job.axes]
-        self.resolution = pv['sensor_resolution']
+        self.active = [AXES.index(a) for a in self.machine.axes]
         self.dt_ns = job.dt_ns
         self.dt = seconds(job.dt_ns)
         self.rec = RunRecord.empty(job.samples, self.dt)
-        self.torque = [math.nan] * len(AXES)
         self.clock = times or NoTimer()
 
     def step(self, k: int) -> None:
         s = self.rec.signals
         t = seconds(k * self.dt_ns)
-        clock, plant, torque = self.clock, self.plant, self.torque
+        clock, machine = self.clock, self.machine
         clock.start()
         ref = self.path.sample(t)
         clock.lap('trajectory')
-        position = plant.position
-        for i in self.active:
-            y = quantize(position[i], self.resolution)
+        efforts = []
+        for i, y in zip(self.active, machine.read(), strict=True):
             clock.start()
             est = self.observers[i].correct(y)
             clock.lap('observer')
-            torque[i] = self.controllers[i].compute(t, y, ref.axis(i), est)
+            u = self.controllers[i].compute(t, y, ref.axis(i), est)
             clock.lap('controller')
+            efforts.append(u)
             s['position'][k, i] = y
             s['reference'][k, i] = ref.position[i]
             s['reference_velocity'][k, i] = ref.velocity[i]
             s['estimate_velocity'][k, i] = est.velocity
             s['estimate_disturbance'][k, i] = est.disturbance
-            s['torque'][k, i] = torque[i]
-        u = tuple(torque)
-        s['true_velocity'][k] = plant.velocity
-        s['true_disturbance'][k] = plant.disturbance(u)
-        s['force'][k] = plant.cutting_force()
+            s['torque'][k, i] = u
+        machine.write(efforts)
+        _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
+        s['force'][k] = machine.cutting_force()
         clock.start()
-        plant.step(u, self.dt)
+        machine.advance(self.dt)
         clock.lap('plant')
-        for i in self.active:
-            self.observers[i].predict(torque[i])
+        for i, u in zip(self.active, efforts, strict=True):
+            self.observers[i].predict(u)
             clock.lap('observer', call=False)  # the second half of the correct call's sample
 
     def record(self) -> RunRecord:
