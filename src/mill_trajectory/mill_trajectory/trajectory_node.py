@@ -12,6 +12,14 @@ feed_override.max]; a non-finite value is ignored and the last one held; both ar
 on /diagnostics as a WARN. Each sample's reference is then computed once, in order, with
 the override in effect when its tick arrives (mill_trajectory.feed_override).
 
+With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
+`axes` has reported its position, starts the job at the stamp of the newest of those states
+(the drive's system clock), first moving from where the axes stand to the path's start at
+`approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
+publishes every `publish_period` the points of the sample grid t0 + kT from one sample
+before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
+them at their states' stamps. The job status says when it started (`start_stamp_ns`).
+
 With feed_override.lockstep the node answers overrides instead of ticks: an override stamped
 t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
 point stamped t_k, with the override's ramp velocity[0] (a β-hold) applied over the sample.
@@ -21,14 +29,18 @@ Each newer stamp gets the next sample, in order; a repeated override gets the sa
 from __future__ import annotations
 
 import math
+import time
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_common.checks import Rejected, joint_values
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
+from rclpy.clock import Clock as RosClock
+from rclpy.clock import ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -36,6 +48,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
+from mill_trajectory.approach import Approach, ApproachError
 from mill_trajectory.config import build_job, parameter_specs
 from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
 
@@ -50,11 +63,17 @@ class TrajectoryNode(Node):
         self._job_end = 0.0
         self._done_sent = False
         self._next_report = 0.0
+        self._t0: int | None = None  # realtime: job start on the system clock [ns]
+        self._newest_state_ns = 0
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, JointTrajectory] | None = None
-        if self.params.values['feed_override.lockstep']:
+        self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
+        self._refused = ''
+        if self.params.values['timing'] == 'realtime':
+            self._start_realtime()
+        elif self.params.values['feed_override.lockstep']:
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
             )
@@ -67,6 +86,8 @@ class TrajectoryNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
+        if self._t0 is not None:
+            raise ValueError('the path cannot change while a realtime job runs')
         if values['feed_override.min'] > values['feed_override.max']:
             raise ValueError('feed_override.min must not exceed feed_override.max')
         if self._scaled is not None:
@@ -87,8 +108,80 @@ class TrajectoryNode(Node):
             return
         self._dt_ns = period_ns(values['sample_period'])
         self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
+        if values['timing'] == 'realtime':
+            return
         if values['feed_override.enabled']:
             self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns))
+
+    # -- real time ---------------------------------------------------------------------------
+    def _start_realtime(self) -> None:
+        v = self.params.values
+        if v['feed_override.enabled']:
+            raise ValueError('feed_override is not available with timing realtime')
+        for axis in v['axes']:
+            self.create_subscription(
+                JointState,
+                topics.state(axis),
+                lambda msg, a=axis: self._on_state(a, msg),
+                1,
+            )
+        wall = RosClock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(v['publish_period'], self._publish_realtime, clock=wall)
+        self.get_logger().info(
+            f'realtime: the job starts when {", ".join(v["axes"])} report their positions'
+        )
+
+    def _on_state(self, axis: str, msg: JointState) -> None:
+        value = joint_values(msg.name, {'position': msg.position}, axis, ('position',))
+        if isinstance(value, Rejected):
+            self.get_logger().warning(
+                f'dropped a state on {topics.state(axis)}: {value.reason}',
+                throttle_duration_sec=1.0,
+            )
+            return
+        self._positions[axis] = value[0]
+        self._newest_state_ns = max(
+            getattr(self, '_newest_state_ns', 0), from_stamp(msg.header.stamp)
+        )
+
+    def _publish_realtime(self) -> None:
+        v = self.params.values
+        if self._t0 is None:
+            if self._refused or set(self._positions) != set(v['axes']):
+                return
+            here = [self._positions.get(a, 0.0) for a in AXES]
+            try:
+                self._path = Approach(
+                    self._path,
+                    here,
+                    v['approach.speed'],
+                    v['approach.max_distance'],
+                    [AXES.index(a) for a in v['axes']],
+                )
+            except ApproachError as exc:
+                self._refused = str(exc)
+                self.get_logger().error(f'job refused: {exc}')
+                self._report(0.0, 'refused', self._refused, level=DiagnosticStatus.ERROR)
+                return
+            self._job_end += self._path.duration
+            self._t0 = self._newest_state_ns
+            self.get_logger().info(
+                f'job started; approach of {1e3 * self._path.distance:.3f} mm in '
+                f'{self._path.duration:.2f} s, ends at t = {self._job_end:.3f} s'
+            )
+        dt_ns = self._dt_ns
+        now = time.time_ns() - self._t0
+        first = max(0, now // dt_ns - 1)
+        count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
+        out = JointTrajectory()
+        out.header.stamp = to_stamp(self._t0 + first * dt_ns)
+        out.header.frame_id = self.get_name()
+        out.joint_names = list(AXES)
+        for i in range(count):
+            sample = self._path.sample(seconds((first + i) * dt_ns))
+            out.points.append(self._point(sample, i * dt_ns))
+        self._ref_pub.publish(out)
+        self._job_status(seconds(now))
 
     def _on_override(self, msg: JointState) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
@@ -173,17 +266,23 @@ class TrajectoryNode(Node):
             out.points.append(self._point(sample, i * self._dt_ns))
         self._ref_pub.publish(out)
 
-    def _report(self, t: float, state: str, problem: str | None = None) -> None:
-        values = {
+    def _report(
+        self, t: float, state: str, problem: str | None = None, level: bytes | None = None
+    ) -> None:
+        values: dict[str, object] = {
             'state': state,
             'time': t,
             'end_time': self._job_end,
             'feed_override': self._override.value,
         }
+        if self._t0 is not None:
+            values['start_stamp_ns'] = self._t0
+        if level is None:
+            level = DiagnosticStatus.WARN if problem else DiagnosticStatus.OK
         self._diag_pub.publish(
             diagnostic_array(
                 self.get_clock().now().nanoseconds,
-                DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
+                level,
                 JOB_STATUS_NAME,
                 problem or f'job {state}',
                 'mill',
