@@ -90,6 +90,16 @@ class Monitor(Node):
         stamp = cdr_stamp_ns(store[-1]) if store else None
         return -1 if stamp is None else stamp
 
+    def status(self, name: str) -> dict[str, str] | None:
+        """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
+        for array in reversed(self.diagnostics):
+            for s in array.status:
+                if s.name == name:
+                    values = {kv.key: kv.value for kv in s.values}
+                    level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
+                    return values | {'message': s.message, 'level': str(level)}
+        return None
+
     def problems(self) -> list[str]:
         """Every WARN or ERROR status heard on /diagnostics, once each, in order."""
         seen: dict[str, None] = {}

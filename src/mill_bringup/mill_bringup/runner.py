@@ -289,6 +289,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scen, runs = load_scenario(args)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
+        if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
+            raise RunError('--compare-offline: a realtime run has no offline twin')
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
         bags: dict[str, Path | None] = {}

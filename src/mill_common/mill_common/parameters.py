@@ -81,6 +81,12 @@ def positive_int(value: Any) -> str | None:
     return None
 
 
+def non_negative_int(value: Any) -> str | None:
+    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+        return 'must be a whole number >= 0'
+    return None
+
+
 def one_of(*choices: str) -> Check:
     def check(value: Any) -> str | None:
         if value in choices:
@@ -164,6 +170,31 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
         (
             'sample_period',
             ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+        ),
+        (
+            'timing',
+            ParamSpec(
+                'timing',
+                'lockstep',
+                'lockstep: inputs joined by their exact stamps on the sample grid (the plant is '
+                'the clock); realtime: act on the newest state, the reference interpolated at '
+                'its stamp, nothing stale queued',
+                one_of('lockstep', 'realtime'),
+                True,
+            ),
+        ),
+        (
+            'command_delay',
+            ParamSpec(
+                'command_delay',
+                0,
+                'samples N between the measurement a command is computed from and the period it '
+                'acts in (realtime: 1); the observer predicts with the commands that really act '
+                'and estimates the state N samples ahead, the controller aims at the reference '
+                'N samples ahead',
+                non_negative_int,
+                True,
+            ),
         ),
     ]
 

@@ -6,7 +6,8 @@ Every command names the state it answers by its stamp. The drive front end
 - lockstep: `complete(stamp)` — has every axis answered the state of this step?
 - real time: `take(now)` at each tick — the newest command of every axis (zero-order
   hold: a command stays applied until a newer one arrives). A command is fresh if it
-  arrived since the last tick; a tick without a fresh command counts as late, and after
+  arrived since the last tick; a tick without a fresh command counts as late (from the
+  axis's first command on: before it the job has not started), and after
   `brake_after` late ticks in a row the axis is braked (NaN) until fresh commands return.
 
 It also keeps, per axis, the state → command latency of every fresh command: the time the
@@ -70,6 +71,9 @@ class CommandTable:
     def take(self) -> Tick:
         efforts, braked, resumed = [], [], []
         for axis, c in self.by_axis.items():
+            if c.stamp < 0:
+                efforts.append(math.nan)  # no command yet: the job has not started for it
+                continue
             c.ticks += 1
             if c.fresh:
                 c.fresh = False

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from mill_common.parameters import ParamSpec, boolean, in_range, one_of, positive_int
+from mill_common.parameters import (
+    ParamSpec,
+    boolean,
+    in_range,
+    non_negative_int,
+    one_of,
+    positive_int,
+)
 
 TIMINGS = ('lockstep', 'realtime')
 
@@ -38,6 +45,18 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
             'any other node are ignored and reported; "" accepts any',
             _owners,
+            True,
+        ),
+    ),
+    (
+        'command_delay',
+        ParamSpec(
+            'command_delay',
+            0,
+            'lockstep: samples N between the step a command answers and the step the plant '
+            'applies it from (a transport delay; the first N steps get zero input); realtime '
+            'has one sample by nature and ignores it',
+            non_negative_int,
             True,
         ),
     ),

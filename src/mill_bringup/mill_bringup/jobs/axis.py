@@ -10,6 +10,7 @@ order in one process, so the distributed record equals the offline one bit for b
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -18,6 +19,7 @@ from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.config import build_controller
 from mill_observers.config import build_observer
+from mill_observers.delay import DelayCompensation
 from mill_plant.simulated_machine import SimulatedMachine
 from mill_trajectory.config import build_job
 
@@ -29,8 +31,30 @@ from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
+AXIS_NODES = {('mill_controllers', 'axis_controller'), ('mill_observers', 'observer_node')}
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
+
+
+def timing_of(scen: Scenario, node: str) -> str:
+    """A node's `timing` parameter (lockstep for nodes that have none)."""
+    return str(scen.parameters(node).get('timing', 'lockstep'))
+
+
+def axis_delays(scen: Scenario) -> dict[int, int]:
+    """command_delay of each axis's controller and observer, which must agree."""
+    delays: dict[int, int] = {}
+    for node in scen.nodes:
+        if (node.package, node.executable) not in AXIS_NODES:
+            continue
+        values = scen.parameters(node.name)
+        i = axis_index(values['axis'])
+        if delays.setdefault(i, values['command_delay']) != values['command_delay']:
+            raise ScenarioError(
+                f'scenario {scen.name}: the {AXES[i]} controller and observer disagree on '
+                'command_delay'
+            )
+    return delays
 
 
 def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
@@ -77,13 +101,22 @@ class AxisSimulation:
 
     def __init__(self, job: AxisJob, times: CoreTimer | None) -> None:
         scen = job.scenario
+        pv = scen.parameters(job.plant)
         # The machine behind the plant node's front end: the same backend, the same calls.
-        self.machine = SimulatedMachine(scen.parameters(job.plant))
+        self.machine = SimulatedMachine(pv)
         self.path = build_job(scen.parameters(job.trajectory)).trajectory
-        self.controllers, self.observers = build_axis_cores(scen)
+        controllers, observers = build_axis_cores(scen)
         self.active = [AXES.index(a) for a in self.machine.axes]
         self.dt_ns = job.dt_ns
         self.dt = seconds(job.dt_ns)
+        delays = axis_delays(scen)
+        self.controllers = controllers
+        self.lead = {i: delays[i] for i in self.active}  # the controllers' aim ahead
+        self.observers = {
+            i: DelayCompensation(observers[i], delays[i], self.dt) for i in self.active
+        }
+        # Commands the plant applies N steps after the step they answer (zero before).
+        self.in_flight: deque[list[float]] = deque([[0.0] * len(self.active)] * pv['command_delay'])
         self.rec = RunRecord.empty(job.samples, self.dt)
         self.clock = times or NoTimer()
 
@@ -99,7 +132,14 @@ class AxisSimulation:
             clock.start()
             est = self.observers[i].correct(y)
             clock.lap('observer')
-            u = self.controllers[i].compute(t, y, ref.axis(i), est)
+            lead = self.lead[i]
+            if lead:  # the command acts N samples on: aim at the state and reference there
+                t_c = seconds((k + lead) * self.dt_ns)
+                u = self.controllers[i].compute(
+                    t_c, est.position, self.path.sample(t_c).axis(i), est
+                )
+            else:
+                u = self.controllers[i].compute(t, y, ref.axis(i), est)
             clock.lap('controller')
             efforts.append(u)
             s['position'][k, i] = y
@@ -108,14 +148,18 @@ class AxisSimulation:
             s['estimate_velocity'][k, i] = est.velocity
             s['estimate_disturbance'][k, i] = est.disturbance
             s['torque'][k, i] = u
-        machine.write(efforts)
+        applied = efforts
+        if self.in_flight:
+            self.in_flight.append(efforts)
+            applied = self.in_flight.popleft()
+        machine.write(applied)
         _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
         s['force'][k] = machine.cutting_force()
         clock.start()
         machine.advance(self.dt)
         clock.lap('plant')
         for i, u in zip(self.active, efforts, strict=True):
-            self.observers[i].predict(u)
+            self.observers[i].command(u)
             clock.lap('observer', call=False)  # the second half of the correct call's sample
 
     def record(self) -> RunRecord:
@@ -126,6 +170,11 @@ class AxisJob(Job[RunRecord]):
     KIND = 'axis'
     CLOCK = ('mill_plant', 'plant_node')
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
+
+    @classmethod
+    def runs(cls, scen: Scenario) -> bool:
+        plants = [n for n in scen.nodes if (n.package, n.executable) == cls.CLOCK]
+        return bool(plants) and timing_of(scen, plants[0].name) == 'lockstep'
 
     def __init__(self, scen: Scenario) -> None:
         super().__init__(scen)
