@@ -32,6 +32,7 @@ class RunRecord:
 
     t: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
+    events: list[str] = field(default_factory=list)  # what happened besides the signals
 
     @classmethod
     def empty(cls, n: int, dt: float) -> RunRecord:

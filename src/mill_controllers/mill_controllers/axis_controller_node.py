@@ -182,9 +182,7 @@ class AxisControllerNode(Node):
             self.get_logger().error(f'control law gave {torque} at t = {seconds(ns):.4f} s')
             return
         self._last_ns = ns
-        self._last_command = joint_state(
-            ns, (self.axis,), effort=(torque,), sender=self.get_name()
-        )
+        self._last_command = joint_state(ns, (self.axis,), effort=(torque,), sender=self.get_name())
         self._pub.publish(self._last_command)
         law = self._law.law
         if hasattr(law, 'status'):

@@ -11,6 +11,7 @@ from mill_common.parameters import (
     axis_node_specs,
     non_negative,
     one_of,
+    positive_or_inf,
 )
 from mill_models.axis_data import nominal_input_gain
 
@@ -40,6 +41,19 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'after a run-time change of controller or gains, the time constant with which '
                 "the old law's output fades into the new one's [s]; 0 = at the next sample",
                 non_negative,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'following_error_limit',
+            ParamSpec(
+                'following_error_limit',
+                0.005,
+                'following-error trip: |measured position - reference| above this latches a '
+                'brake request (effort NaN: the drive brakes the axis) until reset by the '
+                'reset_trip service or by setting this parameter [m]; .inf disables it',
+                positive_or_inf,
             ),
         )
     )

@@ -18,6 +18,7 @@ import numpy as np
 from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.config import build_controller
+from mill_controllers.trip import FollowingErrorTrip
 from mill_observers.config import build_observer
 from mill_observers.delay import DelayCompensation
 from mill_plant.simulated_machine import SimulatedMachine
@@ -55,6 +56,16 @@ def axis_delays(scen: Scenario) -> dict[int, int]:
                 'command_delay'
             )
     return delays
+
+
+def following_error_trips(scen: Scenario) -> dict[int, FollowingErrorTrip]:
+    """The following-error trip of each axis controller, by axis index."""
+    trips = {}
+    for node in scen.nodes:
+        if (node.package, node.executable) == ('mill_controllers', 'axis_controller'):
+            values = scen.parameters(node.name)
+            trips[axis_index(values['axis'])] = FollowingErrorTrip(values['following_error_limit'])
+    return trips
 
 
 def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
@@ -112,6 +123,7 @@ class AxisSimulation:
         delays = axis_delays(scen)
         self.controllers = controllers
         self.lead = {i: delays[i] for i in self.active}  # the controllers' aim ahead
+        self.trips = following_error_trips(scen)
         self.observers = {
             i: DelayCompensation(observers[i], delays[i], self.dt) for i in self.active
         }
@@ -141,6 +153,7 @@ class AxisSimulation:
             else:
                 u = self.controllers[i].compute(t, y, ref.axis(i), est)
             clock.lap('controller')
+            u = self.trips[i].command(t, y - ref.position[i], u)
             efforts.append(u)
             s['position'][k, i] = y
             s['reference'][k, i] = ref.position[i]
@@ -163,6 +176,12 @@ class AxisSimulation:
             clock.lap('observer', call=False)  # the second half of the correct call's sample
 
     def record(self) -> RunRecord:
+        self.rec.events = [
+            f'{AXES[i]} axis: following-error trip at t = {trip.trip.time:.4f} s, '
+            f'|e| = {1e3 * abs(trip.trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
+            for i, trip in sorted(self.trips.items())
+            if trip.trip is not None
+        ]
         return self.rec
 
 
@@ -251,10 +270,10 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        return format_summary(summarize(rec, skip), skip)
+        return '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
-        return {'metrics': [vars(m) for m in summarize(rec, skip)]}
+        return {'metrics': [vars(m) for m in summarize(rec, skip)], 'events': rec.events}
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         return {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
