@@ -33,6 +33,8 @@ class RunRecord:
     t: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
     events: list[str] = field(default_factory=list)  # what happened besides the signals
+    # Messages left out per topic: sent by another node than the topic's owner, or malformed.
+    foreign: dict[str, int] = field(default_factory=dict)
 
     @classmethod
     def empty(cls, n: int, dt: float) -> RunRecord:

@@ -60,9 +60,16 @@ class RunResult:
     summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
     text: str  # the job's summary as text
     problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
+    foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
     differences: dict[str, float] | None = None  # against the offline run
     bag: dict[str, Any] | None = None
     record: Any = field(default=None, repr=False)
+
+    @property
+    def intact(self) -> bool:
+        """No sample missing, nothing foreign in the record or in the drive's graph."""
+        owned = not any('ownership' in p for p in self.problems)
+        return not self.missing_samples and not self.foreign and owned
 
     @property
     def offline_max_difference(self) -> float | None:
@@ -214,6 +221,7 @@ def run(
         summary=job.summary_json(record, skip),
         text=job.summary(record, skip),
         problems=problems,
+        foreign=job.foreign(record),
         bag=bag,
         record=record,
     )
@@ -236,6 +244,8 @@ def format_result(r: RunResult) -> str:
     ]
     if r.missing_samples:
         lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
+    if r.foreign:
+        lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
     if r.problems:
         lines.append('diagnostics: ' + '; '.join(r.problems[:5]))
     if r.differences is not None:
@@ -286,6 +296,7 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     records: dict[str, Any] = {}
+    intact = True
     try:
         scen, runs = load_scenario(args)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
@@ -321,6 +332,7 @@ def main(argv: list[str] | None = None) -> int:
                 record_bag=bags[name],
             )
             records[name] = result.record
+            intact = intact and result.intact
             (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
             if name:
                 print(f'variant {name}:')
@@ -335,6 +347,13 @@ def main(argv: list[str] | None = None) -> int:
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
+    if not intact:
+        print(
+            'run_scenario: error: the record is incomplete or foreign messages were seen '
+            '(see above)',
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

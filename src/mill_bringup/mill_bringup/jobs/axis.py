@@ -261,8 +261,24 @@ class AxisJob(Job[RunRecord]):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw}
         types = {**self.monitor_topics(), **self.recorded_topics()}
-        rec, missing = record_from_raw(kept, types, self.axes, self._samples, self.dt_ns)
+        rec, missing = record_from_raw(
+            kept, types, self.axes, self._samples, self.dt_ns, owners=self.owners()
+        )
         return rec, {t: m for t, m in missing.items() if m}
+
+    def owners(self) -> dict[str, str]:
+        """The node each per-axis topic must come from (header.frame_id)."""
+        out = {}
+        for node in self.scenario.nodes:
+            key = (node.package, node.executable)
+            if key not in AXIS_NODES:
+                continue
+            axis = self.scenario.parameters(node.name)['axis']
+            topic = topics.joint_command(axis) if key[0] == 'mill_controllers' else None
+            out[topic or topics.estimate(axis)] = node.name
+        for axis in self.axes:
+            out[topics.state(axis)] = self.plant
+        return out
 
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> AxisSimulation:
@@ -274,6 +290,9 @@ class AxisJob(Job[RunRecord]):
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         return {'metrics': [vars(m) for m in summarize(rec, skip)], 'events': rec.events}
+
+    def foreign(self, rec: RunRecord) -> dict[str, int]:
+        return dict(rec.foreign)
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         return {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}

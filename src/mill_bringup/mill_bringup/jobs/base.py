@@ -126,6 +126,10 @@ class Job(ABC, Generic[R]):
     def summary_json(self, rec: R, skip: float) -> dict[str, Any]:
         """The same as JSON-ready values."""
 
+    def foreign(self, rec: R) -> dict[str, int]:
+        """Messages the record left out per topic: from another sender, or malformed."""
+        return {}
+
     @abstractmethod
     def differences(self, rec: R, other: R) -> dict[str, float]:
         """Largest difference per signal between two records of this job (inf: a gap)."""
