@@ -93,8 +93,13 @@ def run(
     domain_id: str | None = None,
     compare_offline: bool = False,
     record_bag: Path | None = None,
+    respawn: bool = False,
 ) -> RunResult:
-    """Run the job across processes; the record holds samples 0 .. job.samples − 1."""
+    """Run the job across processes; the record holds samples 0 .. job.samples − 1.
+
+    respawn: a node other than the clock node that dies is started again (at most 3 times)
+    and rejoins the job, instead of ending the run.
+    """
     scen = job.scenario
     job.prepare_graph(monitored=True)
     env = ros_environment(domain_id=domain_id)
@@ -123,7 +128,9 @@ def run(
         monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
         executor = make_executor()
         executor.add_node(monitor)
-        graph = Graph(scen, run_dir, env)
+        clocks = job.clock_nodes
+        others = [n.name for n in scen.nodes if n not in clocks]
+        graph = Graph(scen, run_dir, env, respawn=others if respawn else ())
 
         def spin(when: str) -> None:
             executor.spin_once(timeout_sec=0.05)
@@ -135,7 +142,6 @@ def run(
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
-        clocks = job.clock_nodes
         graph.launch([n for n in scen.nodes if n not in clocks])
         upstream = job.upstream_topics()
         deadline = time.monotonic() + startup_timeout
@@ -191,7 +197,7 @@ def run(
                 'size_bytes': monitor.recorder.writer.size_bytes,
             }
         record, missing = job.record(monitor.raw)
-        problems = monitor.problems()
+        problems = graph.notes + monitor.problems()
     except GraphError as exc:
         raise RunError(str(exc)) from None
     finally:
@@ -292,6 +298,11 @@ def main(argv: list[str] | None = None) -> int:
         'exist (default: RUN_DIR/bag)',
     )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
+    parser.add_argument(
+        '--respawn',
+        action='store_true',
+        help='start a node that dies again (not the plant); it rejoins the running job',
+    )
     args = parser.parse_args(argv)
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
@@ -330,6 +341,7 @@ def main(argv: list[str] | None = None) -> int:
                 domain_id=args.domain_id,
                 compare_offline=args.compare_offline,
                 record_bag=bags[name],
+                respawn=args.respawn,
             )
             records[name] = result.record
             intact = intact and result.intact

@@ -63,6 +63,7 @@ REALTIME_STATUS = 'mill_plant: realtime'
 OWNERSHIP_STATUS = 'mill_plant: ownership'
 AXIS_STATUS = 'mill_plant: {} axis'
 MACHINE_AXES = ('x', 'y', 'z')
+UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
 
 
@@ -450,18 +451,21 @@ class DriveNode(LifecycleNode):
                 continue
             topic = topics.joint_command(axis)
             for info in self.get_publishers_info_by_topic(topic):
-                if info.node_name != owner:
+                if info.node_name not in (owner, UNKNOWN_NODE):
                     self._note_foreign(topic, info.node_name)
             state = topics.state(axis)
             for info in self.get_publishers_info_by_topic(state):
-                if info.node_name != self.get_name():
+                if info.node_name not in (self.get_name(), UNKNOWN_NODE):
                     self._note_foreign(state, info.node_name)
 
     def _report_axis(self, axis: str, level: bytes, message: str) -> None:
-        log = self.get_logger()
-        {DiagnosticStatus.OK: log.info, DiagnosticStatus.WARN: log.warning}.get(level, log.error)(
-            f'axis {axis}: {message}'
-        )
+        # rclpy wants one severity per call site: one call each.
+        if level == DiagnosticStatus.OK:
+            self.get_logger().info(f'axis {axis}: {message}')
+        elif level == DiagnosticStatus.WARN:
+            self.get_logger().warning(f'axis {axis}: {message}')
+        else:
+            self.get_logger().error(f'axis {axis}: {message}')
         status = diagnostic_status(
             level, AXIS_STATUS.format(axis), message, f'axis_{axis}', {'step': self._k}
         )
