@@ -184,6 +184,36 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
         (
+            'plant_node',
+            ParamSpec(
+                'plant_node',
+                'plant',
+                'the node whose states this node accepts (header.frame_id); states from any '
+                'other node are dropped and reported',
+                text,
+                True,
+            ),
+        ),
+        (
+            'input_warn_time',
+            ParamSpec(
+                'input_warn_time',
+                1.0,
+                'an input silent this long (after its first message) is reported as WARN [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+        (
+            'input_timeout',
+            ParamSpec(
+                'input_timeout',
+                10.0,
+                'an input silent this long is an ERROR; in lockstep the node then ends with a '
+                'message naming it [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+        (
             'command_delay',
             ParamSpec(
                 'command_delay',

@@ -1,17 +1,31 @@
 """Axis controller node: one axis, one process.
 
-For every sample it joins the measured position (/mill/<axis>/state), the
-observer's estimate (/mill/<axis>/estimate) and the reference point of that
-time (/mill/reference, several points per message) by stamp, runs the
-selected control law and publishes the torque on /mill/<axis>/joint_command
-with the same stamp. A law that designs with the observer's identified model
-(adaptive_pi with model_source 'observer') also waits for that sample's
-/mill/<axis>/observer_state.
+For every sample it joins the measured position (mill/<axis>/state), the observer's
+estimate (mill/<axis>/estimate) and, for a law that designs with the observer's model
+(adaptive_pi with model_source 'observer'), that sample's mill/<axis>/observer_state, by
+stamp; takes the reference at that stamp (plus command_delay samples) from the points of
+mill/reference; runs the selected control law and publishes the torque on
+mill/<axis>/joint_command with the same stamp and its own name in header.frame_id.
+
+timing lockstep: every stamp is on the plant's grid and the node waits for all inputs of a
+sample; a repeated state (the plant offering a step again) is answered with the same
+command. timing realtime: the node acts on the newest state whose estimate has arrived,
+drops anything older, and interpolates the reference at the state's stamp.
+
+Every message is checked before use (mill_common.checks): sender, joint, array lengths,
+finite values, stamp. A bad one is dropped, counted and reported on /diagnostics; silence
+on an input is reported and, in lockstep, ends the node after input_timeout
+(mill_common.input_guard).
+
+Following-error trip (mill_controllers.trip): |measured position − reference| above
+`following_error_limit` latches a brake request (effort NaN, which the drive answers by
+braking the axis) until the `~/reset_trip` service (std_srvs/Trigger) is called or the
+limit is set again; the trip is an ERROR on /diagnostics naming the axis, the error and the
+time. A law that cannot compute (non-finite result) also sends the brake request.
 
 Changing `controller` or any gain on the running node swaps the law without a bump
-(mill_controllers.switching): the switch sample still outputs the old law's value and the
-difference fades over `blend_time`; the switch is reported on /diagnostics. A law with
-internal estimates (adaptive_pi) publishes them on /mill/<axis>/controller_state.
+(mill_controllers.switching). A law with internal estimates (adaptive_pi) publishes them on
+mill/<axis>/controller_state.
 """
 
 from __future__ import annotations
@@ -22,11 +36,13 @@ from dataclasses import replace
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_common.checks import Rejected, StampCheck, joint_values, owner_check, point_values
+from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
+from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.ros import (
     DATA_QOS,
     diagnostic_array,
-    first,
     from_duration,
     from_stamp,
     joint_state,
@@ -34,18 +50,20 @@ from mill_common.ros import (
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AxisReference, Estimate, FopdtEstimate
 from mill_common.stamp_join import StampJoin
-from mill_common.timebase import seconds
+from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_controllers.config import build_controller, parameter_specs
 from mill_controllers.registry import CONTROLLERS
 from mill_controllers.switching import BumplessSwitch, check_replacement
+from mill_controllers.trip import BRAKE, FollowingErrorTrip
 
-INPUTS = ('state', 'estimate', 'reference')
+INPUTS = ('state', 'estimate')
 
 
 def needs_model(law: object) -> bool:
@@ -61,27 +79,63 @@ class AxisControllerNode(Node):
     def __init__(self) -> None:
         super().__init__('axis_controller')
         self._law: BumplessSwitch | None = None
+        self._trip: FollowingErrorTrip | None = None
         self._reported_switch = None
         self.params = NodeParameters(self, parameter_specs(), self._configure)
-        axis = self.axis = self.params.values['axis']
+        v = self.params.values
+        axis = self.axis = v['axis']
+        self.realtime = v['timing'] == 'realtime'
+        self._dt_ns = period_ns(v['sample_period'])
+        self._lead_ns = v['command_delay'] * self._dt_ns
+        self._owners = {
+            'state': v['plant_node'],
+            'estimate': v['observer_node'] or f'{axis}_observer',
+            'reference': v['trajectory_node'],
+        }
         self._join = StampJoin(required_inputs(self._law.law))
+        self._ready: dict[int, dict[str, Any]] = {}  # joined samples waiting for a reference
+        self._reference = ReferenceBuffer()
+        self._stamps = {
+            slot: StampCheck(None if self.realtime else self._dt_ns) for slot in self._owners
+        }
         self._model_seen = False  # a model estimate has arrived on observer_state
         self._last_ns = -1
         self._last_command: JointState | None = None
         self._waiting_since: float | None = None
+        self._late_references = 0
         self._pub = self.create_publisher(JointState, topics.joint_command(axis), DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.controller_state(axis), DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
-        self.create_subscription(JointState, topics.state(axis), self._on_state, DATA_QOS)
-        self.create_subscription(JointState, topics.estimate(axis), self._on_estimate, DATA_QOS)
-        self.create_subscription(JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS)
-        self.create_subscription(
-            JointState, topics.observer_state(axis), self._on_observer_state, DATA_QOS
+        self.guard = InputGuard(
+            self,
+            lambda: self.params.values['input_warn_time'],
+            lambda: self.params.values['input_timeout'],
+            exit_on_silence=not self.realtime,
+            stamp_ns=lambda: max(self._last_ns, 0),
+            extra=self._trip_status,
         )
+        # Real time keeps only the newest message of each input; lockstep must lose none.
+        qos = 1 if self.realtime else DATA_QOS
+        self._topics = {
+            'state': topics.state(axis),
+            'estimate': topics.estimate(axis),
+            'reference': topics.REFERENCE,
+            'model': topics.observer_state(axis),
+        }
+        for slot, publisher in self._owners.items():
+            self.guard.watch(self._topics[slot], publisher)
+        self.create_subscription(JointState, self._topics['state'], self._on_state, qos)
+        self.create_subscription(JointState, self._topics['estimate'], self._on_estimate, qos)
+        self.create_subscription(
+            JointTrajectory, self._topics['reference'], self._on_reference, DATA_QOS
+        )
+        self.create_subscription(JointState, self._topics['model'], self._on_observer_state, qos)
+        self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
-            f'axis {axis}: controller {self.params.values["controller"]}, '
-            f'commands on {topics.joint_command(axis)}'
+            f'axis {axis}: controller {v["controller"]}, timing {v["timing"]}, commands on '
+            f'{self.resolve_topic_name(topics.joint_command(axis))}, following-error limit '
+            f'{1e3 * v["following_error_limit"]:g} mm'
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
@@ -89,7 +143,10 @@ class AxisControllerNode(Node):
             law = build_controller(values)
             self._law = BumplessSwitch(law, values['sample_period'], values['blend_time'])
             self._law_name = values['controller']
+            self._trip = FollowingErrorTrip(values['following_error_limit'])
             return
+        # Setting following_error_limit (to any value, the same one too) clears a trip.
+        limit = FollowingErrorTrip(values['following_error_limit'])
         if values['axis'] != self.axis:
             raise ValueError('axis is fixed for the life of the node')
         old = self.params.values
@@ -105,55 +162,103 @@ class AxisControllerNode(Node):
                 f'has arrived on {topics.observer_state(self.axis)} (run the rls observer)'
             )
         self._law.set_blend_time(values['sample_period'], values['blend_time'])
-        if any(values[k] != old[k] for k in values if k != 'blend_time'):
+        if self._trip is not None and self._trip.trip is not None:
+            self._log_reset(self._trip.reset(), 'parameter following_error_limit set')
+        self._trip = limit
+        unchanged = ('blend_time', 'following_error_limit', 'input_warn_time', 'input_timeout')
+        if any(values[k] != old[k] for k in values if k not in unchanged):
             self._law.replace(law)
             self._law_name = values['controller']  # params.values changes after we return
             ready = self._join.require(required_inputs(law))
             if ready is not None:  # a sample that waited only for the old law's extra input
-                self._act(*ready)
+                self._ready[ready[0]] = ready[1]
+                self._try_pending()
 
     # -- inputs ----------------------------------------------------------------------------
-    def _fresh(self, ns: int) -> bool:
-        if ns == self._last_ns and self._last_command is not None:
-            self._pub.publish(self._last_command)  # the plant offered this step again
-        return ns > self._last_ns
+    def _accept(self, slot: str, msg: Any) -> int | None:
+        """The message's stamp if its sender and stamp are fine, else None (dropped)."""
+        ns = from_stamp(msg.header.stamp)
+        problem = owner_check(msg.header.frame_id, self._owners[slot]) or self._stamps[slot].check(
+            ns
+        )
+        if problem is not None:
+            if slot == 'state' and ns == self._last_ns and problem.reason.startswith('stamp'):
+                return None
+            self.guard.drop(self._topics[slot], problem, msg.header.frame_id)
+            return None
+        return ns
 
     def _on_state(self, msg: JointState) -> None:
-        ns = from_stamp(msg.header.stamp)
-        if self._fresh(ns):
-            self._offer('state', ns, first(msg.position, 'position'))
+        ns = self._accept('state', msg)
+        if ns is None:
+            return
+        self.guard.heard(self._topics['state'])
+        if self.realtime and self._stamps['state'].is_repeat(ns):
+            self.guard.drop(self._topics['state'], Rejected(f'repeated stamp {ns} ns'))
+            return
+        if ns == self._last_ns and self._last_command is not None:
+            self._pub.publish(self._last_command)  # the plant offered this step again
+            return
+        if ns < self._last_ns:
+            return
+        value = joint_values(msg.name, {'position': msg.position}, self.axis, ('position',))
+        if isinstance(value, Rejected):
+            self.guard.drop(self._topics['state'], value, msg.header.frame_id)
+            return
+        self._stamps['state'].accept(ns)
+        self._offer('state', ns, value[0])
 
     def _on_estimate(self, msg: JointState) -> None:
-        ns = from_stamp(msg.header.stamp)
-        if ns > self._last_ns:
-            est = Estimate(
-                first(msg.position, 'position'),
-                first(msg.velocity, 'velocity'),
-                first(msg.effort, 'effort'),
-            )
-            self._offer('estimate', ns, est)
+        ns = self._accept('estimate', msg)
+        if ns is None or ns <= self._last_ns:
+            return
+        self.guard.heard(self._topics['estimate'])
+        arrays = {'position': msg.position, 'velocity': msg.velocity, 'effort': msg.effort}
+        value = joint_values(msg.name, arrays, self.axis, ('position', 'velocity', 'effort'))
+        if isinstance(value, Rejected):
+            self.guard.drop(self._topics['estimate'], value, msg.header.frame_id)
+            return
+        self._stamps['estimate'].accept(ns)
+        self._offer('estimate', ns, Estimate(*value))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
-        try:
-            i = list(msg.joint_names).index(self.axis)
-        except ValueError:
-            return  # a reference for other axes only
+        topic = self._topics['reference']
+        problem = owner_check(msg.header.frame_id, self._owners['reference'])
+        if problem is not None:
+            self.guard.drop(topic, problem, msg.header.frame_id)
+            return
         ns0 = from_stamp(msg.header.stamp)
+        points = []
         for p in msg.points:
-            ns = ns0 + from_duration(p.time_from_start)
-            if ns <= self._last_ns:
-                continue
-            ref = AxisReference(
-                p.positions[i],
-                p.velocities[i] if len(p.velocities) > i else 0.0,
-                p.accelerations[i] if len(p.accelerations) > i else 0.0,
+            arrays = {
+                'positions': p.positions,
+                'velocities': p.velocities,
+                'accelerations': p.accelerations,
+            }
+            got = point_values(
+                msg.joint_names, arrays, [self.axis], ['positions'], ['velocities', 'accelerations']
             )
-            self._offer('reference', ns, ref)
+            if isinstance(got, Rejected):
+                self.guard.drop(topic, got, msg.header.frame_id)
+                return  # the whole message: a partial reference is no reference
+            points.append((ns0 + from_duration(p.time_from_start), got))
+        self.guard.heard(topic)
+        for ns, got in points:
+            (pos,), (vel,), (acc,) = got['positions'], got['velocities'], got['accelerations']
+            self._reference.add(ns, AxisReference(pos, vel, acc))
+        self._try_pending()
 
     def _on_observer_state(self, msg: JointState) -> None:
+        problem = owner_check(msg.header.frame_id, self._owners['estimate'])
+        if problem is not None:
+            self.guard.drop(self._topics['model'], problem, msg.header.frame_id)
+            return
         model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
         if model is None:
             return  # another observer's state: no model in it
+        if not all(math.isfinite(v) for v in model.as_status().values()):
+            self.guard.drop(self._topics['model'], Rejected('non-finite model estimate'))
+            return
         self._model_seen = True
         ns = from_stamp(msg.header.stamp)
         if ns > self._last_ns:
@@ -165,22 +270,53 @@ class AxisControllerNode(Node):
             if self._waiting_since is None:
                 self._waiting_since = time.monotonic()
             return
-        self._act(ns, inputs)
+        if self.realtime:
+            self._ready.clear()  # only the newest sample is worth acting on
+        self._ready[ns] = inputs
+        self._try_pending()
+
+    def _try_pending(self) -> None:
+        """Act on joined samples whose reference is there, oldest first."""
+        for ns in sorted(self._ready):
+            if ns <= self._last_ns:
+                del self._ready[ns]
+                continue
+            ref = self._reference.at(ns + self._lead_ns)
+            if ref is None:
+                if self.realtime and self._reference.newest is not None:
+                    self._late_references += 1  # the reference does not reach this far yet
+                    del self._ready[ns]
+                    continue
+                return  # lockstep: the trajectory's next message brings it
+            inputs = self._ready.pop(ns)
+            inputs['reference'] = ref
+            if not self._ready:
+                self._waiting_since = None
+            self._act(ns, inputs)
+        self._reference.forget_before(self._last_ns + self._lead_ns)
 
     def _act(self, ns: int, inputs: dict[str, Any]) -> None:
         self._waiting_since = None
         est = inputs['estimate']
         if 'model' in inputs:
             est = replace(est, model=inputs['model'])
+        y, ref = inputs['state'], inputs['reference']
+        t = seconds(ns)
+        if self._lead_ns:  # the command acts N samples on: aim at the state there
+            t, y = seconds(ns + self._lead_ns), est.position
         try:
-            torque = self._law.compute(seconds(ns), inputs['state'], inputs['reference'], est)
+            torque = self._law.compute(t, y, ref, est)
         except ValueError as exc:
-            # Never forward a non-finite command; the plant's lockstep timeout names us.
-            self.get_logger().error(f'no command for t = {seconds(ns):.4f} s: {exc}')
-            return
+            self.get_logger().error(f'no valid command for t = {t:.4f} s: {exc}: braking')
+            torque = BRAKE
         if not math.isfinite(torque):
-            self.get_logger().error(f'control law gave {torque} at t = {seconds(ns):.4f} s')
-            return
+            torque = BRAKE
+        assert self._trip is not None
+        error = inputs['state'] - self._reference_now(ns, ref)
+        was = self._trip.tripped
+        torque = self._trip.command(seconds(ns), error, torque)
+        if self._trip.tripped and not was:
+            self._report_trip(ns)
         self._last_ns = ns
         self._last_command = joint_state(ns, (self.axis,), effort=(torque,), sender=self.get_name())
         self._pub.publish(self._last_command)
@@ -193,6 +329,64 @@ class AxisControllerNode(Node):
         if self._law.last_switch is not self._reported_switch:
             self._reported_switch = self._law.last_switch
             self._report_switch(ns)
+
+    def _reference_now(self, ns: int, aimed: AxisReference) -> float:
+        """The reference position at the state's own stamp (the following error's)."""
+        if not self._lead_ns:
+            return aimed.position
+        here = self._reference.at(ns)
+        return aimed.position if here is None else here.position
+
+    # -- following-error trip ------------------------------------------------------------
+    def _trip_status(self) -> tuple[bytes, str, dict[str, object]]:
+        assert self._trip is not None
+        values: dict[str, object] = {
+            'following_error_limit_m': self._trip.limit,
+            'late_references': self._late_references,
+        }
+        trip = self._trip.trip
+        if trip is None:
+            return DiagnosticStatus.OK, f'axis {self.axis}: running', values
+        values.update({'trip_time_s': trip.time, 'trip_error_m': trip.error})
+        return DiagnosticStatus.ERROR, self._trip_text(), values
+
+    def _trip_text(self) -> str:
+        assert self._trip is not None and self._trip.trip is not None
+        trip = self._trip.trip
+        return (
+            f'axis {self.axis}: following-error trip at t = {trip.time:.4f} s, '
+            f'|e| = {1e3 * abs(trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked '
+            '(reset: ~/reset_trip or set following_error_limit)'
+        )
+
+    def _report_trip(self, ns: int) -> None:
+        self.get_logger().error(self._trip_text())
+        level, message, values = self._trip_status()
+        self._diag_pub.publish(
+            diagnostic_array(
+                ns,
+                level,
+                f'mill_controllers: {self.axis} trip',
+                message,
+                f'axis_{self.axis}',
+                values,
+            )
+        )
+
+    def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        assert self._trip is not None
+        cleared = self._trip.reset()
+        self._log_reset(cleared, 'service reset_trip')
+        response.success = True
+        response.message = 'trip cleared' if cleared else 'no trip to clear'
+        return response
+
+    def _log_reset(self, cleared: Any, how: str) -> None:
+        if cleared is not None:
+            self.get_logger().warning(
+                f'axis {self.axis}: following-error trip of t = {cleared.time:.4f} s cleared '
+                f'by {how}'
+            )
 
     def _report_switch(self, ns: int) -> None:
         record = self._law.last_switch
@@ -220,21 +414,17 @@ class AxisControllerNode(Node):
         )
 
     def _report_waiting(self) -> None:
+        if self._waiting_since is None or time.monotonic() - self._waiting_since < 2.0:
+            return
         pending = self._join.oldest_incomplete()
-        if pending is None or self._waiting_since is None:
+        if pending is not None:
+            ns, missing = pending
+            names = [self._topics[m] for m in missing]
+        elif self._ready:
+            ns, names = min(self._ready), [self._topics['reference']]
+        else:
             return
-        if time.monotonic() - self._waiting_since < 2.0:
-            return
-        ns, missing = pending
-        names = {
-            'state': topics.state(self.axis),
-            'estimate': topics.estimate(self.axis),
-            'reference': topics.REFERENCE,
-            'model': topics.observer_state(self.axis),
-        }
-        detail = ', '.join(
-            f'{names[m]} ({self.count_publishers(names[m])} publishers)' for m in missing
-        )
+        detail = ', '.join(f'{n} ({self.count_publishers(n)} publishers)' for n in names)
         self.get_logger().warning(f'waiting for t = {seconds(ns):.4f} s on {detail}')
 
 

@@ -12,6 +12,7 @@ from mill_common.parameters import (
     non_negative,
     one_of,
     positive_or_inf,
+    text,
 )
 from mill_models.axis_data import nominal_input_gain
 
@@ -41,6 +42,30 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'after a run-time change of controller or gains, the time constant with which '
                 "the old law's output fades into the new one's [s]; 0 = at the next sample",
                 non_negative,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'observer_node',
+            ParamSpec(
+                'observer_node',
+                '',
+                'the node whose estimates this controller accepts; "" = <axis>_observer',
+                text,
+                True,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'trajectory_node',
+            ParamSpec(
+                'trajectory_node',
+                'trajectory',
+                'the node whose reference this controller accepts',
+                text,
+                True,
             ),
         )
     )

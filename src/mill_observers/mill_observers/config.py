@@ -11,6 +11,7 @@ from mill_common.parameters import (
     axis_node_specs,
     non_negative,
     one_of,
+    text,
 )
 from mill_models.axis_data import nominal_input_gain
 
@@ -32,6 +33,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'after a run-time change of observer or gains, the time constant with which the '
                 "estimate moves from the old observer's last value to the new one's [s]",
                 non_negative,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'controller_node',
+            ParamSpec(
+                'controller_node',
+                '',
+                'the node whose commands this observer accepts; "" = <axis>_controller',
+                text,
+                True,
             ),
         )
     )

@@ -174,8 +174,8 @@ class TrajectoryNode(Node):
         first = max(0, now // dt_ns - 1)
         count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
         out = JointTrajectory()
-        out.header.stamp = to_stamp(self._t0 + first * dt_ns)
         out.header.frame_id = self.get_name()
+        out.header.stamp = to_stamp(self._t0 + first * dt_ns)
         out.joint_names = list(AXES)
         for i in range(count):
             sample = self._path.sample(seconds((first + i) * dt_ns))
@@ -210,6 +210,7 @@ class TrajectoryNode(Node):
             self.get_logger().warning(problem)
             self._report(t, 'running', problem)
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = msg.header.stamp
         out.joint_names = list(AXES)
         out.points.append(self._point(self._scaled.sample(accepted.value, slope), 0))
@@ -242,6 +243,7 @@ class TrajectoryNode(Node):
         if first >= last:
             return
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = to_stamp(first * self._dt_ns)
         out.joint_names = list(AXES)
         for k in range(first, last):
@@ -259,6 +261,7 @@ class TrajectoryNode(Node):
 
     def _publish_chunk(self, ns: int) -> None:
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = to_stamp(ns)
         out.joint_names = list(AXES)
         for i in range(self._points):
