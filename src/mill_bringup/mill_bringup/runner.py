@@ -94,12 +94,18 @@ def run(
     compare_offline: bool = False,
     record_bag: Path | None = None,
     respawn: bool = False,
+    external: frozenset[str] = frozenset(),
 ) -> RunResult:
     """Run the job across processes; the record holds samples 0 .. job.samples − 1.
 
     respawn: a node other than the clock node that dies is started again (at most 3 times)
     and rejoins the job, instead of ending the run.
+    external: nodes of the scenario that run elsewhere (a hardware driver started on its
+    own): neither launched nor supervised here.
     """
+    unknown = sorted(external - {n.name for n in job.scenario.nodes})
+    if unknown:
+        raise RunError(f'--external: scenario {job.scenario.name} has no node {unknown[0]!r}')
     scen = job.scenario
     job.prepare_graph(monitored=True)
     env = ros_environment(domain_id=domain_id)
@@ -128,8 +134,8 @@ def run(
         monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
         executor = make_executor()
         executor.add_node(monitor)
-        clocks = job.clock_nodes
-        others = [n.name for n in scen.nodes if n not in clocks]
+        clocks = [n for n in job.clock_nodes if n.name not in external]
+        others = [n.name for n in scen.nodes if n not in job.clock_nodes and n.name not in external]
         graph = Graph(scen, run_dir, env, respawn=others if respawn else ())
 
         def spin(when: str) -> None:
@@ -142,7 +148,7 @@ def run(
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
-        graph.launch([n for n in scen.nodes if n not in clocks])
+        graph.launch([scen.node(n) for n in others])
         upstream = job.upstream_topics()
         deadline = time.monotonic() + startup_timeout
         while any(monitor.count_publishers(t) < 1 for t in upstream):
@@ -182,6 +188,9 @@ def run(
         settle = time.monotonic() + job.SETTLE_TIMEOUT
         while time.monotonic() < settle and not job.settled(monitor):
             spin('after the job ended')
+        if job.BRAKE_AT_END:
+            for node in job.clock_nodes:
+                deactivate(monitor, executor, node.name, progress)
         peak = graph.peak_rss()
         graph.stop()
         progress.close()
@@ -237,6 +246,30 @@ def run(
     if compare_offline:
         result.differences = job.differences(record, simulate(job))
     return result
+
+
+def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> None:
+    """Ask a lifecycle node (the drive) to deactivate: it brakes every axis."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState
+
+    client = node.create_client(ChangeState, f'{target}/change_state')
+    try:
+        if not client.wait_for_service(timeout_sec=2.0):
+            progress.note(f'{target} has no lifecycle: it brakes when the commands stop')
+            return
+        request = ChangeState.Request()
+        request.transition.id = Transition.TRANSITION_DEACTIVATE
+        future = client.call_async(request)
+        deadline = time.monotonic() + 5.0
+        while not future.done() and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        ok = future.done() and future.result().success
+        progress.note(
+            f'{target}: deactivated (axes braked)' if ok else f'{target}: deactivate failed'
+        )
+    finally:
+        node.destroy_client(client)
 
 
 def format_result(r: RunResult) -> str:
@@ -299,6 +332,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
     parser.add_argument(
+        '--external',
+        action='append',
+        default=[],
+        metavar='NODE',
+        help='a node of the scenario that runs elsewhere, e.g. a hardware driver (repeatable)',
+    )
+    parser.add_argument(
         '--respawn',
         action='store_true',
         help='start a node that dies again (not the plant); it rejoins the running job',
@@ -342,6 +382,7 @@ def main(argv: list[str] | None = None) -> int:
                 compare_offline=args.compare_offline,
                 record_bag=bags[name],
                 respawn=args.respawn,
+                external=frozenset(args.external),
             )
             records[name] = result.record
             intact = intact and result.intact

@@ -13,7 +13,8 @@ on /diagnostics as a WARN. Each sample's reference is then computed once, in ord
 the override in effect when its tick arrives (mill_trajectory.feed_override).
 
 With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
-`axes` has reported its position, starts the job at the stamp of the newest of those states
+`axes` has reported its position and as many nodes (the controllers) listen to the reference,
+starts the job at the stamp of the newest of those states
 (the drive's system clock), first moving from where the axes stand to the path's start at
 `approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
 publishes every `publish_period` the points of the sample grid t0 + kT from one sample
@@ -149,6 +150,8 @@ class TrajectoryNode(Node):
         if self._t0 is None:
             if self._refused or set(self._positions) != set(v['axes']):
                 return
+            if self._ref_pub.get_subscription_count() < len(v['axes']):
+                return  # the controllers (one per axis) are not listening yet
             here = [self._positions.get(a, 0.0) for a in AXES]
             try:
                 self._path = Approach(

@@ -211,6 +211,11 @@ class AxisJob(Job[RunRecord]):
         self.end_time = build_job(scen.parameters(self.trajectory)).end_time
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
+        # Who publishes the states: the plant, or the driver the controllers are told of.
+        controllers = [n for n in scen.nodes if (n.package, n.executable) in AXIS_NODES]
+        self.state_owner = (
+            scen.parameters(controllers[0].name)['plant_node'] if controllers else self.plant
+        )
 
     @property
     def samples(self) -> int:
@@ -277,7 +282,7 @@ class AxisJob(Job[RunRecord]):
             topic = topics.joint_command(axis) if key[0] == 'mill_controllers' else None
             out[topic or topics.estimate(axis)] = node.name
         for axis in self.axes:
-            out[topics.state(axis)] = self.plant
+            out[topics.state(axis)] = self.state_owner
         return out
 
     # -- offline ---------------------------------------------------------------------------

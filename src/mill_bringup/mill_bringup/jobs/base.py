@@ -51,6 +51,8 @@ class Job(ABC, Generic[R]):
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
     # Whether the offline simulator reproduces a distributed run of this kind exactly.
     HAS_OFFLINE_TWIN: ClassVar[bool] = True
+    # Whether the runner deactivates the clock node (lifecycle: brake) when the job is done.
+    BRAKE_AT_END: ClassVar[bool] = False
 
     def __init__(self, scen: Scenario) -> None:
         self.scenario = scen

@@ -31,6 +31,7 @@ DRIVE_FIGURES = ('late_fraction', 'latency_median_ms', 'latency_p99_ms', 'latenc
 class RealtimeAxisJob(AxisJob):
     KIND = 'axis-realtime'
     HAS_OFFLINE_TWIN = False
+    BRAKE_AT_END = True  # the drive keeps running on its own clock: brake it first
 
     @classmethod
     def runs(cls, scen: Scenario) -> bool:
@@ -94,7 +95,9 @@ class RealtimeAxisJob(AxisJob):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         if self.start_ns is None:
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
-        rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.plant)
+        rec = realtime_record(
+            raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner
+        )
         return rec, {}
 
     def simulation(self, times: CoreTimer | None = None) -> Any:
