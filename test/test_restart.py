@@ -37,8 +37,10 @@ def run_and_kill(ros_env, tmp_path, victim: str, at: float) -> tuple[int, str, d
         lines.append(line)
         m = re.match(r'\s*([0-9.]+) / 3\.00 s', line)
         if not killed and m and float(m.group(1)) >= at:
-            pid = subprocess.run(
-                ['pgrep', '-f', f'__node:={victim} '], capture_output=True, text=True
+            pid = subprocess.run(  # a child of this runner only: other runs may share the host
+                ['pgrep', '-P', str(proc.pid), '-f', f'__node:={victim} '],
+                capture_output=True,
+                text=True,
             ).stdout.split()
             assert pid, f'no process of {victim}'
             os.kill(int(pid[0]), signal.SIGKILL)
