@@ -119,7 +119,8 @@ def test_switch_to_a_law_needing_a_model_waits_for_one(start_node) -> None:
         pub = node.create_publisher(JointState, topics.observer_state('x'), DATA_QOS)
         assert wait_until(lambda: pub.get_subscription_count() > 0, 30)
         status = FopdtEstimate(29.0, 2.0, 1.25e-4, 0.5, 500).as_status()
-        pub.publish(joint_state(0, tuple(status), tuple(status.values())))
+        # From the observer the controller trusts (observer_node: x_observer by default).
+        pub.publish(joint_state(0, tuple(status), tuple(status.values()), sender='x_observer'))
 
         def accepted() -> bool:
             executor.spin_once(timeout_sec=0.05)
