@@ -8,6 +8,10 @@ with the same stamp. A law that designs with the observer's identified model
 (adaptive_pi with model_source 'observer') also waits for that sample's
 /mill/<axis>/observer_state.
 
+The inputs are the fields of mill_common.signals.ControlInputs; INPUTS below says which
+topic each comes from and how a message becomes (stamp, value) pairs. The law says which
+of them it needs (AxisController.required_inputs), and the stamp join waits for those.
+
 Changing `controller` or any gain on the running node swaps the law without a bump
 (mill_controllers.switching): the switch sample still outputs the old law's value and the
 difference fades over `blend_time`; the switch is reported on /diagnostics. A law with
@@ -18,7 +22,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -32,7 +37,7 @@ from mill_common.ros import (
     joint_state,
 )
 from mill_common.ros_params import NodeParameters
-from mill_common.signals import AxisReference, Estimate, FopdtEstimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_common.stamp_join import StampJoin
 from mill_common.timebase import seconds
 from rclpy.clock import Clock, ClockType
@@ -41,48 +46,105 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
+from mill_controllers.base import BASE_INPUTS
 from mill_controllers.config import build_controller, parameter_specs
 from mill_controllers.registry import CONTROLLERS
-from mill_controllers.switching import BumplessSwitch, check_replacement
+from mill_controllers.switching import BumplessSwitch, SwitchRecord, check_replacement
 
-INPUTS = ('state', 'estimate', 'reference')
-
-
-def needs_model(law: object) -> bool:
-    """Whether the law designs with the observer's model estimate (Estimate.model)."""
-    return bool(getattr(law, 'needs_model', False))
+Samples = list[tuple[int, Any]]  # (stamp [ns], value) pairs read from one message
 
 
-def required_inputs(law: object) -> tuple[str, ...]:
-    return (*INPUTS, 'model') if needs_model(law) else INPUTS
+@dataclass(frozen=True)
+class InputTopic:
+    """Where one field of ControlInputs comes from."""
+
+    message: type
+    topic: Callable[[str], str]  # axis -> topic name
+    read: Callable[[Any, str], Samples]  # (message, axis) -> the samples it holds
+    hint: str = ''  # what to run when a law needs this input and none has arrived
+
+
+def _position(msg: JointState, axis: str) -> Samples:
+    return [(from_stamp(msg.header.stamp), first(msg.position, 'position'))]
+
+
+def _estimate(msg: JointState, axis: str) -> Samples:
+    est = Estimate(
+        first(msg.position, 'position'),
+        first(msg.velocity, 'velocity'),
+        first(msg.effort, 'effort'),
+    )
+    return [(from_stamp(msg.header.stamp), est)]
+
+
+def _reference(msg: JointTrajectory, axis: str) -> Samples:
+    try:
+        i = list(msg.joint_names).index(axis)
+    except ValueError:
+        return []  # a reference for other axes only
+    ns0 = from_stamp(msg.header.stamp)
+    return [
+        (
+            ns0 + from_duration(p.time_from_start),
+            AxisReference(
+                p.positions[i],
+                p.velocities[i] if len(p.velocities) > i else 0.0,
+                p.accelerations[i] if len(p.accelerations) > i else 0.0,
+            ),
+        )
+        for p in msg.points
+    ]
+
+
+def _model(msg: JointState, axis: str) -> Samples:
+    model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
+    if model is None:
+        return []  # another observer's state: no model in it
+    return [(from_stamp(msg.header.stamp), model)]
+
+
+# Field of ControlInputs -> its topic. The plant's state paces the run (CLOCK_INPUT).
+INPUTS: dict[str, InputTopic] = {
+    'position': InputTopic(JointState, topics.state, _position),
+    'estimate': InputTopic(JointState, topics.estimate, _estimate),
+    'reference': InputTopic(JointTrajectory, lambda _axis: topics.REFERENCE, _reference),
+    'model': InputTopic(JointState, topics.observer_state, _model, 'run the rls observer'),
+}
+CLOCK_INPUT = 'position'
 
 
 class AxisControllerNode(Node):
     def __init__(self) -> None:
         super().__init__('axis_controller')
         self._law: BumplessSwitch | None = None
-        self._reported_switch = None
+        self._reported_switch: SwitchRecord | None = None
+        self._seen: set[str] = set()  # inputs of which a sample has arrived
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         axis = self.axis = self.params.values['axis']
-        self._join = StampJoin(required_inputs(self._law.law))
-        self._model_seen = False  # a model estimate has arrived on observer_state
+        self._join = StampJoin(self._switch.law.required_inputs())
         self._last_ns = -1
         self._last_command: JointState | None = None
         self._waiting_since: float | None = None
         self._pub = self.create_publisher(JointState, topics.joint_command(axis), DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.controller_state(axis), DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
-        self.create_subscription(JointState, topics.state(axis), self._on_state, DATA_QOS)
-        self.create_subscription(JointState, topics.estimate(axis), self._on_estimate, DATA_QOS)
-        self.create_subscription(JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS)
-        self.create_subscription(
-            JointState, topics.observer_state(axis), self._on_observer_state, DATA_QOS
-        )
+        for slot, source in INPUTS.items():
+            self.create_subscription(
+                source.message,
+                source.topic(axis),
+                lambda msg, slot=slot: self._on_input(slot, msg),
+                DATA_QOS,
+            )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'axis {axis}: controller {self.params.values["controller"]}, '
             f'commands on {topics.joint_command(axis)}'
         )
+
+    @property
+    def _switch(self) -> BumplessSwitch:
+        assert self._law is not None, 'configured in NodeParameters'
+        return self._law
 
     def _configure(self, values: dict[str, Any]) -> None:
         if self._law is None:
@@ -94,70 +156,34 @@ class AxisControllerNode(Node):
             raise ValueError('axis is fixed for the life of the node')
         old = self.params.values
         reason = check_replacement(
-            CONTROLLERS[old['controller']], CONTROLLERS[values['controller']]
+            CONTROLLERS.get(old['controller']), CONTROLLERS.get(values['controller'])
         )
         if reason:
             raise ValueError(reason)
         law = build_controller(values)  # raises, with the reason, before anything changes
-        if needs_model(law) and not self._model_seen:
-            raise ValueError(
-                f"{values['controller']} designs with the observer's model estimate, and none "
-                f'has arrived on {topics.observer_state(self.axis)} (run the rls observer)'
-            )
+        for slot in law.required_inputs():
+            if slot not in BASE_INPUTS and slot not in self._seen:
+                source = INPUTS[slot]
+                raise ValueError(
+                    f'{values["controller"]} needs the {slot} input each sample, and none '
+                    f'has arrived on {source.topic(self.axis)} ({source.hint})'
+                )
         self._law.set_blend_time(values['sample_period'], values['blend_time'])
         if any(values[k] != old[k] for k in values if k != 'blend_time'):
             self._law.replace(law)
             self._law_name = values['controller']  # params.values changes after we return
-            ready = self._join.require(required_inputs(law))
+            ready = self._join.require(law.required_inputs())
             if ready is not None:  # a sample that waited only for the old law's extra input
                 self._act(*ready)
 
     # -- inputs ----------------------------------------------------------------------------
-    def _fresh(self, ns: int) -> bool:
-        if ns == self._last_ns and self._last_command is not None:
-            self._pub.publish(self._last_command)  # the plant offered this step again
-        return ns > self._last_ns
-
-    def _on_state(self, msg: JointState) -> None:
-        ns = from_stamp(msg.header.stamp)
-        if self._fresh(ns):
-            self._offer('state', ns, first(msg.position, 'position'))
-
-    def _on_estimate(self, msg: JointState) -> None:
-        ns = from_stamp(msg.header.stamp)
-        if ns > self._last_ns:
-            est = Estimate(
-                first(msg.position, 'position'),
-                first(msg.velocity, 'velocity'),
-                first(msg.effort, 'effort'),
-            )
-            self._offer('estimate', ns, est)
-
-    def _on_reference(self, msg: JointTrajectory) -> None:
-        try:
-            i = list(msg.joint_names).index(self.axis)
-        except ValueError:
-            return  # a reference for other axes only
-        ns0 = from_stamp(msg.header.stamp)
-        for p in msg.points:
-            ns = ns0 + from_duration(p.time_from_start)
-            if ns <= self._last_ns:
-                continue
-            ref = AxisReference(
-                p.positions[i],
-                p.velocities[i] if len(p.velocities) > i else 0.0,
-                p.accelerations[i] if len(p.accelerations) > i else 0.0,
-            )
-            self._offer('reference', ns, ref)
-
-    def _on_observer_state(self, msg: JointState) -> None:
-        model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
-        if model is None:
-            return  # another observer's state: no model in it
-        self._model_seen = True
-        ns = from_stamp(msg.header.stamp)
-        if ns > self._last_ns:
-            self._offer('model', ns, model)
+    def _on_input(self, slot: str, msg: Any) -> None:
+        for ns, value in INPUTS[slot].read(msg, self.axis):
+            self._seen.add(slot)
+            if slot == CLOCK_INPUT and ns == self._last_ns and self._last_command is not None:
+                self._pub.publish(self._last_command)  # the plant offered this step again
+            if ns > self._last_ns:
+                self._offer(slot, ns, value)
 
     def _offer(self, slot: str, ns: int, value: Any) -> None:
         inputs = self._join.put(slot, ns, value)
@@ -169,11 +195,8 @@ class AxisControllerNode(Node):
 
     def _act(self, ns: int, inputs: dict[str, Any]) -> None:
         self._waiting_since = None
-        est = inputs['estimate']
-        if 'model' in inputs:
-            est = replace(est, model=inputs['model'])
         try:
-            torque = self._law.compute(seconds(ns), inputs['state'], inputs['reference'], est)
+            torque = self._switch.compute(ControlInputs(seconds(ns), **inputs))
         except ValueError as exc:
             # Never forward a non-finite command; the plant's lockstep timeout names us.
             self.get_logger().error(f'no command for t = {seconds(ns):.4f} s: {exc}')
@@ -184,18 +207,17 @@ class AxisControllerNode(Node):
         self._last_ns = ns
         self._last_command = joint_state(ns, (self.axis,), effort=(torque,))
         self._pub.publish(self._last_command)
-        law = self._law.law
-        if hasattr(law, 'status'):
-            status = law.status()
+        status = self._switch.law.status()
+        if status:
             self._state_pub.publish(
                 joint_state(ns, tuple(status), tuple(float(v) for v in status.values()))
             )
-        if self._law.last_switch is not self._reported_switch:
-            self._reported_switch = self._law.last_switch
-            self._report_switch(ns)
+        record = self._switch.last_switch
+        if record is not None and record is not self._reported_switch:
+            self._reported_switch = record
+            self._report_switch(ns, record)
 
-    def _report_switch(self, ns: int) -> None:
-        record = self._law.last_switch
+    def _report_switch(self, ns: int, record: SwitchRecord) -> None:
         name = self._law_name
         self.get_logger().info(
             f'switched to {name} at t = {record.time:.4f} s: output {record.old_output:.6g} '
@@ -226,15 +248,8 @@ class AxisControllerNode(Node):
         if time.monotonic() - self._waiting_since < 2.0:
             return
         ns, missing = pending
-        names = {
-            'state': topics.state(self.axis),
-            'estimate': topics.estimate(self.axis),
-            'reference': topics.REFERENCE,
-            'model': topics.observer_state(self.axis),
-        }
-        detail = ', '.join(
-            f'{names[m]} ({self.count_publishers(names[m])} publishers)' for m in missing
-        )
+        names = [INPUTS[m].topic(self.axis) for m in missing]
+        detail = ', '.join(f'{n} ({self.count_publishers(n)} publishers)' for n in names)
         self.get_logger().warning(f'waiting for t = {seconds(ns):.4f} s on {detail}')
 
 

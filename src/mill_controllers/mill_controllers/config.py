@@ -4,14 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from mill_common.parameters import (
-    ParamSpec,
-    algorithm_specs,
-    algorithm_values,
-    axis_node_specs,
-    non_negative,
-    one_of,
-)
+from mill_common.parameters import ParamSpec, algorithm_values, axis_node_specs, non_negative
 from mill_models.axis_data import nominal_input_gain
 
 from mill_controllers.base import AxisController
@@ -27,7 +20,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'controller',
                 'adrc',
                 'control law (see README: algorithms)',
-                one_of(*CONTROLLERS),
+                CONTROLLERS.check(),
             ),
         )
     )
@@ -43,7 +36,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
-    return specs + algorithm_specs(CONTROLLERS.values())
+    return specs + CONTROLLERS.parameter_specs()
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -51,6 +44,6 @@ def input_gain(values: dict[str, Any]) -> float:
 
 
 def build_controller(values: dict[str, Any]) -> AxisController:
-    cls = CONTROLLERS[values['controller']]
+    cls = CONTROLLERS.get(values['controller'])
     own = algorithm_values(cls, values)
     return cls.from_parameters(input_gain(values), values['sample_period'], own)

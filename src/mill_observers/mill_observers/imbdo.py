@@ -51,6 +51,8 @@ from mill_common.parameters import (
 )
 from mill_common.signals import Estimate
 
+from mill_observers.base import Observer
+
 MM_PER_M = 1000.0
 
 # Maharof 2018 eq. (1), x axis: A [mm/(V·s²)], B [1/s], C [1/s²] (T_d = 1.2 ms not modelled)
@@ -126,7 +128,7 @@ class _DiscreteSs:
         self.x = self.ad @ self.x + self.bd * w
 
 
-class Imbdo:
+class Imbdo(Observer):
     """Maharof 2018 IMBDO on the x-axis model; d̂ in volts (subtract it from u).
 
     correct(y [m]) -> Estimate(position=y [m], velocity=v̂ [m/s], disturbance=d̂ [V]);

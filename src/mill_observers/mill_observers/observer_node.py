@@ -21,6 +21,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
+from mill_observers.base import Observer
 from mill_observers.config import build_observer, parameter_specs
 from mill_observers.registry import OBSERVERS
 from mill_observers.switching import EstimateBlend
@@ -29,7 +30,7 @@ from mill_observers.switching import EstimateBlend
 class ObserverNode(Node):
     def __init__(self) -> None:
         super().__init__('observer')
-        self._observer = None
+        self._observer: Observer | None = None
         self._last_ns: int | None = None
         self._commands: dict[int, float] = {}
         self.params = NodeParameters(self, parameter_specs(), self._configure)
@@ -54,9 +55,7 @@ class ObserverNode(Node):
         # old one's and fades into its own over blend_time (mill_observers.switching).
         if self._observer is not None:
             old = self.params.values['observer']
-            units = [
-                getattr(OBSERVERS[n], 'DISTURBANCE_UNIT', 'm/s²') for n in (old, values['observer'])
-            ]
+            units = [OBSERVERS.get(n).DISTURBANCE_UNIT for n in (old, values['observer'])]
             if units[0] != units[1]:
                 raise ValueError(
                     f'{values["observer"]} estimates the disturbance in {units[1]} but the running '
@@ -87,6 +86,8 @@ class ObserverNode(Node):
             self._advance()
 
     def _advance(self) -> None:
+        observer = self._observer
+        assert observer is not None, 'configured in NodeParameters'
         while self._states:
             ns = min(self._states)
             if self._last_ns is not None:
@@ -94,16 +95,16 @@ class ObserverNode(Node):
                 if u is None:
                     self._stalled_since = self._stalled_since or time.monotonic()
                     return  # y(k) arrived before u(k-1): wait for it
-                self._observer.predict(u)
-            est = self._blend(self._observer.correct(self._states.pop(ns)))
+                observer.predict(u)
+            est = self._blend(observer.correct(self._states.pop(ns)))
             self._last_ns = ns
             self._stalled_since = None
             self._last_estimate = joint_state(
                 ns, (self.axis,), (est.position,), (est.velocity,), (est.disturbance,)
             )
             self._pub.publish(self._last_estimate)
-            if hasattr(self._observer, 'status'):
-                status = self._observer.status()
+            status = observer.status()
+            if status:
                 values = tuple(float(v) for v in status.values())
                 self._state_pub.publish(joint_state(ns, tuple(status), values))
 

@@ -47,8 +47,6 @@ class EstimateBlend:
         elif self._dv or self._dxi:
             self._dv *= self._decay
             self._dxi *= self._decay
-        out = Estimate(
-            est.position, est.velocity + self._dv, est.disturbance + self._dxi, est.model
-        )
+        out = Estimate(est.position, est.velocity + self._dv, est.disturbance + self._dxi)
         self._last = out
         return out

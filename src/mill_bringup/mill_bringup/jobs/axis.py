@@ -14,9 +14,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from mill_common.signals import AXES, axis_index
+from mill_common.signals import AXES, ControlInputs, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
+from mill_controllers.base import AxisController
 from mill_controllers.config import build_controller
+from mill_observers.base import Observer
 from mill_observers.config import build_observer
 from mill_plant.config import build_plant
 from mill_plant.sensor import quantize
@@ -34,15 +36,15 @@ JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
 
-def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
+def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[int, Observer]]:
     """Controller and observer cores by axis index, checked to fit together.
 
     ScenarioError if an active axis lacks one, or if a controller designs with the
     observer's model estimate and the observer of its axis estimates none.
     """
     pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
-    controllers: dict[int, Any] = {}
-    observers: dict[int, Any] = {}
+    controllers: dict[int, AxisController] = {}
+    observers: dict[int, Observer] = {}
     names: dict[int, str] = {}
     for node in scen.nodes_of('mill_controllers'):
         if node.executable != 'axis_controller':
@@ -63,9 +65,7 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
             f'scenario {scen.name}: axes {missing} lack a controller or an observer'
         )
     for i in active:
-        if getattr(controllers[i], 'needs_model', False) and not getattr(
-            observers[i], 'PROVIDES_MODEL', False
-        ):
+        if controllers[i].needs_model and not observers[i].PROVIDES_MODEL:
             raise ScenarioError(
                 f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
                 f'model estimate, but {names[i]} estimates none (use observer rls)'
@@ -101,9 +101,11 @@ class AxisSimulation:
         for i in self.active:
             y = quantize(position[i], self.resolution)
             clock.start()
-            est = self.observers[i].correct(y)
+            observer = self.observers[i]
+            est = observer.correct(y)
+            model = observer.model_estimate()
             clock.lap('observer')
-            torque[i] = self.controllers[i].compute(t, y, ref.axis(i), est)
+            torque[i] = self.controllers[i].compute(ControlInputs(t, y, ref.axis(i), est, model))
             clock.lap('controller')
             s['position'][k, i] = y
             s['reference'][k, i] = ref.position[i]
