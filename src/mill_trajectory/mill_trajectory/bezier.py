@@ -26,7 +26,7 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 
 # Chávez-Conde section 5: r1 … r9.
 BEZIER_R = (12870, 91520, 288288, 524160, 600600, 443520, 205920, 54912, 6435)
@@ -64,7 +64,7 @@ def blend(delta: float) -> tuple[float, float, float]:
     return psi, d1, d2
 
 
-class BezierRestToRest:
+class BezierRestToRest(Trajectory):
     """All three axes move from `start` to `end` between t1 and t2, at rest at both ends."""
 
     PREFIX = 'bezier'

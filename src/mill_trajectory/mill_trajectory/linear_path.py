@@ -11,11 +11,12 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 
 # The paper's job: x = -0.075 m on the first cut (the reading that makes the
 # path continuous; eq. (19) prints +0.075), 80 mm in +y, then 80 mm in +x,
@@ -32,7 +33,7 @@ def _flat(points: Sequence[Sequence[float]]) -> list[float]:
     return [float(v) for p in points for v in p]
 
 
-class LinearPath:
+class LinearPath(Trajectory):
     PREFIX = 'linear'
     PARAMETERS = (
         ParamSpec(
@@ -73,7 +74,7 @@ class LinearPath:
         self.end_time = self._starts[-1]
 
     @classmethod
-    def from_parameters(cls, values: dict) -> LinearPath:
+    def from_parameters(cls, values: Mapping[str, Any]) -> LinearPath:
         flat = values['waypoints']
         if len(flat) % 3:
             raise ValueError('linear.waypoints must hold a multiple of 3 numbers')
