@@ -339,8 +339,13 @@ class ModelReferenceForceController:
 
     @classmethod
     def from_parameters(
-        cls, model: ForceProcessModel, values: Mapping[str, Any]
+        cls,
+        model: ForceProcessModel,
+        values: Mapping[str, Any],
+        feed_min: float = -math.inf,
+        feed_max: float = math.inf,
     ) -> ModelReferenceForceController:
+        del feed_min, feed_max  # one design, no shadow loops to simulate in the feed range
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
         return cls(model, **v)
 
