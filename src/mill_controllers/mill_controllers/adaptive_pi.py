@@ -47,7 +47,7 @@ the default reading: a 300 Hz velocity-loop bandwidth, typical of such servo dri
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 from mill_common.parameters import (
@@ -152,10 +152,14 @@ class _VelocityPi(AxisController):
         self._v = 0.0
 
     @classmethod
-    def from_parameters(cls, input_gain: float, sample_period: float, values: Mapping[str, Any]):
+    def from_parameters(
+        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> AxisController:
         """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
+        # Each subclass's constructor takes (input_gain, sample_period, **its parameters).
+        build: Callable[..., AxisController] = cls
+        return build(input_gain, sample_period, **v)
 
     def _measure(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
         inputs = (t, y, ref.position, ref.velocity, est.velocity)

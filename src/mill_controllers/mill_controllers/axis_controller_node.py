@@ -24,6 +24,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -132,7 +133,7 @@ class AxisControllerNode(Node):
             self.create_subscription(
                 source.message,
                 source.topic(axis),
-                lambda msg, slot=slot: self._on_input(slot, msg),
+                partial(self._on_input, slot),
                 DATA_QOS,
             )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))

@@ -128,8 +128,8 @@ class CascadePi(AxisController):
         """Voltage [V] from y [m], ref [m, m/s], est.velocity [m/s], est.disturbance [V]."""
         t, y, ref, est = inputs.t, inputs.position, inputs.reference, inputs.estimate
         d_hat = est.disturbance if self._compensate else 0.0
-        inputs = (t, y, ref.position, ref.velocity, est.velocity, d_hat)
-        if not all(math.isfinite(x) for x in inputs):
+        read = (t, y, ref.position, ref.velocity, est.velocity, d_hat)
+        if not all(math.isfinite(x) for x in read):
             raise ValueError(
                 f'CascadePi: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
                 f'velocity estimate={est.velocity!r}, disturbance estimate={d_hat!r})'

@@ -29,9 +29,23 @@ from mill_controllers.multi_model import MultiModelScheme1, MultiModelScheme2
 
 
 class ForceLaw(Protocol):
+    designer: ForceControlDesigner  # its reference model eq. (7) is what J_c compares with
+
+    @property
+    def active_beta(self) -> float: ...
+
+    def set_depth(self, depth: float) -> None: ...
+
+    def update(self, force_reference: float, force_measured: float) -> float: ...
+
+    def record_applied(self, feed: float) -> None: ...
+
+
+class RegisteredForceLaw(ForceLaw, Protocol):
+    """A force law the force_controller parameter chooses: parameters and a factory."""
+
     PREFIX: ClassVar[str]
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
-    designer: ForceControlDesigner  # its reference model eq. (7) is what J_c compares with
 
     @classmethod
     def from_parameters(
@@ -44,18 +58,9 @@ class ForceLaw(Protocol):
         """The law from its values (names without prefix) and the feed range [mm/s]."""
         ...
 
-    @property
-    def active_beta(self) -> float: ...
-
-    def set_depth(self, depth: float) -> None: ...
-
-    def update(self, force_reference: float, force_measured: float) -> float: ...
-
-    def record_applied(self, feed: float) -> None: ...
-
 
 # The force_controller parameter value -> class (one file per algorithm).
-FORCE_CONTROLLERS: Registry[ForceLaw] = Registry(
+FORCE_CONTROLLERS: Registry[RegisteredForceLaw] = Registry(
     'force_controller',
     {
         'fixed': ModelReferenceForceController,  # Rubio 2013 fig. 1, eq. (4)-(11), one β

@@ -122,8 +122,8 @@ class _PdLaw(AxisController):
         """
         t, y, ref, est = inputs.t, inputs.position, inputs.reference, inputs.estimate
         xi_hat = est.disturbance if self.COMPENSATE else 0.0
-        inputs = (t, y, ref.position, ref.velocity, ref.acceleration, est.velocity, xi_hat)
-        if not all(math.isfinite(v) for v in inputs):
+        read = (t, y, ref.position, ref.velocity, ref.acceleration, est.velocity, xi_hat)
+        if not all(math.isfinite(v) for v in read):
             raise ValueError(
                 f'{type(self).__name__}: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
                 f'velocity estimate={est.velocity!r}, disturbance estimate={xi_hat!r})'

@@ -31,6 +31,7 @@ class ObserverNode(Node):
     def __init__(self) -> None:
         super().__init__('observer')
         self._observer: Observer | None = None
+        self._blend: EstimateBlend | None = None
         self._last_ns: int | None = None
         self._commands: dict[int, float] = {}
         self.params = NodeParameters(self, parameter_specs(), self._configure)
@@ -63,8 +64,8 @@ class ObserverNode(Node):
                 )
         self._observer = build_observer(values)
         blend = EstimateBlend(values['sample_period'], values['blend_time'])
-        if self._last_ns is not None:  # a switch while running: continue the estimate
-            blend.resumed(self._blend).switch()
+        if self._last_ns is not None and self._blend is not None:
+            blend.resumed(self._blend).switch()  # a switch while running: continue the estimate
         self._blend = blend
         if self._last_ns is not None:
             self._last_ns = None
@@ -86,8 +87,8 @@ class ObserverNode(Node):
             self._advance()
 
     def _advance(self) -> None:
-        observer = self._observer
-        assert observer is not None, 'configured in NodeParameters'
+        observer, blend = self._observer, self._blend
+        assert observer is not None and blend is not None, 'configured in NodeParameters'
         while self._states:
             ns = min(self._states)
             if self._last_ns is not None:
@@ -96,7 +97,7 @@ class ObserverNode(Node):
                     self._stalled_since = self._stalled_since or time.monotonic()
                     return  # y(k) arrived before u(k-1): wait for it
                 observer.predict(u)
-            est = self._blend(observer.correct(self._states.pop(ns)))
+            est = blend(observer.correct(self._states.pop(ns)))
             self._last_ns = ns
             self._stalled_since = None
             self._last_estimate = joint_state(
@@ -109,7 +110,9 @@ class ObserverNode(Node):
                 self._state_pub.publish(joint_state(ns, tuple(status), values))
 
     def _report_waiting(self) -> None:
-        if self._stalled_since and time.monotonic() - self._stalled_since > 2.0:
+        if self._last_ns is None or self._stalled_since is None:
+            return
+        if time.monotonic() - self._stalled_since > 2.0:
             topic = topics.joint_command(self.axis)
             self.get_logger().warning(
                 f'waiting for the command of t = {seconds(self._last_ns):.4f} s on {topic} '

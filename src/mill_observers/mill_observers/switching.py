@@ -40,7 +40,7 @@ class EstimateBlend:
         self._pending = self._last is not None
 
     def __call__(self, est: Estimate) -> Estimate:
-        if self._pending:
+        if self._pending and self._last is not None:
             self._pending = False
             self._dv = self._last.velocity - est.velocity
             self._dxi = self._last.disturbance - est.disturbance

@@ -90,8 +90,8 @@ class BezierRestToRest(Trajectory):
             raise ValueError('start, end, t1 and t2 must be finite')
         if not t2 > t1:
             raise ValueError(f't2 must be > t1, got t1={t1!r}, t2={t2!r}')
-        self.start: tuple[float, float, float] = start_t  # type: ignore[assignment]
-        self.end: tuple[float, float, float] = end_t  # type: ignore[assignment]
+        self.start: tuple[float, float, float] = start_t
+        self.end: tuple[float, float, float] = end_t
         self.t1 = float(t1)
         self.t2 = float(t2)
         self.end_time = self.t2

@@ -52,9 +52,9 @@ class LinearPath(Trajectory):
         feed_rate: float = BELTRAN_FEED_RATE,
         start_time: float = 0.0,
     ) -> None:
-        points = [tuple(float(v) for v in p) for p in waypoints]
-        if len(points) < 2 or any(len(p) != 3 for p in points):
+        if len(waypoints) < 2 or any(len(p) != 3 for p in waypoints):
             raise ValueError('waypoints must hold at least two points of three coordinates')
+        points = [(float(p[0]), float(p[1]), float(p[2])) for p in waypoints]
         if not (feed_rate > 0 and math.isfinite(feed_rate)):
             raise ValueError(f'feed_rate must be > 0, got {feed_rate!r}')
         self.points = points
@@ -68,7 +68,11 @@ class LinearPath(Trajectory):
                 raise ValueError('waypoints must not repeat a point (zero-length segment)')
             duration = length / self.feed_rate
             # Beltrán 2013 eq. (19)-(22): velocity (p_f - p_i)/(t_f - t_i) on each segment.
-            velocity = tuple((bj - aj) / duration for aj, bj in zip(a, b, strict=True))
+            velocity = (
+                (b[0] - a[0]) / duration,
+                (b[1] - a[1]) / duration,
+                (b[2] - a[2]) / duration,
+            )
             self._velocities.append(velocity)
             self._starts.append(self._starts[-1] + duration)
         self.end_time = self._starts[-1]
