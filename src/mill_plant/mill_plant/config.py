@@ -171,7 +171,10 @@ def build_axis_model(values: dict[str, Any], axis: int) -> AxisModel:
     return cls.from_parameters(axis, own, gravity)
 
 
-def build_plant(values: dict[str, Any]) -> ThreeAxisPlant | MultiAxisPlant:
+Plant = ThreeAxisPlant | MultiAxisPlant  # what build_plant gives
+
+
+def build_plant(values: dict[str, Any]) -> Plant:
     """Three rigid axes: the Beltrán plant (fast, unrolled); any other mix: MultiAxisPlant."""
     rigid_only = all(m == 'rigid' for m in values['axis_model'])
     if rigid_only and not values['gravity'] and not _load_changes(values):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -28,7 +29,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from mill_plant.config import build_plant, parameter_specs
+from mill_plant.config import Plant, build_plant, parameter_specs
 from mill_plant.sensor import quantize
 
 STATUS_NAME = 'mill_plant: lockstep'
@@ -37,7 +38,8 @@ STATUS_NAME = 'mill_plant: lockstep'
 class PlantNode(Node):
     def __init__(self) -> None:
         super().__init__('plant')
-        self._plant = None
+        self._plant: Plant  # built once by _configure
+        self._built = False
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         self._active = [a in v['axes'] for a in AXES]
@@ -69,7 +71,7 @@ class PlantNode(Node):
             a: self.create_subscription(
                 JointState,
                 topics.joint_command(a),
-                lambda msg, axis=a: self._on_command(axis, msg),
+                partial(self._on_command, a),
                 DATA_QOS,
             )
             for a, on in zip(AXES, self._active, strict=True)
@@ -84,9 +86,10 @@ class PlantNode(Node):
 
     # -- configuration -------------------------------------------------------------------
     def _configure(self, values: dict[str, Any]) -> None:
-        if self._plant is not None:
+        if self._built:
             return  # the model's parameters are read-only; the others are read where used
         self._plant = build_plant(values)
+        self._built = True
         self._resolution = values['sensor_resolution']
 
     # -- lockstep ----------------------------------------------------------------------------

@@ -36,6 +36,7 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
+from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.config import build_job, parameter_specs
 from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
 
@@ -45,8 +46,9 @@ JOB_STATUS_NAME = 'mill_trajectory: job'
 class TrajectoryNode(Node):
     def __init__(self) -> None:
         super().__init__('trajectory')
-        self._path = None
-        self._scaled = None
+        self._path: Trajectory  # set by _configure
+        self._scaled: TimeScaledPath | None = None
+        self._override: FeedOverride  # set by _configure
         self._job_end = 0.0
         self._done_sent = False
         self._next_report = 0.0
@@ -112,14 +114,16 @@ class TrajectoryNode(Node):
             slope = 0.0
         if accepted.value != offered:
             slope = 0.0  # a clamped or held override does not ramp
-        t = self._scaled.path_time
+        scaled = self._scaled
+        assert scaled is not None, 'lockstep overrides always scale the path'
+        t = scaled.path_time
         if problem:
             self.get_logger().warning(problem)
             self._report(t, 'running', problem)
         out = JointTrajectory()
         out.header.stamp = msg.header.stamp
         out.joint_names = list(AXES)
-        out.points.append(self._point(self._scaled.sample(accepted.value, slope), 0))
+        out.points.append(self._point(scaled.sample(accepted.value, slope), 0))
         self._ref_pub.publish(out)
         self._answer = (ns, out)
         self._job_status(t)
@@ -128,7 +132,7 @@ class TrajectoryNode(Node):
         ns = from_stamp(msg.clock)
         t = seconds(ns)
         if self._scaled is not None:
-            self._publish_scaled(ns)
+            self._publish_scaled(self._scaled, ns)
             t = self._scaled.path_time
         else:
             self._publish_chunk(ns)
@@ -142,9 +146,9 @@ class TrajectoryNode(Node):
             self._next_report = t + 1.0
             self._report(t, 'running')
 
-    def _publish_scaled(self, ns: int) -> None:
+    def _publish_scaled(self, scaled: TimeScaledPath, ns: int) -> None:
         # Each sample once and in order: its path time depends on all earlier overrides.
-        first = max(ns // self._dt_ns, self._scaled.sample_index)
+        first = max(ns // self._dt_ns, scaled.sample_index)
         last = ns // self._dt_ns + self._points
         if first >= last:
             return
@@ -152,11 +156,11 @@ class TrajectoryNode(Node):
         out.header.stamp = to_stamp(first * self._dt_ns)
         out.joint_names = list(AXES)
         for k in range(first, last):
-            sample = self._scaled.sample(self._override.value)
+            sample = scaled.sample(self._override.value)
             out.points.append(self._point(sample, (k - first) * self._dt_ns))
         self._ref_pub.publish(out)
 
-    def _point(self, sample, offset_ns: int) -> JointTrajectoryPoint:
+    def _point(self, sample: TrajectorySample, offset_ns: int) -> JointTrajectoryPoint:
         point = JointTrajectoryPoint()
         point.positions = list(sample.position)
         point.velocities = list(sample.velocity)
