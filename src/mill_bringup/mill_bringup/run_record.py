@@ -177,6 +177,7 @@ _SHARED: tuple | None = None
 
 
 def _record_part(topics_part: list[str]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
+    assert _SHARED is not None, 'set for the worker processes before they start'
     raw, types, axes, n, dt_ns = _SHARED
     messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
     rec, missing = build_record(messages, axes, n, dt_ns, topics_part)
