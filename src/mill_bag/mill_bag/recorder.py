@@ -259,7 +259,8 @@ class TopicRecorder:
                 )
             if not self.sim_time:
                 stamp = received
-            elif entry.stamped and (stamp := cdr_stamp_ns(data)) is not None:
+            elif entry.stamped and (decoded := cdr_stamp_ns(data)) is not None:
+                stamp = decoded
                 latest = max(latest, stamp)
             else:
                 stamp = latest

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from mill_bag.types import decode
@@ -56,7 +57,7 @@ class ForceRecord:
 
     @classmethod
     def empty(cls, n: int, period: float) -> ForceRecord:
-        arrays = {name: _nan(n) for name in STATE_FIELDS}
+        arrays: dict[str, Any] = {name: _nan(n) for name in STATE_FIELDS}
         return cls(t=np.arange(n) * period, **arrays, slope=_nan(n))
 
     def fine_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

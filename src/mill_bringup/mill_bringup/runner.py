@@ -129,7 +129,7 @@ def run(
     graph: Graph | None = None
     monitor: Monitor | None = None
     executor = None
-    bag = None
+    bag: dict[str, Any] | None = None
     try:
         monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
         executor = make_executor()
@@ -153,8 +153,8 @@ def run(
         deadline = time.monotonic() + startup_timeout
         while any(monitor.count_publishers(t) < 1 for t in upstream):
             if time.monotonic() > deadline:
-                missing = [t for t in upstream if monitor.count_publishers(t) < 1]
-                raise RunError(f'no publisher appeared on {", ".join(missing)}')
+                silent = [t for t in upstream if monitor.count_publishers(t) < 1]
+                raise RunError(f'no publisher appeared on {", ".join(silent)}')
             spin('before the job started')
         graph.launch(clocks)
         progress.note(
@@ -360,11 +360,10 @@ def main(argv: list[str] | None = None) -> int:
             bags[name] = None
             if args.record is not None:
                 bag = Path(args.record) if args.record else (run_dir / name) / 'bag'
-                bags[name] = bag / name if name and args.record else bag
-                if bags[name].exists():
-                    raise RunError(
-                        f'--record: {bags[name]} exists already; a bag is never overwritten'
-                    )
+                path = bag / name if name and args.record else bag
+                bags[name] = path
+                if path.exists():
+                    raise RunError(f'--record: {path} exists already; a bag is never overwritten')
         run_dir.mkdir(parents=True, exist_ok=True)
         print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
         for name, job in jobs.items():

@@ -6,10 +6,16 @@ import contextlib
 import signal
 import sys
 import time
+import weakref
 from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING
 
 from mill_common.env import ros_environment
 from mill_common.parameters import ParameterError, ParamSpec
+
+if TYPE_CHECKING:  # rclpy is imported only when a node really starts (not for --help)
+    from rclpy.executors import Executor
+    from rclpy.node import Node
 
 
 class NodeExit(Exception):
@@ -25,10 +31,18 @@ class NodeExit(Exception):
         self.code = code
 
 
-def request_exit(node: object, code: int, message: str) -> None:
+# The exit requested by each running node (the first one counts), read by run_node.
+_exit_requests: weakref.WeakKeyDictionary[Node, NodeExit] = weakref.WeakKeyDictionary()
+
+
+def request_exit(node: Node, code: int, message: str) -> None:
     """Ask run_node to end `node` after the current callback."""
-    if getattr(node, 'exit_request', None) is None:
-        node.exit_request = NodeExit(code, message)
+    _exit_requests.setdefault(node, NodeExit(code, message))
+
+
+def exit_request(node: Node) -> NodeExit | None:
+    """The exit `node` has asked for, if any."""
+    return _exit_requests.get(node)
 
 
 def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
@@ -44,7 +58,7 @@ def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
 EXECUTORS = ('single', 'events')
 
 
-def make_executor():
+def make_executor() -> Executor:
     """The executor named by MILL_EXECUTOR: 'events' (default) or 'single'.
 
     'events' is rclpy's C++ EventsExecutor (rclpy.experimental in Jazzy): it halves
@@ -79,7 +93,7 @@ def install_stop_handlers() -> list[int]:
     return stop
 
 
-def release_node(executor: object | None, node: object | None) -> None:
+def release_node(executor: Executor | None, node: Node | None) -> None:
     """Destroy a node (and its executor) now, before its context is shut down.
 
     rclpy's shutdown leaves nodes alive until garbage collection, and their DDS readers
@@ -93,7 +107,7 @@ def release_node(executor: object | None, node: object | None) -> None:
         node.destroy_node()
 
 
-def deliver_before_exit(node: object, timeout: float = 1.0) -> None:
+def deliver_before_exit(node: Node, timeout: float = 1.0) -> None:
     """Wait (bounded) until every subscriber acknowledged what the node published.
 
     Destroying a writer drops the samples still in flight, so a recorder could miss the
@@ -118,7 +132,7 @@ def _user_args(argv: Sequence[str]) -> list[str]:
 
 
 def run_node(
-    make_node: Callable[[], object],
+    make_node: Callable[[], Node],
     executable: str,
     summary: str,
     specs: Sequence[tuple[str, ParamSpec]],
@@ -155,10 +169,11 @@ def run_node(
         node = make_node()
         executor = make_executor()
         executor.add_node(node)
-        while rclpy.ok() and not stop and getattr(node, 'exit_request', None) is None:
+        while rclpy.ok() and not stop and exit_request(node) is None:
             executor.spin_once(timeout_sec=0.2)
-        if getattr(node, 'exit_request', None) is not None:
-            raise node.exit_request
+        request = exit_request(node)
+        if request is not None:
+            raise request
     except (ParameterError, ValueError) as exc:
         print(f'{executable}: error: {exc}', file=sys.stderr)
         code = 2

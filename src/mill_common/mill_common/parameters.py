@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, Protocol
 
 Check = Callable[[Any], 'str | None']
 
@@ -32,6 +32,13 @@ class ParamSpec:
     description: str
     check: Check = no_check
     read_only: bool = False
+
+
+class Plugin(Protocol):
+    """An algorithm class with parameters: its namespace (PREFIX) and its parameters."""
+
+    PREFIX: ClassVar[str]
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
 
 
 class ParameterError(ValueError):
@@ -229,7 +236,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
     ]
 
 
-def algorithm_specs(classes: Iterable[type]) -> list[tuple[str, ParamSpec]]:
+def algorithm_specs(classes: Iterable[type[Plugin]]) -> list[tuple[str, ParamSpec]]:
     """Parameters of registered algorithm classes under their PREFIX, each full name once."""
     specs: dict[str, ParamSpec] = {}
     for cls in classes:
@@ -238,6 +245,6 @@ def algorithm_specs(classes: Iterable[type]) -> list[tuple[str, ParamSpec]]:
     return list(specs.items())
 
 
-def algorithm_values(cls: type, values: Mapping[str, Any]) -> dict[str, Any]:
+def algorithm_values(cls: type[Plugin], values: Mapping[str, Any]) -> dict[str, Any]:
     """An algorithm's own values (names without prefix) out of a node's values."""
     return {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}

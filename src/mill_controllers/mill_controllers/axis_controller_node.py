@@ -32,7 +32,9 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -48,7 +50,7 @@ from mill_common.ros import (
     joint_state,
 )
 from mill_common.ros_params import NodeParameters
-from mill_common.signals import AxisReference, Estimate, FopdtEstimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_common.stamp_join import StampJoin
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -58,21 +60,84 @@ from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
+from mill_controllers.base import BASE_INPUTS, AxisController
 from mill_controllers.config import build_controller, parameter_specs
 from mill_controllers.registry import CONTROLLERS
-from mill_controllers.switching import BumplessSwitch, check_replacement
+from mill_controllers.switching import BumplessSwitch, SwitchRecord, check_replacement
 from mill_controllers.trip import BRAKE, FollowingErrorTrip
 
-INPUTS = ('state', 'estimate')
+Samples = list[tuple[int, Any]]  # (stamp [ns], value) pairs read from one message
 
 
-def needs_model(law: object) -> bool:
-    """Whether the law designs with the observer's model estimate (Estimate.model)."""
-    return bool(getattr(law, 'needs_model', False))
+def _position(msg: JointState, axis: str) -> Samples | Rejected:
+    got = joint_values(msg.name, {'position': msg.position}, axis, ('position',))
+    return got if isinstance(got, Rejected) else [(from_stamp(msg.header.stamp), got[0])]
 
 
-def required_inputs(law: object) -> tuple[str, ...]:
-    return (*INPUTS, 'model') if needs_model(law) else INPUTS
+def _estimate(msg: JointState, axis: str) -> Samples | Rejected:
+    arrays = {'position': msg.position, 'velocity': msg.velocity, 'effort': msg.effort}
+    got = joint_values(msg.name, arrays, axis, ('position', 'velocity', 'effort'))
+    return got if isinstance(got, Rejected) else [(from_stamp(msg.header.stamp), Estimate(*got))]
+
+
+def _reference(msg: JointTrajectory, axis: str) -> Samples | Rejected:
+    ns0 = from_stamp(msg.header.stamp)
+    out: Samples = []
+    for p in msg.points:
+        arrays = {
+            'positions': p.positions,
+            'velocities': p.velocities,
+            'accelerations': p.accelerations,
+        }
+        got = point_values(
+            msg.joint_names, arrays, [axis], ['positions'], ['velocities', 'accelerations']
+        )
+        if isinstance(got, Rejected):
+            return got  # the whole message: a partial reference is no reference
+        (pos,), (vel,), (acc,) = got['positions'], got['velocities'], got['accelerations']
+        out.append((ns0 + from_duration(p.time_from_start), AxisReference(pos, vel, acc)))
+    return out
+
+
+def _model(msg: JointState, axis: str) -> Samples | Rejected:
+    model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
+    if model is None:
+        return []  # another observer's state: no model in it
+    if not all(math.isfinite(v) for v in model.as_status().values()):
+        return Rejected('non-finite model estimate')
+    return [(from_stamp(msg.header.stamp), model)]
+
+
+@dataclass(frozen=True)
+class InputTopic:
+    """Where one field of ControlInputs comes from."""
+
+    message: type
+    topic: Callable[[str], str]  # axis -> topic name
+    read: Callable[[Any, str], Samples | Rejected]  # (message, axis) -> its samples
+    owner: str  # the parameter naming the node that must send it
+    hint: str = ''  # what to run when a law needs this input and none has arrived
+
+
+# Field of ControlInputs -> its topic. The state paces the run (CLOCK_INPUT); the reference
+# is taken at the state's stamp from the points the trajectory sent ahead (ReferenceBuffer).
+INPUTS: dict[str, InputTopic] = {
+    'position': InputTopic(JointState, topics.state, _position, 'plant_node'),
+    'estimate': InputTopic(JointState, topics.estimate, _estimate, 'observer_node'),
+    'reference': InputTopic(
+        JointTrajectory, lambda _axis: topics.REFERENCE, _reference, 'trajectory_node'
+    ),
+    'model': InputTopic(
+        JointState, topics.observer_state, _model, 'observer_node', 'run the rls observer'
+    ),
+}
+CLOCK_INPUT = 'position'
+REFERENCE_INPUT = 'reference'
+
+
+def joined(law: AxisController) -> tuple[str, ...]:
+    """The inputs joined by stamp: every one the law needs but the reference."""
+    return tuple(s for s in law.required_inputs() if s != REFERENCE_INPUT)
 
 
 class AxisControllerNode(Node):
@@ -80,25 +145,23 @@ class AxisControllerNode(Node):
         super().__init__('axis_controller')
         self._law: BumplessSwitch | None = None
         self._trip: FollowingErrorTrip | None = None
-        self._reported_switch = None
+        self._reported_switch: SwitchRecord | None = None
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         axis = self.axis = v['axis']
         self.realtime = v['timing'] == 'realtime'
         self._dt_ns = period_ns(v['sample_period'])
         self._lead_ns = v['command_delay'] * self._dt_ns
-        self._owners = {
-            'state': v['plant_node'],
-            'estimate': v['observer_node'] or f'{axis}_observer',
-            'reference': v['trajectory_node'],
-        }
-        self._join = StampJoin(required_inputs(self._law.law))
+        self._owners = {slot: v[source.owner] for slot, source in INPUTS.items()}
+        for slot in ('estimate', 'model'):
+            self._owners[slot] = self._owners[slot] or f'{axis}_observer'
+        self._join = StampJoin(joined(self._switch.law))
         self._ready: dict[int, dict[str, Any]] = {}  # joined samples waiting for a reference
         self._reference = ReferenceBuffer()
         self._stamps = {
             slot: StampCheck(None if self.realtime else self._dt_ns) for slot in self._owners
         }
-        self._model_seen = False  # a model estimate has arrived on observer_state
+        self._seen: set[str] = set()  # inputs of which a sample has arrived
         self._last_ns = -1
         self._last_command: JointState | None = None
         self._waiting_since: float | None = None
@@ -114,22 +177,16 @@ class AxisControllerNode(Node):
             stamp_ns=lambda: max(self._last_ns, 0),
             extra=self._trip_status,
         )
-        # Real time keeps only the newest message of each input; lockstep must lose none.
-        qos = 1 if self.realtime else DATA_QOS
-        self._topics = {
-            'state': topics.state(axis),
-            'estimate': topics.estimate(axis),
-            'reference': topics.REFERENCE,
-            'model': topics.observer_state(axis),
-        }
-        for slot, publisher in self._owners.items():
-            self.guard.watch(self._topics[slot], publisher)
-        self.create_subscription(JointState, self._topics['state'], self._on_state, qos)
-        self.create_subscription(JointState, self._topics['estimate'], self._on_estimate, qos)
-        self.create_subscription(
-            JointTrajectory, self._topics['reference'], self._on_reference, DATA_QOS
-        )
-        self.create_subscription(JointState, self._topics['model'], self._on_observer_state, qos)
+        # Real time keeps only the newest message of each input; lockstep must lose none. The
+        # reference always keeps its history: its messages carry the points ahead.
+        self._topics = {slot: source.topic(axis) for slot, source in INPUTS.items()}
+        for slot in ('position', 'estimate', 'reference'):
+            self.guard.watch(self._topics[slot], self._owners[slot])
+        for slot, source in INPUTS.items():
+            qos = 1 if self.realtime and slot != REFERENCE_INPUT else DATA_QOS
+            self.create_subscription(
+                source.message, self._topics[slot], partial(self._on_input, slot), qos
+            )
         self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
@@ -137,6 +194,11 @@ class AxisControllerNode(Node):
             f'{self.resolve_topic_name(topics.joint_command(axis))}, following-error limit '
             f'{1e3 * v["following_error_limit"]:g} mm'
         )
+
+    @property
+    def _switch(self) -> BumplessSwitch:
+        assert self._law is not None, 'configured in NodeParameters'
+        return self._law
 
     def _configure(self, values: dict[str, Any]) -> None:
         if self._law is None:
@@ -151,16 +213,18 @@ class AxisControllerNode(Node):
             raise ValueError('axis is fixed for the life of the node')
         old = self.params.values
         reason = check_replacement(
-            CONTROLLERS[old['controller']], CONTROLLERS[values['controller']]
+            CONTROLLERS.get(old['controller']), CONTROLLERS.get(values['controller'])
         )
         if reason:
             raise ValueError(reason)
         law = build_controller(values)  # raises, with the reason, before anything changes
-        if needs_model(law) and not self._model_seen:
-            raise ValueError(
-                f"{values['controller']} designs with the observer's model estimate, and none "
-                f'has arrived on {topics.observer_state(self.axis)} (run the rls observer)'
-            )
+        for slot in law.required_inputs():
+            if slot not in BASE_INPUTS and slot not in self._seen:
+                source = INPUTS[slot]
+                raise ValueError(
+                    f'{values["controller"]} needs the {slot} input each sample, and none '
+                    f'has arrived on {source.topic(self.axis)} ({source.hint})'
+                )
         self._law.set_blend_time(values['sample_period'], values['blend_time'])
         if self._trip is not None and self._trip.trip is not None:
             self._log_reset(self._trip.reset(), 'parameter following_error_limit set')
@@ -169,100 +233,49 @@ class AxisControllerNode(Node):
         if any(values[k] != old[k] for k in values if k not in unchanged):
             self._law.replace(law)
             self._law_name = values['controller']  # params.values changes after we return
-            ready = self._join.require(required_inputs(law))
+            ready = self._join.require(joined(law))
             if ready is not None:  # a sample that waited only for the old law's extra input
                 self._ready[ready[0]] = ready[1]
                 self._try_pending()
 
     # -- inputs ----------------------------------------------------------------------------
-    def _accept(self, slot: str, msg: Any) -> int | None:
-        """The message's stamp if its sender and stamp are fine, else None (dropped)."""
-        ns = from_stamp(msg.header.stamp)
-        problem = owner_check(msg.header.frame_id, self._owners[slot]) or self._stamps[slot].check(
-            ns
-        )
+    def _on_input(self, slot: str, msg: Any) -> None:
+        """Check a message (sender, stamp, content) and hand its samples on."""
+        topic, sender = self._topics[slot], msg.header.frame_id
+        problem = owner_check(sender, self._owners[slot])
         if problem is not None:
-            if slot == 'state' and ns == self._last_ns and problem.reason.startswith('stamp'):
-                return None
-            self.guard.drop(self._topics[slot], problem, msg.header.frame_id)
-            return None
-        return ns
-
-    def _on_state(self, msg: JointState) -> None:
-        ns = self._accept('state', msg)
-        if ns is None:
+            self.guard.drop(topic, problem, sender)
             return
-        self.guard.heard(self._topics['state'])
-        if self.realtime and self._stamps['state'].is_repeat(ns):
-            self.guard.drop(self._topics['state'], Rejected(f'repeated stamp {ns} ns'))
+        ns = from_stamp(msg.header.stamp)
+        if slot != REFERENCE_INPUT:
+            problem = self._stamps[slot].check(ns)
+            if problem is None and self.realtime and self._stamps[slot].is_repeat(ns):
+                problem = Rejected(f'repeated stamp {ns / 1e9:.6f} s')
+            if problem is not None:
+                if not (slot == CLOCK_INPUT and ns == self._last_ns):  # a re-offered step
+                    self.guard.drop(topic, problem, sender)
+                return
+        samples = INPUTS[slot].read(msg, self.axis)
+        if isinstance(samples, Rejected):
+            self.guard.drop(topic, samples, sender)
             return
-        if ns == self._last_ns and self._last_command is not None:
+        if slot in self.guard.watches:
+            self.guard.heard(topic)
+        if not samples:
+            return
+        self._seen.add(slot)
+        if slot == REFERENCE_INPUT:
+            for at, ref in samples:
+                self._reference.add(at, ref)
+            self._try_pending()
+            return
+        self._stamps[slot].accept(ns)
+        if slot == CLOCK_INPUT and ns == self._last_ns and self._last_command is not None:
             self._pub.publish(self._last_command)  # the plant offered this step again
             return
-        if ns < self._last_ns:
-            return
-        value = joint_values(msg.name, {'position': msg.position}, self.axis, ('position',))
-        if isinstance(value, Rejected):
-            self.guard.drop(self._topics['state'], value, msg.header.frame_id)
-            return
-        self._stamps['state'].accept(ns)
-        self._offer('state', ns, value[0])
-
-    def _on_estimate(self, msg: JointState) -> None:
-        ns = self._accept('estimate', msg)
-        if ns is None or ns <= self._last_ns:
-            return
-        self.guard.heard(self._topics['estimate'])
-        arrays = {'position': msg.position, 'velocity': msg.velocity, 'effort': msg.effort}
-        value = joint_values(msg.name, arrays, self.axis, ('position', 'velocity', 'effort'))
-        if isinstance(value, Rejected):
-            self.guard.drop(self._topics['estimate'], value, msg.header.frame_id)
-            return
-        self._stamps['estimate'].accept(ns)
-        self._offer('estimate', ns, Estimate(*value))
-
-    def _on_reference(self, msg: JointTrajectory) -> None:
-        topic = self._topics['reference']
-        problem = owner_check(msg.header.frame_id, self._owners['reference'])
-        if problem is not None:
-            self.guard.drop(topic, problem, msg.header.frame_id)
-            return
-        ns0 = from_stamp(msg.header.stamp)
-        points = []
-        for p in msg.points:
-            arrays = {
-                'positions': p.positions,
-                'velocities': p.velocities,
-                'accelerations': p.accelerations,
-            }
-            got = point_values(
-                msg.joint_names, arrays, [self.axis], ['positions'], ['velocities', 'accelerations']
-            )
-            if isinstance(got, Rejected):
-                self.guard.drop(topic, got, msg.header.frame_id)
-                return  # the whole message: a partial reference is no reference
-            points.append((ns0 + from_duration(p.time_from_start), got))
-        self.guard.heard(topic)
-        for ns, got in points:
-            (pos,), (vel,), (acc,) = got['positions'], got['velocities'], got['accelerations']
-            self._reference.add(ns, AxisReference(pos, vel, acc))
-        self._try_pending()
-
-    def _on_observer_state(self, msg: JointState) -> None:
-        problem = owner_check(msg.header.frame_id, self._owners['estimate'])
-        if problem is not None:
-            self.guard.drop(self._topics['model'], problem, msg.header.frame_id)
-            return
-        model = FopdtEstimate.from_status(dict(zip(msg.name, msg.position, strict=False)))
-        if model is None:
-            return  # another observer's state: no model in it
-        if not all(math.isfinite(v) for v in model.as_status().values()):
-            self.guard.drop(self._topics['model'], Rejected('non-finite model estimate'))
-            return
-        self._model_seen = True
-        ns = from_stamp(msg.header.stamp)
-        if ns > self._last_ns:
-            self._offer('model', ns, model)
+        for at, value in samples:
+            if at > self._last_ns:
+                self._offer(slot, at, value)
 
     def _offer(self, slot: str, ns: int, value: Any) -> None:
         inputs = self._join.put(slot, ns, value)
@@ -297,22 +310,19 @@ class AxisControllerNode(Node):
 
     def _act(self, ns: int, inputs: dict[str, Any]) -> None:
         self._waiting_since = None
-        est = inputs['estimate']
-        if 'model' in inputs:
-            est = replace(est, model=inputs['model'])
-        y, ref = inputs['state'], inputs['reference']
+        est, y, ref = inputs['estimate'], inputs['position'], inputs['reference']
         t = seconds(ns)
         if self._lead_ns:  # the command acts N samples on: aim at the state there
             t, y = seconds(ns + self._lead_ns), est.position
         try:
-            torque = self._law.compute(t, y, ref, est)
+            torque = self._switch.compute(ControlInputs(t, y, ref, est, inputs.get('model')))
         except ValueError as exc:
             self.get_logger().error(f'no valid command for t = {t:.4f} s: {exc}: braking')
             torque = BRAKE
         if not math.isfinite(torque):
             torque = BRAKE
         assert self._trip is not None
-        error = inputs['state'] - self._reference_now(ns, ref)
+        error = inputs['position'] - self._reference_now(ns, ref)
         was = self._trip.tripped
         torque = self._trip.command(seconds(ns), error, torque)
         if self._trip.tripped and not was:
@@ -320,15 +330,14 @@ class AxisControllerNode(Node):
         self._last_ns = ns
         self._last_command = joint_state(ns, (self.axis,), effort=(torque,), sender=self.get_name())
         self._pub.publish(self._last_command)
-        law = self._law.law
-        if hasattr(law, 'status'):
-            status = law.status()
-            self._state_pub.publish(
-                joint_state(ns, tuple(status), tuple(float(v) for v in status.values()))
-            )
-        if self._law.last_switch is not self._reported_switch:
-            self._reported_switch = self._law.last_switch
-            self._report_switch(ns)
+        status = self._switch.law.status()
+        if status:
+            values = tuple(float(v) for v in status.values())
+            self._state_pub.publish(joint_state(ns, tuple(status), values, sender=self.get_name()))
+        record = self._switch.last_switch
+        if record is not None and record is not self._reported_switch:
+            self._reported_switch = record
+            self._report_switch(ns, record)
 
     def _reference_now(self, ns: int, aimed: AxisReference) -> float:
         """The reference position at the state's own stamp (the following error's)."""
@@ -388,8 +397,7 @@ class AxisControllerNode(Node):
                 f'by {how}'
             )
 
-    def _report_switch(self, ns: int) -> None:
-        record = self._law.last_switch
+    def _report_switch(self, ns: int, record: SwitchRecord) -> None:
         name = self._law_name
         self.get_logger().info(
             f'switched to {name} at t = {record.time:.4f} s: output {record.old_output:.6g} '

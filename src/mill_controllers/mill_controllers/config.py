@@ -6,11 +6,9 @@ from typing import Any
 
 from mill_common.parameters import (
     ParamSpec,
-    algorithm_specs,
     algorithm_values,
     axis_node_specs,
     non_negative,
-    one_of,
     positive_or_inf,
     text,
 )
@@ -29,7 +27,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'controller',
                 'adrc',
                 'control law (see README: algorithms)',
-                one_of(*CONTROLLERS),
+                CONTROLLERS.check(),
             ),
         )
     )
@@ -82,7 +80,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
-    return specs + algorithm_specs(CONTROLLERS.values())
+    return specs + CONTROLLERS.parameter_specs()
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -90,6 +88,6 @@ def input_gain(values: dict[str, Any]) -> float:
 
 
 def build_controller(values: dict[str, Any]) -> AxisController:
-    cls = CONTROLLERS[values['controller']]
+    cls = CONTROLLERS.get(values['controller'])
     own = algorithm_values(cls, values)
     return cls.from_parameters(input_gain(values), values['sample_period'], own)

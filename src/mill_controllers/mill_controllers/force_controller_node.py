@@ -40,7 +40,8 @@ STATE_NAMES = ('force', 'reference', 'feed_command', 'override', 'beta', 'depth'
 class ForceControllerNode(Node):
     def __init__(self) -> None:
         super().__init__('force_controller')
-        self._loop: ForceFeedLoop | None = None
+        self._loop: ForceFeedLoop  # built once by _configure
+        self._built = False
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._next_k = 0  # the next control instant
         self._last: tuple[int, JointState] | None = None  # last force stamp and its answer
@@ -61,8 +62,9 @@ class ForceControllerNode(Node):
     def _configure(self, values: dict[str, Any]) -> None:
         if values['override.min'] > values['override.max']:
             raise ValueError('override.min must not exceed override.max')
-        if self._loop is None:
+        if not self._built:
             self._loop = ForceFeedLoop.from_parameters(values)
+            self._built = True
         # reference_force, the only changeable value, is read at every sample
 
     def _measure(self, msg: WrenchStamped) -> float:

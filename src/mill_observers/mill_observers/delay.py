@@ -56,11 +56,9 @@ class DelayCompensation:
         later = list(self.pending)[1:]
         if isinstance(self.observer, ModelPredictor):
             ahead = self.observer.predicted(later)
-            return Estimate(ahead.position, ahead.velocity, ahead.disturbance, est.model)
+            return ahead
         lead = self.delay * self.T
-        return Estimate(
-            est.position + lead * est.velocity, est.velocity, est.disturbance, est.model
-        )
+        return Estimate(est.position + lead * est.velocity, est.velocity, est.disturbance)
 
     def command(self, u: float) -> None:
         """The command computed at sample k (acts from k + N; a braked axis gets no input)."""

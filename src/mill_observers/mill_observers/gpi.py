@@ -25,6 +25,8 @@ from mill_common.parameters import ParameterError, ParamSpec, positive, validate
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
+from mill_observers.base import Observer
+
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
 
 
@@ -48,7 +50,7 @@ def _expm1_complex(s: complex) -> complex:
     )
 
 
-class GpiObserver:
+class GpiObserver(Observer):
     """Beltrán 2013 GPI observer for one axis ẍ = b·τ + ξ, ξ a 4th-degree Taylor polynomial.
 
     Estimates position [m], velocity [m/s] and the lumped disturbance ξ [m/s²] from the

@@ -44,6 +44,7 @@ class ObserverNode(Node):
     def __init__(self) -> None:
         super().__init__('observer')
         self._comp: DelayCompensation | None = None
+        self._blend: EstimateBlend | None = None
         self._last_ns: int | None = None
         self._commands: dict[int, float] = {}
         self._newest_command: float | None = None  # real time: the newest command received
@@ -89,9 +90,7 @@ class ObserverNode(Node):
         # old one's and fades into its own over blend_time (mill_observers.switching).
         if self._comp is not None:
             old = self.params.values['observer']
-            units = [
-                getattr(OBSERVERS[n], 'DISTURBANCE_UNIT', 'm/s²') for n in (old, values['observer'])
-            ]
+            units = [OBSERVERS.get(n).DISTURBANCE_UNIT for n in (old, values['observer'])]
             if units[0] != units[1]:
                 raise ValueError(
                     f'{values["observer"]} estimates the disturbance in {units[1]} but the running '
@@ -101,8 +100,8 @@ class ObserverNode(Node):
             build_observer(values), values['command_delay'], values['sample_period']
         )
         blend = EstimateBlend(values['sample_period'], values['blend_time'])
-        if self._last_ns is not None:  # a switch while running: continue the estimate
-            blend.resumed(self._blend).switch()
+        if self._last_ns is not None and self._blend is not None:
+            blend.resumed(self._blend).switch()  # a switch while running: continue the estimate
         self._blend = blend
         if self._last_ns is not None:
             self._last_ns = None
@@ -161,7 +160,8 @@ class ObserverNode(Node):
             self._advance()
 
     def _advance(self) -> None:
-        assert self._comp is not None
+        comp, blend = self._comp, self._blend
+        assert comp is not None and blend is not None, 'configured in NodeParameters'
         while self._states:
             ns = min(self._states)
             if self.realtime:
@@ -169,14 +169,14 @@ class ObserverNode(Node):
                 self._states = {ns: self._states[ns]}
                 if self._last_ns is not None:
                     held = self._newest_command
-                    self._comp.command(0.0 if held is None else held)
+                    comp.command(0.0 if held is None else held)
             elif self._last_ns is not None:
                 u = self._commands.pop(self._last_ns, None)
                 if u is None:
                     self._stalled_since = self._stalled_since or time.monotonic()
                     return  # y(k) arrived before u(k-1): wait for it
-                self._comp.command(u)
-            est = self._blend(self._comp.correct(self._states.pop(ns)))
+                comp.command(u)
+            est = blend(comp.correct(self._states.pop(ns)))
             self._last_ns = ns
             self._stalled_since = None
             self._last_estimate = joint_state(
@@ -188,16 +188,17 @@ class ObserverNode(Node):
                 sender=self.get_name(),
             )
             self._pub.publish(self._last_estimate)
-            observer = self._comp.observer
-            if hasattr(observer, 'status'):
-                status = observer.status()
+            status = comp.observer.status()
+            if status:
                 values = tuple(float(v) for v in status.values())
                 self._state_pub.publish(
                     joint_state(ns, tuple(status), values, sender=self.get_name())
                 )
 
     def _report_waiting(self) -> None:
-        if self._stalled_since and time.monotonic() - self._stalled_since > 2.0:
+        if self._last_ns is None or self._stalled_since is None:
+            return
+        if time.monotonic() - self._stalled_since > 2.0:
             topic = topics.joint_command(self.axis)
             self.get_logger().warning(
                 f'waiting for the command of t = {seconds(self._last_ns):.4f} s on {topic} '

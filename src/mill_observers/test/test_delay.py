@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from mill_common.signals import AxisReference
+from mill_common.signals import AxisReference, ControlInputs
 from mill_controllers.pd_law import AdrcController
 from mill_observers.delay import DelayCompensation
 from mill_observers.gpi import GpiObserver
@@ -27,7 +27,7 @@ def run(delay: int, compensate: bool, steps: int = 3000) -> list[float]:
     for k in range(steps):
         est = comp.correct(x)
         y = est.position if lead else x
-        u = law.compute((k + lead) * T, y, AxisReference(0.001, 0.0, 0.0), est)
+        u = law.compute(ControlInputs((k + lead) * T, y, AxisReference(0.001, 0.0, 0.0), est))
         queue.append(u)
         a = B * queue.pop(0) + 1.0
         x, v = x + v * T + 0.5 * a * T * T, v + a * T

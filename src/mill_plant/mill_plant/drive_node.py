@@ -31,6 +31,7 @@ import math
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -144,10 +145,7 @@ class DriveNode(LifecycleNode):
             self._force_pub = self.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
         self._command_subs = {
             a: self.create_subscription(
-                JointState,
-                topics.joint_command(a),
-                lambda msg, axis=a: self._on_command(axis, msg),
-                DATA_QOS,
+                JointState, topics.joint_command(a), partial(self._on_command, a), DATA_QOS
             )
             for a in self.axes
         }

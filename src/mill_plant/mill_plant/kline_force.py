@@ -39,15 +39,44 @@ smooth in time; F_z ∝ |sin| has a kink at each tooth entry (120 Hz).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
 
-from mill_plant.cutting import Force3
+from mill_common.parameters import (
+    ParamSpec,
+    in_range,
+    number,
+    number_list,
+    positive,
+    positive_int,
+    validate_all,
+)
+
+from mill_plant.cutting import CuttingForceModel, Force3
 
 _TWO_PI = 2.0 * math.pi
 
 
-class KlineCuttingForce:
+class KlineCuttingForce(CuttingForceModel):
     """Kline quasi-static cutting force (Beltrán 2013 eq. (4)) on a box-shaped workpiece."""
+
+    PREFIX: ClassVar[str] = 'kline'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec(
+            'specific_energy',
+            1.37e9,
+            'u_s, energy per removed volume [J/m^3] (0.5 hp min/in^3)',
+            positive,
+        ),
+        ParamSpec('spindle_speed', 1800.0, 'spindle speed N [rpm]', positive),
+        ParamSpec('teeth', 2, 'cutter teeth n_t', positive_int),
+        ParamSpec('tool_diameter', 0.010, 'cutter diameter D [m]', positive),
+        ParamSpec('radial_depth', 0.010, 'radial depth of cut b [m] (b = D: slot)', positive),
+        ParamSpec('helix_angle', 45.0, 'cutting-edge angle lambda [deg]', in_range(0, 89)),
+        ParamSpec('workpiece_min', [-0.1, -0.12], 'workpiece corner x, y [m]', number_list(2)),
+        ParamSpec('workpiece_max', [0.03, 0.0], 'workpiece corner x, y [m]', number_list(2)),
+        ParamSpec('workpiece_top', 0.0, 'z of the workpiece top surface [m]', number),
+    )
 
     def __init__(
         self,
@@ -117,6 +146,22 @@ class KlineCuttingForce:
         # f = |v_xy| / (n_t N/60), so u_s f = u_s |v_xy| * 60/(n_t N): fold the constants once
         self._energy_per_speed = self.specific_energy * 60.0 / (teeth * self.spindle_speed_rpm)
         self._axial = self.radial_ratio * math.tan(self.helix_angle)
+
+    @classmethod
+    def from_parameters(cls, values: Mapping[str, Any]) -> KlineCuttingForce:
+        """From PARAMETERS (spindle speed in rpm, helix angle in degrees)."""
+        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
+        return cls(
+            specific_energy=v['specific_energy'],
+            spindle_speed_rpm=v['spindle_speed'],
+            teeth=v['teeth'],
+            tool_diameter=v['tool_diameter'],
+            radial_depth=v['radial_depth'],
+            helix_angle=math.radians(v['helix_angle']),
+            workpiece_min=tuple(v['workpiece_min']),
+            workpiece_max=tuple(v['workpiece_max']),
+            workpiece_top=v['workpiece_top'],
+        )
 
     def feed_per_tooth(self, feed_speed: float) -> float:
         """f [m/tooth] at an x-y feed speed [m/s]."""

@@ -9,7 +9,8 @@ start point is refused with a message naming the distance, rather than moved bli
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.bezier import BezierRestToRest
@@ -23,8 +24,17 @@ class ApproachError(ValueError):
     """The axes stand too far from the start point; str() names the distance."""
 
 
-class Approach:
-    """From `position` to path.sample(0) at a limited speed, then the path, shifted."""
+class Approach(Trajectory):
+    """From `position` to path.sample(0) at a limited speed, then the path, shifted.
+
+    Not a registered path type: the trajectory node puts it in front of the job's path.
+    """
+
+    PREFIX = 'approach'
+
+    @classmethod
+    def from_parameters(cls, values: Mapping[str, Any]) -> Approach:
+        raise NotImplementedError('an approach is built from the measured position')
 
     def __init__(
         self,

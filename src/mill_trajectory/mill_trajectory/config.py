@@ -10,7 +10,6 @@ from typing import Any
 
 from mill_common.parameters import (
     ParamSpec,
-    algorithm_specs,
     algorithm_values,
     boolean,
     in_range,
@@ -26,7 +25,7 @@ from mill_trajectory.registry import TRAJECTORIES
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
     specs = [
-        ('trajectory', ParamSpec('trajectory', 'linear', 'path type', one_of(*TRAJECTORIES))),
+        ('trajectory', ParamSpec('trajectory', 'linear', 'path type', TRAJECTORIES.check())),
         (
             'duration',
             ParamSpec(
@@ -144,7 +143,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('max', 1.5, 'largest accepted feed override [-]', in_range(0.0, 10.0)),
         ),
     ]
-    return specs + algorithm_specs(TRAJECTORIES.values())
+    return specs + TRAJECTORIES.parameter_specs()
 
 
 def _axes(value: Any) -> str | None:
@@ -161,7 +160,7 @@ class Job:
 
 
 def build_job(values: dict[str, Any]) -> Job:
-    cls = TRAJECTORIES[values['trajectory']]
+    cls = TRAJECTORIES.get(values['trajectory'])
     own = algorithm_values(cls, values)
     path = cls.from_parameters(own)
     end = path.end_time + values['settle_time']

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import time
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -50,6 +51,7 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
 from mill_trajectory.approach import Approach, ApproachError
+from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.config import build_job, parameter_specs
 from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
 
@@ -59,8 +61,9 @@ JOB_STATUS_NAME = 'mill_trajectory: job'
 class TrajectoryNode(Node):
     def __init__(self) -> None:
         super().__init__('trajectory')
-        self._path = None
-        self._scaled = None
+        self._path: Trajectory  # set by _configure
+        self._scaled: TimeScaledPath | None = None
+        self._override: FeedOverride  # set by _configure
         self._job_end = 0.0
         self._done_sent = False
         self._next_report = 0.0
@@ -121,10 +124,7 @@ class TrajectoryNode(Node):
             raise ValueError('feed_override is not available with timing realtime')
         for axis in v['axes']:
             self.create_subscription(
-                JointState,
-                topics.state(axis),
-                lambda msg, a=axis: self._on_state(a, msg),
-                1,
+                JointState, topics.state(axis), partial(self._on_state, axis), 1
             )
         wall = RosClock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(v['publish_period'], self._publish_realtime, clock=wall)
@@ -154,7 +154,7 @@ class TrajectoryNode(Node):
                 return  # the controllers (one per axis) are not listening yet
             here = [self._positions.get(a, 0.0) for a in AXES]
             try:
-                self._path = Approach(
+                approach = Approach(
                     self._path,
                     here,
                     v['approach.speed'],
@@ -166,11 +166,12 @@ class TrajectoryNode(Node):
                 self.get_logger().error(f'job refused: {exc}')
                 self._report(0.0, 'refused', self._refused, level=DiagnosticStatus.ERROR)
                 return
-            self._job_end += self._path.duration
+            self._path = approach
+            self._job_end += approach.duration
             self._t0 = self._newest_state_ns
             self.get_logger().info(
-                f'job started; approach of {1e3 * self._path.distance:.3f} mm in '
-                f'{self._path.duration:.2f} s, ends at t = {self._job_end:.3f} s'
+                f'job started; approach of {1e3 * approach.distance:.3f} mm in '
+                f'{approach.duration:.2f} s, ends at t = {self._job_end:.3f} s'
             )
         dt_ns = self._dt_ns
         now = time.time_ns() - self._t0
@@ -208,7 +209,9 @@ class TrajectoryNode(Node):
             slope = 0.0
         if accepted.value != offered:
             slope = 0.0  # a clamped or held override does not ramp
-        t = self._scaled.path_time
+        scaled = self._scaled
+        assert scaled is not None, 'lockstep overrides always scale the path'
+        t = scaled.path_time
         if problem:
             self.get_logger().warning(problem)
             self._report(t, 'running', problem)
@@ -216,7 +219,7 @@ class TrajectoryNode(Node):
         out.header.frame_id = self.get_name()
         out.header.stamp = msg.header.stamp
         out.joint_names = list(AXES)
-        out.points.append(self._point(self._scaled.sample(accepted.value, slope), 0))
+        out.points.append(self._point(scaled.sample(accepted.value, slope), 0))
         self._ref_pub.publish(out)
         self._answer = (ns, out)
         self._job_status(t)
@@ -225,7 +228,7 @@ class TrajectoryNode(Node):
         ns = from_stamp(msg.clock)
         t = seconds(ns)
         if self._scaled is not None:
-            self._publish_scaled(ns)
+            self._publish_scaled(self._scaled, ns)
             t = self._scaled.path_time
         else:
             self._publish_chunk(ns)
@@ -239,9 +242,9 @@ class TrajectoryNode(Node):
             self._next_report = t + 1.0
             self._report(t, 'running')
 
-    def _publish_scaled(self, ns: int) -> None:
+    def _publish_scaled(self, scaled: TimeScaledPath, ns: int) -> None:
         # Each sample once and in order: its path time depends on all earlier overrides.
-        first = max(ns // self._dt_ns, self._scaled.sample_index)
+        first = max(ns // self._dt_ns, scaled.sample_index)
         last = ns // self._dt_ns + self._points
         if first >= last:
             return
@@ -250,11 +253,11 @@ class TrajectoryNode(Node):
         out.header.stamp = to_stamp(first * self._dt_ns)
         out.joint_names = list(AXES)
         for k in range(first, last):
-            sample = self._scaled.sample(self._override.value)
+            sample = scaled.sample(self._override.value)
             out.points.append(self._point(sample, (k - first) * self._dt_ns))
         self._ref_pub.publish(out)
 
-    def _point(self, sample, offset_ns: int) -> JointTrajectoryPoint:
+    def _point(self, sample: TrajectorySample, offset_ns: int) -> JointTrajectoryPoint:
         point = JointTrajectoryPoint()
         point.positions = list(sample.position)
         point.velocities = list(sample.velocity)

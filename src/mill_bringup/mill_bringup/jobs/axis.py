@@ -15,10 +15,12 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from mill_common.signals import AXES, axis_index
+from mill_common.signals import AXES, ControlInputs, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
+from mill_controllers.base import AxisController
 from mill_controllers.config import build_controller
 from mill_controllers.trip import FollowingErrorTrip
+from mill_observers.base import Observer
 from mill_observers.config import build_observer
 from mill_observers.delay import DelayCompensation
 from mill_plant.simulated_machine import SimulatedMachine
@@ -68,15 +70,15 @@ def following_error_trips(scen: Scenario) -> dict[int, FollowingErrorTrip]:
     return trips
 
 
-def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
+def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[int, Observer]]:
     """Controller and observer cores by axis index, checked to fit together.
 
     ScenarioError if an active axis lacks one, or if a controller designs with the
     observer's model estimate and the observer of its axis estimates none.
     """
     pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
-    controllers: dict[int, Any] = {}
-    observers: dict[int, Any] = {}
+    controllers: dict[int, AxisController] = {}
+    observers: dict[int, Observer] = {}
     names: dict[int, str] = {}
     for node in scen.nodes_of('mill_controllers'):
         if node.executable != 'axis_controller':
@@ -97,9 +99,7 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
             f'scenario {scen.name}: axes {missing} lack a controller or an observer'
         )
     for i in active:
-        if getattr(controllers[i], 'needs_model', False) and not getattr(
-            observers[i], 'PROVIDES_MODEL', False
-        ):
+        if controllers[i].needs_model and not observers[i].PROVIDES_MODEL:
             raise ScenarioError(
                 f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
                 f'model estimate, but {names[i]} estimates none (use observer rls)'
@@ -142,16 +142,17 @@ class AxisSimulation:
         efforts = []
         for i, y in zip(self.active, machine.read(), strict=True):
             clock.start()
-            est = self.observers[i].correct(y)
+            observer = self.observers[i]
+            est = observer.correct(y)
+            model = observer.observer.model_estimate()
             clock.lap('observer')
             lead = self.lead[i]
             if lead:  # the command acts N samples on: aim at the state and reference there
                 t_c = seconds((k + lead) * self.dt_ns)
-                u = self.controllers[i].compute(
-                    t_c, est.position, self.path.sample(t_c).axis(i), est
-                )
+                inputs = ControlInputs(t_c, est.position, self.path.sample(t_c).axis(i), est, model)
             else:
-                u = self.controllers[i].compute(t, y, ref.axis(i), est)
+                inputs = ControlInputs(t, y, ref.axis(i), est, model)
+            u = self.controllers[i].compute(inputs)
             clock.lap('controller')
             u = self.trips[i].command(t, y - ref.position[i], u)
             efforts.append(u)

@@ -95,9 +95,7 @@ class RealtimeAxisJob(AxisJob):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         if self.start_ns is None:
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
-        rec = realtime_record(
-            raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner
-        )
+        rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner)
         return rec, {}
 
     def simulation(self, times: CoreTimer | None = None) -> Any:
