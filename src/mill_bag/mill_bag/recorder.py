@@ -46,7 +46,7 @@ from pathlib import Path
 from typing import Any
 
 from mill_common.node_main import request_exit, run_node
-from mill_common.parameters import ParamSpec, in_range, one_of, text
+from mill_common.parameters import ParamSpec, StringList, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -297,12 +297,6 @@ class TopicRecorder:
 # -- the recorder node -------------------------------------------------------------------------
 
 
-def _string_list(value: Any) -> str | None:
-    if isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
-        return None
-    return 'must be a list of topic names'
-
-
 def _regex(value: Any) -> str | None:
     if not isinstance(value, str):
         return 'must be a string'
@@ -323,7 +317,11 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             True,
         ),
         ParamSpec(
-            'topics', [], 'topics to record (empty and no regex: all topics)', _string_list, True
+            'topics',
+            [],
+            'topics to record (empty and no regex: all topics)',
+            StringList('topic names'),
+            True,
         ),
         ParamSpec('regex', '', 'also record topics matching this regular expression', _regex, True),
         ParamSpec('compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), True),
