@@ -220,7 +220,11 @@ def run_node(
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if node is not None:
             deliver_before_exit(node)
-            node.destroy_node()
+            try:
+                node.destroy_node()
+            except ValueError as exc:  # what the node could not finish, e.g. closing a bag
+                print(f'{executable}: error: {exc}', file=sys.stderr)
+                code = code or 1
         if rclpy.ok():
             rclpy.try_shutdown()
     return code
