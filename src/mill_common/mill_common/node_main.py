@@ -18,7 +18,7 @@ from mill_common.param_sources import (
     params_files,
     rcl_error_message,
 )
-from mill_common.parameters import ParameterError, ParamSpec
+from mill_common.parameters import ParameterError, ParamSpec, value_type
 
 
 class NodeExit(Exception):
@@ -44,9 +44,12 @@ def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
     lines = []
     width = max((len(name) for name, _ in specs), default=10)
     for name, spec in specs:
-        default = spec.default
         ro = ' (read-only)' if spec.read_only else ''
-        lines.append(f'  {name:<{width}}  {spec.description}{ro} [default: {default!r}]')
+        constraint = getattr(spec.check, 'text', '')
+        kind = value_type(spec) + (f', {constraint}' if constraint else '')
+        lines.append(
+            f'  {name:<{width}}  {spec.description}{ro} [{kind}; default: {spec.default!r}]'
+        )
     return '\n'.join(lines)
 
 
