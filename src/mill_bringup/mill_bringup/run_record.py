@@ -291,7 +291,12 @@ def read_run(path: str | Path) -> BagRun:
     if pairs and any(w is not None and w != s for s, w in pairs):
         by_stamp = {s: w for s, w in pairs if w is not None}
         wall = np.array([by_stamp.get(k * dt_ns, -1) for k in range(n)], dtype=np.int64)
-    if bag.truncated:
+    if bag.cut_short:
+        notes.append(
+            f'the recording was cut short ({bag.cut_short}): the bag holds what was written '
+            'up to its last complete flush'
+        )
+    elif bag.truncated:
         notes.append(
             'the bag was not closed (recorder killed?): read up to its last complete chunk'
         )

@@ -3,15 +3,24 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
+import tempfile
 import time
 import weakref
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import TYPE_CHECKING
 
 from mill_common.env import ros_environment
-from mill_common.parameters import ParameterError, ParamSpec
+from mill_common.param_sources import (
+    parameter_rule_problem,
+    parameter_rules,
+    params_file_problem,
+    params_files,
+    rcl_error_message,
+)
+from mill_common.parameters import ParameterError, ParamSpec, value_type
 
 if TYPE_CHECKING:  # rclpy is imported only when a node really starts (not for --help)
     from rclpy.executors import Executor
@@ -49,9 +58,12 @@ def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
     lines = []
     width = max((len(name) for name, _ in specs), default=10)
     for name, spec in specs:
-        default = spec.default
         ro = ' (read-only)' if spec.read_only else ''
-        lines.append(f'  {name:<{width}}  {spec.description}{ro} [default: {default!r}]')
+        constraint = getattr(spec.check, 'text', '')
+        kind = value_type(spec) + (f', {constraint}' if constraint else '')
+        lines.append(
+            f'  {name:<{width}}  {spec.description}{ro} [{kind}; default: {spec.default!r}]'
+        )
     return '\n'.join(lines)
 
 
@@ -66,8 +78,6 @@ def make_executor() -> Executor:
     what bounds a 1 kHz lockstep loop across processes (README, Performance).
     Callbacks never raise through it: nodes end via `request_exit`.
     """
-    import os
-
     name = os.environ.get('MILL_EXECUTOR', 'events')
     if name == 'events':
         from rclpy.experimental import EventsExecutor
@@ -126,6 +136,29 @@ def deliver_before_exit(node: Node, timeout: float = 1.0) -> None:
             pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
 
+class _Kept:
+    text = ''
+
+
+@contextlib.contextmanager
+def stderr_kept_back() -> Iterator[_Kept]:
+    """Hold back what is written to file descriptor 2 inside the block (rcl's own C log
+    lines); the caller prints it, or not, once it knows whether the block succeeded."""
+    kept = _Kept()
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield kept
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            kept.text = tmp.read().decode(errors='replace')
+
+
 def _user_args(argv: Sequence[str]) -> list[str]:
     args = list(argv[1:])
     return args[: args.index('--ros-args')] if '--ros-args' in args else args
@@ -151,8 +184,6 @@ def run_node(
         print(f'{executable}: error: unexpected arguments {user}; use --ros-args', file=sys.stderr)
         return 2
 
-    import os
-
     # Keep DDS on loopback unless the user chose otherwise (see README, Network).
     for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE',):
         os.environ.setdefault(key, ros_environment({})[key])
@@ -161,8 +192,27 @@ def run_node(
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
 
+    from mill_common import ros_params
+
+    for rule in parameter_rules(argv):
+        problem = parameter_rule_problem(rule)
+        if problem:
+            print(f'{executable}: error: -p {rule}: {problem}', file=sys.stderr)
+            return 2
+    for path in params_files(argv):
+        problem = params_file_problem(path)
+        if problem:
+            print(f'{executable}: error: --params-file {path}: {problem}', file=sys.stderr)
+            return 2
     stop = install_stop_handlers()
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        with stderr_kept_back() as kept:
+            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as exc:  # rcl's RCLError: arguments or a parameter file it refuses
+        print(f'{executable}: error: {rcl_error_message(str(exc))}', file=sys.stderr)
+        return 2
+    sys.stderr.write(kept.text)
+    ros_params.command_line = argv
     node = None
     code = 0
     try:
@@ -188,7 +238,11 @@ def run_node(
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if node is not None:
             deliver_before_exit(node)
-            node.destroy_node()
+            try:
+                node.destroy_node()
+            except ValueError as exc:  # what the node could not finish, e.g. closing a bag
+                print(f'{executable}: error: {exc}', file=sys.stderr)
+                code = code or 1
         if rclpy.ok():
             rclpy.try_shutdown()
     return code
