@@ -20,6 +20,7 @@ from mill_common.parameters import (
     one_of,
     positive,
     positive_int,
+    positive_or_inf,
 )
 from mill_common.signals import AXES
 from mill_models.axis_data import RigidAxisParams
@@ -28,7 +29,12 @@ from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.drive_config import DRIVE_PARAMETERS
 from mill_plant.harmonic_force import PARAMETERS as HARMONIC_PARAMETERS
 from mill_plant.harmonic_force import from_parameters as harmonic_force
-from mill_plant.kline_force import KlineCuttingForce
+from mill_plant.kline_force import (
+    BELTRAN_FEED_RATE,
+    BELTRAN_PROGRAM,
+    KlineCuttingForce,
+)
+from mill_plant.kline_force import PATHS as KLINE_PATHS
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
@@ -69,6 +75,19 @@ def _axes(value: Any) -> str | None:
     return None
 
 
+def _program(value: Any) -> str | None:
+    reason = number_list()(value)
+    if reason:
+        return reason
+    if len(value) < 6 or len(value) % 3:
+        return 'must list at least two points x, y, z (a multiple of 3 numbers)'
+    return None
+
+
+def _points(flat: list[float]) -> list[list[float]]:
+    return [flat[i : i + 3] for i in range(0, len(flat), 3)]
+
+
 def _three(description: str, defaults: list[float], each=number) -> ParamSpec:
     return ParamSpec('', defaults, description, number_list(3, each))
 
@@ -81,9 +100,10 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         (
             'max_torque',
             _three(
-                "drive input limit per axis, in the axis model's input unit [N m or V]",
+                "drive input limit per axis, in the axis model's input unit [N m or V]; "
+                '.inf = none',
                 [10.0] * 3,
-                positive,
+                positive_or_inf,
             ),
         ),
         (
@@ -215,6 +235,49 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('workpiece_top', 0.0, 'z of the workpiece top surface [m]', number, ro),
         ),
         (
+            'kline.chip',
+            ParamSpec(
+                'chip',
+                'tool',
+                "whose x-y path since the previous tooth is the chip: 'programmed' = "
+                "kline.program's (Beltrán 2013's quasi-static assumption), 'tool' = the tool's",
+                one_of(*KLINE_PATHS),
+                ro,
+            ),
+        ),
+        (
+            'kline.depth',
+            ParamSpec(
+                'depth',
+                'tool',
+                "depth of cut d_a = workpiece_top - z: 'programmed' = z of kline.program "
+                "(Beltrán 2013's constant depth), 'tool' = the tool's z",
+                one_of(*KLINE_PATHS),
+                ro,
+            ),
+        ),
+        (
+            'kline.program',
+            ParamSpec(
+                'program',
+                [v for p in BELTRAN_PROGRAM for v in p],
+                "the programmed path for 'programmed' chip or depth: corners x0, y0, z0, x1, "
+                '... [m], straight segments from t = 0 (as trajectory linear.waypoints)',
+                _program,
+                ro,
+            ),
+        ),
+        (
+            'kline.program_feed_rate',
+            ParamSpec(
+                'program_feed_rate',
+                BELTRAN_FEED_RATE,
+                'speed along kline.program [m/s] (as trajectory linear.feed_rate)',
+                positive,
+                ro,
+            ),
+        ),
+        (
             'step.force',
             ParamSpec(
                 'force',
@@ -297,6 +360,10 @@ def build_cutting(values: dict[str, Any]):
             workpiece_min=tuple(values['kline.workpiece_min']),
             workpiece_max=tuple(values['kline.workpiece_max']),
             workpiece_top=values['kline.workpiece_top'],
+            chip=values['kline.chip'],
+            depth=values['kline.depth'],
+            program=_points(values['kline.program']),
+            program_feed_rate=values['kline.program_feed_rate'],
         )
     if model == 'step':
         return StepForce(tuple(values['step.force']), values['step.start_time'])

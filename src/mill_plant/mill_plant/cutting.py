@@ -14,7 +14,12 @@ Force3 = tuple[float, float, float]
 
 
 class CuttingForceModel(Protocol):
-    """Anything returning the cutting force (F_cx, F_cy, F_cz) [N] on the tool."""
+    """Anything returning the cutting force (F_cx, F_cy, F_cz) [N] on the tool.
+
+    A model whose force depends on the tool's past path (the Kline chip) also has
+    `commit(t, position, velocity)`: the plant calls it with its initial state and with
+    every state it accepts (after each RK4 substep), in increasing time.
+    """
 
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         """Cutting force at time t [s], tool position (x, y, z) [m], velocity [m/s]."""
