@@ -96,7 +96,11 @@ def beltran(records: Mapping[str, RunRecord]) -> str:
     ]
     rms: dict[str, list[float]] = {}
     estimation = {}
-    for name, rec in records.items():
+    for name, rec in list(records.items()):
+        if rec.t[-1] < BELTRAN_FIRST_CUT.end - (rec.t[1] - rec.t[0]) * 1.5:
+            lines.append(f'{name:<16} run ends before the first cut does: no paper metrics')
+            records = {k: v for k, v in records.items() if k != name}
+            continue
         w = BELTRAN_WINDOW.mask(rec.t)
         e = rec.tracking_error[w]
         rms[name] = [_rms(e[:, i]) for i in range(3)]
