@@ -48,9 +48,11 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
 
 
 # (scenario, duration [s], samples): every variant of each paper scenario, distributed
-# against offline. Hatwesh runs past its load change at t = 1 s; its adaptive_pi_rls variant
+# against offline (beltran: the main job with and without compensation, and the tool-path
+# variants). Hatwesh runs past its load change at t = 1 s; its adaptive_pi_rls variant
 # designs with the rls observer node's estimate (a fourth topic joined by the controller).
 PAPER_RUNS = [
+    ('beltran', 0.5, 501),
     ('chavez_conde', 1.0, 1001),
     ('maharof', 0.3, 3001),
     ('hatwesh', 1.1, 4401),

@@ -20,6 +20,7 @@ from mill_common.parameters import (
     one_of,
     positive,
     positive_int,
+    positive_or_inf,
 )
 from mill_common.signals import AXES
 from mill_models.axis_data import RigidAxisParams
@@ -80,8 +81,8 @@ PLANT_PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'max_torque',
         [10.0] * 3,
-        "drive input limit per axis, in the axis model's input unit [N m or V]",
-        number_list(3, positive),
+        "drive input limit per axis, in the axis model's input unit [N m or V]; .inf = none",
+        number_list(3, positive_or_inf),
         True,
     ),
     ParamSpec(

@@ -22,7 +22,14 @@ Force3 = tuple[float, float, float]
 
 
 class CuttingForceModel(ABC):
-    """Anything returning the cutting force (F_cx, F_cy, F_cz) [N] on the tool."""
+    """Anything returning the cutting force (F_cx, F_cy, F_cz) [N] on the tool.
+
+    A model whose force depends on the tool's past path (the Kline chip) says so with
+    PATH_DEPENDENT: the plant then calls `commit(t, position, velocity)` with its initial
+    state and with every state it accepts (after each RK4 substep), in increasing time.
+    """
+
+    PATH_DEPENDENT: ClassVar[bool] = False
 
     PREFIX: ClassVar[str]
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
@@ -38,6 +45,9 @@ class CuttingForceModel(ABC):
     @abstractmethod
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         """Cutting force at time t [s], tool position (x, y, z) [m], velocity [m/s]."""
+
+    def commit(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> None:  # noqa: B027
+        """An accepted tool state (PATH_DEPENDENT models keep the path)."""
 
 
 class NoCutting(CuttingForceModel):
