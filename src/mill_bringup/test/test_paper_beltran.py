@@ -9,9 +9,8 @@ compensated errors 2-4 times larger and fails them. Physics checks give their ow
 
 from __future__ import annotations
 
-import math
-
 import functools
+import math
 
 import numpy as np
 import pytest
