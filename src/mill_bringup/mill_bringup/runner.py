@@ -140,6 +140,8 @@ def run(
 
         def spin(when: str) -> None:
             executor.spin_once(timeout_sec=0.05)
+            for _ in range(200):  # take what has queued up, then look at the job again
+                executor.spin_once(timeout_sec=0.0)
             if stop:
                 raise KeyboardInterrupt
             if monitor.recorder is not None and monitor.recorder.error:

@@ -235,12 +235,11 @@ class TrajectoryNode(Node):
         self._job_status(t)
 
     def _job_status(self, t: float) -> None:
-        if t >= self._job_end and not self._done_sent:
-            self._done_sent = True
-            self._report(t, 'done')
-        elif t >= self._next_report:
+        done = t >= self._job_end
+        if (done and not self._done_sent) or t >= self._next_report:
+            self._done_sent = self._done_sent or done
             self._next_report = t + 1.0
-            self._report(t, 'running')
+            self._report(t, 'done' if done else 'running')
 
     def _publish_scaled(self, scaled: TimeScaledPath, ns: int) -> None:
         # Each sample once and in order: its path time depends on all earlier overrides.
