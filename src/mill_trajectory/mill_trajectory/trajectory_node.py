@@ -13,9 +13,9 @@ on /diagnostics as a WARN. Each sample's reference is then computed once, in ord
 the override in effect when its tick arrives (mill_trajectory.feed_override).
 
 With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
-`axes` has reported its position and as many nodes (the controllers) listen to the reference,
-starts the job at the stamp of the newest of those states
-(the drive's system clock), first moving from where the axes stand to the path's start at
+`axes` has reported its position, every axis has an estimate publisher (its observer) and as
+many nodes (the controllers) listen to the reference, starts the job at the stamp of the
+newest of those states (the drive's system clock), first moving from where the axes stand to the path's start at
 `approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
 publishes every `publish_period` the points of the sample grid t0 + kT from one sample
 before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
@@ -152,6 +152,8 @@ class TrajectoryNode(Node):
                 return
             if self._ref_pub.get_subscription_count() < len(v['axes']):
                 return  # the controllers (one per axis) are not listening yet
+            if any(self.count_publishers(topics.estimate(a)) < 1 for a in v['axes']):
+                return  # an observer is not up yet: its controller could not act
             here = [self._positions.get(a, 0.0) for a in AXES]
             try:
                 approach = Approach(
