@@ -15,8 +15,9 @@ the override in effect when its tick arrives (mill_trajectory.feed_override).
 With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
 `axes` has reported its position, every axis has an estimate publisher (its observer) and as
 many nodes (the controllers) listen to the reference, starts the job at the stamp of the
-newest of those states (the drive's system clock), first moving from where the axes stand to the path's start at
-`approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
+newest of those states (the drive's system clock), first moving from where the axes stand
+to the path's start at `approach.speed` (or refusing, with the distance, beyond
+`approach.max_distance`), and
 publishes every `publish_period` the points of the sample grid t0 + kT from one sample
 before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
 them at their states' stamps. The job status says when it started (`start_stamp_ns`).
