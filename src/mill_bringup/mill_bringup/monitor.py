@@ -12,7 +12,8 @@ rest (the job's other contract topics, /clock, /diagnostics, and whatever discov
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,9 +42,11 @@ class Monitor(Node):
         record: RecordOptions | None = None,
         recorded: Mapping[str, str] | None = None,
         name: str = 'mill_monitor',
+        timed: Iterable[str] = (),
     ) -> None:
         super().__init__(name)
         self.raw: dict[str, list[bytes]] = {}
+        self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
         if record is not None:
@@ -64,7 +67,14 @@ class Monitor(Node):
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
-        keep = store.append
+        keep: Callable[[bytes], None] = store.append
+        arrivals = self.arrivals.get(topic)
+        if arrivals is not None:  # when each message came, on the system clock (latency)
+
+            def keep(data: bytes) -> None:
+                store.append(data)
+                arrivals.append(time.time_ns())
+
         if self.recorder is not None:
             tap = self.recorder.tap(topic, msgtype)
 
@@ -79,6 +89,9 @@ class Monitor(Node):
     # -- what a job reads (mill_bringup.jobs.base.MessageSource) ----------------------------
     def messages(self, topic: str) -> Sequence[bytes]:
         return self.raw.get(topic, ())
+
+    def arrival_ns(self, topic: str) -> Sequence[int]:
+        return self.arrivals.get(topic, ())
 
     def latest_stamp_ns(self, topic: str) -> int:
         """Stamp of the newest message of a topic (one writer delivers in order), -1 if none.

@@ -131,7 +131,9 @@ def run(
     executor = None
     bag: dict[str, Any] | None = None
     try:
-        monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
+        monitor = Monitor(
+            job.monitor_topics(), options, job.recorded_topics(), timed=job.timed_topics()
+        )
         executor = make_executor()
         executor.add_node(monitor)
         clocks = [n for n in job.clock_nodes if n.name not in external]
