@@ -1,9 +1,11 @@
 """The node processes of a scenario: launch, supervise, stop; and the progress display.
 
 Each node runs as `ros2 run` would start it (`python -m MODULE --ros-args -r __node:=NAME
---params-file SCENARIO --params-file OVERRIDES`), in its own session, with its output in
-RUN_DIR/logs/NAME.log. A node dies with the process that started it, whatever ends that
-process (Linux PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
+[-r __ns:=NAMESPACE] --params-file SCENARIO --params-file PARAMETERS`), in its own session,
+with its output in RUN_DIR/logs/NAME.log. RUN_DIR/parameters.yaml holds every node's values
+with the overrides, keyed `/**/NAME` so that they apply under the graph's namespace too.
+A node dies with the process that started it, whatever ends that process (Linux
+PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
 """
 
 from __future__ import annotations
@@ -19,9 +21,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError
+from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError, dump_parameters
 
 PR_SET_PDEATHSIG = 1
 
@@ -76,15 +76,14 @@ class Graph:
         self.logs: dict[str, Path] = {}
         self._log_dir = run_dir / 'logs'
         self._log_dir.mkdir(parents=True, exist_ok=True)
-        self._overrides = run_dir / 'overrides.yaml'
+        self._parameters = run_dir / 'parameters.yaml'
         self._env = env
 
     def launch(self, nodes: Iterable[NodeLaunch]) -> None:
         """Start these nodes of the scenario, each in its own process."""
         # Written at each launch: the job may have adjusted the scenario since the last one.
-        self._overrides.write_text(
-            yaml.safe_dump({n: {'ros__parameters': p} for n, p in self.scen.overrides.items()})
-        )
+        self._parameters.write_text(dump_parameters(self.scen.node_parameters()))
+        remaps = [arg for rule in self.scen.remappings() for arg in ('-r', rule)]
         for node in nodes:
             cmd = [
                 sys.executable,
@@ -93,10 +92,11 @@ class Graph:
                 '--ros-args',
                 '-r',
                 f'__node:={node.name}',
+                *remaps,
                 '--params-file',
                 str(self.scen.path),
                 '--params-file',
-                str(self._overrides),
+                str(self._parameters),
             ]
             self.logs[node.name] = self._log_dir / f'{node.name}.log'
             with open(self.logs[node.name], 'w') as log:

@@ -214,7 +214,7 @@ class AxisControllerNode(Node):
                 DiagnosticStatus.OK,
                 f'mill_controllers: {self.axis} switch',
                 f'switched to {name}',
-                f'axis_{self.axis}',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )

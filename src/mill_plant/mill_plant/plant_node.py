@@ -213,8 +213,9 @@ class PlantNode(Node):
         for axis in AXES:
             values[f'{axis}.faults'] = self._faults[axis]
             values[f'{axis}.saturations'] = self._saturations[axis]
+        machine = topics.machine_id(self.get_namespace())
         self._diag_pub.publish(
-            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, 'mill_plant', values)
+            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, machine, values)
         )
 
 

@@ -186,7 +186,7 @@ class TrajectoryNode(Node):
                 DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
                 JOB_STATUS_NAME,
                 problem or f'job {state}',
-                'mill',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )

@@ -99,6 +99,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument('--label', action='append', help='name of each bag in the report')
     parser.add_argument('--no-plots', action='store_true', help='table and report.md only')
+    parser.add_argument(
+        '--namespace',
+        metavar='NAME',
+        help='the machine namespace of the run, for a bag that holds several (default: the '
+        "bag's only one)",
+    )
     args = parser.parse_args(argv)
     if args.label and len(args.label) != len(args.bags):
         parser.error(f'{len(args.label)} --label for {len(args.bags)} bags')
@@ -108,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     for bag, label in zip(args.bags, labels, strict=True):
         t0 = time.monotonic()
         try:
-            run = read_run(bag)
+            run = read_run(bag, args.namespace)
         except BagError as exc:
             print(f'report: error: {exc}', file=sys.stderr)
             return 1
