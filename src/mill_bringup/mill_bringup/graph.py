@@ -148,16 +148,31 @@ class Graph:
 
 
 class Progress:
-    """One live bar with the ETA on a terminal (tqdm), a plain line every 5 s otherwise."""
+    """One live bar with the ETA on a terminal (tqdm), a plain line every 5 s otherwise.
 
-    def __init__(self, total: float, unit: str = 's', quiet: bool = False) -> None:
+    total None: not known (a count and the rate, no share); label: what is progressing;
+    decimals: of the values shown (0 for counts); delay: no display during the first
+    seconds (a short task shows none).
+    """
+
+    def __init__(
+        self,
+        total: float | None,
+        unit: str = 's',
+        quiet: bool = False,
+        label: str = '',
+        decimals: int = 2,
+        delay: float = 0.0,
+    ) -> None:
         self.total = total
         self.quiet = quiet
+        self.label = label
+        self.decimals = decimals
         self.tty = sys.stderr.isatty()
         self._bar: Any = None
-        self._next = 0.0
         self._value = 0.0
         self._started = time.monotonic()
+        self._next = self._started + delay
         self._unit = unit
 
     def note(self, text: str) -> None:
@@ -173,16 +188,26 @@ class Progress:
         if self.quiet or not value > self._value:
             return
         if self.tty:
+            if self._bar is None and time.monotonic() < self._next:
+                return
             if self._bar is None:
                 from tqdm import tqdm
 
+                d = self.decimals
+                known = self.total is not None
                 self._bar = tqdm(
-                    total=round(self.total, 3),
+                    total=round(self.total, 3) if known else None,
+                    desc=self.label or None,
                     unit=self._unit,
                     file=sys.stderr,
                     dynamic_ncols=True,
-                    bar_format='{l_bar}{bar}| {n:.2f}/{total:.2f} {unit} '
-                    '[{elapsed}<{remaining}{postfix}]',
+                    bar_format=(
+                        f'{{l_bar}}{{bar}}| {{n:.{d}f}}/{{total:.{d}f}} {{unit}} '
+                        '[{elapsed}<{remaining}{postfix}]'
+                        if known
+                        else f'{{desc}}: {{n:.{d}f}} {{unit}} '
+                        '[{elapsed}, {rate_fmt}{postfix}]'
+                    ),
                 )
             self._bar.update(round(value - self._value, 3))
             if extra:
@@ -193,8 +218,13 @@ class Progress:
         now = time.monotonic()
         if now >= self._next:
             self._next = now + 5.0
-            share = 100.0 * value / self.total if self.total > 0 else 100.0
-            line = f'{value:.2f} / {self.total:.2f} {self._unit} ({share:.0f} %)'
+            d = self.decimals
+            if self.total is None:
+                line = f'{value:.{d}f} {self._unit}'
+            else:
+                share = 100.0 * value / self.total if self.total > 0 else 100.0
+                line = f'{value:.{d}f} / {self.total:.{d}f} {self._unit} ({share:.0f} %)'
+            line = f'{self.label}: {line}' if self.label else line
             print(line + (f', {extra}' if extra else ''), file=sys.stderr, flush=True)
 
     def close(self) -> None:

@@ -40,6 +40,9 @@ from mill_common.timebase import job_steps
 from mill_bringup.metrics import RunRecord
 from mill_common import topics as topic_names
 
+# progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
+ProgressCallback = Callable[[str, int, int | None], None]
+
 
 def record_topics(axes: Sequence[str]) -> dict[str, str]:
     """Topics (and types) a RunRecord is built from."""
@@ -142,14 +145,19 @@ def record_from_raw(
     n: int,
     dt_ns: int,
     workers: int = 1,
+    progress: ProgressCallback | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
     """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
     reader both call. With workers > 1 the topics are split between forked processes, each
     running build_record on its share; every (sample, axis) value comes from one topic, so
-    the merged record is the one a single call gives."""
+    the merged record is the one a single call gives. `progress('decoding', done, total)`
+    is called now and then with the number of messages decoded."""
     listened = list(raw)
+    total = sum(len(raw[t]) for t in listened)
     if workers <= 1:
         messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
+        if progress is not None:
+            messages = _counted(messages, lambda done: progress('decoding', done, total))
         return build_record(messages, axes, n, dt_ns, listened)
     import multiprocessing
 
@@ -160,12 +168,21 @@ def record_from_raw(
         i = loads.index(min(loads))
         groups[i].append(topic)
         loads[i] += len(raw[topic])
-    _SHARED = (raw, types, list(axes), n, dt_ns)
+    context = multiprocessing.get_context('fork')
+    decoded = context.Value('q', 0)  # messages decoded by all workers, for progress
+    _SHARED = (raw, types, list(axes), n, dt_ns, decoded)
     try:
-        with multiprocessing.get_context('fork').Pool(workers) as pool:
-            parts = pool.map(_record_part, [g for g in groups if g])
+        with context.Pool(workers) as pool:
+            pending = pool.map_async(_record_part, [g for g in groups if g])
+            while not pending.ready():
+                pending.wait(0.5)
+                if progress is not None:
+                    progress('decoding', decoded.value, total)
+            parts = pending.get()
     finally:
         _SHARED = None
+    if progress is not None:
+        progress('decoding', total, total)
     rec = RunRecord.empty(n, dt_ns / 1e9)
     missing: dict[str, int] = {}
     for signals, part_missing in parts:
@@ -179,9 +196,29 @@ def record_from_raw(
 _SHARED: tuple | None = None
 
 
+def _counted(items: Iterable[Any], report: Callable[[int], None], every: int = 20_000):
+    """The items, calling report(count so far) every `every` items and at the end."""
+    count = 0
+    for count, item in enumerate(items, 1):
+        if count % every == 0:
+            report(count)
+        yield item
+    report(count)
+
+
 def _record_part(topics_part: list[str]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
-    raw, types, axes, n, dt_ns = _SHARED
+    raw, types, axes, n, dt_ns, decoded = _SHARED
+
+    last = 0
+
+    def add(done: int) -> None:
+        nonlocal last
+        with decoded.get_lock():
+            decoded.value += done - last
+        last = done
+
     messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
+    messages = _counted(messages, add, every=5_000)
     rec, missing = build_record(messages, axes, n, dt_ns, topics_part)
     return rec.signals, missing
 
@@ -254,7 +291,7 @@ class _Stream:
 def read_run(
     path: str | Path,
     namespace: str | None = None,
-    progress: Callable[[int], None] | None = None,
+    progress: ProgressCallback | None = None,
 ) -> BagRun:
     """Read a bag of a mill run into a RunRecord, by topic names and types only.
 
@@ -262,7 +299,9 @@ def read_run(
     number of samples comes from the trajectory's job status on /diagnostics
     (end_time, as the runner computes it), or, without it, from the last sample
     every state topic has. The run may be in any namespace; `namespace` chooses the
-    machine in a bag of several. `progress(messages read)` is called now and then.
+    machine in a bag of several. `progress(phase, done, total)` is called now and then, while
+    the bag is read ('reading', messages; total from metadata.yaml, None if it has none)
+    and while its messages are decoded ('decoding').
     """
     bag = open_bag(path)
     wanted_types = record_topics(AXES)
@@ -270,12 +309,14 @@ def read_run(
     # One pass over the bag: every topic that is a contract topic in some namespace is
     # kept by its absolute name; the namespace is chosen once every name is known.
     kept: dict[str, _Stream | None] = {}
+    info = (bag.metadata or {}).get('rosbag2_bagfile_information') or {}
+    expected = info.get('message_count') if isinstance(info, dict) else None
     all_statuses: list[Any] = []
     read = 0
     for name, msgtype, log_time, publish_time, data in bag.read():
         read += 1
         if progress is not None and read % 20_000 == 0:
-            progress(read)
+            progress('reading', read, expected)
         if name == topic_names.DIAGNOSTICS:
             if msgtype == DIAGNOSTIC_ARRAY:
                 all_statuses.append(decode(msgtype, data))
@@ -289,7 +330,7 @@ def read_run(
             stream.log_times.append(log_time)
             stream.publish_times.append(publish_time)
     if progress is not None:
-        progress(read)
+        progress('reading', read, expected)
     total = sum(bag.counts.values())
     if total == 0:
         raise BagError(f'{bag.path} holds no messages')
@@ -340,7 +381,7 @@ def read_run(
     listened = {t: raw[t] for t in record_topics(axes) if t in raw}
     to_decode = sum(len(v) for v in listened.values())
     workers = min(2, os.cpu_count() or 1) if to_decode > 100_000 else 1
-    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers)
+    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers, progress)
     # Wall-clock arrival of each sample of the first axis, where the storage has
     # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
     wall = None

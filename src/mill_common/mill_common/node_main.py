@@ -167,15 +167,21 @@ def run_node(
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
 
-    stop = install_stop_handlers()
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    # Until the node spins, SIGINT and SIGTERM end the start-up at once (KeyboardInterrupt in
+    # Python code): building a node can take seconds on a busy machine, longer than launch
+    # waits after SIGINT. From then on they only set the flag the spin loop polls.
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.default_int_handler)
+    stop: list[int] = []
     node = None
     executor = None
     code = 0
     try:
+        rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
         node = make_node()
         executor = make_executor()
         executor.add_node(node)
+        stop = install_stop_handlers()
         while rclpy.ok() and not stop and getattr(node, 'exit_request', None) is None:
             executor.spin_once(timeout_sec=0.2)
         if getattr(node, 'exit_request', None) is not None:
@@ -189,9 +195,10 @@ def run_node(
     except (KeyboardInterrupt, ExternalShutdownException):
         code = 0
     finally:
-        # A second SIGINT (ros2 launch forwards one after the terminal's) must not
-        # break the teardown; CPython keeps SIG_IGN through interpreter exit.
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        # A second SIGINT (ros2 launch forwards one after the terminal's) or launch's
+        # SIGTERM must not break the teardown.
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, signal.SIG_IGN)
         if node is not None:
             deliver_before_exit(node)
         if executor is not None:
