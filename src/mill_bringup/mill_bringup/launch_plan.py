@@ -59,7 +59,7 @@ ARGUMENTS = (
     Argument(
         'namespace',
         '',
-        "machine namespace of every node, e.g. machine2 (default: the scenario's, else /); "
+        "machine namespace of every node, e.g. machine2; empty: the scenario's, else /. "
         '/clock and /diagnostics stay global',
     ),
     Argument(
@@ -71,7 +71,7 @@ ARGUMENTS = (
     Argument(
         'timing',
         '',
-        "lockstep or realtime: every node's timing parameter (default: the scenario's)",
+        "lockstep or realtime: every node's timing parameter; empty: the scenario's",
     ),
     Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
 )
