@@ -296,7 +296,7 @@ class TrajectoryNode(Node):
                 level,
                 JOB_STATUS_NAME,
                 problem or f'job {state}',
-                'mill',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )
