@@ -20,6 +20,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from math import nan
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +39,7 @@ from mill_common.signals import AXES
 from mill_common.timebase import job_steps
 
 from mill_bringup.metrics import RunRecord
+from mill_bringup.realtime_record import realtime_record
 from mill_common import topics as topic_names
 
 # progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
@@ -263,6 +265,11 @@ class BagRun:
     message_count: int
     size_bytes: int
     notes: list[str] = field(default_factory=list)
+    # A realtime run (the drive's own clock): per axis, the state -> command latency of every
+    # command as the recorder received it [ms], and the share of states no command answered.
+    realtime: bool = False
+    command_latency_ms: dict[str, np.ndarray] = field(default_factory=dict)
+    unanswered: dict[str, float] = field(default_factory=dict)
 
 
 def run_namespace(names: Iterable[str], where: str, namespace: str | None = None) -> str:
@@ -384,6 +391,9 @@ def read_run(
     first = topic_names.state(axes[0])
     first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
     stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
+    start_ns = _job_start(statuses)
+    if start_ns is not None:  # the drive's own clock: no sample grid
+        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
     diffs = np.diff(stamps)
     dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
     if dt_ns <= 0:
@@ -454,9 +464,76 @@ def _job_end(statuses: list[Any]) -> tuple[float | None, str]:
 def _plant_status(statuses: list[Any]) -> dict[str, str]:
     for array in reversed(statuses):
         for status in array.status:
-            if status.name == 'mill_plant: lockstep':
+            if status.name in ('mill_plant: lockstep', 'mill_plant: realtime'):
                 return _status_values(status) | {'message': status.message}
     return {}
+
+
+def _job_start(statuses: list[Any]) -> int | None:
+    """The start stamp of a realtime job, from the trajectory's status (None: lockstep)."""
+    for array in reversed(statuses):
+        for status in array.status:
+            if status.name == 'mill_trajectory: job':
+                values = _status_values(status)
+                if 'start_stamp_ns' in values:
+                    return int(values['start_stamp_ns'])
+    return None
+
+
+def _realtime_run(
+    bag: Bag,
+    axes: list[str],
+    raw: dict[str, list[bytes]],
+    walls: dict[str, list[int | None]],
+    statuses: list[Any],
+    start_ns: int,
+    stamps: np.ndarray,
+    total: int,
+) -> BagRun:
+    """A realtime run's record at the drive's stamps, and the commands' timing."""
+    end_time, source = _job_end(statuses)
+    if end_time is None:
+        end_time = (int(stamps[-1]) - start_ns) * 1e-9
+    record = realtime_record(raw, axes, start_ns, end_time)
+    latency, unanswered = {}, {}
+    states = start_ns + np.round(record.t * 1e9).astype(np.int64)
+    for axis in axes:
+        topic = topic_names.joint_command(axis)
+        cmd_stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
+        arrivals = walls.get(topic, [])
+        latency[axis] = np.array(
+            [
+                (w - s) * 1e-6
+                for s, w in zip(cmd_stamps, arrivals, strict=False)
+                if s is not None and w is not None and start_ns <= s
+            ]
+        )
+        answered = {s for s in cmd_stamps if s is not None}
+        unanswered[axis] = (
+            float(np.mean([s not in answered for s in states.tolist()])) if len(states) else nan
+        )
+    diffs = np.diff(stamps)
+    dt_ns = int(np.median(diffs)) if diffs.size else 0
+    notes = ["realtime run: samples at the drive's stamps, the reference interpolated there"]
+    return BagRun(
+        bag=bag,
+        axes=axes,
+        dt_ns=dt_ns,
+        n=len(record.t),
+        record=record,
+        missing={},
+        end_time=end_time,
+        job_end_source=source,
+        state_wall_ns=None,
+        plant_status=_plant_status(statuses),
+        feed_override=None,
+        message_count=total,
+        size_bytes=sum(f.stat().st_size for f in bag.files),
+        notes=notes,
+        realtime=True,
+        command_latency_ms=latency,
+        unanswered=unanswered,
+    )
 
 
 def _feed_values(msgtype: str, feed: list, notes: list[str]) -> list[tuple[int, float]]:

@@ -14,6 +14,7 @@ use, so `report --no-plots` never loads it.
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -130,6 +131,15 @@ def figures(reports: list[RunReport]) -> list[Job]:
     with_wall = [r for r in reports if r.run.state_wall_ns is not None]
     if with_wall:
         jobs.append(Job('loop_timing.png', 'Loop timing', partial(loop_timing_figure, with_wall)))
+    realtime = [r for r in reports if r.run.realtime]
+    if realtime:
+        jobs.append(
+            Job(
+                'command_latency.png',
+                'State → command latency (realtime)',
+                partial(latency_figure, realtime),
+            )
+        )
     return jobs
 
 
@@ -347,13 +357,18 @@ def _draw_spectra(ax_row: np.ndarray, r: RunReport, i: int, color: str) -> None:
         if seg.size < 16:
             continue
         f, amp = amplitude_spectrum(seg, r.run.dt_ns / 1e9)
-        ax_row[col].loglog(
-            *log_envelope(f[1:], amp[1:] * scale), lw=0.6, color=color, label=r.label
-        )
+        x, y = log_envelope(f[1:], amp[1:] * scale)
+        keep = (x > 0) & (y > 0)  # an axis held still (braked) has no spectrum to draw
+        if keep.any():
+            ax_row[col].loglog(x[keep], y[keep], lw=0.6, color=color, label=r.label)
 
 
 def _style_spectrum(a: Axes, axis: str, what: str, freqs: list[float]) -> None:
     from matplotlib.ticker import LogLocator, NullFormatter
+
+    if not a.lines:
+        a.set_xscale('linear')
+        a.set_yscale('linear')
 
     # decades only: minor tick labels on 10 decades cost seconds to lay out
     for axis_ in (a.xaxis, a.yaxis):
@@ -393,21 +408,48 @@ def loop_timing_figure(reports: list[RunReport]) -> Figure:
     return fig
 
 
+def latency_figure(reports: list[RunReport]) -> Figure:
+    """Histogram of the state -> command latency of every command, per axis, runs overlaid."""
+    axes = reports[0].run.axes
+    fig, ax = _layout(1, len(axes), 3.6 * len(axes), 3.4)
+    for j, axis in enumerate(axes):
+        a = ax[0, j]
+        for r in reports:
+            lat = r.run.command_latency_ms.get(axis, np.zeros(0))
+            lat = lat[np.isfinite(lat)]
+            if lat.size:
+                a.hist(lat, bins=60, histtype='step', label=r.label)
+        a.set_yscale('log')
+        a.set_title(f'{axis} axis', loc='left')
+        a.set_xlabel('latency: command received − state stamp [ms]')
+        if a.patches:
+            a.legend()
+    return fig
+
+
 # -- rendering -------------------------------------------------------------------------------
 
 
 _JOBS: list[tuple[Job, Path]] = []
 
 
-def _render(i: int) -> None:
+def _render(i: int) -> str | None:
+    """Draw one figure; the reason it could not be drawn, if it could not (one line)."""
     job, out = _JOBS[i]
-    fig = job.make()
-    fig.savefig(out / job.name)
-    _pyplot().close(fig)
+    try:
+        fig = job.make()
+        try:
+            fig.savefig(out / job.name)
+        finally:
+            _pyplot().close(fig)
+    except (ValueError, OverflowError) as exc:  # data a plot cannot show (all NaN, all <= 0)
+        return f'{job.name} not drawn: {exc}'
+    return None
 
 
 def render(jobs: list[Job], out: Path, workers: int) -> list[tuple[str, str]]:
-    """Draw and save the figures, in `workers` forked processes if more than one."""
+    """Draw and save the figures, in `workers` forked processes if more than one; a figure
+    the data cannot make is left out and said so on stderr."""
     global _JOBS  # read by the forked workers
     _JOBS = [(job, out) for job in jobs]
     try:
@@ -415,13 +457,15 @@ def render(jobs: list[Job], out: Path, workers: int) -> list[tuple[str, str]]:
             import multiprocessing
 
             with multiprocessing.get_context('fork').Pool(workers) as pool:
-                pool.map(_render, range(len(jobs)), chunksize=1)
+                problems = pool.map(_render, range(len(jobs)), chunksize=1)
         else:
-            for i in range(len(jobs)):
-                _render(i)
+            problems = [_render(i) for i in range(len(jobs))]
     finally:
         _JOBS = []
-    return [(job.name, job.caption) for job in jobs]
+    for problem in problems:
+        if problem:
+            print(f'report: {problem}', file=sys.stderr)
+    return [(job.name, job.caption) for job, p in zip(jobs, problems, strict=True) if not p]
 
 
 def _nice(x: float) -> float:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import datetime as dt
 import math
 
+import numpy as np
+
 from mill_bringup.metrics import format_summary
 from mill_bringup.report.analysis import RunReport
 
@@ -45,6 +47,8 @@ def text_table(reports: list[RunReport]) -> str:
             lines.append(row)
         lines.append(feed_text(r))
         lines.append(loop_text(r))
+        if r.run.realtime:
+            lines.append(realtime_text(r))
         for note in r.run.notes:
             lines.append(f'note: {note}')
     return '\n'.join(lines)
@@ -58,6 +62,31 @@ def feed_text(r: RunReport) -> str:
         f'feed override: {f["messages"]:.0f} messages, min {f["min"]:.3f}, '
         f'mean {f["mean"]:.3f}, max {f["max"]:.3f}'
     )
+
+
+def realtime_text(r: RunReport) -> str:
+    """Per axis: states no command answered, and state -> command latency as recorded."""
+    rows = [
+        'realtime: axis   states without a command   latency as recorded [ms]: median   p99     max'
+    ]
+    for axis in r.run.axes:
+        lat = r.run.command_latency_ms.get(axis, np.zeros(0))
+        med, p99, top = (
+            (float(np.median(lat)), float(np.percentile(lat, 99)), float(lat.max()))
+            if lat.size
+            else (float('nan'),) * 3
+        )
+        share = 100 * r.run.unanswered.get(axis, float('nan'))
+        rows.append(f'{axis:>14}   {share:22.2f} %   {med:31.3f} {p99:7.3f} {top:7.3f}')
+    status = r.run.plant_status
+    drive = [
+        f'{a}: {100 * float(status[f"{a}.late_fraction"]):.2f} % late'
+        for a in r.run.axes
+        if f'{a}.late_fraction' in status
+    ]
+    if drive:
+        rows.append('the drive counted periods without a fresh command: ' + ', '.join(drive))
+    return '\n'.join(rows)
 
 
 def loop_text(r: RunReport) -> str:
