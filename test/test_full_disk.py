@@ -31,6 +31,8 @@ from mill_common import topics
 from test.test_recording import FakePlant, both_readers, ros_node
 
 T_NS = 1_000_000
+# The absolute name a node in the root namespace records the x state under.
+STATE_X = topics.qualify(topics.state('x'))
 FULL = 'no space left on device'
 
 
@@ -89,7 +91,7 @@ def fill_until_cut(bag: Path, flush_every: int = 100) -> tuple[BagCutShort, int,
     """Write state messages into a new bag, flushing every `flush_every`, until the disk is
     full: (the error, messages written, messages in the last complete flush)."""
     writer = BagWriter(bag, compression='none')
-    topic = writer.add_topic(topics.state('x'), JOINT_STATE, [])
+    topic = writer.add_topic(STATE_X, JOINT_STATE, [])
     flushed = 0
     for k in range(10**6):
         writer.write(topic, k * T_NS, k * T_NS, state_cdr(k))
@@ -144,7 +146,7 @@ def test_a_full_disk_cuts_the_bag_short_at_its_last_flush(small_disk) -> None:
     resize(disk, '4m')
     assert recover(bag) == (flushed, 1)
     by_rosbags, by_mcap, _ = both_readers(bag)
-    assert by_rosbags == by_mcap == {topics.state('x'): flushed}
+    assert by_rosbags == by_mcap == {STATE_X: flushed}
     meta = yaml.safe_load((bag / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
     assert meta['custom_data'] == {'cut_short': FULL}  # still cut short in time
     assert not (bag / RESERVE_NAME).exists()
@@ -154,7 +156,7 @@ def test_recover_on_a_full_disk_gives_one_line_and_leaves_no_stub(small_disk, tm
     # A killed recording (flushed, never closed), moved onto a disk with too little room.
     source = tmp_path / 'killed'
     writer = BagWriter(source, compression='none')
-    topic = writer.add_topic(topics.state('x'), JOINT_STATE, [])
+    topic = writer.add_topic(STATE_X, JOINT_STATE, [])
     for k in range(3000):
         writer.write(topic, k * T_NS, k * T_NS, state_cdr(k))
     writer.flush()  # on disk; no close(): what a SIGKILL leaves
@@ -222,7 +224,7 @@ def test_the_recorder_on_a_full_disk_ends_with_one_line(start_node, small_disk):
     reader = open_bag(bag)
     rows = list(reader.read())
     assert reader.cut_short == FULL
-    states = [log // T_NS for t, _ty, log, _p, _d in rows if t == topics.state('x')]
+    states = [log // T_NS for t, _ty, log, _p, _d in rows if t == STATE_X]
     assert states == list(range(len(states))) and len(states) > 1000
     run = read_run(bag)
     assert any(f'cut short ({FULL})' in note for note in run.notes), run.notes
