@@ -16,6 +16,14 @@ With feed_override.lockstep the node answers overrides instead of ticks: an over
 t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
 point stamped t_k, with the override's ramp velocity[0] (a β-hold) applied over the sample.
 Each newer stamp gets the next sample, in order; a repeated override gets the same answer.
+With feed_override.period T_c > 0 the sender acts once per control period on this node's
+sample grid (a force controller on the 1 kHz axis job): the override stamped at control
+instant j sets the reference from that sample up to the one before instant j + 1, sent as
+one message (mill_trajectory.feed_override.PeriodicOverridePath).
+
+With a feed override the job ends when the path ends, whatever the override: `settle_time`
+after the first sample whose path time reaches the end of the path, or at `duration`. The
+"done" status on /diagnostics then gives the time of that last sample as end_time.
 """
 
 from __future__ import annotations
@@ -37,7 +45,12 @@ from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
 from mill_trajectory.config import build_job, parameter_specs
-from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
+from mill_trajectory.feed_override import (
+    FeedOverride,
+    JobEnd,
+    PeriodicOverridePath,
+    TimeScaledPath,
+)
 
 JOB_STATUS_NAME = 'mill_trajectory: job'
 
@@ -46,7 +59,9 @@ class TrajectoryNode(Node):
     def __init__(self) -> None:
         super().__init__('trajectory')
         self._path = None
-        self._scaled = None
+        self._scaled: TimeScaledPath | None = None
+        self._periodic: PeriodicOverridePath | None = None
+        self._dt_ns = 0
         self._job_end = 0.0
         self._done_sent = False
         self._next_report = 0.0
@@ -54,7 +69,11 @@ class TrajectoryNode(Node):
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, JointTrajectory] | None = None
-        if self.params.values['feed_override.lockstep']:
+        if self._periodic is not None:
+            self.create_subscription(
+                JointState, topics.FEED_OVERRIDE, self._on_override_periodic, DATA_QOS
+            )
+        elif self.params.values['feed_override.lockstep']:
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
             )
@@ -82,13 +101,30 @@ class TrajectoryNode(Node):
         if values['feed_override.lockstep']:
             if not values['feed_override.enabled']:
                 raise ValueError('feed_override.lockstep needs feed_override.enabled')
+            if values['feed_override.period'] > 0:
+                self._dt_ns = period_ns(values['sample_period'])
+                self._periodic = PeriodicOverridePath(
+                    self._path,
+                    self._dt_ns,
+                    values['feed_override.period'],
+                    self._override,
+                    self._end_rule(values),
+                )
+                self._scaled = self._periodic.scaled
+                return
             # Samples are stamped by the override's sender: T need not be whole ns here.
             self._scaled = TimeScaledPath(self._path, values['sample_period'])
             return
         self._dt_ns = period_ns(values['sample_period'])
         self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
         if values['feed_override.enabled']:
-            self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns))
+            end = self._end_rule(values)
+            self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns), end)
+
+    def _end_rule(self, values: dict[str, Any]) -> JobEnd:
+        return JobEnd.of(
+            self._path.end_time, values['settle_time'], values['duration'], self._dt_ns
+        )
 
     def _on_override(self, msg: JointState) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
@@ -124,6 +160,33 @@ class TrajectoryNode(Node):
         self._answer = (ns, out)
         self._job_status(t)
 
+    def _on_override_periodic(self, msg: JointState) -> None:
+        ns = from_stamp(msg.header.stamp)
+        if self._answer is not None and ns <= self._answer[0]:
+            if ns == self._answer[0]:
+                self._ref_pub.publish(self._answer[1])  # a repeat: the same samples again
+            return
+        k, rem = divmod(ns, self._dt_ns)
+        if rem:
+            problem = f'override stamped {ns} ns, not a sample: ignored'
+            self.get_logger().warning(problem)
+            self._report(self._scaled.path_time, 'running', problem)
+            return
+        offered = msg.position[0] if len(msg.position) else math.nan
+        slope = msg.velocity[0] if len(msg.velocity) else 0.0
+        answer = self._periodic.answer(k, float(offered), float(slope))
+        if answer.problem:
+            self.get_logger().warning(answer.problem)
+            self._report(self._scaled.path_time, 'running', answer.problem)
+        out = JointTrajectory()
+        out.header.stamp = to_stamp(answer.first * self._dt_ns)
+        out.joint_names = list(AXES)
+        for i, sample in enumerate(answer.samples):
+            out.points.append(self._point(sample, i * self._dt_ns))
+        self._ref_pub.publish(out)
+        self._answer = (ns, out)
+        self._job_status(self._scaled.path_time)
+
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
@@ -135,9 +198,15 @@ class TrajectoryNode(Node):
         self._job_status(t)
 
     def _job_status(self, t: float) -> None:
-        if t >= self._job_end and not self._done_sent:
+        done, end = t >= self._job_end, self._job_end
+        if self._scaled is not None and self._dt_ns and self.params.values['feed_override.enabled']:
+            # The job ends with its path, whatever the override: at a sample found on the way.
+            last = self._scaled.last_sample
+            done = last is not None and self._scaled.sample_index > last
+            end = seconds(last * self._dt_ns) if done else end
+        if done and not self._done_sent:
             self._done_sent = True
-            self._report(t, 'done')
+            self._report(t, 'done', end_time=end)
         elif t >= self._next_report:
             self._next_report = t + 1.0
             self._report(t, 'running')
@@ -173,11 +242,13 @@ class TrajectoryNode(Node):
             out.points.append(self._point(sample, i * self._dt_ns))
         self._ref_pub.publish(out)
 
-    def _report(self, t: float, state: str, problem: str | None = None) -> None:
+    def _report(
+        self, t: float, state: str, problem: str | None = None, end_time: float | None = None
+    ) -> None:
         values = {
             'state': state,
             'time': t,
-            'end_time': self._job_end,
+            'end_time': self._job_end if end_time is None else end_time,
             'feed_override': self._override.value,
         }
         self._diag_pub.publish(
