@@ -6,6 +6,12 @@ integrates to k+1. The commands' arrival, not the wall clock, paces the run,
 so results do not depend on DDS latency or machine load. A step whose
 commands do not arrive within `lockstep_timeout` ends the node with a message
 naming the missing topics and their publishers.
+
+The cutting force of step k is a function of the state of step k (position, velocity,
+time), not of its commands: it is published with the measured positions, so a force
+controller can answer within the step (the adaptive-feed job sets the reference of step k
+from the force of step k). Ground truth, which holds the disturbance the commands meet, is
+published once the commands have arrived.
 """
 
 from __future__ import annotations
@@ -102,6 +108,7 @@ class PlantNode(Node):
             if self._active[i]:
                 y = quantize(position[i], self._resolution)
                 self._state_pubs[axis].publish(joint_state(ns, (axis,), position=(y,)))
+        self._publish_force(ns)
         self._last_publish_wall = time.monotonic()
 
     def _on_command(self, axis: str, msg: JointState) -> None:
@@ -154,6 +161,8 @@ class PlantNode(Node):
             self._truth_pub.publish(
                 joint_state(ns, AXES, self._plant.position, self._plant.velocity, xi)
             )
+
+    def _publish_force(self, ns: int) -> None:
         if not self._force_pub.get_subscription_count():
             return
         force = self._plant.cutting_force()
