@@ -178,6 +178,9 @@ class ForceLoopSimulation:
         rec.depth[k] = self.model.depth_at(t)
         rec.interval_cost[k] = cost
 
+    def finished(self) -> bool:
+        return False  # the job is a whole number of revolutions, known in advance
+
     def record(self) -> ForceRecord:
         rec = self.rec
         rec.held_samples = self.feed_loop.held_samples
