@@ -66,6 +66,37 @@ def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: 
         assert summary['beta_switches'] >= 1
 
 
+@pytest.mark.system
+def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_env, tmp_path):
+    """The Kline job with the force law in lockstep, on a 1 mm cut: the run's length is found
+    by the trajectory (the force law slows the feed), and every sample and control instant
+    equals the offline twin's."""
+    segments = 'trajectory.program.segments=["linear -0.075 -0.104 -0.005 0.003"]'
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting_adaptive_feed'),
+            *('-p', segments, '--compare-offline', '--quiet', '--output', str(out)),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'summary.json').read_text())
+    scen = scenario.load('slotting_adaptive_feed')
+    scen.add_override(segments)
+    job = job_for(scen)
+    nominal = job.samples  # at override 1
+    offline = simulate(job)
+    assert summary['samples'] == len(offline.t) == job.samples != nominal
+    assert summary['missing_samples'] == {}
+    # the same cores on the same floats: bit-equal (1e-9 m allows nothing but rounding)
+    assert summary['offline_max_difference'] <= 1e-9
+    assert set(summary['differences']) >= {'tracking_error', 'force_control.override'}
+
+
 def _force(ns: int, value: float) -> WrenchStamped:
     msg = WrenchStamped()
     msg.header.stamp = to_stamp(ns)
