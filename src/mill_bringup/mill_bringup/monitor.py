@@ -59,8 +59,9 @@ class Monitor(Node):
             for topic, msgtype in (recorded or {}).items():
                 self.recorder.subscribe(topic, msgtype, DATA_QOS)
             self.recorder.subscribe(topics.CLOCK, CLOCK, DATA_QOS)
-            diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-            self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
+            if topics.DIAGNOSTICS not in kept:  # a job that keeps it records it as kept
+                diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+                self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])

@@ -17,7 +17,8 @@ instant's stamp has arrived too.
 A non-finite force sample is replaced by the last finite one, and an override outside
 [override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
 trajectory, and both are reported on /diagnostics as a WARN. The force, reference, feed
-command, override, active β and depth go to /mill/force_control/state every sample.
+command, override, active β and depth go to /mill/force_control/state every sample, with the
+reference model's ξ and ω_n (so that J_c can be computed from a bag).
 """
 
 from __future__ import annotations
@@ -43,7 +44,18 @@ from mill_controllers.force_control import (
 )
 
 STATUS_NAME = 'mill_controllers: force'
-STATE_NAMES = ('force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+# the law's force, reference, feed command, override, active β and depth at the instant, then
+# its reference model eq. (7) (ξ, ω_n): what J_c of eq. (14) compares the force with
+STATE_NAMES = (
+    'force',
+    'reference',
+    'feed_command',
+    'override',
+    'beta',
+    'depth',
+    'model_damping',
+    'model_natural_frequency',
+)
 
 
 class ForceControllerNode(Node):
@@ -119,7 +131,11 @@ class ForceControllerNode(Node):
         out = joint_state(ns, ('override',), position=(cmd.override,), velocity=(cmd.slope,))
         self._override_pub.publish(out)
         self._last = (ns, out)
-        state = (cmd.force, reference, cmd.feed_command, cmd.override, cmd.beta, cmd.depth)
+        model = self._loop.law.designer
+        state = (
+            *(cmd.force, reference, cmd.feed_command, cmd.override, cmd.beta, cmd.depth),
+            *(model.damping, model.omega_n),
+        )
         self._state_pub.publish(joint_state(ns, STATE_NAMES, position=state))
         self._report(ns, cmd, measured)
 
