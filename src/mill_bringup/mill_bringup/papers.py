@@ -187,7 +187,8 @@ HATWESH_BAND = 1e-4
 def hatwesh(records: Mapping[str, RunRecord]) -> str:
     lines = [
         'Hatwesh 2013, x axis velocity loop, the same move before and after a load-inertia '
-        'step (settling band 0.01 % of the move, 1 µm):',
+        'step (settling band 0.01 % of the move, 1 µm; the paper gives figures only, no '
+        'numbers, and judges the velocity response: see hatwesh_velocity):',
         f'{"controller":<16} {"move":<7} {"overshoot [%]":>14} {"settling [ms]":>14} '
         f'{"IAE [mm s]":>11}',
     ]
@@ -408,7 +409,8 @@ def rubio(records: Mapping[str, ForceRecord]) -> str:
         return ''
     zoh = records['zoh'].j_c
     lines = [
-        'Rubio 2013, peak cutting force held at F_r by the feed (J_c of eq. 14, against ZOH):',
+        'Rubio 2013, peak cutting force held at F_r by the feed (J_c of eq. 14, against ZOH; '
+        'the paper gives J_c as a plot only, fig. 10, no numbers):',
         f'{"variant":<14} {"J_c [N² s]":>12} {"vs ZOH [%]":>11} {"active β":>20}',
     ]
     for name, rec in records.items():
