@@ -276,17 +276,18 @@ class PhaseMetrics:
     overshoot: float  # mean over the steps [%]
     settling_time: float  # longest [s]
     iae: float  # mean [µm]
-    max_command: float  # largest |u| in the phase [V]
+    max_command: float  # largest |u| in the phase [V] (nan: no commands in the record)
 
 
 def phase_metrics(rec: RunRecord, start: float, end: float, band: float) -> PhaseMetrics:
     steps = velocity_steps(rec, start, end, band)
     u = rec['torque'][(rec.t >= start) & (rec.t < end), X]
+    u = u[np.isfinite(u)]  # the runner's record has no commands: offline only
     return PhaseMetrics(
         float(np.mean([s.overshoot for s in steps])),
         max(s.settling_time for s in steps),
         float(np.mean([s.iae for s in steps])),
-        float(np.max(np.abs(u))),
+        float(np.max(np.abs(u))) if u.size else math.nan,
     )
 
 
@@ -352,7 +353,7 @@ def hatwesh_velocity(records: Mapping[str, RunRecord]) -> str:
         for phase, m in ours[name].items():
             lines.append(
                 f'{name:<18} {phase:<14} {m.overshoot:13.2f} {m.settling_time * 1e3:14.2f} '
-                f'{m.iae:9.3f} {m.max_command:12.2f}'
+                f'{m.iae:9.3f} {m.max_command:12.2f}'.replace('nan', 'n/a')
             )
     span = (HV_LOAD[1] - HV_LOAD[0]) * 1e3
     lines.append(
