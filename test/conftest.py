@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 from mill_common.env import ros_environment
-from rcl_interfaces.srv import GetParameters, SetParameters
+from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
 from rclpy.parameter import Parameter, parameter_value_to_python
 
 REPO = Path(__file__).resolve().parents[1]
@@ -121,13 +121,14 @@ def ros_node(name: str) -> Iterator:
 
 
 class ParameterClient:
-    """set_parameters / get_parameters of one remote node, each call bounded in time."""
+    """set / get / describe_parameters of one remote node, each call bounded in time."""
 
     def __init__(self, node, executor, target: str) -> None:
         self._executor = executor
         self._set = node.create_client(SetParameters, f'/{target}/set_parameters')
         self._get = node.create_client(GetParameters, f'/{target}/get_parameters')
-        for client in (self._set, self._get):
+        self._describe = node.create_client(DescribeParameters, f'/{target}/describe_parameters')
+        for client in (self._set, self._get, self._describe):
             assert client.wait_for_service(timeout_sec=60), f'{client.srv_name} never appeared'
 
     def _call(self, client, request):
@@ -147,3 +148,8 @@ class ParameterClient:
         response = self._call(self._get, GetParameters.Request(names=list(names)))
         values = zip(names, response.values, strict=True)
         return {n: parameter_value_to_python(v) for n, v in values}
+
+    def describe(self, *names: str) -> dict:
+        """name -> rcl_interfaces/msg/ParameterDescriptor, as `ros2 param describe` gets it."""
+        response = self._call(self._describe, DescribeParameters.Request(names=list(names)))
+        return dict(zip(names, response.descriptors, strict=True))

@@ -5,49 +5,39 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from mill_bringup import scenario
-
-
-def tx_packets_off_loopback() -> int:
-    """Packets sent so far through every interface but loopback (/proc/net/dev)."""
-    total = 0
-    for line in Path('/proc/net/dev').read_text().splitlines()[2:]:
-        name, _, fields = line.partition(':')
-        if name.strip() != 'lo':
-            total += int(fields.split()[9])
-    return total
+from test.dds_sniffer import DdsSniffer
 
 
 @pytest.mark.system
 def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
     out = tmp_path / 'run'
-    sent_before = tx_packets_off_loopback()
-    proc = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'mill_bringup.runner',
-            'slotting',
-            '--duration',
-            '5',
-            '--compare-offline',
-            '--quiet',
-            '--output',
-            str(out),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
+    with DdsSniffer() as sniffer:
+        proc = subprocess.run(
+            [
+                sys.executable,
+                '-m',
+                'mill_bringup.runner',
+                'slotting',
+                '--duration',
+                '5',
+                '--compare-offline',
+                '--quiet',
+                '--output',
+                str(out),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
     assert proc.returncode == 0, proc.stderr[-3000:]
-    # DDS stayed on loopback: discovery of 9 participants off loopback would send
-    # hundreds of packets; a stray neighbour-discovery packet of the OS is tolerated.
-    assert tx_packets_off_loopback() - sent_before < 5
+    # DDS stayed on loopback: not one RTPS packet through any other interface (the host's
+    # other traffic, downloads or name lookups, is not RTPS and not counted).
+    assert sniffer.count == 0, sniffer.examples
     summary = json.loads((out / 'summary.json').read_text())
     assert summary['samples'] == 5001  # t = 0 .. 5 s at 1 kHz, the start included
     assert summary['missing_samples'] == {}
@@ -58,9 +48,11 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
 
 
 # (scenario, duration [s], samples): every variant of each paper scenario, distributed
-# against offline. Hatwesh runs past its load change at t = 1 s; its adaptive_pi_rls variant
+# against offline (beltran: the main job with and without compensation, and the tool-path
+# variants). Hatwesh runs past its load change at t = 1 s; its adaptive_pi_rls variant
 # designs with the rls observer node's estimate (a fourth topic joined by the controller).
 PAPER_RUNS = [
+    ('beltran', 0.5, 501),
     ('chavez_conde', 1.0, 1001),
     ('maharof', 0.3, 3001),
     ('hatwesh', 1.1, 4401),

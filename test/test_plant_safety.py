@@ -50,7 +50,9 @@ class FakeController:
         self.states.append((ns, msg.position[0]))
         k = ns // T_NS
         if k < self.steps:
-            self._pub.publish(joint_state(ns, ('x',), effort=(self.torque(k),)))
+            self._pub.publish(
+                joint_state(ns, ('x',), effort=(self.torque(k),), sender='x_controller')
+            )
 
     def matched(self) -> bool:
         node = self._node

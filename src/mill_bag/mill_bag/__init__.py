@@ -16,10 +16,13 @@ Modules (each imports only those above it):
     errors     BagError: str() says in one line why a bag cannot be written or read
     cdr        cdr_stamp_ns (a message's leading stamp), joint_state_cdr (fast JointState)
     types      message-type names, the typestore, definitions and RIHS01 hashes, decode()
-    writer     BagWriter, TopicInfo, metadata.yaml; flush() closes an MCAP chunk
+    writer     BagWriter, TopicInfo, metadata.yaml; flush() closes an MCAP chunk; a full
+               disk cuts the bag short at its last flush (BagCutShort, noted in metadata)
     reader     open_bag -> Bag; read() yields (topic, type, log_time, publish_time, data),
-               a file without footer (a killed recording) up to its last complete chunk
-    recover    recover(): rewrite such a file as a complete bag
+               a file without footer (a killed recording) up to its last complete chunk;
+               Bag.cut_short says why a recording ended early, where the writer noted it
+    recover    recover(): rewrite such a file as a complete bag (nothing changes if the
+               disk has no room for it)
     recorder   TopicRecorder (raw subscriptions of any node -> BagWriter) and the
                `recorder` node; the only module that needs rclpy
 

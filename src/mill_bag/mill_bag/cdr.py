@@ -144,7 +144,7 @@ def joint_state_cdr(data: bytes) -> JointStateData | None:
         getter,
         getter(data),
         struct.Struct(fmt),
-        tuple(len(a) for a in arrays),
+        (len(arrays[0]), len(arrays[1]), len(arrays[2])),  # position, velocity, effort
         frame_id,
         tuple(names),
     )

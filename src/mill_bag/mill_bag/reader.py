@@ -7,7 +7,8 @@ of `ros2 bag record` (MCAP or sqlite3 storage) read like ours.
 
 An MCAP file without footer (the recording was killed) is read up to its last
 complete record, and `Bag.truncated` lists it: the writer flushes whole chunks, so
-that is every message up to the last flush. `mill_bag.recover` rewrites it.
+that is every message up to the last flush. `mill_bag.recover` rewrites it. A bag the
+writer cut short (a full disk) says why in metadata.yaml: `Bag.cut_short`.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from pathlib import Path
 import yaml
 
 from mill_bag.errors import BagError
+from mill_bag.writer import CUT_SHORT
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 Row = tuple[str, str, int, int | None, bytes]  # topic, type, log time, publish time, CDR
@@ -46,6 +48,15 @@ class Bag:
     @property
     def name(self) -> str:
         return self.path.name
+
+    @property
+    def cut_short(self) -> str | None:
+        """Why the recording ended before it was closed (a full disk), as the writer noted
+        it in metadata.yaml (`custom_data: cut_short`); None if it did not say so."""
+        info = (self.metadata or {}).get('rosbag2_bagfile_information') or {}
+        custom = info.get('custom_data') if isinstance(info, dict) else None
+        reason = custom.get(CUT_SHORT) if isinstance(custom, dict) else None
+        return str(reason) if reason else None
 
     def read(self, topics: Collection[str] | None = None) -> Iterator[Row]:
         self.counts.clear()

@@ -26,7 +26,9 @@ written every `flush_period` (<= 1 s) of wall time: each write closes an MCAP
 chunk, hands it to the OS and refreshes metadata.yaml. SIGINT or SIGTERM close
 the bag (summary, footer, final metadata.yaml); a hard kill loses at most the
 messages of the last `flush_period` and leaves a bag that `mill_bag.reader` reads
-as it is and `python -m mill_bag recover` makes complete.
+as it is and `python -m mill_bag recover` makes complete. A write the OS refuses (a
+full disk) cuts the bag short at its last complete flush, says so in its metadata.yaml
+and ends the recorder with one line and exit code 1.
 
 Helpers used from mill_common, all generic (no topic, no run): node_main (run_node:
 --help from the parameter specs, one-line start-up errors, SIGINT/SIGTERM, spin;
@@ -46,7 +48,7 @@ from pathlib import Path
 from typing import Any
 
 from mill_common.node_main import request_exit, run_node
-from mill_common.parameters import ParamSpec, in_range, one_of, text
+from mill_common.parameters import ParamSpec, StringList, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -54,7 +56,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.errors import BagError
 from mill_bag.types import message_definition, sim_stamped
-from mill_bag.writer import COMPRESSIONS, BagWriter, TopicInfo
+from mill_bag.writer import COMPRESSIONS, BagCutShort, BagWriter, TopicInfo
 
 DEPTH = 2000  # as the data topics' own depth: a busy recorder must not drop samples
 
@@ -232,11 +234,14 @@ class TopicRecorder:
         # Nothing may be thrown through the executor: a failed write ends the node instead.
         if self.error is not None:
             return
+        # The node's exit prints the error once (run_node), so it is not logged here too.
         try:
             self.flush()
+        except BagCutShort as exc:  # a full disk: the bag ends at its last complete flush
+            self.error = str(exc)
+            request_exit(self.node, 1, self.error)
         except (OSError, ValueError) as exc:
             self.error = f'cannot write the bag {self.writer.path}: {exc}'
-            self.node.get_logger().error(self.error)
             request_exit(self.node, 1, self.error)
 
     def flush(self) -> None:
@@ -259,7 +264,8 @@ class TopicRecorder:
                 )
             if not self.sim_time:
                 stamp = received
-            elif entry.stamped and (stamp := cdr_stamp_ns(data)) is not None:
+            elif entry.stamped and (decoded := cdr_stamp_ns(data)) is not None:
+                stamp = decoded
                 latest = max(latest, stamp)
             else:
                 stamp = latest
@@ -268,11 +274,11 @@ class TopicRecorder:
         writer.flush()
 
     def close(self) -> None:
-        """Write the rest and close the bag (idempotent)."""
-        if self.writer.closed:
-            return
+        """Write the rest and close the bag (idempotent; BagCutShort if the disk is full)."""
         for timer in self._timers:
             timer.cancel()
+        if self.writer.closed:
+            return
         try:
             try:
                 self.flush()
@@ -297,12 +303,6 @@ class TopicRecorder:
 # -- the recorder node -------------------------------------------------------------------------
 
 
-def _string_list(value: Any) -> str | None:
-    if isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
-        return None
-    return 'must be a list of topic names'
-
-
 def _regex(value: Any) -> str | None:
     if not isinstance(value, str):
         return 'must be a string'
@@ -323,7 +323,11 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             True,
         ),
         ParamSpec(
-            'topics', [], 'topics to record (empty and no regex: all topics)', _string_list, True
+            'topics',
+            [],
+            'topics to record (empty and no regex: all topics)',
+            StringList('topic names'),
+            True,
         ),
         ParamSpec('regex', '', 'also record topics matching this regular expression', _regex, True),
         ParamSpec('compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), True),
@@ -366,11 +370,17 @@ class RecorderNode(Node):
         )
 
     def destroy_node(self) -> None:
-        if self.recorder is not None:
-            self.recorder.close()
-            print(f'recorder: {self.recorder.summary()}', file=sys.stderr)
-            self.recorder = None
-        super().destroy_node()
+        """Close the bag. A failure to (a full disk) propagates as a BagError, which run_node
+        prints as one line; a bag cut short while recording has been reported already."""
+        recorder, self.recorder = self.recorder, None
+        try:
+            if recorder is not None:
+                cut_before = recorder.writer.cut_short
+                recorder.close()
+                if cut_before is None:
+                    print(f'recorder: {recorder.summary()}', file=sys.stderr)
+        finally:
+            super().destroy_node()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,4 +1,4 @@
-"""Writing a rosbag2 bag in MCAP storage, in chunks that survive a hard kill.
+"""Writing a rosbag2 bag in MCAP storage, in chunks that survive a hard kill and a full disk.
 
     BAG/metadata.yaml    rosbag2_bagfile_information, version 9, as Jazzy writes it
     BAG/BAG_0.mcap       profile "ros2", one schema (ros2msg) per type, one channel per
@@ -11,15 +11,25 @@ and rewrites metadata.yaml (atomically; it exists from the start), so a writer t
 flushes every half second loses at most that much to a hard kill; `mill_bag.reader`
 reads such a file up to its last complete chunk and `mill_bag.recover` completes it.
 `close()` writes the MCAP summary, footer and the final metadata.yaml.
+
+A write the operating system refuses (a full disk, above all) cuts the bag short
+instead of leaving it damaged: the MCAP file is cut back to the end of its last
+complete flush, and metadata.yaml describes what is in it and says why it ends there
+(`custom_data: cut_short: <reason>`, a field rosbag2 keeps for such notes). Writing
+that last metadata.yaml needs room on a disk that has none: the writer holds
+RESERVE_NAME, a file of twice the size of metadata.yaml (at least 64 KiB), allocated
+while there is room and deleted when the bag is closed or cut short.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any, cast
 
 import yaml
 
@@ -28,6 +38,57 @@ from mill_bag.types import message_definition
 
 ROSBAG2_VERSION = 9
 COMPRESSIONS = ('zstd', 'lz4', 'none')
+CUT_SHORT = 'cut_short'  # custom_data key: why the recording ended before it was closed
+RESERVE_NAME = '.metadata_reserve'  # room kept for the last metadata.yaml (deleted at close)
+RESERVE_MIN = 64 * 1024
+FULL = (errno.ENOSPC, errno.EDQUOT)
+
+
+def os_reason(exc: OSError) -> str:
+    """An OSError in words: 'no space left on device'."""
+    text = exc.strerror or str(exc)
+    return text[:1].lower() + text[1:]
+
+
+class _FlushedFile:
+    """The stream under the MCAP writer: bytes reach the file only at flush(), and a flush
+    the OS refuses leaves the file as it was after the last complete one (never a partial
+    record), so the file stays a readable MCAP prefix whatever happens."""
+
+    def __init__(self, path: Path) -> None:
+        self._fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        self._buf = bytearray()
+        self.size = 0  # bytes in the file, all of complete flushes
+
+    def write(self, data: bytes) -> int:
+        self._buf += data
+        return len(data)
+
+    def tell(self) -> int:
+        return self.size + len(self._buf)
+
+    def flush(self) -> None:
+        view = memoryview(self._buf)
+        done = 0
+        try:
+            while done < len(view):
+                done += os.write(self._fd, view[done:])
+        except OSError:
+            view.release()
+            os.ftruncate(self._fd, self.size)  # back to the end of the last complete flush
+            os.lseek(self._fd, self.size, os.SEEK_SET)
+            raise
+        view.release()
+        self.size += len(self._buf)
+        self._buf.clear()
+
+    def fsync(self) -> None:
+        os.fsync(self._fd)
+
+    def close(self) -> None:
+        if self._fd >= 0:
+            os.close(self._fd)
+            self._fd = -1
 
 
 @dataclass
@@ -46,6 +107,8 @@ class BagWriter:
     `add_topic` registers a topic (schema + channel with its offered QoS), `write`
     adds one serialized message, `flush` closes the chunk, writes it to the file and
     refreshes metadata.yaml, `close` writes the MCAP summary and the final metadata.
+    A write the OS refuses raises `BagCutShort` and leaves the bag cut short (`cut_short`
+    says why); nothing is written after that.
     """
 
     def __init__(self, path: Path, compression: str = 'zstd', chunk_size: int = 1 << 20) -> None:
@@ -61,21 +124,38 @@ class BagWriter:
         except OSError as exc:
             raise BagError(f'cannot create bag directory {self.path}: {exc.strerror}') from None
         self.file_name = f'{self.path.name}_0.mcap'
-        self._file = open(self.path / self.file_name, 'xb')  # noqa: SIM115 (closed in close())
-        kind = {
-            'zstd': CompressionType.ZSTD,
-            'lz4': CompressionType.LZ4,
-            'none': CompressionType.NONE,
-        }[compression]
-        self._mcap = Writer(self._file, chunk_size=chunk_size, compression=kind)
-        self._mcap.start(profile='ros2', library=f'mill recorder ({mcap_library()})')
         self.topics: dict[str, TopicInfo] = {}
         self._schemas: dict[str, int] = {}
         self.message_count = 0
         self.start_ns: int | None = None
         self.end_ns: int | None = None
         self.closed = False
-        self.write_metadata()
+        self.cut_short: str | None = None  # why writing stopped before close(), if it did
+        self._reserved = 0
+        try:
+            self._file = _FlushedFile(self.path / self.file_name)
+            kind = {
+                'zstd': CompressionType.ZSTD,
+                'lz4': CompressionType.LZ4,
+                'none': CompressionType.NONE,
+            }[compression]
+            # The mcap Writer needs only write() and tell() of its stream, which we have.
+            stream = cast(IO[Any], self._file)
+            self._mcap = Writer(stream, chunk_size=chunk_size, compression=kind)
+            self._mcap.start(profile='ros2', library=f'mill recorder ({mcap_library()})')
+            self._file.flush()
+            self._flushed = self.metadata()  # what the file holds after the last flush
+            self.write_metadata()
+        except OSError as exc:
+            self._remove_started_bag()
+            raise BagError(f'cannot create the bag {self.path}: {os_reason(exc)}') from None
+
+    def _remove_started_bag(self) -> None:
+        if getattr(self, '_file', None) is not None:
+            self._file.close()
+        for name in (self.file_name, RESERVE_NAME, 'metadata.yaml', 'metadata.yaml.tmp'):
+            (self.path / name).unlink(missing_ok=True)
+        self.path.rmdir()
 
     def add_topic(
         self, name: str, msgtype: str, qos: list[dict], type_hash: str | None = None
@@ -97,6 +177,8 @@ class BagWriter:
         return info
 
     def write(self, topic: TopicInfo, log_time: int, publish_time: int, data: bytes) -> None:
+        if self.closed:
+            raise BagError(f'the bag {self.path} is closed' + self._why())
         self._mcap.add_message(topic.channel_id, log_time, data, publish_time, topic.count)
         topic.count += 1
         self.message_count += 1
@@ -105,10 +187,22 @@ class BagWriter:
         if self.end_ns is None or log_time > self.end_ns:
             self.end_ns = log_time
 
+    def _why(self) -> str:
+        return f' (cut short: {self.cut_short})' if self.cut_short else ''
+
     def flush(self) -> None:
         """Close the current chunk, hand it to the OS and refresh metadata.yaml."""
-        self._mcap.flush()
-        self.write_metadata()
+        if self.closed:
+            raise BagError(f'the bag {self.path} is closed' + self._why())
+        try:
+            self._mcap.flush()
+        except OSError as exc:
+            self._cut(exc)
+        self._flushed = self.metadata()
+        try:
+            self.write_metadata()
+        except OSError as exc:
+            self._cut(exc)
 
     def metadata(self) -> dict:
         return bag_metadata(
@@ -119,25 +213,76 @@ class BagWriter:
         )
 
     def write_metadata(self) -> None:
-        write_metadata_file(self.path, self.metadata())
+        """metadata.yaml of what was flushed; the reserve grows with it first."""
+        text = dump_yaml(self._flushed) + '\n'
+        self._reserve(max(RESERVE_MIN, 2 * len(text.encode())))
+        write_metadata_file(self.path, self._flushed, text)
+
+    def _reserve(self, size: int) -> None:
+        if size <= self._reserved:
+            return
+        fd = os.open(self.path / RESERVE_NAME, os.O_WRONLY | os.O_CREAT, 0o644)
+        try:
+            try:
+                os.posix_fallocate(fd, 0, size)
+            except OSError as exc:
+                if exc.errno not in (errno.EOPNOTSUPP, errno.EINVAL):
+                    raise
+                os.pwrite(fd, bytes(size), 0)  # a file system without fallocate
+        finally:
+            os.close(fd)
+        self._reserved = size
+
+    def _cut(self, exc: OSError) -> None:
+        """Stop at the last complete flush: free the reserve, write the metadata of what the
+        file holds with the reason, close the file; raise BagCutShort."""
+        self.closed = True
+        self.cut_short = os_reason(exc)
+        self._file.close()
+        (self.path / RESERVE_NAME).unlink(missing_ok=True)
+        self._reserved = 0
+        info = self._flushed['rosbag2_bagfile_information']
+        info['custom_data'] = {CUT_SHORT: self.cut_short}
+        # If even this fails, the metadata of the last flush stays: the file still reads.
+        with contextlib.suppress(OSError):
+            write_metadata_file(self.path, self._flushed)
+        raise BagCutShort(self.path, self.cut_short, info['message_count'])
 
     def close(self) -> None:
         if self.closed:
             return
-        self.closed = True
         info = self.metadata()
-        self._mcap.add_metadata(
-            'rosbag2', {'serialized_metadata': dump_yaml(info['rosbag2_bagfile_information'])}
-        )
-        self._mcap.finish()
-        self._file.flush()
-        os.fsync(self._file.fileno())
+        try:
+            self._mcap.add_metadata(
+                'rosbag2', {'serialized_metadata': dump_yaml(info['rosbag2_bagfile_information'])}
+            )
+            self._mcap.finish()
+            self._file.flush()
+            self._file.fsync()
+        except OSError as exc:
+            self._cut(exc)
+        self.closed = True
         self._file.close()
+        (self.path / RESERVE_NAME).unlink(missing_ok=True)
+        self._flushed = info
         write_metadata_file(self.path, info)
 
     @property
     def size_bytes(self) -> int:
         return (self.path / self.file_name).stat().st_size
+
+
+class BagCutShort(BagError):
+    """The OS refused a write (a full disk): the bag ends at its last complete flush."""
+
+    def __init__(self, path: Path, reason: str, messages: int) -> None:
+        super().__init__(
+            f'{reason}: the bag {path} is cut short after {messages} messages '
+            f'(`python -m mill_bag recover {path}` completes it once there is room)'
+        )
+        self.path = path
+        self.reason = reason
+        self.messages = messages
 
 
 def mcap_library() -> str:
@@ -196,8 +341,13 @@ def bag_metadata(
     }
 
 
-def write_metadata_file(bag_dir: Path, metadata: dict) -> None:
-    """metadata.yaml, replaced atomically (a reader never sees half a file)."""
+def write_metadata_file(bag_dir: Path, metadata: dict, text: str | None = None) -> None:
+    """metadata.yaml, replaced atomically (a reader never sees half a file); a failed write
+    leaves the previous one and no temporary file."""
     tmp = bag_dir / 'metadata.yaml.tmp'
-    tmp.write_text(dump_yaml(metadata) + '\n')
+    try:
+        tmp.write_text(text if text is not None else dump_yaml(metadata) + '\n')
+    except OSError:
+        tmp.unlink(missing_ok=True)
+        raise
     tmp.replace(bag_dir / 'metadata.yaml')

@@ -41,7 +41,7 @@ from mill_bringup import scenario as scenario_mod
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
-from mill_bringup.runner import RunError, run
+from mill_bringup.runner import RunError, RunResult, run
 
 
 def measure_pingpong(count: int, env: dict[str, str]) -> dict:
@@ -74,9 +74,11 @@ def _rates(values: list[float], fmt: str = '.0f') -> str:
 def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
     """Runs without and with recording, alternating; the bag's size and the report's time."""
     job = job_for(scen)
-    plain, recorded = [], []
-    plain_cpu, recorded_cpu = [], []
-    result = None
+    plain: list[float] = []
+    recorded: list[float] = []
+    plain_cpu: list[float] = []
+    recorded_cpu: list[float] = []
+    result: RunResult | None = None
     bag = None
     for i in range(repeat):
         order = (False, True) if i % 2 == 0 else (True, False)
@@ -98,6 +100,7 @@ def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
             (recorded_cpu if record else plain_cpu).append(r.cpu_ms_per_step)
             if record:
                 result = r
+    assert result is not None and result.bag is not None, 'repeat >= 1 recorded run'
     import resource
 
     cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)

@@ -22,6 +22,20 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument('--duration', type=float, help='end the job after this time [s]')
     parser.add_argument(
+        '--delay',
+        type=int,
+        metavar='N',
+        help='samples between the measurement a command is computed from and the period it '
+        'acts in: the plant applies each command N steps late, the observers and controllers '
+        'compensate for N (command_delay)',
+    )
+    parser.add_argument(
+        '--timing',
+        choices=('lockstep', 'realtime'),
+        help='lockstep (the plant is the clock; the default of the scenarios) or realtime '
+        '(the plant keeps the wall clock and holds the newest command, as a drive does)',
+    )
+    parser.add_argument(
         '--skip',
         type=float,
         default=1.0,
@@ -44,6 +58,17 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
             raise ScenarioError(f'--controller: scenario {scen.name} has no axis controller')
         for node in axis_controllers:
             scen.add_override(f'{node.name}.controller={args.controller}')
+    if getattr(args, 'timing', None):
+        for node in scen.nodes:
+            scen.add_override(f'{node.name}.timing={args.timing}')
+            if args.timing == 'realtime':
+                scen.add_override(f'{node.name}.use_sim_time=false')
+    if getattr(args, 'delay', None) is not None:
+        if args.delay < 0:
+            raise ScenarioError(f'--delay must be a whole number >= 0, got {args.delay}')
+        for node in scen.nodes:
+            if node.package in ('mill_plant', 'mill_controllers', 'mill_observers'):
+                scen.add_override(f'{node.name}.command_delay={args.delay}')
     if args.duration is not None:
         if not args.duration > 0:
             raise ScenarioError(f'--duration must be > 0, got {args.duration}')

@@ -158,6 +158,8 @@ class ForceLoopSimulation:
 
     def step(self, k: int) -> None:
         rec, drive = self.rec, self.drive
+        assert rec.feed is not None and rec.measured is not None  # offline arrays, made above
+        assert rec.interval_cost is not None
         t = drive.plant.time
         measured = math.nan if k in self.nan_set else drive.plant.force
         cmd = self.feed_loop.step(t, self.reference, measured)
@@ -188,6 +190,7 @@ class ForceLoopSimulation:
     def record(self) -> ForceRecord:
         rec = self.rec
         rec.held_samples = self.feed_loop.held_samples
+        assert rec.interval_cost is not None  # made in __init__
         rec.j_c = float(np.sum(rec.interval_cost))
         if self.trace:
             rec.trace_ns = np.concatenate(
@@ -227,7 +230,7 @@ def run(
 
 
 def sweep(
-    betas: Sequence[float],
+    betas: Sequence[float] | np.ndarray,
     model: ForceProcessModel | None = None,
     loop: Mapping[str, Any] | None = None,
     values: Mapping[str, Any] | None = None,
@@ -258,8 +261,8 @@ def paper_cases(
 
 
 def plot_cost_vs_beta(
-    betas: Sequence[float],
-    costs: Sequence[float],
+    betas: Sequence[float] | np.ndarray,
+    costs: Sequence[float] | np.ndarray,
     path: str,
     marks: Mapping[str, float] | None = None,
     title: str = 'Continuous-time cost J_c vs β (cf. Rubio 2013 fig. 10)',
@@ -289,7 +292,7 @@ def claims(costs: Mapping[float, float], cases: Mapping[str, ForceRecord]) -> st
     """Rubio 2013's three claims, each with the figures and a computed verdict."""
     zoh = cases['ZOH (β = 0)'].j_c
     negative = {b: c for b, c in costs.items() if b < 0}
-    best_b = min(negative, key=negative.get)
+    best_b = min(negative, key=lambda b: negative[b])
     s1, s2 = cases['scheme 1'].j_c, cases['scheme 2'].j_c
     rows = [
         (

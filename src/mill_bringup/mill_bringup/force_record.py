@@ -17,6 +17,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from mill_bag.cdr import cdr_stamp_ns
@@ -60,7 +61,7 @@ class ForceRecord:
 
     @classmethod
     def empty(cls, n: int, period: float) -> ForceRecord:
-        arrays = {name: _nan(n) for name in STATE_FIELDS}
+        arrays: dict[str, Any] = {name: _nan(n) for name in STATE_FIELDS}
         return cls(t=np.arange(n) * period, **arrays, slope=_nan(n))
 
     def fine_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -39,13 +39,13 @@ def state_windows(
             rows.append((t, msg.position[0], msg.position[3]))  # force, override (STATE_NAMES)
     if not rows:
         raise WindowError(f'{bag_path}: no {topics.FORCE_CONTROL_STATE} messages')
-    data = np.array(rows)
+    table = np.array(rows)
     out = []
     for a, b in itertools.pairwise(edges):
-        sel = (data[:, 0] >= a) & (data[:, 0] < b)
+        sel = (table[:, 0] >= a) & (table[:, 0] < b)
         n = int(np.count_nonzero(sel))
-        force = float(np.mean(data[sel, 1])) if n else math.nan
-        override = float(np.mean(data[sel, 2])) if n else math.nan
+        force = float(np.mean(table[sel, 1])) if n else math.nan
+        override = float(np.mean(table[sel, 2])) if n else math.nan
         out.append((a, b, n, force, override))
     return out
 

@@ -70,9 +70,21 @@ def _die_with_parent() -> None:
 class Graph:
     """The scenario's node processes."""
 
-    def __init__(self, scen: Scenario, run_dir: Path, env: dict[str, str]) -> None:
+    def __init__(
+        self,
+        scen: Scenario,
+        run_dir: Path,
+        env: dict[str, str],
+        respawn: Iterable[str] = (),
+        max_restarts: int = 3,
+    ) -> None:
         self.scen = scen
         self.procs: dict[str, subprocess.Popen[bytes]] = {}
+        # Nodes started again when they die (ros2 launch's respawn), up to max_restarts each.
+        self.respawn = set(respawn)
+        self.max_restarts = max_restarts
+        self.restarts: dict[str, int] = {}
+        self.notes: list[str] = []
         self.logs: dict[str, Path] = {}
         self._log_dir = run_dir / 'logs'
         self._log_dir.mkdir(parents=True, exist_ok=True)
@@ -98,8 +110,9 @@ class Graph:
                 '--params-file',
                 str(self._overrides),
             ]
+            again = node.name in self.procs
             self.logs[node.name] = self._log_dir / f'{node.name}.log'
-            with open(self.logs[node.name], 'w') as log:
+            with open(self.logs[node.name], 'a' if again else 'w') as log:
                 self.procs[node.name] = subprocess.Popen(
                     cmd,
                     stdout=log,
@@ -113,10 +126,14 @@ class Graph:
         return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
 
     def check(self, when: str) -> None:
-        """GraphError naming the first node that has exited, with the end of its log."""
-        exited = self.exited()
-        if exited:
-            name, code = next(iter(exited.items()))
+        """Start a respawned node again; GraphError naming any other node that has exited."""
+        for name, code in self.exited().items():
+            count = self.restarts.get(name, 0)
+            if name in self.respawn and count < self.max_restarts:
+                self.restarts[name] = count + 1
+                self.notes.append(f'node {name} exited with code {code} {when}: started again')
+                self.launch([self.scen.node(name)])
+                continue
             raise GraphError(f'node {name} exited with code {code} {when}:\n' + self.log_tail(name))
 
     def cpu(self) -> float:

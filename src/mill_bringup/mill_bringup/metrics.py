@@ -36,6 +36,9 @@ class RunRecord:
 
     t: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
+    events: list[str] = field(default_factory=list)  # what happened besides the signals
+    # Messages left out per topic: sent by another node than the topic's owner, or malformed.
+    foreign: dict[str, int] = field(default_factory=dict)
     # A job with a force controller: one row per control instant, columns FORCE_CONTROL
     force_control: np.ndarray | None = None
 
@@ -47,7 +50,11 @@ class RunRecord:
     def trimmed(self, n: int) -> RunRecord:
         """The first n samples (a job that ended before the space it was given)."""
         return RunRecord(
-            self.t[:n], {k: v[:n] for k, v in self.signals.items()}, self.force_control
+            self.t[:n],
+            {k: v[:n] for k, v in self.signals.items()},
+            self.events,
+            self.foreign,
+            self.force_control,
         )
 
     def grown(self, n: int, dt: float) -> RunRecord:
@@ -56,7 +63,7 @@ class RunRecord:
         out = RunRecord.empty(n, dt)
         for k, v in self.signals.items():
             out.signals[k][:old] = v
-        out.force_control = self.force_control
+        out.events, out.foreign, out.force_control = self.events, self.foreign, self.force_control
         return out
 
     def __getitem__(self, name: str) -> np.ndarray:

@@ -59,9 +59,8 @@ class Monitor(Node):
             for topic, msgtype in (recorded or {}).items():
                 self.recorder.subscribe(topic, msgtype, DATA_QOS)
             self.recorder.subscribe(topics.CLOCK, CLOCK, DATA_QOS)
-            if topics.DIAGNOSTICS not in kept:  # a job that keeps it records it as kept
-                diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
-                self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
+            diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+            self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
@@ -90,6 +89,16 @@ class Monitor(Node):
         store = self.raw.get(topic)
         stamp = cdr_stamp_ns(store[-1]) if store else None
         return -1 if stamp is None else stamp
+
+    def status(self, name: str) -> dict[str, str] | None:
+        """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
+        for array in reversed(self.diagnostics):
+            for s in array.status:
+                if s.name == name:
+                    values = {kv.key: kv.value for kv in s.values}
+                    level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
+                    return values | {'message': s.message, 'level': str(level)}
+        return None
 
     def problems(self) -> list[str]:
         """Every WARN or ERROR status heard on /diagnostics, once each, in order."""

@@ -15,7 +15,7 @@ so a bag from `ros2 bag record` with these topics works as well as ours.
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -61,14 +61,19 @@ def build_record(
     n: int,
     dt_ns: int,
     listened: Iterable[str],
+    owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
     """Decoded messages (topic, message) -> RunRecord of n samples at t = k T.
 
     The one place where messages become signals: the runner's monitor and the
     bag reader both call it. A message belongs to sample k when its header stamp
     is exactly k T (0 <= k < n); a repeated stamp overwrites with the same values.
-    Also returns, per listened per-sample topic, how many of the n samples are missing.
+    owners {topic: node}: a message of such a topic whose header.frame_id names another
+    sender is left out, as is a malformed one (too short, no joint); both are counted in
+    the record's `foreign`. Also returns, per listened per-sample topic, how many of the n
+    samples are missing.
     """
+    owners = owners or {}
     rec = RunRecord.empty(n, dt_ns / 1e9)
     s = rec.signals
     seen: dict[str, set[int]] = {t: set() for t in listened if t != topic_names.REFERENCE}
@@ -107,25 +112,34 @@ def build_record(
         handlers[topic_names.estimate(axis)] = (on_estimate, i)
         handlers[topic_names.joint_command(axis)] = (on_command, i)
 
+    foreign = rec.foreign
     for topic, msg in messages:
+        owner = owners.get(topic)
+        if owner is not None and msg.header.frame_id != owner:
+            foreign[topic] = foreign.get(topic, 0) + 1
+            continue
         k, rem = divmod(_ns(msg.header.stamp), dt_ns)
         if rem != 0 or not 0 <= k < n:
             continue
-        if topic == topic_names.REFERENCE:
-            for point in msg.points:
-                kp = k + _ns(point.time_from_start) // dt_ns
-                if kp >= n:
-                    break
-                for j, name in enumerate(msg.joint_names):
-                    if name in axes:
-                        i = AXES.index(name)
-                        ref_p[kp, i] = point.positions[j]
-                        ref_v[kp, i] = point.velocities[j]
+        try:
+            if topic == topic_names.REFERENCE:
+                for point in msg.points:
+                    kp = k + _ns(point.time_from_start) // dt_ns
+                    if kp >= n:
+                        break
+                    for j, name in enumerate(msg.joint_names):
+                        if name in axes:
+                            i = AXES.index(name)
+                            ref_p[kp, i] = point.positions[j]
+                            ref_v[kp, i] = point.velocities[j]
+                continue
+            handler = handlers.get(topic)
+            if handler is None:
+                continue
+            handler[0](k, msg, handler[1])
+        except (IndexError, ValueError):
+            foreign[topic] = foreign.get(topic, 0) + 1  # malformed: too short, unknown joint
             continue
-        handler = handlers.get(topic)
-        if handler is None:
-            continue
-        handler[0](k, msg, handler[1])
         if topic in seen:
             seen[topic].add(k)
     missing = {t: n - len(ks) for t, ks in seen.items()}
@@ -139,6 +153,7 @@ def record_from_raw(
     n: int,
     dt_ns: int,
     workers: int = 1,
+    owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
     """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
     reader both call. With workers > 1 the topics are split between forked processes, each
@@ -147,7 +162,7 @@ def record_from_raw(
     listened = list(raw)
     if workers <= 1:
         messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
-        return build_record(messages, axes, n, dt_ns, listened)
+        return build_record(messages, axes, n, dt_ns, listened, owners)
     import multiprocessing
 
     global _SHARED  # read by the forked workers, not pickled
@@ -157,7 +172,7 @@ def record_from_raw(
         i = loads.index(min(loads))
         groups[i].append(topic)
         loads[i] += len(raw[topic])
-    _SHARED = (raw, types, list(axes), n, dt_ns)
+    _SHARED = (raw, types, list(axes), n, dt_ns, owners)
     try:
         with multiprocessing.get_context('fork').Pool(workers) as pool:
             parts = pool.map(_record_part, [g for g in groups if g])
@@ -165,22 +180,26 @@ def record_from_raw(
         _SHARED = None
     rec = RunRecord.empty(n, dt_ns / 1e9)
     missing: dict[str, int] = {}
-    for signals, part_missing in parts:
+    for signals, part_missing, part_foreign in parts:
         for name, values in signals.items():
             have = ~np.isnan(values)
             rec.signals[name][have] = values[have]
         missing.update(part_missing)
+        rec.foreign.update(part_foreign)
     return rec, missing
 
 
 _SHARED: tuple | None = None
 
 
-def _record_part(topics_part: list[str]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
-    raw, types, axes, n, dt_ns = _SHARED
+def _record_part(
+    topics_part: list[str],
+) -> tuple[dict[str, np.ndarray], dict[str, int], dict[str, int]]:
+    assert _SHARED is not None
+    raw, types, axes, n, dt_ns, owners = _SHARED
     messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
-    rec, missing = build_record(messages, axes, n, dt_ns, topics_part)
-    return rec.signals, missing
+    rec, missing = build_record(messages, axes, n, dt_ns, topics_part, owners)
+    return rec.signals, missing, rec.foreign
 
 
 # -- the run in a bag ------------------------------------------------------------------------
@@ -272,7 +291,12 @@ def read_run(path: str | Path) -> BagRun:
     if pairs and any(w is not None and w != s for s, w in pairs):
         by_stamp = {s: w for s, w in pairs if w is not None}
         wall = np.array([by_stamp.get(k * dt_ns, -1) for k in range(n)], dtype=np.int64)
-    if bag.truncated:
+    if bag.cut_short:
+        notes.append(
+            f'the recording was cut short ({bag.cut_short}): the bag holds what was written '
+            'up to its last complete flush'
+        )
+    elif bag.truncated:
         notes.append(
             'the bag was not closed (recorder killed?): read up to its last complete chunk'
         )

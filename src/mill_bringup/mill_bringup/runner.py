@@ -60,9 +60,16 @@ class RunResult:
     summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
     text: str  # the job's summary as text
     problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
+    foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
     differences: dict[str, float] | None = None  # against the offline run
     bag: dict[str, Any] | None = None
     record: Any = field(default=None, repr=False)
+
+    @property
+    def intact(self) -> bool:
+        """No sample missing, nothing foreign in the record or in the drive's graph."""
+        owned = not any('ownership' in p for p in self.problems)
+        return not self.missing_samples and not self.foreign and owned
 
     @property
     def offline_max_difference(self) -> float | None:
@@ -86,8 +93,19 @@ def run(
     domain_id: str | None = None,
     compare_offline: bool = False,
     record_bag: Path | None = None,
+    respawn: bool = False,
+    external: frozenset[str] = frozenset(),
 ) -> RunResult:
-    """Run the job across processes; the record holds samples 0 .. job.samples − 1."""
+    """Run the job across processes; the record holds samples 0 .. job.samples − 1.
+
+    respawn: a node other than the clock node that dies is started again (at most 3 times)
+    and rejoins the job, instead of ending the run.
+    external: nodes of the scenario that run elsewhere (a hardware driver started on its
+    own): neither launched nor supervised here.
+    """
+    unknown = sorted(external - {n.name for n in job.scenario.nodes})
+    if unknown:
+        raise RunError(f'--external: scenario {job.scenario.name} has no node {unknown[0]!r}')
     scen = job.scenario
     job.prepare_graph(monitored=True)
     env = ros_environment(domain_id=domain_id)
@@ -111,12 +129,14 @@ def run(
     graph: Graph | None = None
     monitor: Monitor | None = None
     executor = None
-    bag = None
+    bag: dict[str, Any] | None = None
     try:
         monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
         executor = make_executor()
         executor.add_node(monitor)
-        graph = Graph(scen, run_dir, env)
+        clocks = [n for n in job.clock_nodes if n.name not in external]
+        others = [n.name for n in scen.nodes if n not in job.clock_nodes and n.name not in external]
+        graph = Graph(scen, run_dir, env, respawn=others if respawn else ())
 
         def spin(when: str) -> None:
             executor.spin_once(timeout_sec=0.05)
@@ -128,14 +148,13 @@ def run(
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
-        clocks = job.clock_nodes
-        graph.launch([n for n in scen.nodes if n not in clocks])
+        graph.launch([scen.node(n) for n in others])
         upstream = job.upstream_topics()
         deadline = time.monotonic() + startup_timeout
         while any(monitor.count_publishers(t) < 1 for t in upstream):
             if time.monotonic() > deadline:
-                missing = [t for t in upstream if monitor.count_publishers(t) < 1]
-                raise RunError(f'no publisher appeared on {", ".join(missing)}')
+                silent = [t for t in upstream if monitor.count_publishers(t) < 1]
+                raise RunError(f'no publisher appeared on {", ".join(silent)}')
             spin('before the job started')
         graph.launch(clocks)
         progress.note(
@@ -169,6 +188,9 @@ def run(
         settle = time.monotonic() + job.SETTLE_TIMEOUT
         while time.monotonic() < settle and not job.settled(monitor):
             spin('after the job ended')
+        if job.BRAKE_AT_END:
+            for node in job.clock_nodes:
+                deactivate(monitor, executor, node.name, progress)
         peak = graph.peak_rss()
         graph.stop()
         progress.close()
@@ -184,7 +206,7 @@ def run(
                 'size_bytes': monitor.recorder.writer.size_bytes,
             }
         record, missing = job.record(monitor.raw)
-        problems = monitor.problems()
+        problems = graph.notes + monitor.problems()
     except GraphError as exc:
         raise RunError(str(exc)) from None
     finally:
@@ -214,6 +236,7 @@ def run(
         summary=job.summary_json(record, skip),
         text=job.summary(record, skip),
         problems=problems,
+        foreign=job.foreign(record),
         bag=bag,
         record=record,
     )
@@ -223,6 +246,30 @@ def run(
     if compare_offline:
         result.differences = job.differences(record, simulate(job))
     return result
+
+
+def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> None:
+    """Ask a lifecycle node (the drive) to deactivate: it brakes every axis."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState
+
+    client = node.create_client(ChangeState, f'{target}/change_state')
+    try:
+        if not client.wait_for_service(timeout_sec=2.0):
+            progress.note(f'{target} has no lifecycle: it brakes when the commands stop')
+            return
+        request = ChangeState.Request()
+        request.transition.id = Transition.TRANSITION_DEACTIVATE
+        future = client.call_async(request)
+        deadline = time.monotonic() + 5.0
+        while not future.done() and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.05)
+        ok = future.done() and future.result().success
+        progress.note(
+            f'{target}: deactivated (axes braked)' if ok else f'{target}: deactivate failed'
+        )
+    finally:
+        node.destroy_client(client)
 
 
 def format_result(r: RunResult) -> str:
@@ -236,6 +283,8 @@ def format_result(r: RunResult) -> str:
     ]
     if r.missing_samples:
         lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
+    if r.foreign:
+        lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
     if r.problems:
         lines.append('diagnostics: ' + '; '.join(r.problems[:5]))
     if r.differences is not None:
@@ -282,13 +331,28 @@ def main(argv: list[str] | None = None) -> int:
         'exist (default: RUN_DIR/bag)',
     )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
+    parser.add_argument(
+        '--external',
+        action='append',
+        default=[],
+        metavar='NODE',
+        help='a node of the scenario that runs elsewhere, e.g. a hardware driver (repeatable)',
+    )
+    parser.add_argument(
+        '--respawn',
+        action='store_true',
+        help='start a node that dies again (not the plant); it rejoins the running job',
+    )
     args = parser.parse_args(argv)
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     records: dict[str, Any] = {}
+    intact = True
     try:
         scen, runs = load_scenario(args)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
+        if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
+            raise RunError('--compare-offline: a realtime run has no offline twin')
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
         bags: dict[str, Path | None] = {}
@@ -296,11 +360,10 @@ def main(argv: list[str] | None = None) -> int:
             bags[name] = None
             if args.record is not None:
                 bag = Path(args.record) if args.record else (run_dir / name) / 'bag'
-                bags[name] = bag / name if name and args.record else bag
-                if bags[name].exists():
-                    raise RunError(
-                        f'--record: {bags[name]} exists already; a bag is never overwritten'
-                    )
+                path = bag / name if name and args.record else bag
+                bags[name] = path
+                if path.exists():
+                    raise RunError(f'--record: {path} exists already; a bag is never overwritten')
         run_dir.mkdir(parents=True, exist_ok=True)
         print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
         for name, job in jobs.items():
@@ -317,8 +380,11 @@ def main(argv: list[str] | None = None) -> int:
                 domain_id=args.domain_id,
                 compare_offline=args.compare_offline,
                 record_bag=bags[name],
+                respawn=args.respawn,
+                external=frozenset(args.external),
             )
             records[name] = result.record
+            intact = intact and result.intact
             (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
             if name:
                 print(f'variant {name}:')
@@ -333,6 +399,13 @@ def main(argv: list[str] | None = None) -> int:
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
+    if not intact:
+        print(
+            'run_scenario: error: the record is incomplete or foreign messages were seen '
+            '(see above)',
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

@@ -14,9 +14,17 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from mill_common.parameters import ParameterError, ParamSpec, validate
+from mill_common.param_sources import flatten
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    is_ros_parameter,
+    unknown_parameters_message,
+    validate,
+)
 
 SCENARIO_KEY = 'mill_scenario'
+SHARED_KEY = '/**'  # what a parameter file gives every node
 
 
 class _Loader(yaml.SafeLoader):
@@ -94,19 +102,41 @@ class Scenario:
     def nodes_of(self, package: str) -> list[NodeLaunch]:
         return [n for n in self.nodes if n.package == package]
 
-    def raw_parameters(self, name: str) -> dict[str, Any]:
-        """Parameters a node of this name gets: /** entries, then its own, then overrides."""
+    def _entry(self, key: str) -> dict[str, Any]:
+        entry = self.raw.get(key)
+        params = entry.get('ros__parameters') if isinstance(entry, dict) else None
+        return flatten(params) if isinstance(params, dict) else {}
+
+    def given_parameters(self, name: str) -> dict[str, Any]:
+        """What is given to this node alone: its own entry, then the overrides."""
         merged: dict[str, Any] = {}
-        for key in ('/**', name, '/' + name):
-            entry = self.raw.get(key) or {}
-            merged.update(entry.get('ros__parameters') or {})
+        for key in (name, '/' + name):
+            merged.update(self._entry(key))
         merged.update(self.overrides.get(name, {}))
         return merged
 
+    def raw_parameters(self, name: str) -> dict[str, Any]:
+        """Parameters a node of this name gets: /** entries, then its own, then overrides."""
+        return {**self._entry(SHARED_KEY), **self.given_parameters(name)}
+
     def parameters(self, name: str) -> dict[str, Any]:
-        """Validated parameter values of one node, as its node would hold them."""
+        """Validated parameter values of one node, as its node would hold them.
+
+        A name given to this node alone (its own entry, an override) that it does not
+        declare is refused, as the node itself would refuse it; `/**` names are checked
+        against every node at load time.
+        """
         launch = self.node(name)
         specs = parameter_specs_of(launch)
+        known = {full for full, _spec in specs}
+        unknown = {
+            n: v
+            for n, v in self.given_parameters(name).items()
+            if n not in known and not is_ros_parameter(n)
+        }
+        if unknown:
+            message = unknown_parameters_message(unknown, known, name)
+            raise ScenarioError(f'{self.path}: entry {name}: {message}')
         raw = self.raw_parameters(name)
         values = {}
         for full, spec in specs:
@@ -127,6 +157,32 @@ class Scenario:
             copy.add_override(text)
         return copy
 
+    def _declares(self, node: str, param: str) -> bool:
+        specs = parameter_specs_of(self.node(node))
+        return is_ros_parameter(param) or any(full == param for full, _spec in specs)
+
+    def check_shared(self) -> None:
+        """Every top-level entry is for a node of the scenario, /** or mill_scenario, and
+        every /** name is declared by some node of the scenario (or by ROS)."""
+        names = {n.name for n in self.nodes}
+        for key in self.raw or {}:
+            if key not in (SHARED_KEY, SCENARIO_KEY) and str(key).strip('/') not in names:
+                raise ScenarioError(
+                    f'{self.path}: entry {key!r} is for no node of the scenario '
+                    f'(nodes: {", ".join(sorted(names))}; {SHARED_KEY} is for all of them)'
+                )
+        known = {full for n in self.nodes for full, _spec in parameter_specs_of(n)}
+        unknown = {
+            n: v
+            for n, v in self._entry(SHARED_KEY).items()
+            if n not in known and not is_ros_parameter(n)
+        }
+        if unknown:
+            them = 'them' if len(unknown) > 1 else 'it'
+            reason = f'no node of scenario {self.name} declares {them}'
+            message = unknown_parameters_message(unknown, known, reason=reason)
+            raise ScenarioError(f'{self.path}: {SHARED_KEY}: {message}')
+
     def add_override(self, text: str) -> None:
         """NODE.NAME=VALUE, NODE may be a glob (`*_controller.controller=pd`)."""
         target, sep, value_text = text.partition('=')
@@ -140,7 +196,17 @@ class Scenario:
         matched = [n.name for n in self.nodes if fnmatch.fnmatchcase(n.name, node_glob)]
         if not matched:
             raise ScenarioError(f'override {text!r} matches no node of scenario {self.name}')
-        for name in matched:
+        # A glob gives the value to the matched nodes that declare the name; a node named
+        # exactly must declare it. A name that no matched node declares is refused.
+        declaring = [n for n in matched if self._declares(n, param)]
+        if not declaring:
+            known = {full for n in matched for full, _s in parameter_specs_of(self.node(n))}
+            reason = f'{matched[0]} has no such parameter'
+            if len(matched) > 1:
+                reason = f'none of {", ".join(matched)} declares it'
+            message = unknown_parameters_message({param: value}, known, reason=reason)
+            raise ScenarioError(f'override {text!r}: {message}')
+        for name in declaring:
             self.overrides.setdefault(name, {})[param] = value
 
 
@@ -193,6 +259,7 @@ def load(name_or_path: str) -> Scenario:
         # "name NODE.NAME=VALUE ..." (a string list, so that rcl can read the file too)
         name, *overrides = str(line).split()
         scen.variants[name] = overrides
+    scen.check_shared()
     for name in scen.variants:
         scen.variant(name)  # every override must name a node of the scenario
     return scen

@@ -5,8 +5,10 @@ The clock node (the plant, the force process) calls `tick` from a steady-time ti
 - before the start it waits until no peer is missing, then another `settle` seconds so
   that discovery settles on the subscribers' side too (a writer that has matched a reader
   does not mean the reader has matched the writer), then says START;
-- while step 0 is unanswered it says OFFER_AGAIN every `retry` seconds: a peer may have
-  matched just after step 0 went out;
+- while a step stays unanswered it says OFFER_AGAIN every `retry` seconds: a peer may have
+  matched just after step 0 went out, or a restarted controller or observer may have missed
+  the step it is needed for — a repeated step lets it rejoin (the others answer a repeat
+  with what they sent before);
 - PEERS_MISSING when peers are still missing after `startup_timeout`, STALLED when no step
   has completed (`progressed`) for `lockstep_timeout`: the node ends with a message.
 """
@@ -48,8 +50,13 @@ class LockstepWatchdog:
     def progressed(self, now: float) -> None:
         """A step has completed."""
         self._last_progress = now
+        self._retry_at = now + self._retry
 
-    def tick(self, now: float, missing_peers: Callable[[], list[str]], at_step_0: bool) -> Action:
+    def waited(self, now: float) -> float:
+        """Wall time since the last step completed (or since the start) [s]."""
+        return now - self._last_progress if self.started else 0.0
+
+    def tick(self, now: float, missing_peers: Callable[[], list[str]]) -> Action:
         if not self.started:
             if missing_peers():
                 self._ready_since = None
@@ -66,7 +73,7 @@ class LockstepWatchdog:
             return Action.START
         if now - self._last_progress > self._lockstep_timeout():
             return Action.STALLED
-        if at_step_0 and now > self._retry_at:
+        if now - self._last_progress > self._retry and now > self._retry_at:
             self._retry_at = now + self._retry
             return Action.OFFER_AGAIN
         return Action.WAIT

@@ -3,13 +3,28 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
+import tempfile
 import time
-from collections.abc import Callable, Sequence
+import weakref
+from collections.abc import Callable, Iterator, Sequence
+from typing import TYPE_CHECKING
 
 from mill_common.env import ros_environment
-from mill_common.parameters import ParameterError, ParamSpec
+from mill_common.param_sources import (
+    parameter_rule_problem,
+    parameter_rules,
+    params_file_problem,
+    params_files,
+    rcl_error_message,
+)
+from mill_common.parameters import ParameterError, ParamSpec, value_type
+
+if TYPE_CHECKING:  # rclpy is imported only when a node really starts (not for --help)
+    from rclpy.executors import Executor
+    from rclpy.node import Node
 
 
 class NodeExit(Exception):
@@ -25,26 +40,37 @@ class NodeExit(Exception):
         self.code = code
 
 
-def request_exit(node: object, code: int, message: str) -> None:
+# The exit requested by each running node (the first one counts), read by run_node.
+_exit_requests: weakref.WeakKeyDictionary[Node, NodeExit] = weakref.WeakKeyDictionary()
+
+
+def request_exit(node: Node, code: int, message: str) -> None:
     """Ask run_node to end `node` after the current callback."""
-    if getattr(node, 'exit_request', None) is None:
-        node.exit_request = NodeExit(code, message)
+    _exit_requests.setdefault(node, NodeExit(code, message))
+
+
+def exit_request(node: Node) -> NodeExit | None:
+    """The exit `node` has asked for, if any."""
+    return _exit_requests.get(node)
 
 
 def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
     lines = []
     width = max((len(name) for name, _ in specs), default=10)
     for name, spec in specs:
-        default = spec.default
         ro = ' (read-only)' if spec.read_only else ''
-        lines.append(f'  {name:<{width}}  {spec.description}{ro} [default: {default!r}]')
+        constraint = getattr(spec.check, 'text', '')
+        kind = value_type(spec) + (f', {constraint}' if constraint else '')
+        lines.append(
+            f'  {name:<{width}}  {spec.description}{ro} [{kind}; default: {spec.default!r}]'
+        )
     return '\n'.join(lines)
 
 
 EXECUTORS = ('single', 'events')
 
 
-def make_executor():
+def make_executor() -> Executor:
     """The executor named by MILL_EXECUTOR: 'events' (default) or 'single'.
 
     'events' is rclpy's C++ EventsExecutor (rclpy.experimental in Jazzy): it halves
@@ -52,8 +78,6 @@ def make_executor():
     what bounds a 1 kHz lockstep loop across processes (README, Performance).
     Callbacks never raise through it: nodes end via `request_exit`.
     """
-    import os
-
     name = os.environ.get('MILL_EXECUTOR', 'events')
     if name == 'events':
         from rclpy.experimental import EventsExecutor
@@ -79,7 +103,7 @@ def install_stop_handlers() -> list[int]:
     return stop
 
 
-def release_node(executor: object | None, node: object | None) -> None:
+def release_node(executor: Executor | None, node: Node | None) -> None:
     """Destroy a node (and its executor) now, before its context is shut down.
 
     rclpy's shutdown leaves nodes alive until garbage collection, and their DDS readers
@@ -93,7 +117,7 @@ def release_node(executor: object | None, node: object | None) -> None:
         node.destroy_node()
 
 
-def deliver_before_exit(node: object, timeout: float = 1.0) -> None:
+def deliver_before_exit(node: Node, timeout: float = 1.0) -> None:
     """Wait (bounded) until every subscriber acknowledged what the node published.
 
     Destroying a writer drops the samples still in flight, so a recorder could miss the
@@ -112,13 +136,36 @@ def deliver_before_exit(node: object, timeout: float = 1.0) -> None:
             pub.wait_for_all_acked(Duration(nanoseconds=int(left * 1e9)))
 
 
+class _Kept:
+    text = ''
+
+
+@contextlib.contextmanager
+def stderr_kept_back() -> Iterator[_Kept]:
+    """Hold back what is written to file descriptor 2 inside the block (rcl's own C log
+    lines); the caller prints it, or not, once it knows whether the block succeeded."""
+    kept = _Kept()
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield kept
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            kept.text = tmp.read().decode(errors='replace')
+
+
 def _user_args(argv: Sequence[str]) -> list[str]:
     args = list(argv[1:])
     return args[: args.index('--ros-args')] if '--ros-args' in args else args
 
 
 def run_node(
-    make_node: Callable[[], object],
+    make_node: Callable[[], Node],
     executable: str,
     summary: str,
     specs: Sequence[tuple[str, ParamSpec]],
@@ -137,8 +184,6 @@ def run_node(
         print(f'{executable}: error: unexpected arguments {user}; use --ros-args', file=sys.stderr)
         return 2
 
-    import os
-
     # Keep DDS on loopback unless the user chose otherwise (see README, Network).
     for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE',):
         os.environ.setdefault(key, ros_environment({})[key])
@@ -147,18 +192,38 @@ def run_node(
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
 
+    from mill_common import ros_params
+
+    for rule in parameter_rules(argv):
+        problem = parameter_rule_problem(rule)
+        if problem:
+            print(f'{executable}: error: -p {rule}: {problem}', file=sys.stderr)
+            return 2
+    for path in params_files(argv):
+        problem = params_file_problem(path)
+        if problem:
+            print(f'{executable}: error: --params-file {path}: {problem}', file=sys.stderr)
+            return 2
     stop = install_stop_handlers()
-    rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        with stderr_kept_back() as kept:
+            rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as exc:  # rcl's RCLError: arguments or a parameter file it refuses
+        print(f'{executable}: error: {rcl_error_message(str(exc))}', file=sys.stderr)
+        return 2
+    sys.stderr.write(kept.text)
+    ros_params.command_line = argv
     node = None
     code = 0
     try:
         node = make_node()
         executor = make_executor()
         executor.add_node(node)
-        while rclpy.ok() and not stop and getattr(node, 'exit_request', None) is None:
+        while rclpy.ok() and not stop and exit_request(node) is None:
             executor.spin_once(timeout_sec=0.2)
-        if getattr(node, 'exit_request', None) is not None:
-            raise node.exit_request
+        request = exit_request(node)
+        if request is not None:
+            raise request
     except (ParameterError, ValueError) as exc:
         print(f'{executable}: error: {exc}', file=sys.stderr)
         code = 2
@@ -173,7 +238,11 @@ def run_node(
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         if node is not None:
             deliver_before_exit(node)
-            node.destroy_node()
+            try:
+                node.destroy_node()
+            except ValueError as exc:  # what the node could not finish, e.g. closing a bag
+                print(f'{executable}: error: {exc}', file=sys.stderr)
+                code = code or 1
         if rclpy.ok():
             rclpy.try_shutdown()
     return code

@@ -8,10 +8,11 @@ value is always refused with a reason and never half-applied.
 
 from __future__ import annotations
 
+import difflib
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar, Protocol
 
 Check = Callable[[Any], 'str | None']
 
@@ -20,11 +21,36 @@ def no_check(_value: Any) -> str | None:
     return None
 
 
+class Constraint:
+    """A check that also describes itself, for the parameter descriptor a node declares.
+
+    Calling it checks a value (None, or the reason the value is refused). `text` is the
+    constraint in one line (ROS `additional_constraints`); `bounds` the closed interval
+    [lo, hi] every accepted number lies in (ROS `floating_point_range` / `integer_range`),
+    None where the check is no interval; `low_open` says that lo itself is refused (as
+    `> 0` refuses 0: a ROS range is closed, so the descriptor shows [0, ...] and the text
+    says `> 0`). `value_type` names the type of a list whose default is empty.
+    """
+
+    text: str = ''
+    bounds: tuple[float, float] | None = None
+    low_open: bool = False
+    value_type: str | None = None
+
+    def __call__(self, value: Any) -> str | None:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f'<{type(self).__name__} {self.text}>'
+
+
 @dataclass(frozen=True)
 class ParamSpec:
     """One parameter: name (without any prefix), default, description, and a check.
 
-    check returns None when the value is acceptable, otherwise the reason it is not.
+    check returns None when the value is acceptable, otherwise the reason it is not. A
+    `Constraint` also gives the node's parameter descriptor its range and constraint text;
+    the type comes from the default (see `value_type`).
     """
 
     name: str
@@ -32,6 +58,13 @@ class ParamSpec:
     description: str
     check: Check = no_check
     read_only: bool = False
+
+
+class Plugin(Protocol):
+    """An algorithm class with parameters: its namespace (PREFIX) and its parameters."""
+
+    PREFIX: ClassVar[str]
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
 
 
 class ParameterError(ValueError):
@@ -44,75 +77,254 @@ class ParameterError(ValueError):
         self.reason = reason
 
 
+class UnknownParameterError(ParameterError):
+    """Parameters were given that nothing declares; str() names them in one line."""
+
+    def __init__(self, given: Mapping[str, Any], known: Iterable[str], owner: str) -> None:
+        ValueError.__init__(self, unknown_parameters_message(given, known, owner))
+        self.names = sorted(given)
+        self.name = self.names[0]
+        self.value = given[self.name]
+        self.reason = 'unknown'
+
+
+def unknown_parameters_message(
+    given: Mapping[str, Any], known: Iterable[str], owner: str = '', reason: str = ''
+) -> str:
+    """`unknown parameter pd.omega=20.0 (did you mean pd.omega_c?): OWNER has no such
+    parameter` (or `: REASON`); several names in one line."""
+    known = list(known)
+    parts = []
+    for name in sorted(given):
+        close = difflib.get_close_matches(name, known, n=1)
+        hint = f' (did you mean {close[0]}?)' if close else ''
+        parts.append(f'{name}={given[name]!r}{hint}')
+    s = 's' if len(parts) > 1 else ''
+    reason = reason or f'{owner} has no such parameter{s}'
+    return f'unknown parameter{s} {", ".join(parts)}: {reason}'
+
+
+# Parameters rclpy declares on every node by itself; `qos_overrides.` parameters too, when a
+# publisher or subscription is created with QoS overriding options.
+ROS_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
+ROS_PARAMETER_PREFIXES = ('qos_overrides.',)
+
+
+def is_ros_parameter(name: str) -> bool:
+    return name in ROS_PARAMETERS or name.startswith(ROS_PARAMETER_PREFIXES)
+
+
 def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def number(value: Any) -> str | None:
-    if not _is_number(value) or not math.isfinite(value):
-        return 'must be a finite number'
-    return None
+class Finite(Constraint):
+    text = 'a finite number'
 
-
-def positive(value: Any) -> str | None:
-    return number(value) or (None if value > 0 else 'must be > 0')
-
-
-def non_negative(value: Any) -> str | None:
-    return number(value) or (None if value >= 0 else 'must be >= 0')
-
-
-def positive_or_inf(value: Any) -> str | None:
-    if _is_number(value) and value == math.inf:
+    def __call__(self, value: Any) -> str | None:
+        if not _is_number(value) or not math.isfinite(value):
+            return 'must be a finite number'
         return None
-    return positive(value)
 
 
-def in_range(lo: float, hi: float) -> Check:
-    def check(value: Any) -> str | None:
-        return number(value) or (None if lo <= value <= hi else f'must be in [{lo}, {hi}]')
-
-    return check
+number = Finite()
 
 
-def positive_int(value: Any) -> str | None:
-    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-        return 'must be a whole number >= 1'
-    return None
+class Above(Constraint):
+    """A finite number > lo (or also +inf)."""
 
+    low_open = True
 
-def one_of(*choices: str) -> Check:
-    def check(value: Any) -> str | None:
-        if value in choices:
+    def __init__(self, lo: float, or_inf: bool = False) -> None:
+        self.lo = lo
+        self.or_inf = or_inf
+        self.bounds = (lo, math.inf)
+        self.text = f'> {lo:g}' + (', or .inf (no limit)' if or_inf else '')
+
+    def __call__(self, value: Any) -> str | None:
+        if self.or_inf and _is_number(value) and value == math.inf:
             return None
-        return f'must be one of: {", ".join(choices)}'
-
-    return check
+        return number(value) or (None if value > self.lo else f'must be > {self.lo:g}')
 
 
-def boolean(value: Any) -> str | None:
-    return None if isinstance(value, bool) else 'must be true or false'
+class AtLeast(Constraint):
+    """A finite number >= lo."""
+
+    def __init__(self, lo: float) -> None:
+        self.lo = lo
+        self.bounds = (lo, math.inf)
+        self.text = f'>= {lo:g}'
+
+    def __call__(self, value: Any) -> str | None:
+        return number(value) or (None if value >= self.lo else f'must be >= {self.lo:g}')
 
 
-def text(value: Any) -> str | None:
-    return None if isinstance(value, str) else 'must be a string'
+positive = Above(0)
+non_negative = AtLeast(0)
+positive_or_inf = Above(0, or_inf=True)
 
 
-def number_list(length: int | None = None, each: Check = number) -> Check:
+class Between(Constraint):
+    """A finite number in [lo, hi]."""
+
+    def __init__(self, lo: float, hi: float) -> None:
+        self.lo, self.hi = lo, hi
+        self.bounds = (lo, hi)
+        self.text = f'in [{lo}, {hi}]'
+
+    def __call__(self, value: Any) -> str | None:
+        if number(value):
+            return number(value)
+        return None if self.lo <= value <= self.hi else f'must be in [{self.lo}, {self.hi}]'
+
+
+def in_range(lo: float, hi: float) -> Between:
+    return Between(lo, hi)
+
+
+class WholeAtLeast(Constraint):
+    """A whole number (not a bool) >= lo."""
+
+    def __init__(self, lo: int) -> None:
+        self.lo = lo
+        self.bounds = (lo, math.inf)
+        self.text = f'a whole number >= {lo}'
+
+    def __call__(self, value: Any) -> str | None:
+        if not isinstance(value, int) or isinstance(value, bool) or value < self.lo:
+            return f'must be a whole number >= {self.lo}'
+        return None
+
+
+positive_int = WholeAtLeast(1)
+non_negative_int = WholeAtLeast(0)
+
+
+class OneOf(Constraint):
+    def __init__(self, choices: Sequence[str]) -> None:
+        self.choices = tuple(choices)
+        self.text = f'one of: {", ".join(self.choices)}'
+
+    def __call__(self, value: Any) -> str | None:
+        return None if value in self.choices else f'must be {self.text}'
+
+
+def one_of(*choices: str) -> OneOf:
+    return OneOf(choices)
+
+
+class Boolean(Constraint):
+    def __call__(self, value: Any) -> str | None:
+        return None if isinstance(value, bool) else 'must be true or false'
+
+
+class Text(Constraint):
+    def __call__(self, value: Any) -> str | None:
+        return None if isinstance(value, str) else 'must be a string'
+
+
+boolean = Boolean()
+text = Text()
+
+
+class NumberList(Constraint):
     """A list of numbers, optionally of a fixed length, each passing `each`."""
 
-    def check(value: Any) -> str | None:
+    value_type = 'double_array'
+
+    def __init__(self, length: int | None = None, each: Check = number) -> None:
+        self.length = length
+        self.each = each
+        count = f'{length} numbers' if length is not None else 'numbers'
+        each_text = getattr(each, 'text', '')
+        show = each_text and each is not number
+        self.text = f'a list of {count}' + (f', each {each_text}' if show else '')
+
+    def __call__(self, value: Any) -> str | None:
         if not isinstance(value, list | tuple):
             return 'must be a list of numbers'
-        if length is not None and len(value) != length:
-            return f'must have {length} entries, got {len(value)}'
+        if self.length is not None and len(value) != self.length:
+            return f'must have {self.length} entries, got {len(value)}'
         for i, item in enumerate(value):
-            reason = each(item)
+            reason = self.each(item)
             if reason:
                 return f'entry {i} {reason}'
         return None
 
-    return check
+
+def number_list(length: int | None = None, each: Check = number) -> NumberList:
+    return NumberList(length, each)
+
+
+class StringList(Constraint):
+    """A list of strings."""
+
+    value_type = 'string_array'
+
+    def __init__(self, what: str = 'strings') -> None:
+        self.what = what
+        self.text = f'a list of {what}'
+
+    def __call__(self, value: Any) -> str | None:
+        if isinstance(value, list | tuple) and all(isinstance(v, str) for v in value):
+            return None
+        return f'must be a list of {self.what}'
+
+
+# -- value types ---------------------------------------------------------------------------------
+# The ROS parameter types a spec can have, with how an error message says them.
+VALUE_TYPES = {
+    'bool': 'true or false',
+    'integer': 'a whole number',
+    'double': 'a floating-point number',
+    'string': 'a string',
+    'bool_array': 'a list of true/false',
+    'integer_array': 'a list of whole numbers',
+    'double_array': 'a list of numbers',
+    'string_array': 'a list of strings',
+}
+
+
+def type_of(value: Any) -> str:
+    """The parameter type of a value (`double` for 1.5, `string_array` for ['a']); for
+    anything a parameter cannot hold, a plain word (`null`, `mapping`, `mixed list`)."""
+    if isinstance(value, bool):
+        return 'bool'
+    if isinstance(value, int):
+        return 'integer'
+    if isinstance(value, float):
+        return 'double'
+    if isinstance(value, str):
+        return 'string'
+    if isinstance(value, list | tuple):
+        kinds = {type_of(v) for v in value}
+        if len(kinds) == 1 and (kind := kinds.pop()) in ('bool', 'integer', 'double', 'string'):
+            return kind + '_array'
+        return 'empty list' if not value else 'mixed list'
+    if value is None:
+        return 'null'
+    return 'mapping' if isinstance(value, dict) else type(value).__name__
+
+
+def value_type(spec: ParamSpec) -> str:
+    """The type of a spec's parameter: that of its default, or what its check names for a
+    list whose default is empty."""
+    kind = type_of(spec.default)
+    if kind in VALUE_TYPES:
+        return kind
+    named = getattr(spec.check, 'value_type', None)
+    if named in VALUE_TYPES:
+        return named
+    raise ValueError(f'parameter {spec.name}: cannot tell its type from default {spec.default!r}')
+
+
+def type_mismatch(spec: ParamSpec, value: Any) -> str | None:
+    """None if `value` (coerced) has the spec's type, else the reason in words."""
+    expected = value_type(spec)
+    got = type_of(value)
+    if got == expected or (got == 'empty list' and expected.endswith('_array')):
+        return None
+    return f'must be of type {expected} ({VALUE_TYPES[expected]}), got {got}'
 
 
 def coerce(spec: ParamSpec, value: Any) -> Any:
@@ -126,9 +338,16 @@ def coerce(spec: ParamSpec, value: Any) -> Any:
 
 
 def validate(spec: ParamSpec, value: Any, full_name: str | None = None) -> Any:
-    """Return the coerced value, or raise ParameterError with the reason."""
+    """Return the coerced value, or raise ParameterError with the reason.
+
+    A value of the wrong type is refused naming the expected type; for a list parameter
+    its own check speaks first, as it names the entry that is wrong (`entry 1 must be > 0`).
+    """
     value = coerce(spec, value)
-    reason = spec.check(value)
+    if value_type(spec).endswith('_array'):
+        reason = spec.check(value) or type_mismatch(spec, value)
+    else:
+        reason = type_mismatch(spec, value) or spec.check(value)
     if reason:
         raise ParameterError(full_name or spec.name, value, reason)
     return value
@@ -158,17 +377,72 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 0.0,
                 'b of the nominal model x" = b tau + xi [m/s^2 per N m]; '
                 '0 = 1/(a m_e) from Beltrán 2013 Table 1 for this axis',
-                lambda v: number(v) or (None if v >= 0 else 'must be >= 0 (0 = nominal)'),
+                non_negative,
             ),
         ),
         (
             'sample_period',
             ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
         ),
+        (
+            'timing',
+            ParamSpec(
+                'timing',
+                'lockstep',
+                'lockstep: inputs joined by their exact stamps on the sample grid (the plant is '
+                'the clock); realtime: act on the newest state, the reference interpolated at '
+                'its stamp, nothing stale queued',
+                one_of('lockstep', 'realtime'),
+                True,
+            ),
+        ),
+        (
+            'plant_node',
+            ParamSpec(
+                'plant_node',
+                'plant',
+                'the node whose states this node accepts (header.frame_id); states from any '
+                'other node are dropped and reported',
+                text,
+                True,
+            ),
+        ),
+        (
+            'input_warn_time',
+            ParamSpec(
+                'input_warn_time',
+                1.0,
+                'an input silent this long (after its first message) is reported as WARN [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+        (
+            'input_timeout',
+            ParamSpec(
+                'input_timeout',
+                10.0,
+                'an input silent this long is an ERROR; in lockstep the node then ends with a '
+                'message naming it [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+        (
+            'command_delay',
+            ParamSpec(
+                'command_delay',
+                0,
+                'samples N between the measurement a command is computed from and the period it '
+                'acts in (realtime: 1); the observer predicts with the commands that really act '
+                'and estimates the state N samples ahead, the controller aims at the reference '
+                'N samples ahead',
+                non_negative_int,
+                True,
+            ),
+        ),
     ]
 
 
-def algorithm_specs(classes: Iterable[type]) -> list[tuple[str, ParamSpec]]:
+def algorithm_specs(classes: Iterable[type[Plugin]]) -> list[tuple[str, ParamSpec]]:
     """Parameters of registered algorithm classes under their PREFIX, each full name once."""
     specs: dict[str, ParamSpec] = {}
     for cls in classes:
@@ -177,6 +451,6 @@ def algorithm_specs(classes: Iterable[type]) -> list[tuple[str, ParamSpec]]:
     return list(specs.items())
 
 
-def algorithm_values(cls: type, values: Mapping[str, Any]) -> dict[str, Any]:
+def algorithm_values(cls: type[Plugin], values: Mapping[str, Any]) -> dict[str, Any]:
     """An algorithm's own values (names without prefix) out of a node's values."""
     return {s.name: values[f'{cls.PREFIX}.{s.name}'] for s in cls.PARAMETERS}

@@ -38,9 +38,13 @@ def joint_state(
     position: Sequence[float] = (),
     velocity: Sequence[float] = (),
     effort: Sequence[float] = (),
+    sender: str = '',
 ) -> JointState:
+    """A stamped JointState; `sender` (header.frame_id) names the publishing node, which
+    the receivers check against the owner of the topic."""
     msg = JointState()
     msg.header.stamp = to_stamp(ns)
+    msg.header.frame_id = sender
     msg.name = list(names)
     msg.position = [float(v) for v in position]
     msg.velocity = [float(v) for v in velocity]
@@ -55,6 +59,23 @@ def first(values: Sequence[float], what: str) -> float:
     return float(values[0])
 
 
+def diagnostic_status(
+    level: bytes,
+    name: str,
+    message: str,
+    hardware_id: str,
+    values: Mapping[str, object] | None = None,
+) -> DiagnosticStatus:
+    """One DiagnosticStatus; values as text (floats exact: str = repr)."""
+    return DiagnosticStatus(
+        level=level,
+        name=name,
+        message=message,
+        hardware_id=hardware_id,
+        values=[KeyValue(key=k, value=str(v)) for k, v in (values or {}).items()],
+    )
+
+
 def diagnostic_array(
     ns: int,
     level: bytes,
@@ -63,14 +84,12 @@ def diagnostic_array(
     hardware_id: str,
     values: Mapping[str, object],
 ) -> DiagnosticArray:
-    """One DiagnosticStatus in an array stamped ns; values as text (floats exact: str = repr)."""
-    status = DiagnosticStatus(
-        level=level,
-        name=name,
-        message=message,
-        hardware_id=hardware_id,
-        values=[KeyValue(key=k, value=str(v)) for k, v in values.items()],
-    )
-    array = DiagnosticArray(status=[status])
+    """One DiagnosticStatus in an array stamped ns."""
+    return diagnostics_of(ns, [diagnostic_status(level, name, message, hardware_id, values)])
+
+
+def diagnostics_of(ns: int, statuses: Sequence[DiagnosticStatus]) -> DiagnosticArray:
+    """Several statuses in one array stamped ns."""
+    array = DiagnosticArray(status=list(statuses))
     array.header.stamp = to_stamp(ns)
     return array

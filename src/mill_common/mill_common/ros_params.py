@@ -1,27 +1,91 @@
-"""ROS parameters from ParamSpecs: declared with descriptions, checked, changed atomically.
+"""ROS parameters from ParamSpecs: declared with their types, ranges and descriptions,
+checked, changed atomically.
 
-A change at run time is validated and then applied by the node's `apply`
-callback; if either refuses, the change is rejected with its reason and the
+At start-up every value given to the node (`-p`, parameter files) is checked before it is
+declared: a name the node does not declare, a value of the wrong type and a value its check
+refuses each end the node with one line naming the parameter. Each parameter is declared
+statically typed, with the range and constraint text its check gives (`ros2 param
+describe`). A change at run time is coerced (an integer for a double), checked by ROS
+against the declared type and range, validated by the spec and then applied by the node's
+`apply` callback; if any of them refuses, the change is rejected with its reason and the
 node keeps its previous configuration.
 """
 
 from __future__ import annotations
 
 import array
+import math
+import sys
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import (
+    FloatingPointRange,
+    IntegerRange,
+    ParameterDescriptor,
+    ParameterType,
+    SetParametersResult,
+)
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from mill_common.parameters import ParameterError, ParamSpec, coerce, validate
+from mill_common.param_sources import parameter_sources
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    UnknownParameterError,
+    coerce,
+    is_ros_parameter,
+    validate,
+    value_type,
+)
+
+ROS_TYPES = {
+    'bool': ParameterType.PARAMETER_BOOL,
+    'integer': ParameterType.PARAMETER_INTEGER,
+    'double': ParameterType.PARAMETER_DOUBLE,
+    'string': ParameterType.PARAMETER_STRING,
+    'bool_array': ParameterType.PARAMETER_BOOL_ARRAY,
+    'integer_array': ParameterType.PARAMETER_INTEGER_ARRAY,
+    'double_array': ParameterType.PARAMETER_DOUBLE_ARRAY,
+    'string_array': ParameterType.PARAMETER_STRING_ARRAY,
+}
+INT64_MAX = 2**63 - 1
+
+# The command line the node's process was started with (run_node sets it; else sys.argv):
+# rcl does not tell which overrides came from `-p` and which from a shared file entry.
+command_line: list[str] | None = None
 
 
 def _plain(value: Any) -> Any:
     if isinstance(value, array.array):
         return list(value)
     return value
+
+
+def descriptor(spec: ParamSpec) -> ParameterDescriptor:
+    """The ROS descriptor of a spec: its type, description, read-only flag, and, where its
+    check is a `Constraint`, the constraint text and the closed range of accepted numbers."""
+    kind = value_type(spec)
+    check = spec.check
+    d = ParameterDescriptor(
+        description=spec.description,
+        read_only=spec.read_only,
+        type=ROS_TYPES[kind],
+        additional_constraints=getattr(check, 'text', '') or '',
+        dynamic_typing=False,
+    )
+    bounds = getattr(check, 'bounds', None)
+    if bounds is not None and kind == 'double':
+        d.floating_point_range = [
+            FloatingPointRange(from_value=float(bounds[0]), to_value=float(bounds[1]), step=0.0)
+        ]
+    elif bounds is not None and kind == 'integer':
+        lo, hi = bounds
+        low = math.floor(lo) + 1 if getattr(check, 'low_open', False) else math.ceil(lo)
+        high = INT64_MAX if hi == math.inf else math.floor(hi)
+        d.integer_range = [IntegerRange(from_value=low, to_value=high, step=1)]
+    return d
 
 
 class NodeParameters:
@@ -36,17 +100,18 @@ class NodeParameters:
         self._node = node
         self._specs = dict(specs)
         self._apply = apply
+        given = self._given_values()
         values: dict[str, Any] = {}
         for name, spec in specs:
-            descriptor = ParameterDescriptor(
-                description=spec.description, read_only=spec.read_only, dynamic_typing=True
-            )
-            node.declare_parameter(name, spec.default, descriptor)
-            given = node.get_parameter(name)
-            typed = self._typed(given)
-            if typed is not given and not spec.read_only:
-                node.set_parameters([typed])  # keep the declared type: 12 -> 12.0
-            values[name] = validate(spec, _plain(typed.value), name)
+            value = validate(spec, given.get(name, spec.default), name)
+            # The value is checked already: the override is not read a second time. rclpy
+            # takes a static type from the value, and cannot tell it for an empty list:
+            # such a parameter is declared with its type and no value (`ros2 param get`
+            # says "not set"); the node holds [].
+            kind = ROS_TYPES[value_type(spec)]
+            initial = value if value != [] else Parameter.Type(kind)
+            node.declare_parameter(name, initial, descriptor(spec), ignore_override=True)
+            values[name] = value
         try:
             apply(values)
         except ParameterError:
@@ -57,12 +122,41 @@ class NodeParameters:
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
 
+    def _given_values(self) -> dict[str, Any]:
+        """The values given to the node (-p, parameter files), refusing unknown names.
+
+        A name given directly (-p, the node's own file entry) must be declared by a spec or
+        by ROS; a name from a file's shared entry (`/**`) the node does not declare is
+        ignored: it is there for other nodes.
+        """
+        node = self._node
+        # rclpy keeps the overrides rcl gathered for this node here (name -> Parameter).
+        overrides = {n: _plain(p.value) for n, p in node._parameter_overrides.items()}
+        declared = set(self._specs) | set(node.list_parameters([], 0).names)
+        unknown = {n: v for n, v in overrides.items() if n not in declared}
+        unknown = {n: v for n, v in unknown.items() if not is_ros_parameter(n)}
+        if unknown:
+            argv = command_line if command_line is not None else sys.argv
+            sources = parameter_sources(argv, node.get_name(), node.get_fully_qualified_name())
+            shared_only = sources.shared - sources.direct
+            unknown = {n: v for n, v in unknown.items() if n not in shared_only}
+        if unknown:
+            raise UnknownParameterError(unknown, declared, node.get_fully_qualified_name())
+        given = {n: v for n, v in overrides.items() if n in self._specs}
+        for name, value in given.items():
+            if value is None and value_type(self._specs[name]).endswith('_array'):
+                given[name] = []  # rcl reads `[]` in a parameter file as no value
+        return given
+
     def _typed(self, param: Parameter) -> Parameter:
-        """An integer given for a float parameter, as that float (`param set ... 20`)."""
+        """An integer given for a float parameter, as that float (`param set ... 20`); an
+        empty list as one of the parameter's type."""
         spec = self._specs.get(param.name)
         if spec is None:
             return param
         value = _plain(param.value)
+        if value == [] and param.type_ != Parameter.Type(ROS_TYPES[value_type(spec)]):
+            return Parameter(param.name, Parameter.Type(ROS_TYPES[value_type(spec)]), [])
         coerced = coerce(spec, value)
         if repr(coerced) == repr(value):  # also tells 12 from 12.0 inside lists
             return param

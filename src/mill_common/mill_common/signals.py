@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 AXES: tuple[str, ...] = ('x', 'y', 'z')
 
@@ -36,8 +36,6 @@ class Estimate:
     position: float
     velocity: float
     disturbance: float
-    # An identified plant model, from observers that estimate one (rls); None otherwise.
-    model: FopdtEstimate | None = None
 
 
 @dataclass(frozen=True)
@@ -77,3 +75,25 @@ class FopdtEstimate:
             )
         except KeyError:
             return None
+
+
+@dataclass(frozen=True, slots=True)
+class ControlInputs:
+    """Everything an axis controller gets at one sample: the inputs joined by stamp.
+
+    t [s] is the sample's time; position is the measured position y [m]; reference and
+    estimate are the trajectory's and the observer's values for that time; model is the
+    observer's identified plant model (rls observer), None when no law asked for it.
+    A new per-step input is a field here (the controller node joins the fields other
+    than t by stamp, one topic each) and used by the laws that need it.
+    """
+
+    t: float
+    position: float
+    reference: AxisReference
+    estimate: Estimate
+    model: FopdtEstimate | None = None
+
+
+# The fields of ControlInputs the controller node joins by stamp (all but t).
+JOINED_INPUTS: tuple[str, ...] = tuple(f.name for f in fields(ControlInputs) if f.name != 't')

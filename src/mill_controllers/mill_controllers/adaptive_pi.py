@@ -30,7 +30,7 @@ phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"):
 Until the estimator has had `warmup` updates and gives a usable model (0 < a < 1, i.e.
 0 < τ < ∞, and K > 0), the initial gains are used.
 
-model_source 'observer': the law runs no estimator of its own and designs with est.model,
+model_source 'observer': the law runs no estimator of its own and designs with inputs.model,
 the FOPDT estimate of the observer node (observer `rls`, published on
 /mill/<axis>/observer_state). The rls observer's estimate at sample k has used the same
 samples as the internal one, so both sources give the same commands (a test checks this).
@@ -47,7 +47,7 @@ the default reading: a 300 Hz velocity-loop bandwidth, typical of such servo dri
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar
 
 from mill_common.parameters import (
@@ -61,8 +61,10 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
-from mill_common.signals import AxisReference, Estimate, FopdtEstimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_models.rls import RLS_PARAMETERS, RlsEstimator
+
+from mill_controllers.base import AxisController
 
 # Hatwesh 2013 Table 1, x axis.
 HATWESH_PITCH = 0.012  # ball-screw pitch [m]
@@ -129,7 +131,7 @@ def _common_specs(kp: float, ki: float, kp_text: str, ki_text: str) -> tuple[Par
     )
 
 
-class _VelocityPi:
+class _VelocityPi(AxisController):
     """Incremental PI on the table velocity; subclasses supply the gains."""
 
     PREFIX: ClassVar[str] = ''
@@ -150,10 +152,14 @@ class _VelocityPi:
         self._v = 0.0
 
     @classmethod
-    def from_parameters(cls, input_gain: float, sample_period: float, values: Mapping[str, Any]):
+    def from_parameters(
+        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> AxisController:
         """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
+        # Each subclass's constructor takes (input_gain, sample_period, **its parameters).
+        build: Callable[..., AxisController] = cls
+        return build(input_gain, sample_period, **v)
 
     def _measure(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
         inputs = (t, y, ref.position, ref.velocity, est.velocity)
@@ -250,9 +256,10 @@ class MachinePi(_VelocityPi):
         """(K_p [V/(m/s)], K_i [V/m]) after the unit conversion."""
         return self._kp * self._factor, self._ki * self._factor
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+    def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V] from y [m], ref [m, m/s] (and est.velocity if selected)."""
-        v = self._measure(t, y, ref, est)
+        y, ref = inputs.position, inputs.reference
+        v = self._measure(inputs.t, y, ref, inputs.estimate)
         e = self._error(y, ref, v) * self._factor  # error in velocity_unit
         return self._pi_step(e, self._kp, self._ki)
 
@@ -350,16 +357,17 @@ class AdaptivePi(_VelocityPi):
             covariance_limit=v['covariance_limit'],
         )
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+    def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V]; identifies the plant from (v(k), u(k)) and re-tunes every sample."""
-        v = self._measure(t, y, ref, est)
+        y, ref = inputs.position, inputs.reference
+        v = self._measure(inputs.t, y, ref, inputs.estimate)
         if self._external:
-            if est.model is None:
+            if inputs.model is None:
                 raise ValueError(
-                    'adaptive_pi.model_source is observer but the estimate carries no model '
-                    '(the observer must be rls)'
+                    'adaptive_pi.model_source is observer but no model estimate came with '
+                    'the sample (the observer must be rls)'
                 )
-            self._model = est.model
+            self._model = inputs.model
         else:
             self._model = self.rls.fopdt()
         self._retune(self._model)
@@ -386,7 +394,7 @@ class AdaptivePi(_VelocityPi):
 
     @property
     def needs_model(self) -> bool:
-        """True if compute() needs est.model (model_source 'observer')."""
+        """True if compute() needs inputs.model (model_source 'observer')."""
         return self._external
 
     # --- published state -------------------------------------------------------------

@@ -1,30 +1,68 @@
-"""Interface of a per-axis controller (ROS-free)."""
+"""The contract of a per-axis controller (ROS-free).
+
+Every control law subclasses AxisController. What the node and the offline simulator may
+rely on is declared here, with defaults a law overrides only where it differs:
+
+- PREFIX, PARAMETERS: the parameter namespace and the parameters (mill_common.parameters);
+- OUTPUT_UNIT: the unit of the command, the plant's input: motor torque 'N·m' or
+  amplifier voltage 'V';
+- needs_model / required_inputs(): which fields of ControlInputs the law reads beyond
+  the measured position, the reference and the observer's estimate (the node waits for
+  exactly these by stamp);
+- status(): internal estimates worth publishing each sample (none by default);
+- reset(): forget the past (nothing to forget by default).
+"""
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import ControlInputs
+
+# The inputs every law gets (fields of ControlInputs joined by stamp).
+BASE_INPUTS: tuple[str, ...] = ('position', 'estimate', 'reference')
 
 
-@runtime_checkable
-class AxisController(Protocol):
-    """One axis: measured position, reference and observer estimate in, torque out."""
-
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
-        """Torque command [N·m] at time t [s] from the measured position y [m]."""
-        ...
-
-
-class ControllerClass(Protocol):
-    """What a registry entry offers: its parameter namespace, specs and a factory."""
+class AxisController(ABC):
+    """One axis: measured position, reference and observer estimate in, command out."""
 
     PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+    OUTPUT_UNIT: ClassVar[str] = 'N·m'  # motor torque; 'V' for an amplifier voltage
 
     @classmethod
+    @abstractmethod
     def from_parameters(
         cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> AxisController: ...
+    ) -> AxisController:
+        """Build from values named without the prefix (missing names take defaults).
+
+        input_gain: b of the nominal model x'' = b u + ξ [m/s² per N·m]; sample_period T
+        [s]. Raises ParameterError naming a bad parameter.
+        """
+
+    @abstractmethod
+    def compute(self, inputs: ControlInputs) -> float:
+        """The command in OUTPUT_UNIT for the sample at inputs.t [s].
+
+        Raises ValueError if an input the law reads is not finite or missing.
+        """
+
+    @property
+    def needs_model(self) -> bool:
+        """True if compute() reads inputs.model, the observer's identified plant model."""
+        return False
+
+    def required_inputs(self) -> tuple[str, ...]:
+        """The ControlInputs fields compute() needs each sample (the node joins them)."""
+        return (*BASE_INPUTS, 'model') if self.needs_model else BASE_INPUTS
+
+    def status(self) -> dict[str, float]:
+        """Internal quantities of the last sample, name → value (published if any)."""
+        return {}
+
+    def reset(self) -> None:  # noqa: B027 (a default that does nothing is intended)
+        """Start afresh, as just built (a law without memory has nothing to do)."""

@@ -37,7 +37,9 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import ControlInputs
+
+from mill_controllers.base import AxisController
 
 MM_PER_M = 1000.0
 
@@ -46,7 +48,7 @@ MM_PER_M = 1000.0
 DEFAULT_VOLTAGE_LIMIT = 10.0
 
 
-class CascadePi:
+class CascadePi(AxisController):
     """Maharof 2018 cascade P/PI with input-voltage disturbance compensation."""
 
     PREFIX: ClassVar[str] = 'cascade_pi'
@@ -122,11 +124,12 @@ class CascadePi:
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
         return cls(input_gain, sample_period, **v)
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+    def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V] from y [m], ref [m, m/s], est.velocity [m/s], est.disturbance [V]."""
+        t, y, ref, est = inputs.t, inputs.position, inputs.reference, inputs.estimate
         d_hat = est.disturbance if self._compensate else 0.0
-        inputs = (t, y, ref.position, ref.velocity, est.velocity, d_hat)
-        if not all(math.isfinite(x) for x in inputs):
+        read = (t, y, ref.position, ref.velocity, est.velocity, d_hat)
+        if not all(math.isfinite(x) for x in read):
             raise ValueError(
                 f'CascadePi: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
                 f'velocity estimate={est.velocity!r}, disturbance estimate={d_hat!r})'

@@ -6,11 +6,11 @@ from typing import Any
 
 from mill_common.parameters import (
     ParamSpec,
-    algorithm_specs,
     algorithm_values,
     axis_node_specs,
     non_negative,
-    one_of,
+    positive_or_inf,
+    text,
 )
 from mill_models.axis_data import nominal_input_gain
 
@@ -27,7 +27,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'controller',
                 'adrc',
                 'control law (see README: algorithms)',
-                one_of(*CONTROLLERS),
+                CONTROLLERS.check(),
             ),
         )
     )
@@ -43,7 +43,44 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
-    return specs + algorithm_specs(CONTROLLERS.values())
+    specs.append(
+        (
+            'observer_node',
+            ParamSpec(
+                'observer_node',
+                '',
+                'the node whose estimates this controller accepts; "" = <axis>_observer',
+                text,
+                True,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'trajectory_node',
+            ParamSpec(
+                'trajectory_node',
+                'trajectory',
+                'the node whose reference this controller accepts',
+                text,
+                True,
+            ),
+        )
+    )
+    specs.append(
+        (
+            'following_error_limit',
+            ParamSpec(
+                'following_error_limit',
+                0.005,
+                'following-error trip: |measured position - reference| above this latches a '
+                'brake request (effort NaN: the drive brakes the axis) until reset by the '
+                'reset_trip service or by setting this parameter [m]; .inf disables it',
+                positive_or_inf,
+            ),
+        )
+    )
+    return specs + CONTROLLERS.parameter_specs()
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -51,6 +88,6 @@ def input_gain(values: dict[str, Any]) -> float:
 
 
 def build_controller(values: dict[str, Any]) -> AxisController:
-    cls = CONTROLLERS[values['controller']]
+    cls = CONTROLLERS.get(values['controller'])
     own = algorithm_values(cls, values)
     return cls.from_parameters(input_gain(values), values['sample_period'], own)

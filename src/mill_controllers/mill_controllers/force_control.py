@@ -26,16 +26,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
-from mill_common.parameters import (
-    ParamSpec,
-    algorithm_specs,
-    algorithm_values,
-    number,
-    one_of,
-    positive,
-)
+from mill_common.parameters import ParamSpec, algorithm_values, number, one_of, positive
+from mill_common.registry import Registry
 from mill_common.timebase import sample_index, sample_stamp_ns
 from mill_models.force_process import ForceProcessModel
 from mill_models.holds import SampleHold, hold_input
@@ -57,12 +51,33 @@ class ForceLaw(Protocol):
     def record_applied(self, feed: float) -> None: ...
 
 
+class RegisteredForceLaw(ForceLaw, Protocol):
+    """A force law the force_controller parameter chooses: parameters and a factory."""
+
+    PREFIX: ClassVar[str]
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
+
+    @classmethod
+    def from_parameters(
+        cls,
+        model: ForceProcessModel,
+        values: Mapping[str, Any],
+        feed_min: float = ...,
+        feed_max: float = ...,
+    ) -> ForceLaw:
+        """The law from its values (names without prefix) and the feed range [mm/s]."""
+        ...
+
+
 # The force_controller parameter value -> class (one file per algorithm).
-FORCE_CONTROLLERS: dict[str, type] = {
-    'fixed': ModelReferenceForceController,  # Rubio 2013 fig. 1, eq. (4)-(11), one β
-    'scheme1': MultiModelScheme1,  # Rubio 2013 §3.2.1, eq. (13)
-    'scheme2': MultiModelScheme2,  # Rubio 2013 §3.2.2
-}
+FORCE_CONTROLLERS: Registry[RegisteredForceLaw] = Registry(
+    'force_controller',
+    {
+        'fixed': ModelReferenceForceController,  # Rubio 2013 fig. 1, eq. (4)-(11), one β
+        'scheme1': MultiModelScheme1,  # Rubio 2013 §3.2.1, eq. (13)
+        'scheme2': MultiModelScheme2,  # Rubio 2013 §3.2.2
+    },
+)
 FORCE_COMPONENTS = ('resultant', 'x', 'y', 'z')
 DEPTH_SOURCES = ('profile', 'position')
 
@@ -81,7 +96,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'force_controller',
                 'fixed',
                 'force law: fixed (one β), scheme1 or scheme2 (Rubio 2013 multi-model)',
-                one_of(*FORCE_CONTROLLERS),
+                FORCE_CONTROLLERS.check(),
                 True,
             ),
         ),
@@ -159,8 +174,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         (f'{ForceProcessModel.PREFIX}.{s.name}', replace(s, read_only=True))
         for s in ForceProcessModel.PARAMETERS
     ]
-    laws = [(n, replace(s, read_only=True)) for n, s in algorithm_specs(FORCE_CONTROLLERS.values())]
-    return specs + model + laws
+    return specs + model + FORCE_CONTROLLERS.parameter_specs(read_only=True)
 
 
 def build_model(values: Mapping[str, Any]) -> ForceProcessModel:
@@ -171,11 +185,7 @@ def build_law(
     kind: str, model: ForceProcessModel, values: Mapping[str, Any], feed_min: float, feed_max: float
 ) -> ForceLaw:
     """The law `kind` with its own values (names without prefix) and the feed range [mm/s]."""
-    if kind not in FORCE_CONTROLLERS:
-        raise ValueError(f'force_controller must be one of {", ".join(FORCE_CONTROLLERS)}')
-    if kind == 'fixed':
-        return ModelReferenceForceController.from_parameters(model, values)
-    return FORCE_CONTROLLERS[kind].from_parameters(model, values, feed_min, feed_max)
+    return FORCE_CONTROLLERS.get(kind).from_parameters(model, values, feed_min, feed_max)
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,8 @@ STATE_NAMES = (
 class ForceControllerNode(Node):
     def __init__(self) -> None:
         super().__init__('force_controller')
-        self._loop: ForceFeedLoop | None = None
+        self._loop: ForceFeedLoop  # built once by _configure
+        self._built = False
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         self._sampler = ForceSampler(self._loop.T, v['force_component'], v['force_measure'])
@@ -86,8 +87,9 @@ class ForceControllerNode(Node):
     def _configure(self, values: dict[str, Any]) -> None:
         if values['override.min'] > values['override.max']:
             raise ValueError('override.min must not exceed override.max')
-        if self._loop is None:
+        if not self._built:
             self._loop = ForceFeedLoop.from_parameters(values)
+            self._built = True
         # reference_force, the only changeable value, is read at every sample
 
     def _on_force(self, msg: WrenchStamped) -> None:

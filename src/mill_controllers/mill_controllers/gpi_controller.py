@@ -62,8 +62,9 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, ControlInputs
 
+from mill_controllers.base import AxisController
 from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
 
 DAMPING_RATE_SPEC = ParamSpec(
@@ -137,7 +138,7 @@ def discrete_gpi_gains(
     return k0, k1, k2
 
 
-class GpiController:
+class GpiController(AxisController):
     """Chávez-Conde eq. (12) for one axis: position feedback, velocity reconstructed."""
 
     PREFIX: ClassVar[str] = 'gpi'
@@ -274,9 +275,10 @@ class GpiController:
         self._u_prev = tau
         return tau
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
-        """Torque [N·m] at time t from the measured position y; est is not used."""
-        e, de_hat, int_e = self._advance(t, y, ref)
+    def compute(self, inputs: ControlInputs) -> float:
+        """Torque [N·m] at time t from the measured position y; the estimate is not used."""
+        ref = inputs.reference
+        e, de_hat, int_e = self._advance(inputs.t, inputs.position, ref)
         k0, k1, k2 = self._k
         # Chávez-Conde eq. (9), (12): u = d1 v + d2 F̂,
         # v = F̈* − α2 (F̂ − Ḟ*) − α1 e − α0 ∫e, i.e. b u = v + κ F̂ (discrete gains k for α)

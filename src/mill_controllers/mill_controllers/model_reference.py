@@ -33,7 +33,7 @@ equation (u_k uses r_j, y_j for j ≤ k and u_j for j < k).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -47,7 +47,7 @@ from mill_common.parameters import (
 )
 from mill_models.force_process import AffineLti, ForceProcessModel
 from mill_models.holds import DiscreteTF, froh_discretize
-from mill_models.polynomials import degree, pad, solve_diophantine, split_numerator, trim
+from mill_models.polynomials import Poly, degree, pad, solve_diophantine, split_numerator, trim
 from mill_models.reference_model import (
     natural_frequency as rise_time_frequency,  # the __init__ argument shadows the name
 )
@@ -91,7 +91,7 @@ class RstDesign:
 def design_rst(
     plant: DiscreteTF,
     reference: DiscreteTF,
-    observer: Sequence[float],
+    observer: Poly,
     zero_cancel_radius: float = 1.0,
 ) -> RstDesign:
     """Model-following R, S, T (module docstring) for a strictly proper plant."""
@@ -339,8 +339,13 @@ class ModelReferenceForceController:
 
     @classmethod
     def from_parameters(
-        cls, model: ForceProcessModel, values: Mapping[str, Any]
+        cls,
+        model: ForceProcessModel,
+        values: Mapping[str, Any],
+        feed_min: float = -math.inf,
+        feed_max: float = math.inf,
     ) -> ModelReferenceForceController:
+        del feed_min, feed_max  # one design, no shadow loops to simulate in the feed range
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
         return cls(model, **v)
 

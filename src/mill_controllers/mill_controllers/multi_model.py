@@ -154,9 +154,9 @@ class _Shadow:
         self.force = 0.0  # F_p^(l) at the current sample
         self.feed = 0.0  # f_c^(l) at the current sample (clamped, applied in the shadow)
         n = horizon + 1
-        self.err = deque(maxlen=n)  # e_j^(l), continuous
-        self.forces = deque(maxlen=n)  # F_p,j^(l)
-        self.ref_out = deque(maxlen=n)  # F_pm,j^(l), discrete reference model of design l
+        self.err: deque[float] = deque(maxlen=n)  # e_j^(l), continuous
+        self.forces: deque[float] = deque(maxlen=n)  # F_p,j^(l)
+        self.ref_out: deque[float] = deque(maxlen=n)  # F_pm,j^(l), discrete reference model
         ref = self.design.reference
         self._ref_num = ref.num  # same length as den: keeps the one-sample delay
         self._ref_den = ref.den
@@ -216,8 +216,8 @@ class _RealLoop:
         self.ctrl = RstController(designer.design(beta), model.process_gain(model.depth_at(0.0)))
         self.held = HeldPlant(ForceProcessPlant(model), lo, hi, spacing)
         self.applied = 0.0
-        self.err = deque(maxlen=horizon + 1)
-        self.forces = deque(maxlen=horizon + 1)  # measured F_p,j
+        self.err: deque[float] = deque(maxlen=horizon + 1)
+        self.forces: deque[float] = deque(maxlen=horizon + 1)  # measured F_p,j
         self.beta = float(beta)  # hold used over the current interval
 
 

@@ -23,7 +23,9 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import ControlInputs
+
+from mill_controllers.base import AxisController
 
 # 5 N·m: about the peak torque of the ~0.75 kW AC servo that drives a small mill's ball
 # screw. The paper's cut needs well under 1 N·m with the realistic cutting-energy reading,
@@ -32,7 +34,7 @@ from mill_common.signals import AxisReference, Estimate
 DEFAULT_TORQUE_LIMIT = 5.0
 
 
-class _PdLaw:
+class _PdLaw(AxisController):
     """Beltrán 2013 eq. (9) for one axis; subclasses choose whether ξ̂ is compensated."""
 
     PREFIX: ClassVar[str] = 'pd'
@@ -112,15 +114,16 @@ class _PdLaw:
     def input_gain(self) -> float:
         return self._b
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
+    def compute(self, inputs: ControlInputs) -> float:
         """Torque [N·m], clipped to ±torque_limit.
 
         Uses the measured position y, the reference and est.velocity; est.disturbance
         only when compensating. Raises ValueError if any value it reads is not finite.
         """
+        t, y, ref, est = inputs.t, inputs.position, inputs.reference, inputs.estimate
         xi_hat = est.disturbance if self.COMPENSATE else 0.0
-        inputs = (t, y, ref.position, ref.velocity, ref.acceleration, est.velocity, xi_hat)
-        if not all(math.isfinite(v) for v in inputs):
+        read = (t, y, ref.position, ref.velocity, ref.acceleration, est.velocity, xi_hat)
+        if not all(math.isfinite(v) for v in read):
             raise ValueError(
                 f'{type(self).__name__}: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
                 f'velocity estimate={est.velocity!r}, disturbance estimate={xi_hat!r})'

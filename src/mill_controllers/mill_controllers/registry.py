@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from mill_common.parameters import ParameterError
+from mill_common.registry import Registry
 
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
 from mill_controllers.base import AxisController
@@ -14,29 +14,27 @@ from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.sliding_gpi import SlidingGpiController
 
-CONTROLLERS: dict[str, type] = {
-    'adrc': AdrcController,  # Beltrán 2013 eq. (9) with the observer's xi_hat
-    'pd': PdController,  # the same law, xi_hat = 0
-    'gpi': GpiController,  # Chávez-Conde eq. (9)-(12)
-    'sliding_gpi': SlidingGpiController,  # Chávez-Conde eq. (13)-(17)
-    'cascade_pi': CascadePi,  # Maharof 2018 §4.1, output in V
-    'adaptive_pi': AdaptivePi,  # Hatwesh 2013 self-tuning PI, output in V
-    'machine_pi': MachinePi,  # Hatwesh 2013 fixed machine PI, output in V
-}
+CONTROLLERS: Registry[AxisController] = Registry(
+    'controller',
+    {
+        'adrc': AdrcController,  # Beltrán 2013 eq. (9) with the observer's xi_hat
+        'pd': PdController,  # the same law, xi_hat = 0
+        'gpi': GpiController,  # Chávez-Conde eq. (9)-(12)
+        'sliding_gpi': SlidingGpiController,  # Chávez-Conde eq. (13)-(17)
+        'cascade_pi': CascadePi,  # Maharof 2018 §4.1, output in V
+        'adaptive_pi': AdaptivePi,  # Hatwesh 2013 self-tuning PI, output in V
+        'machine_pi': MachinePi,  # Hatwesh 2013 fixed machine PI, output in V
+    },
+)
 
 
-def controller_class(name: str) -> type:
+def controller_class(name: str) -> type[AxisController]:
     """The registered class; ParameterError('controller', …) for an unknown name."""
-    try:
-        return CONTROLLERS[name]
-    except (KeyError, TypeError):
-        raise ParameterError(
-            'controller', name, f'must be one of: {", ".join(CONTROLLERS)}'
-        ) from None
+    return CONTROLLERS.get(name)
 
 
 def make_controller(
     name: str, input_gain: float, sample_period: float, values: Mapping[str, Any]
 ) -> AxisController:
     """Build controller `name` from its parameters (names without the prefix)."""
-    return controller_class(name).from_parameters(input_gain, sample_period, values)
+    return CONTROLLERS.get(name).from_parameters(input_gain, sample_period, values)

@@ -34,7 +34,7 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec, non_negative, positive, validate_all
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import ControlInputs
 
 from mill_controllers.gpi_controller import (
     DAMPING_RATE_SPEC,
@@ -138,9 +138,10 @@ class SlidingGpiController(GpiController):
             return min(1.0, max(-1.0, sigma / self._phi))
         return 0.0 if sigma == 0.0 else math.copysign(1.0, sigma)
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
-        """Torque [N·m] at time t from the measured position y; est is not used."""
-        e, de_hat, int_e = self._advance(t, y, ref)
+    def compute(self, inputs: ControlInputs) -> float:
+        """Torque [N·m] at time t from the measured position y; the estimate is not used."""
+        ref = inputs.reference
+        e, de_hat, int_e = self._advance(inputs.t, inputs.position, ref)
         # Chávez-Conde eq. (13): σ̂ = (F̂ − Ḟ*) + α1 (F − F*) + α0 ∫(F − F*)
         self._sigma = de_hat + self._a1 * e + self._a0 * int_e
         k0, k1, k2 = self._k

@@ -21,24 +21,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import ControlInputs
 
 from mill_controllers.base import AxisController
 
-DEFAULT_UNIT = 'N·m'
 
-
-def output_unit(cls: type) -> str:
-    """The unit of a controller class's command: N·m unless the class says otherwise."""
-    return getattr(cls, 'OUTPUT_UNIT', DEFAULT_UNIT)
-
-
-def check_replacement(old: type, new: type) -> str | None:
+def check_replacement(old: type[AxisController], new: type[AxisController]) -> str | None:
     """None if `new` may replace `old` on a running plant, else the reason it may not."""
-    if output_unit(old) != output_unit(new):
+    if old.OUTPUT_UNIT != new.OUTPUT_UNIT:
         return (
-            f'{new.PREFIX} commands {output_unit(new)} but the running {old.PREFIX} '
-            f'commands {output_unit(old)}: the plant input cannot change unit mid-job'
+            f'{new.PREFIX} commands {new.OUTPUT_UNIT} but the running {old.PREFIX} '
+            f'commands {old.OUTPUT_UNIT}: the plant input cannot change unit mid-job'
         )
     return None
 
@@ -83,13 +76,13 @@ class BumplessSwitch:
             self._old = self._law  # two changes before one sample: the first old law stays
         self._law = law
 
-    def compute(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
-        u_new = self._law.compute(t, y, ref, est)
+    def compute(self, inputs: ControlInputs) -> float:
+        u_new = self._law.compute(inputs)
         if self._old is not None:
-            u_old = self._old.compute(t, y, ref, est)
+            u_old = self._old.compute(inputs)
             self._old = None
             self._offset = u_old - u_new
-            self.last_switch = SwitchRecord(t, u_old, u_new)
+            self.last_switch = SwitchRecord(inputs.t, u_old, u_new)
             return u_old
         if self._offset != 0.0:
             self._offset *= self._decay

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate, FopdtEstimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi, phase_margin_pi
 from mill_observers.registry import make_observer
 
@@ -31,7 +31,9 @@ def simulate(ctrl, inertia=J, duration=1.0, v_ref=0.05):
     for k in range(round(duration / T)):
         t = k * T
         r = v_ref if (t % 0.2) < 0.1 else -v_ref
-        u = ctrl.compute(t, x[0], AxisReference(0.0, r, 0.0), Estimate(x[0], 0.0, 0.0))
+        u = ctrl.compute(
+            ControlInputs(t, x[0], AxisReference(0.0, r, 0.0), Estimate(x[0], 0.0, 0.0))
+        )
         out.append((t, r, x[1] * PITCH / (2 * math.pi), u))
         x = ad @ x + bd[:, 0] * u
         if not np.all(np.abs(x) < 1e6):
@@ -136,9 +138,9 @@ def test_model_from_the_rls_observer_gives_the_same_commands() -> None:
         t = k * T
         inertia = J if t < 0.5 else 3 * J
         ref = AxisReference(0.0, 0.05 if (t % 0.2) < 0.1 else -0.05, 0.0)
-        u_own = own.compute(t, x[0], ref, Estimate(x[0], 0.0, 0.0))
+        u_own = own.compute(ControlInputs(t, x[0], ref, Estimate(x[0], 0.0, 0.0)))
         est = observer.correct(x[0])
-        u = outside.compute(t, x[0], ref, est)
+        u = outside.compute(ControlInputs(t, x[0], ref, est, observer.model_estimate()))
         observer.predict(u)
         assert u == u_own, k
         if adapted_at is None and outside.adapted:
@@ -151,7 +153,7 @@ def test_model_from_the_rls_observer_gives_the_same_commands() -> None:
     assert outside.status()['gain'] == own.status()['gain']
 
 
-def test_model_source_observer_needs_a_model_in_the_estimate() -> None:
+def test_model_source_observer_needs_a_model_with_the_sample() -> None:
     ctrl = AdaptivePi(0.0, T, model_source='observer')
     with pytest.raises(ValueError, match='rls'):
-        ctrl.compute(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0.0, 0.0, 0.0))
+        ctrl.compute(ControlInputs(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0.0, 0.0, 0.0)))

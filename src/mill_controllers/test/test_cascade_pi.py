@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
 from mill_controllers.cascade_pi import CascadePi
 from mill_observers.dfo import Dfo
@@ -54,7 +54,7 @@ def simulate(observer, controller, duration, ref=_sine, dist=lambda t: 0.0, peri
         y = x[0] / 1000.0
         est = observer.correct(y)
         r, rv = ref(t)
-        u = controller.compute(t, y, AxisReference(r, rv, 0.0), est)
+        u = controller.compute(ControlInputs(t, y, AxisReference(r, rv, 0.0), est))
         observer.predict(u)
         out[k] = (t, y, r - y, u)
         for j in range(sub):
@@ -138,13 +138,16 @@ def test_output_is_clipped_and_the_integral_does_not_wind_up() -> None:
     ctrl = CascadePi(0.0, T, voltage_limit=1.0)
     est = Estimate(0.0, 0.0, 0.0)
     for k in range(1000):
-        u = ctrl.compute(k * T, 0.0, AxisReference(1.0, 0.0, 0.0), est)
+        u = ctrl.compute(ControlInputs(k * T, 0.0, AxisReference(1.0, 0.0, 0.0), est))
         assert u == 1.0
     assert ctrl.integral == 0.0
     # Subtracts the disturbance estimate [V].
     free = CascadePi(0.0, T, k_i=0.0, voltage_limit=math.inf)
-    assert free.compute(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0, 0, 0.3)) == -0.3
+    assert (
+        free.compute(ControlInputs(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0, 0, 0.3)))
+        == -0.3
+    )
     with pytest.raises(ParameterError, match='k_v'):
         CascadePi.from_parameters(0.0, T, {'k_v': 0.0})
     with pytest.raises(ValueError):
-        free.compute(0.0, math.nan, AxisReference(0.0, 0.0, 0.0), est)
+        free.compute(ControlInputs(0.0, math.nan, AxisReference(0.0, 0.0, 0.0), est))

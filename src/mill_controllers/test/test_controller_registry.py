@@ -23,7 +23,7 @@ def test_registered_names() -> None:
         'cascade_pi': CascadePi,
         'adaptive_pi': AdaptivePi,
         'machine_pi': MachinePi,
-    } == CONTROLLERS
+    } == dict(CONTROLLERS.items())
     assert controller_class('pd') is PdController
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
 from mill_controllers.gpi_controller import GpiController
 from mill_trajectory.bezier import BezierRestToRest
@@ -44,9 +44,9 @@ def controller_realisation(ctrl: AxisController, order: int = 1, n: int = 12):
     compensator τ = −(1/b)·((k1 − (k2 − κ)κ) s + k0)/(s + k2 − κ)·y), so the Hankel matrix
     has rank 1, which the assert checks.
     """
-    ctrl.compute(0.0, 0.0, ZERO, EST)
-    h = [ctrl.compute(T, 1.0, ZERO, EST)]
-    h += [ctrl.compute((k + 1) * T, 0.0, ZERO, EST) for k in range(1, 2 * n + 2)]
+    ctrl.compute(ControlInputs(0.0, 0.0, ZERO, EST))
+    h = [ctrl.compute(ControlInputs(T, 1.0, ZERO, EST))]
+    h += [ctrl.compute(ControlInputs((k + 1) * T, 0.0, ZERO, EST)) for k in range(1, 2 * n + 2)]
     hankel = np.array([[h[i + j + 1] for j in range(n)] for i in range(n)])
     shifted = np.array([[h[i + j + 2] for j in range(n)] for i in range(n)])
     u, s, vt = np.linalg.svd(hankel)
@@ -112,7 +112,7 @@ def simulate(ctrl, force: float = 0.0, coulomb: float = 0.0, t_end: float = 3.5)
     for k in range(round(t_end / T) + 1):
         t = k * T
         ref = path.sample(t).axis(0)
-        tau = ctrl.compute(t, float(x[0]), ref, EST)
+        tau = ctrl.compute(ControlInputs(t, float(x[0]), ref, EST))
         errors.append(x[0] - ref.position)
         torques.append(tau)
         # η1 ẍ + η2 ẋ + μ sign(ẋ) = τ/a − F_c
@@ -142,23 +142,23 @@ def test_coulomb_friction_leaves_the_predicted_small_error() -> None:
 def test_est_is_ignored_and_repeated_calls_are_idempotent() -> None:
     ctrl = GpiController(B, T)
     ref = AxisReference(0.001, 0.002, 0.0)
-    ctrl.compute(0.0, 0.0, ref, EST)
+    ctrl.compute(ControlInputs(0.0, 0.0, ref, EST))
     other = copy.deepcopy(ctrl)
-    u1 = ctrl.compute(T, 1e-4, ref, EST)
-    u2 = other.compute(T, 1e-4, ref, Estimate(5.0, -3.0, 1e3))
+    u1 = ctrl.compute(ControlInputs(T, 1e-4, ref, EST))
+    u2 = other.compute(ControlInputs(T, 1e-4, ref, Estimate(5.0, -3.0, 1e3)))
     assert u1 == u2
-    assert ctrl.compute(T, 1e-4, ref, EST) == u1  # same t: nothing integrated twice
+    assert ctrl.compute(ControlInputs(T, 1e-4, ref, EST)) == u1  # same t: nothing integrated twice
     with pytest.raises(ValueError, match='backwards'):
-        ctrl.compute(0.0, 1e-4, ref, EST)
+        ctrl.compute(ControlInputs(0.0, 1e-4, ref, EST))
     with pytest.raises(ValueError, match='non-finite'):
-        ctrl.compute(2 * T, math.nan, ref, EST)
+        ctrl.compute(ControlInputs(2 * T, math.nan, ref, EST))
 
 
 def test_torque_is_clipped_and_the_clipped_torque_is_reconstructed() -> None:
     ctrl = GpiController(B, T, torque_limit=0.01)
     big = AxisReference(0.01, 0.0, 0.0)
-    assert ctrl.compute(0.0, 0.0, big, EST) == pytest.approx(0.01)
-    ctrl.compute(T, 0.0, big, EST)
+    assert ctrl.compute(ControlInputs(0.0, 0.0, big, EST)) == pytest.approx(0.01)
+    ctrl.compute(ControlInputs(T, 0.0, big, EST))
     # F̂ integrates the applied (clipped) torque: b·0.01·T.
     assert ctrl.velocity_estimate == pytest.approx(B * 0.01 * T)
 

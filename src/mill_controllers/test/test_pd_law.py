@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
 from mill_controllers.pd_law import AdrcController, PdController
 
@@ -23,7 +23,7 @@ def _closed_loop_matrix(ctrl: AxisController, xi: float, ref: AxisReference) -> 
     def error_accel(e: float, de: float) -> float:
         y = ref.position + e
         est = Estimate(y, ref.velocity + de, xi)
-        tau = ctrl.compute(0.0, y, ref, est)
+        tau = ctrl.compute(ControlInputs(0.0, y, ref, est))
         return B * tau + xi - ref.acceleration  # ë = ẍ − ẍ*
 
     a0 = error_accel(0.0, 0.0)
@@ -42,7 +42,7 @@ def test_closed_loop_poles_are_the_designed_ones(omega: float, zeta: float) -> N
     np.testing.assert_allclose(got, want, rtol=1e-9)
     # With exact ξ̂ the origin is an equilibrium: the disturbance is fully rejected.
     y = ref.position
-    tau = ctrl.compute(0.0, y, ref, Estimate(y, ref.velocity, xi))
+    tau = ctrl.compute(ControlInputs(0.0, y, ref, Estimate(y, ref.velocity, xi)))
     assert B * tau + xi == pytest.approx(ref.acceleration, abs=1e-12)
 
 
@@ -58,14 +58,18 @@ def test_pd_variant_ignores_the_disturbance_estimate() -> None:
     adrc = AdrcController(B, 1e-3, torque_limit=math.inf)
     est0 = Estimate(0.001, 0.002, 0.0)
     est1 = Estimate(0.001, 0.002, 5.0)
-    assert pd.compute(0.0, 0.001, ref, est1) == pd.compute(0.0, 0.001, ref, est0)
-    assert adrc.compute(0.0, 0.001, ref, est1) == pytest.approx(
-        adrc.compute(0.0, 0.001, ref, est0) - 5.0 / B
+    assert pd.compute(ControlInputs(0.0, 0.001, ref, est1)) == pd.compute(
+        ControlInputs(0.0, 0.001, ref, est0)
+    )
+    assert adrc.compute(ControlInputs(0.0, 0.001, ref, est1)) == pytest.approx(
+        adrc.compute(ControlInputs(0.0, 0.001, ref, est0)) - 5.0 / B
     )
     # A NaN ξ̂ is not read by the PD variant, so it is not an error there.
-    assert math.isfinite(pd.compute(0.0, 0.001, ref, Estimate(0.001, 0.002, math.nan)))
+    assert math.isfinite(
+        pd.compute(ControlInputs(0.0, 0.001, ref, Estimate(0.001, 0.002, math.nan)))
+    )
     # Same law otherwise: both use the observer's velocity, not the reference's.
-    assert pd.compute(0.0, 0.0, ref, Estimate(0.0, 0.01, 0.0)) == pytest.approx(
+    assert pd.compute(ControlInputs(0.0, 0.0, ref, Estimate(0.0, 0.01, 0.0))) == pytest.approx(
         -pd.alpha1 * 0.01 / B
     )
 
@@ -76,16 +80,16 @@ def test_pd_leaves_the_static_error_xi_over_omega_squared() -> None:
     ref = AxisReference(0.0, 0.0, 0.0)
     xi = -3.6
     e = xi / pd.alpha0
-    tau = pd.compute(0.0, e, ref, Estimate(e, 0.0, xi))
+    tau = pd.compute(ControlInputs(0.0, e, ref, Estimate(e, 0.0, xi)))
     assert B * tau + xi == pytest.approx(0.0, abs=1e-12)
 
 
 def test_output_is_clipped() -> None:
     ctrl = AdrcController(B, 1e-3, torque_limit=0.5)
     ref = AxisReference(0.0, 0.0, 0.0)
-    assert ctrl.compute(0.0, -1.0, ref, Estimate(-1.0, 0.0, 0.0)) == 0.5
-    assert ctrl.compute(0.0, 1.0, ref, Estimate(1.0, 0.0, 0.0)) == -0.5
-    small = ctrl.compute(0.0, 1e-5, ref, Estimate(1e-5, 0.0, 0.0))
+    assert ctrl.compute(ControlInputs(0.0, -1.0, ref, Estimate(-1.0, 0.0, 0.0))) == 0.5
+    assert ctrl.compute(ControlInputs(0.0, 1.0, ref, Estimate(1.0, 0.0, 0.0))) == -0.5
+    small = ctrl.compute(ControlInputs(0.0, 1e-5, ref, Estimate(1e-5, 0.0, 0.0)))
     assert small == pytest.approx(-144.0 * 1e-5 / B)
 
 
@@ -102,9 +106,10 @@ def test_non_finite_inputs_raise(cls: type, field: str, bad: float) -> None:
     for group in (args, ref, est):
         if field in group:
             group[field] = bad
-    call = lambda: ctrl.compute(  # noqa: E731
+    inputs = ControlInputs(
         args['t'], args['y'], AxisReference(**ref), Estimate(0.0, est['v_hat'], est['xi_hat'])
     )
+    call = lambda: ctrl.compute(inputs)  # noqa: E731
     if cls is PdController and field == 'xi_hat':
         assert call() == 0.0
     else:

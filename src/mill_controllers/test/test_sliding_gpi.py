@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_common.signals import AxisReference, Estimate
+from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.sliding_gpi import SlidingGpiController
 
@@ -58,8 +58,8 @@ def test_switching_function() -> None:
 def test_sigma_is_eq13() -> None:
     ctrl = SlidingGpiController(B, T, torque_limit=math.inf)
     ref = AxisReference(0.002, 0.001, 0.0)
-    tau0 = ctrl.compute(0.0, 0.0, ref, EST)
-    tau = ctrl.compute(T, 0.0005, ref, EST)
+    tau0 = ctrl.compute(ControlInputs(0.0, 0.0, ref, EST))
+    tau = ctrl.compute(ControlInputs(T, 0.0005, ref, EST))
     int_e = T * (0.0 - 0.002)  # forward rectangle: e at t = 0
     f_hat = B * T * tau0  # eq. (10) with κ = 0
     assert ctrl.velocity_estimate == pytest.approx(f_hat)
@@ -102,6 +102,8 @@ def test_parameters() -> None:
     with pytest.raises(ParameterError, match=r'sliding_gpi\.boundary_layer'):
         SlidingGpiController(B, T, boundary_layer=math.nan)
     assert (
-        SlidingGpiController(B, T).compute(0.0, 0.0, AxisReference(0, 0, 0), Estimate(0, 0, 0))
+        SlidingGpiController(B, T).compute(
+            ControlInputs(0.0, 0.0, AxisReference(0, 0, 0), Estimate(0, 0, 0))
+        )
         == 0.0
     )

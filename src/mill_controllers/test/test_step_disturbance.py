@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import scipy.signal
-from mill_common.signals import AxisReference
+from mill_common.signals import AxisReference, ControlInputs
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_observers.gpi import GpiObserver
 
@@ -40,7 +40,7 @@ def _simulate(T: float, ctrl_cls: type, seconds: float = 0.3):
         t = k * T
         xi = XI_STEP if k >= round(T_STEP / T) else 0.0
         est = obs.correct(float(state[0]))
-        tau = ctrl.compute(t, float(state[0]), ref, est)
+        tau = ctrl.compute(ControlInputs(t, float(state[0]), ref, est))
         obs.predict(tau)
         rows.append((t, est.disturbance, xi, tau, state[0] - ref.position))
         state = ad @ state + bd @ np.array([tau, xi])

@@ -6,7 +6,7 @@ import copy
 import math
 
 import pytest
-from mill_common.signals import AxisReference
+from mill_common.signals import AxisReference, ControlInputs
 from mill_controllers.adaptive_pi import AdaptivePi
 from mill_controllers.cascade_pi import CascadePi
 from mill_controllers.gpi_controller import GpiController
@@ -49,9 +49,9 @@ def run(new_law, switch_at: float, blend_time: float = 0.05, duration: float = 4
             shadow = copy.deepcopy(switch.law)
             raw = copy.deepcopy(new_law)
             switch.replace(new_law)
-        u = switch.compute(t, y, ref, est)
-        RAW.append(raw.compute(t, y, ref, est) if raw else math.nan)
-        shadow_out.append(shadow.compute(t, y, ref, est) if shadow else u)
+        u = switch.compute(ControlInputs(t, y, ref, est))
+        RAW.append(raw.compute(ControlInputs(t, y, ref, est)) if raw else math.nan)
+        shadow_out.append(shadow.compute(ControlInputs(t, y, ref, est)) if shadow else u)
         commands.append(u)
         errors.append(ref.position - y)
         observer.predict(u)

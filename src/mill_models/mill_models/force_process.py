@@ -321,7 +321,7 @@ class ForceProcessPlant:
         self._x = np.array([feed, feed], dtype=float)
         self._t = float(t)
 
-    def set_state(self, state: Sequence[float], t: float) -> None:
+    def set_state(self, state: Sequence[float] | np.ndarray, t: float) -> None:
         """Set [f_a, x_c] [mm/s] at time t [s] (used to synchronise a model copy)."""
         x = np.asarray(state, dtype=float).reshape(2)
         if not np.all(np.isfinite(x)) or not math.isfinite(t):

@@ -274,7 +274,7 @@ class HeldPlant:
         u0, slope = hold_input(u_k, self.u_prev, beta, self.T)
         self.u_prev = float(u_k)
         cost = 0.0
-        trace = []
+        trace: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         if reference is None:  # no grid needed: one exact step per clamped piece
             for length, start, sl in clamped_pieces(u0, slope, self.T, self.lo, self.hi):
                 self.plant.step(start, sl, length)

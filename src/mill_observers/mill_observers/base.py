@@ -1,43 +1,68 @@
-"""Interface of a per-axis observer (ROS-free).
+"""The contract of a per-axis observer (ROS-free).
 
 Each sample k the node calls, in this order:
 
 1. ``est = observer.correct(y)``  -- measurement update with the position measured at k;
    returns the estimate at k (current-estimator form), so the controller can use it in the
    same sample. The first call initialises the state from y (position = y, the rest 0).
-2. ``observer.predict(u)``  -- time update with the command u [N·m] held over the next
-   sample period (zero-order hold).
+2. ``observer.predict(u)``  -- time update with the command u held over the next sample
+   period (zero-order hold), in the plant's input unit (N·m, or V for a voltage drive).
+
+Every observer subclasses Observer; what the node and the offline simulator may rely on is
+declared here, with defaults an observer overrides only where it differs:
+
+- PREFIX, PARAMETERS: the parameter namespace and the parameters;
+- DISTURBANCE_UNIT: the unit of Estimate.disturbance, an acceleration 'm/s²' (Beltrán
+  2013 eq. (5)) or an input-equivalent voltage 'V';
+- PROVIDES_MODEL / model_estimate(): whether it identifies a plant model, and the model
+  after the last correct() (published within status(), joined by the controller);
+- status(): internal quantities worth publishing each sample (none by default);
+- reset(): forget the past (nothing to forget by default).
 """
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec
-from mill_common.signals import Estimate
+from mill_common.signals import Estimate, FopdtEstimate
 
 
-@runtime_checkable
-class Observer(Protocol):
+class Observer(ABC):
     """One axis: position measurement in, position/velocity/disturbance estimate out."""
 
-    def correct(self, y: float) -> Estimate:
-        """Measurement update with the position y [m] measured at this sample."""
-        ...
-
-    def predict(self, u: float) -> None:
-        """Time update with the command u [N·m] held constant over the next period."""
-        ...
-
-
-class ObserverClass(Protocol):
-    """What a registry entry offers: its parameter namespace, specs and a factory."""
-
     PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+    DISTURBANCE_UNIT: ClassVar[str] = 'm/s²'  # 'V' for an input-equivalent voltage
+    PROVIDES_MODEL: ClassVar[bool] = False  # model_estimate() gives an identified model
 
     @classmethod
+    @abstractmethod
     def from_parameters(
         cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> Observer: ...
+    ) -> Observer:
+        """Build from values named without the prefix (missing names take defaults).
+
+        Raises ParameterError naming a bad parameter.
+        """
+
+    @abstractmethod
+    def correct(self, y: float) -> Estimate:
+        """Measurement update with the position y [m] measured at this sample."""
+
+    @abstractmethod
+    def predict(self, u: float) -> None:
+        """Time update with the command u held constant over the next period."""
+
+    def model_estimate(self) -> FopdtEstimate | None:
+        """The plant model identified up to the last correct(); None unless PROVIDES_MODEL."""
+        return None
+
+    def status(self) -> dict[str, float]:
+        """Internal quantities of the last sample, name → value (published if any)."""
+        return {}
+
+    def reset(self) -> None:  # noqa: B027 (a default that does nothing is intended)
+        """Start afresh, as just built."""

@@ -4,14 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from mill_common.parameters import (
-    ParamSpec,
-    algorithm_specs,
-    algorithm_values,
-    axis_node_specs,
-    non_negative,
-    one_of,
-)
+from mill_common.parameters import ParamSpec, algorithm_values, axis_node_specs, non_negative, text
 from mill_models.axis_data import nominal_input_gain
 
 from mill_observers.base import Observer
@@ -21,7 +14,7 @@ from mill_observers.registry import OBSERVERS
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
     specs = axis_node_specs()
     specs.append(
-        ('observer', ParamSpec('observer', 'gpi', 'observer algorithm', one_of(*OBSERVERS)))
+        ('observer', ParamSpec('observer', 'gpi', 'observer algorithm', OBSERVERS.check()))
     )
     specs.append(
         (
@@ -35,11 +28,23 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
-    return specs + algorithm_specs(OBSERVERS.values())
+    specs.append(
+        (
+            'controller_node',
+            ParamSpec(
+                'controller_node',
+                '',
+                'the node whose commands this observer accepts; "" = <axis>_controller',
+                text,
+                True,
+            ),
+        )
+    )
+    return specs + OBSERVERS.parameter_specs()
 
 
 def build_observer(values: dict[str, Any]) -> Observer:
-    cls = OBSERVERS[values['observer']]
+    cls = OBSERVERS.get(values['observer'])
     own = algorithm_values(cls, values)
     gain = values['input_gain'] or nominal_input_gain(values['axis'])
     return cls.from_parameters(gain, values['sample_period'], own)

@@ -56,6 +56,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import Estimate
 
+from mill_observers.base import Observer
 from mill_observers.imbdo import (
     MAHAROF_A,
     MAHAROF_B,
@@ -122,7 +123,7 @@ def dfo_specs() -> tuple[ParamSpec, ...]:
     )
 
 
-class Dfo:
+class Dfo(Observer):
     """Maharof 2018 DFO; d̂ = Σ q̂1_i in volts (subtract it from u).
 
     correct(y [m]) -> Estimate(position=y [m], velocity=Δy/T [m/s], disturbance=d̂ [V]);

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -24,6 +24,8 @@ import scipy.linalg
 from mill_common.parameters import ParameterError, ParamSpec, positive, validate_all
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
+
+from mill_observers.base import Observer
 
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
 
@@ -48,7 +50,7 @@ def _expm1_complex(s: complex) -> complex:
     )
 
 
-class GpiObserver:
+class GpiObserver(Observer):
     """Beltrán 2013 GPI observer for one axis ẍ = b·τ + ξ, ξ a 4th-degree Taylor polynomial.
 
     Estimates position [m], velocity [m/s] and the lumped disturbance ξ [m/s²] from the
@@ -202,6 +204,19 @@ class GpiObserver:
             z5 + z6,
             z6,
         ]
+
+    def predicted(self, inputs: Sequence[float]) -> Estimate:
+        """The estimate after further time updates with these commands; the state is kept.
+
+        After predict() the state is x̄(k+1); this gives x̄(k+1+len(inputs)) with the model of
+        eq. (14) — what a loop with that many samples of delay acts on.
+        """
+        saved = self._z  # predict() builds a new list: the saved one stays untouched
+        for u in inputs:
+            self.predict(u)
+        z = self._z
+        self._z = saved
+        return Estimate(z[0], z[1] * self._inv_T, z[2] * self._inv_T2)
 
     def reset(self) -> None:
         """Forget the state; the next correct() initialises from its measurement."""

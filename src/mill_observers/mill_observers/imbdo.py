@@ -51,6 +51,8 @@ from mill_common.parameters import (
 )
 from mill_common.signals import Estimate
 
+from mill_observers.base import Observer
+
 MM_PER_M = 1000.0
 
 # Maharof 2018 eq. (1), x axis: A [mm/(V·s²)], B [1/s], C [1/s²] (T_d = 1.2 ms not modelled)
@@ -68,7 +70,7 @@ def plant_specs() -> tuple[ParamSpec, ...]:
             MAHAROF_A,
             'gain A of the nominal model A/(s² + B s + C), eq. (1) [mm/(V·s²)]',
             positive,
-            positive_or_inf,
+            True,  # read-only, as it has always been (see docs/contract.md)
         ),
         ParamSpec(
             'plant_damping',
@@ -126,7 +128,7 @@ class _DiscreteSs:
         self.x = self.ad @ self.x + self.bd * w
 
 
-class Imbdo:
+class Imbdo(Observer):
     """Maharof 2018 IMBDO on the x-axis model; d̂ in volts (subtract it from u).
 
     correct(y [m]) -> Estimate(position=y [m], velocity=v̂ [m/s], disturbance=d̂ [V]);
@@ -144,7 +146,7 @@ class Imbdo:
             'cut-off frequency f_c of the Q filter ω_c^n/(s + ω_c)^n, ω_c = 2π f_c, '
             'eq. (3) and fig. 5 [Hz]',
             positive,
-            positive_or_inf,
+            True,  # read-only, as it has always been (see docs/contract.md)
         ),
         ParamSpec(
             'q_order',

@@ -23,6 +23,7 @@ from typing import Any, ClassVar
 from mill_common.parameters import ParamSpec, validate_all
 from mill_common.signals import Estimate
 
+from mill_observers.base import Observer
 from mill_observers.dfo import Dfo, dfo_specs
 from mill_observers.imbdo import Imbdo, plant_specs
 
@@ -30,7 +31,7 @@ _IMBDO_ONLY = ('q_cutoff', 'q_order', 'velocity_cutoff')
 _PLANT = tuple(s.name for s in plant_specs())
 
 
-class ImbdoDfo:
+class ImbdoDfo(Observer):
     """Maharof 2018 combined observer; disturbance = d̂_D + d̂_I [V] (subtract it from u)."""
 
     PREFIX: ClassVar[str] = 'imbdo_dfo'

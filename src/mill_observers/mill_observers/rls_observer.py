@@ -7,7 +7,7 @@ the command u(k) update y(k) = a y(k−1) + Σ b_i u(k−i) (mill_models.rls), a
 publishes it on /mill/<axis>/observer_state every sample.
 
 Estimate: position y, velocity v(k) (the backward difference, as the Hatwesh loops use),
-disturbance 0 (this observer estimates a model, not a disturbance), and `model`: the
+disturbance 0 (this observer estimates a model, not a disturbance); `model_estimate()`: the
 FOPDT read-out from the samples before k. That is the model the adaptive PI designs with at
 sample k, so `adaptive_pi.model_source: observer` with this observer computes the same
 commands as the adaptive PI with its own estimator (same RLS parameters).
@@ -19,15 +19,17 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from mill_common.parameters import ParamSpec, validate_all
-from mill_common.signals import Estimate
+from mill_common.signals import Estimate, FopdtEstimate
 from mill_models.rls import RLS_PARAMETERS, RlsEstimator
 
+from mill_observers.base import Observer
 
-class RlsObserver:
+
+class RlsObserver(Observer):
     """Identifies the velocity loop's FOPDT model online; passes the measurement through."""
 
     PREFIX: ClassVar[str] = 'rls'
-    PROVIDES_MODEL: ClassVar[bool] = True  # Estimate.model is set (controllers may ask)
+    PROVIDES_MODEL: ClassVar[bool] = True  # model_estimate() (controllers may ask for it)
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = RLS_PARAMETERS
 
     def __init__(self, sample_period: float, **values: Any) -> None:
@@ -55,12 +57,15 @@ class RlsObserver:
     def correct(self, y: float) -> Estimate:
         self._v = 0.0 if self._y is None else (y - self._y) / self._T
         self._y = y
-        return Estimate(y, self._v, 0.0, self.rls.fopdt())
+        return Estimate(y, self._v, 0.0)
 
     def predict(self, u: float) -> None:
         self.rls.update(self._v, u)  # u(k) enters the regressor of the next samples
 
+    def model_estimate(self) -> FopdtEstimate:
+        return self.rls.fopdt()
+
     def status(self) -> dict[str, float]:
-        out = self.rls.fopdt().as_status()
+        out = self.model_estimate().as_status()
         out.update(self.rls.diagnostics())
         return out

@@ -40,15 +40,13 @@ class EstimateBlend:
         self._pending = self._last is not None
 
     def __call__(self, est: Estimate) -> Estimate:
-        if self._pending:
+        if self._pending and self._last is not None:
             self._pending = False
             self._dv = self._last.velocity - est.velocity
             self._dxi = self._last.disturbance - est.disturbance
         elif self._dv or self._dxi:
             self._dv *= self._decay
             self._dxi *= self._decay
-        out = Estimate(
-            est.position, est.velocity + self._dv, est.disturbance + self._dxi, est.model
-        )
+        out = Estimate(est.position, est.velocity + self._dv, est.disturbance + self._dxi)
         self._last = out
         return out

@@ -22,7 +22,7 @@ def test_registered_names() -> None:
         'imbdo_dfo': ImbdoDfo,
         'rls': RlsObserver,
     }
-    assert want == OBSERVERS
+    assert want == dict(OBSERVERS.items())
     assert observer_class('gpi') is GpiObserver
 
 

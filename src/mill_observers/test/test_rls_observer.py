@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
+from mill_common.signals import FopdtEstimate
 from mill_observers.registry import make_observer
 
 T = 0.25e-3
@@ -30,6 +31,8 @@ def test_converges_to_the_plants_gain_and_time_constant() -> None:
     assert status['gain'] == pytest.approx(GAIN, rel=0.01)
     assert status['time_constant'] == pytest.approx(TAU, rel=0.01)
     assert est.disturbance == 0.0
+    # What the controller node reads back from observer_state is the offline model, exactly.
+    assert FopdtEstimate.from_status(status) == obs.model_estimate()
 
 
 def test_bad_forgetting_is_refused() -> None:

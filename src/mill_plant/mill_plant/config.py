@@ -12,39 +12,29 @@ from typing import Any
 
 from mill_common.parameters import (
     ParamSpec,
+    algorithm_values,
     boolean,
     in_range,
     non_negative,
-    number,
     number_list,
     one_of,
     positive,
     positive_int,
+    positive_or_inf,
 )
 from mill_common.signals import AXES
 from mill_models.axis_data import RigidAxisParams
 
-from mill_plant.cutting import NoCutting, StepForce
-from mill_plant.harmonic_force import PARAMETERS as HARMONIC_PARAMETERS
-from mill_plant.harmonic_force import from_parameters as harmonic_force
-from mill_plant.kline_force import KlineCuttingForce
+from mill_plant.cutting import CuttingForceModel
+from mill_plant.drive_config import DRIVE_PARAMETERS
 from mill_plant.models.base import AxisModel
-from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
-from mill_plant.models.transfer_function import TransferFunctionAxisModel
-from mill_plant.models.velocity_drive import VelocityDriveAxisModel
 from mill_plant.multi_axis import MultiAxisPlant
+from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
 from mill_plant.three_axis import ThreeAxisPlant
 
-CUTTING_MODELS = ('kline', 'step', 'harmonic', 'none')
-
-# The axis_model parameter value -> class (one file per model in mill_plant.models).
-AXIS_MODELS: dict[str, type[AxisModel]] = {
-    'rigid': RigidAxisModel,  # Beltrán 2013 eq. (1)-(3); Chávez-Conde eq. (1)-(3) with gravity
-    'flexible': FlexibleAxisModel,  # Chávez-Conde eq. (4)-(6)
-    'transfer_function': TransferFunctionAxisModel,  # Maharof 2018 eq. (1), input in V
-    'velocity_drive': VelocityDriveAxisModel,  # Hatwesh 2013 eq. (1)-(6), input in V
-}
+# The rigid model's parameters keep their plain names (mass, pitch, ...): Beltrán 2013
+# Table 1 by default; the other models' parameters live under their prefix.
 _RIGID = ('mass', 'screw_inertia', 'pitch', 'cart_damping', 'screw_damping', 'coulomb_friction')
 
 
@@ -68,244 +58,108 @@ def _axes(value: Any) -> str | None:
     return None
 
 
-def _three(description: str, defaults: list[float], each=number) -> ParamSpec:
-    return ParamSpec('', defaults, description, number_list(3, each))
+def _full_names(specs: list[tuple[str, ParamSpec]]) -> tuple[ParamSpec, ...]:
+    """Registry specs (PREFIX.name, spec), each as a spec named by its full name."""
+    return tuple(replace(spec, name=name) for name, spec in specs)
+
+
+# Parameters of the node that runs the lockstep (plant node, force-process node).
+LOCKSTEP_TIMEOUT = ParamSpec(
+    'lockstep_timeout',
+    10.0,
+    "wall time to wait for a step's commands before giving up [s]",
+    positive,
+)
+STARTUP_TIMEOUT = ParamSpec(
+    'startup_timeout', 60.0, 'wall time to wait for the peers to appear [s]', positive
+)
+
+# The plant node's parameters, by full name: the plant is built once (read-only) except
+# for what only the node's behaviour depends on (the last four).
+PLANT_PARAMETERS: tuple[ParamSpec, ...] = (
+    *(replace(s, read_only=True) for s in RigidAxisModel.PARAMETERS if s.name in _RIGID),
+    ParamSpec(
+        'max_torque',
+        [10.0] * 3,
+        "drive input limit per axis, in the axis model's input unit [N m or V]; .inf = none",
+        number_list(3, positive_or_inf),
+        True,
+    ),
+    ParamSpec(
+        'initial_position',
+        [-0.075, -0.105, -0.005],
+        'axis positions at t = 0 [m]',
+        number_list(3),
+        True,
+    ),
+    ParamSpec(
+        'axis_model',
+        ['rigid'] * 3,
+        'dynamic model per axis x, y, z: ' + ', '.join(AXIS_MODELS),
+        _axis_models,
+        True,
+    ),
+    ParamSpec(
+        'gravity',
+        False,
+        'the weight of the carried mass acts on the vertical z axis (Chávez-Conde eq. 3)',
+        boolean,
+        True,
+    ),
+    ParamSpec(
+        'load_change.time',
+        0.0,
+        'time of a step change of the carried mass (workpiece or fixture) [s]',
+        non_negative,
+        True,
+    ),
+    ParamSpec(
+        'load_change.mass',
+        [0.0, 0.0, 0.0],
+        'mass added per axis x, y, z at load_change.time [kg]; all 0 = no change',
+        number_list(3),
+        True,
+    ),
+    ParamSpec('axes', list(AXES), 'axes under control; the others are braked', _axes, True),
+    ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+    ParamSpec(
+        'clock_period',
+        0.01,
+        'sim time between /clock messages [s] (a multiple of sample_period); every '
+        'node with use_sim_time wakes for each one',
+        in_range(1e-6, 10.0),
+        True,
+    ),
+    ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, True),
+    ParamSpec('sensor_resolution', 0.0, 'encoder resolution [m]; 0 = ideal', non_negative, True),
+    ParamSpec('cutting_model', 'kline', 'cutting force model', CUTTING_MODELS.check(), True),
+    *_full_names(CUTTING_MODELS.parameter_specs(read_only=True)),
+    *_full_names(AXIS_MODELS.parameter_specs(read_only=True, exclude=('rigid',))),
+    ParamSpec(
+        'publish_ground_truth',
+        True,
+        'publish true velocities and disturbances (analysis only)',
+        boolean,
+    ),
+    LOCKSTEP_TIMEOUT,
+    STARTUP_TIMEOUT,
+    ParamSpec(
+        'min_subscribers',
+        2,
+        'subscribers each state topic needs before the first step (controller, observer)',
+        positive_int,
+    ),
+)
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    # The rigid model's parameters keep their plain names (mass, pitch, ...): Beltrán 2013
-    # Table 1 by default; the other models' parameters live under their prefix.
-    model = [(spec.name, spec) for spec in RigidAxisModel.PARAMETERS if spec.name in _RIGID]
-    model += [
-        (
-            'max_torque',
-            _three(
-                "drive input limit per axis, in the axis model's input unit [N m or V]",
-                [10.0] * 3,
-                positive,
-            ),
-        ),
-        (
-            'initial_position',
-            _three('axis positions at t = 0 [m]', [-0.075, -0.105, -0.005]),
-        ),
-    ]
-    specs: list[tuple[str, ParamSpec]] = []
-    for name, spec in model:
-        specs.append((name, ParamSpec(name, spec.default, spec.description, spec.check, True)))
-    ro = True
-    specs += [
-        (
-            'axis_model',
-            ParamSpec(
-                'axis_model',
-                ['rigid'] * 3,
-                'dynamic model per axis x, y, z: ' + ', '.join(AXIS_MODELS),
-                _axis_models,
-                ro,
-            ),
-        ),
-        (
-            'gravity',
-            ParamSpec(
-                'gravity',
-                False,
-                'the weight of the carried mass acts on the vertical z axis (Chávez-Conde eq. 3)',
-                boolean,
-                ro,
-            ),
-        ),
-        (
-            'load_change.time',
-            ParamSpec(
-                'time',
-                0.0,
-                'time of a step change of the carried mass (workpiece or fixture) [s]',
-                non_negative,
-                ro,
-            ),
-        ),
-        (
-            'load_change.mass',
-            ParamSpec(
-                'mass',
-                [0.0, 0.0, 0.0],
-                'mass added per axis x, y, z at load_change.time [kg]; all 0 = no change',
-                number_list(3),
-                ro,
-            ),
-        ),
-        (
-            'axes',
-            ParamSpec('axes', list(AXES), 'axes under control; the others are braked', _axes, ro),
-        ),
-        (
-            'sample_period',
-            ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), ro),
-        ),
-        (
-            'clock_period',
-            ParamSpec(
-                'clock_period',
-                0.01,
-                'sim time between /clock messages [s] (a multiple of sample_period); every '
-                'node with use_sim_time wakes for each one',
-                in_range(1e-6, 10.0),
-                ro,
-            ),
-        ),
-        (
-            'substeps',
-            ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, ro),
-        ),
-        (
-            'sensor_resolution',
-            ParamSpec(
-                'sensor_resolution', 0.0, 'encoder resolution [m]; 0 = ideal', non_negative, ro
-            ),
-        ),
-        (
-            'cutting_model',
-            ParamSpec('cutting_model', 'kline', 'cutting force model', one_of(*CUTTING_MODELS), ro),
-        ),
-        (
-            'kline.specific_energy',
-            ParamSpec(
-                'specific_energy',
-                1.37e9,
-                'u_s, energy per removed volume [J/m^3] (0.5 hp min/in^3)',
-                positive,
-                ro,
-            ),
-        ),
-        (
-            'kline.spindle_speed',
-            ParamSpec('spindle_speed', 1800.0, 'spindle speed N [rpm]', positive, ro),
-        ),
-        ('kline.teeth', ParamSpec('teeth', 2, 'cutter teeth n_t', positive_int, ro)),
-        (
-            'kline.tool_diameter',
-            ParamSpec('tool_diameter', 0.010, 'cutter diameter D [m]', positive, ro),
-        ),
-        (
-            'kline.radial_depth',
-            ParamSpec(
-                'radial_depth', 0.010, 'radial depth of cut b [m] (b = D: slot)', positive, ro
-            ),
-        ),
-        (
-            'kline.helix_angle',
-            ParamSpec('helix_angle', 45.0, 'cutting-edge angle lambda [deg]', in_range(0, 89), ro),
-        ),
-        (
-            'kline.workpiece_min',
-            ParamSpec(
-                'workpiece_min', [-0.1, -0.12], 'workpiece corner x, y [m]', number_list(2), ro
-            ),
-        ),
-        (
-            'kline.workpiece_max',
-            ParamSpec(
-                'workpiece_max', [0.03, 0.0], 'workpiece corner x, y [m]', number_list(2), ro
-            ),
-        ),
-        (
-            'kline.workpiece_top',
-            ParamSpec('workpiece_top', 0.0, 'z of the workpiece top surface [m]', number, ro),
-        ),
-        (
-            'step.force',
-            ParamSpec(
-                'force',
-                [0.0, 100.0, 0.0],
-                'constant force Fx, Fy, Fz after the step [N]',
-                number_list(3),
-                ro,
-            ),
-        ),
-        (
-            'step.start_time',
-            ParamSpec('start_time', 1.0, 'time the step force starts [s]', non_negative, ro),
-        ),
-        *[
-            (
-                f'harmonic.{spec.name}',
-                ParamSpec(spec.name, spec.default, spec.description, spec.check, ro),
-            )
-            for spec in HARMONIC_PARAMETERS
-        ],
-        *[
-            (
-                f'{cls.PREFIX}.{spec.name}',
-                ParamSpec(spec.name, spec.default, spec.description, spec.check, ro),
-            )
-            for cls in AXIS_MODELS.values()
-            if cls is not RigidAxisModel
-            for spec in cls.PARAMETERS
-        ],
-        (
-            'publish_ground_truth',
-            ParamSpec(
-                'publish_ground_truth',
-                True,
-                'publish true velocities and disturbances (analysis only)',
-                boolean,
-            ),
-        ),
-        (
-            'lockstep_timeout',
-            ParamSpec(
-                'lockstep_timeout',
-                10.0,
-                "wall time to wait for a step's commands before giving up [s]",
-                positive,
-            ),
-        ),
-        (
-            'startup_timeout',
-            ParamSpec(
-                'startup_timeout', 60.0, 'wall time to wait for the peers to appear [s]', positive
-            ),
-        ),
-        (
-            'min_subscribers',
-            ParamSpec(
-                'min_subscribers',
-                2,
-                'subscribers each state topic needs before the first step (controller, observer)',
-                positive_int,
-            ),
-        ),
-    ]
-    return [
-        (name, ParamSpec(name, s.default, s.description, s.check, s.read_only)) for name, s in specs
-    ]
+    """The plant node's parameters as (full name, spec): the machine's, then the drive's."""
+    return [(spec.name, spec) for spec in PLANT_PARAMETERS] + list(DRIVE_PARAMETERS)
 
 
-def build_cutting(values: dict[str, Any]):
-    model = values['cutting_model']
-    if model == 'kline':
-        return KlineCuttingForce(
-            specific_energy=values['kline.specific_energy'],
-            spindle_speed_rpm=values['kline.spindle_speed'],
-            teeth=values['kline.teeth'],
-            tool_diameter=values['kline.tool_diameter'],
-            radial_depth=values['kline.radial_depth'],
-            helix_angle=math.radians(values['kline.helix_angle']),
-            workpiece_min=tuple(values['kline.workpiece_min']),
-            workpiece_max=tuple(values['kline.workpiece_max']),
-            workpiece_top=values['kline.workpiece_top'],
-        )
-    if model == 'step':
-        return StepForce(tuple(values['step.force']), values['step.start_time'])
-    if model == 'harmonic':
-        return harmonic_force(_prefixed(values, 'harmonic'))
-    return NoCutting()
-
-
-def _prefixed(values: dict[str, Any], prefix: str) -> dict[str, Any]:
-    cut = len(prefix) + 1
-    return {k[cut:]: v for k, v in values.items() if k.startswith(prefix + '.')}
+def build_cutting(values: dict[str, Any]) -> CuttingForceModel:
+    cls = CUTTING_MODELS.get(values['cutting_model'])
+    return cls.from_parameters(algorithm_values(cls, values))
 
 
 def _load_changes(values: dict[str, Any]) -> bool:
@@ -313,13 +167,16 @@ def _load_changes(values: dict[str, Any]) -> bool:
 
 
 def build_axis_model(values: dict[str, Any], axis: int) -> AxisModel:
-    cls = AXIS_MODELS[values['axis_model'][axis]]
-    own = {n: values[n] for n in _RIGID} if cls is RigidAxisModel else _prefixed(values, cls.PREFIX)
+    cls = AXIS_MODELS.get(values['axis_model'][axis])
+    own = {n: values[n] for n in _RIGID} if cls is RigidAxisModel else algorithm_values(cls, values)
     gravity = values['gravity'] and axis == 2
     return cls.from_parameters(axis, own, gravity)
 
 
-def build_plant(values: dict[str, Any]) -> ThreeAxisPlant | MultiAxisPlant:
+Plant = ThreeAxisPlant | MultiAxisPlant  # what build_plant gives
+
+
+def build_plant(values: dict[str, Any]) -> Plant:
     """Three rigid axes: the Beltrán plant (fast, unrolled); any other mix: MultiAxisPlant."""
     rigid_only = all(m == 'rigid' for m in values['axis_model'])
     if rigid_only and not values['gravity'] and not _load_changes(values):
@@ -351,57 +208,48 @@ def _feed_limits(value: Any) -> str | None:
     return None
 
 
+# The force-process node's own parameters; the process model's follow (force_process_specs).
+FORCE_PROCESS_PARAMETERS: tuple[ParamSpec, ...] = (
+    ParamSpec(
+        'feed_axis',
+        'x',
+        'axis whose reference velocity [m/s] is the feed command',
+        one_of(*AXES),
+        True,
+    ),
+    ParamSpec(
+        'feed_limits',
+        [0.0, 20.0],
+        "the drive's feed range [lowest, highest] [mm/s]: the reconstructed "
+        'command is clamped to it',
+        _feed_limits,
+        True,
+    ),
+    ParamSpec(
+        'trace_intervals',
+        32,
+        'grid intervals per sample of the force published on /mill/cutting_force/trace',
+        positive_int,
+        True,
+    ),
+    LOCKSTEP_TIMEOUT,
+    STARTUP_TIMEOUT,
+    ParamSpec(
+        'min_subscribers',
+        1,
+        'subscribers /mill/cutting_force needs before the first step (the controller)',
+        positive_int,
+    ),
+)
+
+
 def force_process_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters of the force-process plant node (Rubio 2013 eq. (1)-(3))."""
+    # Imported here: the process model needs scipy, which the plant node does without.
     from mill_models.force_process import ForceProcessModel
 
-    lockstep = {name: spec for name, spec in parameter_specs()}
-    specs = [
-        (
-            'feed_axis',
-            ParamSpec(
-                'feed_axis',
-                'x',
-                'axis whose reference velocity [m/s] is the feed command',
-                one_of(*AXES),
-                True,
-            ),
-        ),
-        (
-            'feed_limits',
-            ParamSpec(
-                'feed_limits',
-                [0.0, 20.0],
-                "the drive's feed range [lowest, highest] [mm/s]: the reconstructed "
-                'command is clamped to it',
-                _feed_limits,
-                True,
-            ),
-        ),
-        (
-            'trace_intervals',
-            ParamSpec(
-                'trace_intervals',
-                32,
-                'grid intervals per sample of the force published on /mill/cutting_force/trace',
-                positive_int,
-                True,
-            ),
-        ),
-        ('lockstep_timeout', lockstep['lockstep_timeout']),
-        ('startup_timeout', lockstep['startup_timeout']),
-        (
-            'min_subscribers',
-            ParamSpec(
-                'min_subscribers',
-                1,
-                'subscribers /mill/cutting_force needs before the first step (the controller)',
-                positive_int,
-            ),
-        ),
-    ]
     model = [
         (f'{ForceProcessModel.PREFIX}.{s.name}', replace(s, read_only=True))
         for s in ForceProcessModel.PARAMETERS
     ]
-    return specs + model
+    return [(spec.name, spec) for spec in FORCE_PROCESS_PARAMETERS] + model

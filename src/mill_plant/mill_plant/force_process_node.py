@@ -52,7 +52,8 @@ MM_PER_M = 1000.0
 class ForceProcessNode(Node):
     def __init__(self) -> None:
         super().__init__('force_process')
-        self._drive: DrivenForceProcess | None = None
+        self._drive: DrivenForceProcess  # built once by _configure
+        self._built = False
         self.params = NodeParameters(self, force_process_specs(), self._configure)
         v = self.params.values
         self._axis = AXES.index(v['feed_axis'])
@@ -84,7 +85,7 @@ class ForceProcessNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
-        if self._drive is not None:
+        if self._built:
             return  # the model is read-only; the others are read where used
         model = ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, values))
         self._T = model.sample_period
@@ -92,6 +93,7 @@ class ForceProcessNode(Node):
         self._drive = DrivenForceProcess(
             ForceProcessPlant(model), lo, hi, self._T / values['trace_intervals']
         )
+        self._built = True
 
     # -- lockstep ----------------------------------------------------------------------------
     def _stamp_ns(self) -> int:
@@ -168,7 +170,7 @@ class ForceProcessNode(Node):
         return missing
 
     def _watchdog(self) -> None:
-        action = self._lockstep.tick(time.monotonic(), self._missing_peers, self._k == 0)
+        action = self._lockstep.tick(time.monotonic(), self._missing_peers)
         if action is Action.START:
             self.get_logger().info('all peers matched: starting lockstep')
             self._publish_sample()

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 from mill_common.parameters import (
     ParameterError,
@@ -49,9 +49,7 @@ from mill_common.parameters import (
     validate_all,
 )
 
-from mill_plant.cutting import Force3
-
-PREFIX = 'harmonic'
+from mill_plant.cutting import CuttingForceModel, Force3
 
 MAHAROF_SPINDLE_SPEED = 1560.0  # rpm, 26 Hz once per revolution (module docstring)
 MAHAROF_TEETH = 1
@@ -79,57 +77,58 @@ def _amplitudes(value: Any) -> str | None:
     return number_list(each=non_negative)(value)
 
 
-PARAMETERS: tuple[ParamSpec, ...] = (
-    ParamSpec(
-        'spindle_speed',
-        MAHAROF_SPINDLE_SPEED,
-        "spindle speed n; base harmonic f_0 = n/60·teeth (1560 rpm × 1 = the paper's 26 Hz) [rpm]",
-        positive,
-    ),
-    ParamSpec(
-        'teeth',
-        MAHAROF_TEETH,
-        'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
-        'flute count = tooth passing) [-]',
-        positive_int,
-    ),
-    ParamSpec(
-        'harmonics',
-        list(MAHAROF_HARMONICS),
-        'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz) [-]',
-        _multiples,
-    ),
-    ParamSpec(
-        'amplitudes',
-        list(SYNTHESISED_AMPLITUDES),
-        'amplitude A_i of each harmonic, eq. (5) (synthesised from Table 2) [N]',
-        _amplitudes,
-    ),
-    ParamSpec(
-        'phases',
-        [0.0] * len(MAHAROF_HARMONICS),
-        'phase θ_i of each harmonic at t = 0, eq. (5) [rad]',
-        _finite_list,
-    ),
-    ParamSpec('mean', SYNTHESISED_MEAN, 'mean (DC) force F̄ [N]', number),
-    ParamSpec(
-        'axis_weights',
-        [1.0, 0.0, 0.0],
-        'weight of the force on x, y, z (F_axis = weight · F(t)) [-]',
-        number_list(3),
-    ),
-    ParamSpec('start_time', 0.0, 'the force acts from this time [s]', non_negative),
-    ParamSpec(
-        'end_time',
-        math.inf,
-        'the force acts until this time (> start_time; .inf = for ever) [s]',
-        positive_or_inf,
-    ),
-)
+class HarmonicForce(CuttingForceModel):
+    """Mean plus harmonics of the spindle frequency on chosen axes."""
 
-
-class HarmonicForce:
-    """Mean plus harmonics of the spindle frequency on chosen axes (a CuttingForceModel)."""
+    PREFIX: ClassVar[str] = 'harmonic'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec(
+            'spindle_speed',
+            MAHAROF_SPINDLE_SPEED,
+            'spindle speed n; base harmonic f_0 = n/60·teeth '
+            "(1560 rpm × 1 = the paper's 26 Hz) [rpm]",
+            positive,
+        ),
+        ParamSpec(
+            'teeth',
+            MAHAROF_TEETH,
+            'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
+            'flute count = tooth passing) [-]',
+            positive_int,
+        ),
+        ParamSpec(
+            'harmonics',
+            list(MAHAROF_HARMONICS),
+            'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz) [-]',
+            _multiples,
+        ),
+        ParamSpec(
+            'amplitudes',
+            list(SYNTHESISED_AMPLITUDES),
+            'amplitude A_i of each harmonic, eq. (5) (synthesised from Table 2) [N]',
+            _amplitudes,
+        ),
+        ParamSpec(
+            'phases',
+            [0.0] * len(MAHAROF_HARMONICS),
+            'phase θ_i of each harmonic at t = 0, eq. (5) [rad]',
+            _finite_list,
+        ),
+        ParamSpec('mean', SYNTHESISED_MEAN, 'mean (DC) force F̄ [N]', number),
+        ParamSpec(
+            'axis_weights',
+            [1.0, 0.0, 0.0],
+            'weight of the force on x, y, z (F_axis = weight · F(t)) [-]',
+            number_list(3),
+        ),
+        ParamSpec('start_time', 0.0, 'the force acts from this time [s]', non_negative),
+        ParamSpec(
+            'end_time',
+            math.inf,
+            'the force acts until this time (> start_time; .inf = for ever) [s]',
+            positive_or_inf,
+        ),
+    )
 
     def __init__(
         self,
@@ -146,7 +145,7 @@ class HarmonicForce:
     ) -> None:
         """Validate every value; ParameterError names the parameter ('harmonic.<name>')."""
         v = validate_all(
-            PARAMETERS,
+            self.PARAMETERS,
             {
                 'spindle_speed': spindle_speed,
                 'teeth': teeth,
@@ -158,19 +157,19 @@ class HarmonicForce:
                 'start_time': start_time,
                 'end_time': end_time,
             },
-            prefix=PREFIX + '.',
+            prefix=self.PREFIX + '.',
         )
         n = len(v['harmonics'])
         for name in ('amplitudes', 'phases'):
             if len(v[name]) != n:
                 raise ParameterError(
-                    f'{PREFIX}.{name}',
+                    f'{self.PREFIX}.{name}',
                     v[name],
                     f'must have one entry per harmonic ({n}), got {len(v[name])}',
                 )
         if not v['end_time'] > v['start_time']:
             raise ParameterError(
-                f'{PREFIX}.end_time',
+                f'{self.PREFIX}.end_time',
                 v['end_time'],
                 f'must be > start_time = {v["start_time"]}',
             )
@@ -187,6 +186,18 @@ class HarmonicForce:
         # f_0 = n/60 · teeth, the same base frequency as the DFO (module docstring)
         self.base_frequency: float = self.spindle_speed / 60.0 * self.teeth
         self._omegas = tuple(2.0 * math.pi * m * self.base_frequency for m in self.harmonics)
+
+    @classmethod
+    def from_parameters(cls, values: Mapping[str, Any]) -> HarmonicForce:
+        """Build from a mapping keyed by PARAMETERS names (missing names take defaults).
+
+        A missing 'phases' means zero phase for every harmonic. Raises ParameterError naming
+        the parameter as 'harmonic.<name>'.
+        """
+        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
+        if 'phases' not in values:
+            v['phases'] = None
+        return cls(**v)
 
     @property
     def frequencies(self) -> tuple[float, ...]:
@@ -208,15 +219,3 @@ class HarmonicForce:
         f = self.profile(t)
         wx, wy, wz = self.axis_weights
         return (wx * f, wy * f, wz * f)
-
-
-def from_parameters(values: Mapping[str, Any]) -> HarmonicForce:
-    """Build from a mapping keyed by PARAMETERS names (no prefix; missing names take defaults).
-
-    A missing 'phases' means zero phase for every harmonic. Raises ParameterError naming the
-    parameter as 'harmonic.<name>'.
-    """
-    v = validate_all(PARAMETERS, values, prefix=PREFIX + '.')
-    if 'phases' not in values:
-        v['phases'] = None
-    return HarmonicForce(**v)

@@ -100,6 +100,10 @@ class MultiAxisPlant:
         self._state: list[State] = [
             m.initial_state(float(p)) for m, p in zip(self._models, initial_position, strict=True)
         ]
+        # A path-dependent force model (mill_plant.cutting) learns every accepted state.
+        self._commit = cutting.commit if cutting.PATH_DEPENDENT else None
+        if self._commit is not None:
+            self._commit(self._t, self.position, self.velocity)
 
     def _bind(self) -> None:
         """Cache the models' bound methods for the integration loop."""
@@ -238,6 +242,7 @@ class MultiAxisPlant:
             cuts = [s for s in switches if a + tol < s < a + h - tol]
             if not cuts:
                 states = self._rk4(states, a, h, self._inputs(uc, a + 0.5 * h), faulted)
+                self._accept(a + h, states)
                 continue
             starts = [a]
             for s in cuts:
@@ -249,12 +254,24 @@ class MultiAxisPlant:
                 states = self._rk4(
                     states, start, length, self._inputs(uc, start + 0.5 * length), faulted
                 )
+                self._accept(end, states)
         self._state = states
         self._t = t0 + dt
         for hist in self._history:
             while len(hist) > 1 and hist[1][0] <= self._t:
                 del hist[0]
         return StepReport(saturated, faulted, (uc[0], uc[1], uc[2]))
+
+    def _accept(self, t: float, states: list[State]) -> None:
+        """Tell a path-dependent force model the state accepted at time t."""
+        if self._commit is None:
+            return
+        m = self._models
+        self._commit(
+            t,
+            (m[0].position(states[0]), m[1].position(states[1]), m[2].position(states[2])),
+            (m[0].velocity(states[0]), m[1].velocity(states[1]), m[2].velocity(states[2])),
+        )
 
     def _inputs(self, uc: list[float], t_mid: float) -> list[float]:
         """Input acting on each axis over a piece whose midpoint is t_mid."""

@@ -104,6 +104,10 @@ class ThreeAxisPlant:
         self._t = float(start_time)
         self._x = [float(p) for p in initial_position]
         self._v = [0.0, 0.0, 0.0]
+        # A path-dependent force model (mill_plant.cutting) learns every accepted state.
+        self._commit = cutting.commit if cutting.PATH_DEPENDENT else None
+        if self._commit is not None:
+            self._commit(self._t, self.position, self.velocity)
 
     # ---- state -------------------------------------------------------------
 
@@ -265,6 +269,8 @@ class ThreeAxisPlant:
                 nx2, nv2 = _stop_at_crossing(x2, v2, nv2, h)
             x0, x1, x2 = nx0, nx1, nx2
             v0, v1, v2 = nv0, nv1, nv2
+            if self._commit is not None:
+                self._commit(t + h, (x0, x1, x2), (v0, v1, v2))
         self._x = [x0, x1, x2]
         self._v = [v0, v1, v2]
         self._t = t_start + dt

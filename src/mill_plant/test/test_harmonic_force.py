@@ -8,12 +8,7 @@ import numpy as np
 import pytest
 from mill_common.parameters import ParameterError, validate_all
 from mill_models.axis_data import BELTRAN_TABLE1
-from mill_plant.harmonic_force import (
-    PARAMETERS,
-    SYNTHESISED_AMPLITUDES,
-    HarmonicForce,
-    from_parameters,
-)
+from mill_plant.harmonic_force import SYNTHESISED_AMPLITUDES, HarmonicForce
 
 ORIGIN = (0.0, 0.0, 0.0)
 
@@ -25,7 +20,7 @@ def _spectrum(force: HarmonicForce, axis: int, duration: float, rate: float) -> 
 
 
 def test_defaults_are_26_52_78_hz_like_the_dfo() -> None:
-    force = from_parameters({})
+    force = HarmonicForce.from_parameters({})
     assert force.frequencies == pytest.approx((26.0, 52.0, 78.0), rel=1e-15)
     # mill_observers is not a dependency of mill_plant: compare only where it is installed.
     dfo_module = pytest.importorskip('mill_observers.dfo')
@@ -38,7 +33,7 @@ def test_defaults_are_26_52_78_hz_like_the_dfo() -> None:
 def test_spectrum_has_exactly_the_configured_amplitudes_and_mean() -> None:
     amplitudes = [30.0, 12.5, 4.0]
     phases = [0.3, -1.1, 2.0]
-    force = from_parameters(
+    force = HarmonicForce.from_parameters(
         {'amplitudes': amplitudes, 'phases': phases, 'mean': 17.0, 'axis_weights': [1.0, -0.5, 0.0]}
     )
     rate = 2000.0  # 1 s = 26 whole periods of f_0: 1 Hz bins, 26/52/78 Hz on bins
@@ -57,7 +52,7 @@ def test_spectrum_has_exactly_the_configured_amplitudes_and_mean() -> None:
 
 
 def test_default_spectrum() -> None:
-    x = _spectrum(from_parameters({}), 0, 1.0, 2000.0)
+    x = _spectrum(HarmonicForce.from_parameters({}), 0, 1.0, 2000.0)
     assert x[0].real == pytest.approx(45.0, abs=1e-9)
     for freq, amp in zip((26, 52, 78), (39.3, 7.3, 7.6), strict=True):
         assert 2.0 * abs(x[freq]) == pytest.approx(amp, abs=1e-9)
@@ -81,13 +76,13 @@ def test_default_amplitudes_follow_from_table_2() -> None:
         newtons = volts * a * 1e-3 * m_e  # same acceleration of the suite's x carriage
         assert newtons == pytest.approx(default, abs=0.05)
     # The default mean keeps the default force one-signed.
-    force = from_parameters({})
+    force = HarmonicForce.from_parameters({})
     samples = [force.profile(t) for t in np.linspace(0.0, 1.0 / 26.0, 5001)]
     assert min(samples) > 0.0
 
 
 def test_zero_amplitude_is_exactly_the_mean() -> None:
-    force = from_parameters({'amplitudes': [0.0, 0.0, 0.0], 'mean': 12.25})
+    force = HarmonicForce.from_parameters({'amplitudes': [0.0, 0.0, 0.0], 'mean': 12.25})
     for t in np.linspace(0.0, 2.0, 1001):
         assert force.force(float(t), ORIGIN, ORIGIN) == (12.25, 0.0, 0.0)
 
@@ -109,7 +104,7 @@ def test_time_window() -> None:
 
 def test_tooth_passing_reading() -> None:
     values = {'spindle_speed': 1800.0, 'teeth': 2, 'harmonics': [1.0, 2.0], 'amplitudes': [5, 1]}
-    force = from_parameters(values)
+    force = HarmonicForce.from_parameters(values)
     assert force.frequencies == pytest.approx((60.0, 120.0))
     assert force.phases == (0.0, 0.0)  # missing phases: zero for each harmonic
 
@@ -140,15 +135,15 @@ def test_tooth_passing_reading() -> None:
 )
 def test_bad_parameters_are_refused(values: dict, name: str) -> None:
     with pytest.raises(ParameterError) as info:
-        from_parameters(values)
+        HarmonicForce.from_parameters(values)
     assert info.value.name == name
 
 
 def test_parameter_specs() -> None:
-    assert all(spec.description for spec in PARAMETERS)
-    assert all('.' not in spec.name for spec in PARAMETERS)
-    defaults = validate_all(PARAMETERS, {})
-    force = from_parameters(defaults)
+    assert all(spec.description for spec in HarmonicForce.PARAMETERS)
+    assert all('.' not in spec.name for spec in HarmonicForce.PARAMETERS)
+    defaults = validate_all(HarmonicForce.PARAMETERS, {})
+    force = HarmonicForce.from_parameters(defaults)
     assert force.amplitudes == (39.3, 7.3, 7.6)
     assert force.mean == 45.0
     assert force.end_time == math.inf

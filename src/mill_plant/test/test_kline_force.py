@@ -17,9 +17,16 @@ def _k(kline: KlineCuttingForce, speed: float, depth: float) -> float:
     return kline.specific_energy * depth * speed * 60.0 / (kline.teeth * kline.spindle_speed_rpm)
 
 
+def _force(kline: KlineCuttingForce, t: float, position, velocity) -> tuple[float, ...]:
+    """Eq. (4) for a tool fed steadily at `velocity`: chip = velocity * T_z, d_a from z."""
+    tz = kline.tooth_period
+    feed = (velocity[0] * tz, velocity[1] * tz)
+    return kline.chip_force(t, position, feed, kline.workpiece_top - position[2])
+
+
 def _samples(kline: KlineCuttingForce, velocity: tuple[float, float, float], n: int = 4000):
     t0 = 0.3
-    return [kline.force(t0 + (j + 0.5) * REV / n, INSIDE, velocity) for j in range(n)]
+    return [_force(kline, t0 + (j + 0.5) * REV / n, INSIDE, velocity) for j in range(n)]
 
 
 def _mean(forces, i: int) -> float:
@@ -35,14 +42,14 @@ def test_paper_feed_per_tooth() -> None:
 def test_zero_force_at_rest_outside_and_above() -> None:
     kline = KlineCuttingForce()
     t = 0.0123
-    assert kline.force(t, INSIDE, (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
-    assert kline.force(t, INSIDE, (0.0, 0.0, -0.001)) == (0.0, 0.0, 0.0)  # plunging only
-    assert kline.force(t, (-0.2, -0.06, -0.005), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
-    assert kline.force(t, (-0.05, 0.01, -0.005), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
-    assert kline.force(t, (-0.05, -0.06, 0.001), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
-    assert kline.force(t, (-0.05, -0.06, 0.0), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
+    assert _force(kline, t, INSIDE, (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
+    assert _force(kline, t, INSIDE, (0.0, 0.0, -0.001)) == (0.0, 0.0, 0.0)  # plunging only
+    assert _force(kline, t, (-0.2, -0.06, -0.005), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
+    assert _force(kline, t, (-0.05, 0.01, -0.005), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
+    assert _force(kline, t, (-0.05, -0.06, 0.001), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
+    assert _force(kline, t, (-0.05, -0.06, 0.0), (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
     # ...while the same instant inside the workpiece does cut.
-    assert kline.force(t, INSIDE, (0.0, FEED, 0.0)) != (0.0, 0.0, 0.0)
+    assert _force(kline, t, INSIDE, (0.0, FEED, 0.0)) != (0.0, 0.0, 0.0)
 
 
 def test_feed_along_y_means_over_a_revolution() -> None:
@@ -78,19 +85,19 @@ def test_feed_along_x_is_the_same_force_rotated() -> None:
     kline = KlineCuttingForce()
     for j in range(200):
         t = 0.01 + j * 1.7e-4
-        fy_feed = kline.force(t, INSIDE, (0.0, FEED, 0.0))
-        fx_feed = kline.force(t, INSIDE, (FEED, 0.0, 0.0))
+        fy_feed = _force(kline, t, INSIDE, (0.0, FEED, 0.0))
+        fx_feed = _force(kline, t, INSIDE, (FEED, 0.0, 0.0))
         # local y (feed) -> +x, local x -> n = (d_y, -d_x) = -y
         assert fx_feed[0] == pytest.approx(fy_feed[1], rel=1e-12, abs=1e-12)
         assert fx_feed[1] == pytest.approx(-fy_feed[0], rel=1e-12, abs=1e-12)
         assert fx_feed[2] == pytest.approx(fy_feed[2], rel=1e-12, abs=1e-12)
         # Feeding backwards flips the in-plane force: it still resists the motion.
-        back = kline.force(t, INSIDE, (0.0, -FEED, 0.0))
+        back = _force(kline, t, INSIDE, (0.0, -FEED, 0.0))
         assert back[0] == pytest.approx(-fy_feed[0], rel=1e-12, abs=1e-12)
         assert back[1] == pytest.approx(-fy_feed[1], rel=1e-12, abs=1e-12)
         # Any feed direction: same in-plane magnitude (a proper rotation).
         c = FEED / math.sqrt(2.0)
-        diag = kline.force(t, INSIDE, (c, -c, 0.0))
+        diag = _force(kline, t, INSIDE, (c, -c, 0.0))
         assert math.hypot(diag[0], diag[1]) == pytest.approx(
             math.hypot(fy_feed[0], fy_feed[1]), rel=1e-9, abs=1e-9
         )
@@ -103,9 +110,9 @@ def test_force_is_linear_in_feed_velocity_and_depth() -> None:
     kline = KlineCuttingForce()
     for j in range(50):
         t = 0.2 + j * 3.1e-4
-        base = kline.force(t, INSIDE, (0.001, 0.002, 0.0))
-        fast = kline.force(t, INSIDE, (0.003, 0.006, 0.0))
-        deep = kline.force(t, (INSIDE[0], INSIDE[1], 2.0 * INSIDE[2]), (0.001, 0.002, 0.0))
+        base = _force(kline, t, INSIDE, (0.001, 0.002, 0.0))
+        fast = _force(kline, t, INSIDE, (0.003, 0.006, 0.0))
+        deep = _force(kline, t, (INSIDE[0], INSIDE[1], 2.0 * INSIDE[2]), (0.001, 0.002, 0.0))
         for i in range(3):
             assert fast[i] == pytest.approx(3.0 * base[i], rel=1e-12, abs=1e-12)
             assert deep[i] == pytest.approx(2.0 * base[i], rel=1e-12, abs=1e-12)
@@ -116,9 +123,9 @@ def test_engagement_window_half_immersion() -> None:
     kline = KlineCuttingForce(radial_depth=0.005)
     assert kline.exit_angle == pytest.approx(0.5 * math.pi)
     omega = 2.0 * math.pi * 1800.0 / 60.0
-    out = kline.force(0.75 * math.pi / omega, INSIDE, (0.0, FEED, 0.0))  # teeth at 3pi/4, 7pi/4
+    out = _force(kline, 0.75 * math.pi / omega, INSIDE, (0.0, FEED, 0.0))  # teeth at 3pi/4, 7pi/4
     assert out == (0.0, 0.0, 0.0)
-    inside = kline.force(0.25 * math.pi / omega, INSIDE, (0.0, FEED, 0.0))  # tooth 0 at pi/4
+    inside = _force(kline, 0.25 * math.pi / omega, INSIDE, (0.0, FEED, 0.0))  # tooth 0 at pi/4
     k = _k(kline, FEED, 0.005)
     s = math.sin(0.25 * math.pi)
     assert inside[1] == pytest.approx(k * (s * s - 0.3 * s * s), rel=1e-9)
@@ -139,5 +146,127 @@ def test_engagement_window_half_immersion() -> None:
     ],
 )
 def test_invalid_parameters_are_refused(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=field):
+        KlineCuttingForce(**kwargs)
+
+
+# --- whose path sets the chip and the depth ----------------------------------------------
+
+TZ = 60.0 / (2 * 1800.0)  # tooth period of the paper's cutter [s]
+
+
+def test_programmed_chip_is_the_programmed_path_between_tooth_passes() -> None:
+    kline = KlineCuttingForce(chip='programmed', depth='programmed')
+    assert kline.tooth_period == pytest.approx(TZ, rel=1e-15)
+    # On the first cut (+y at 3 mm/s from t = 0), whatever the tool does: f = 0.05 mm along +y
+    # and d_a = 5 mm (the program's z = -5 mm below the top at 0).
+    tool = (-0.074, -0.06, -0.0123)  # off the program, deeper than programmed
+    for t in (0.5, 3.21, 20.0):
+        for velocity in ((0.0, 0.0, 0.0), (0.01, -0.02, 0.003)):
+            got = kline.force(t, tool, velocity)
+            want = kline.chip_force(t, tool, (0.0, FEED * TZ), 0.005)
+            assert got == pytest.approx(want, rel=1e-9, abs=1e-9)
+    # Right after the corner (t = 80 mm / 3 mm/s) the chip turns: the programmed path since
+    # the previous tooth has a +y part before the corner and a +x part after it.
+    corner = 0.08 / FEED
+    t = corner + 0.25 * TZ
+    got = kline.force(t, tool, (0.0, 0.0, 0.0))
+    want = kline.chip_force(t, tool, (0.25 * TZ * FEED, 0.75 * TZ * FEED), 0.005)
+    assert got == pytest.approx(want, rel=1e-9, abs=1e-9)
+    # At rest (before the start) there is no chip.
+    assert kline.force(-0.1, tool, (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
+    assert kline.force(60.0, tool, (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
+
+
+def test_tool_chip_follows_the_path_not_the_velocity_ripple() -> None:
+    # The tool feeds +y at 3 mm/s with a 60 Hz velocity ripple of 2 mm/s amplitude (what the
+    # observer's loop shows under cutting). The ripple has the tooth period, so the path since
+    # the previous tooth is exactly the programmed 0.05 mm, while |v| ranges 1 .. 5 mm/s.
+    kline = KlineCuttingForce()
+    w = 2.0 * math.pi * 60.0
+    amp = 0.002 / w
+    h = 0.25e-3  # the plant's RK4 substep at 1 kHz with 4 substeps
+
+    def state(t: float):
+        y = INSIDE[1] + FEED * t + amp * math.sin(w * t)
+        return (INSIDE[0], y, INSIDE[2]), (0.0, FEED + 0.002 * math.cos(w * t), 0.0)
+
+    worst = 0.0
+    for k in range(400):
+        t = k * h
+        kline.commit(t, *state(t))
+        if t < 2 * TZ:
+            continue
+        for tau in (t, t + 0.5 * h, t + h):  # the RK4 stages ask ahead of the last commit
+            position, velocity = state(tau)
+            got = kline.force(tau, position, velocity)
+            want = kline.chip_force(tau, position, (0.0, FEED * TZ), 0.005)
+            worst = max(worst, max(abs(g - v) for g, v in zip(got, want, strict=True)))
+    # Numerics: the cubic Hermite interpolation of the past position errs by at most
+    # h^4 max|y^(4)| / 384 = (2.5e-4 s)^4 * (0.002 m/s * w^3 = 1.07e5 m/s^4) / 384 = 1.1e-12 m,
+    # and eq. (4) turns a chip error into at most u_s d_a * 1.03 = 7.0e6 N/m: 7.7e-6 N. The
+    # old model (f from |v|) was off by up to 230 N here.
+    assert worst < 7.7e-6
+
+
+def test_tool_chip_is_zero_for_a_tool_that_stood_for_a_tooth_period() -> None:
+    kline = KlineCuttingForce()
+    kline.commit(0.0, INSIDE, (0.0, 0.0, 0.0))
+    assert kline.force(0.5, INSIDE, (0.0, FEED, 0.0)) == (0.0, 0.0, 0.0)
+    kline.commit(0.6, INSIDE, (0.0, 0.0, 0.0))
+    # Moved 0.01 mm in +x since the previous tooth: a chip of 0.01 mm along +x.
+    moved = (INSIDE[0] + 1e-5, INSIDE[1], INSIDE[2])
+    got = kline.force(0.6, moved, (0.0, 0.0, 0.0))
+    assert got == pytest.approx(kline.chip_force(0.6, moved, (1e-5, 0.0), 0.005), rel=1e-12)
+
+
+def test_commit_keeps_time_order_and_force_needs_a_committed_path() -> None:
+    kline = KlineCuttingForce()
+    with pytest.raises(ValueError, match='commit first'):
+        kline.force(0.1, INSIDE, (0.0, FEED, 0.0))
+    kline.commit(1.0, INSIDE, (0.0, 0.0, 0.0))
+    kline.commit(1.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # the same instant: replaced
+    assert kline.past_position(0.0) == (0.0, 0.0)
+    with pytest.raises(ValueError, match='backwards'):
+        kline.commit(0.999, INSIDE, (0.0, 0.0, 0.0))
+
+
+def test_past_position_is_exact_on_a_cubic_path() -> None:
+    kline = KlineCuttingForce()
+    for k in range(200):
+        t = k * 1e-3
+        kline.commit(t, (t**3, 2.0 * t, 0.0), (3.0 * t * t, 2.0, 0.0))
+    for tau in (0.1705, 0.18, 0.19833):  # within the 2 T_z of the past that is kept
+        x, y = kline.past_position(tau)
+        assert x == pytest.approx(tau**3, rel=1e-12)
+        assert y == pytest.approx(2.0 * tau, rel=1e-12)
+
+
+def test_programmed_depth_ignores_the_tool_z_and_tool_depth_follows_it() -> None:
+    fixed = KlineCuttingForce(chip='programmed', depth='programmed')
+    coupled = KlineCuttingForce(chip='programmed', depth='tool')
+    t = 2.0 + 0.3 * TZ
+    shallow, deep = (-0.075, -0.099, -0.005), (-0.075, -0.099, -0.010)
+    assert fixed.force(t, deep, (0, 0, 0)) == fixed.force(t, shallow, (0, 0, 0))
+    pairs = zip(
+        coupled.force(t, deep, (0, 0, 0)), coupled.force(t, shallow, (0, 0, 0)), strict=True
+    )
+    for a, b in pairs:
+        assert a == pytest.approx(2.0 * b, rel=1e-12)
+    # Above the top no tool cuts, whatever the program says.
+    assert fixed.force(t, (-0.075, -0.099, 0.001), (0, 0, 0)) == (0.0, 0.0, 0.0)
+
+
+@pytest.mark.parametrize(
+    ('kwargs', 'field'),
+    [
+        ({'chip': 'velocity'}, 'chip'),
+        ({'depth': 'fixed'}, 'depth'),
+        ({'program': ((0.0, 0.0, 0.0),)}, 'program'),
+        ({'program': ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))}, 'program'),
+        ({'program_feed_rate': 0.0}, 'program_feed_rate'),
+    ],
+)
+def test_invalid_path_parameters_are_refused(kwargs: dict, field: str) -> None:
     with pytest.raises(ValueError, match=field):
         KlineCuttingForce(**kwargs)

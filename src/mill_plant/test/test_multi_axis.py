@@ -35,12 +35,14 @@ def _pd(plant, ref: tuple[float, float, float], w: float = 30.0) -> tuple[float,
 @pytest.mark.parametrize('cutting', ['kline', 'step'])
 def test_three_rigid_models_reproduce_three_axis_plant(cutting: str) -> None:
     start = (-0.075, -0.105, -0.005)
-    if cutting == 'kline':
-        force = KlineCuttingForce()
-    else:
-        force = StepForce((40.0, -25.0, 10.0), start_time=0.5)
-    old = ThreeAxisPlant(AXES, force, start, max_torque=(0.5, 0.5, 0.5))
-    new = MultiAxisPlant(_rigid(), force, start, max_input=(0.5, 0.5, 0.5))
+
+    def force():  # a Kline model learns its plant's path: one per plant
+        if cutting == 'kline':
+            return KlineCuttingForce()
+        return StepForce((40.0, -25.0, 10.0), start_time=0.5)
+
+    old = ThreeAxisPlant(AXES, force(), start, max_torque=(0.5, 0.5, 0.5))
+    new = MultiAxisPlant(_rigid(), force(), start, max_input=(0.5, 0.5, 0.5))
     sliding = stuck = 0
     for k in range(2000):  # 2 s: a 3 mm/s cut in x, then hold (stick-slip at the stop)
         t = k * DT

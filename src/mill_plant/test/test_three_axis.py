@@ -24,23 +24,49 @@ def _set_velocity(plant: ThreeAxisPlant, velocity: tuple[float, float, float]) -
 
 
 def _reference(kline: KlineCuttingForce, x0, v0, torque, t_end: float) -> np.ndarray:
-    """Same ODE by scipy DOP853; valid only while no velocity reaches zero."""
+    """Same equations by scipy DOP853; valid only while no velocity reaches zero.
+
+    The chip is the tool's x-y path since the previous tooth, p(t) - p(t - T_z): a delay
+    equation, solved by steps of one tooth period, each using the dense output of the one
+    before for p(t - T_z) (the tool stood at x0 before t = 0, as the plant tells the model).
+    """
     drive = [torque[i] / AXES[i].lead for i in range(3)]
     m_e = [a.effective_mass for a in AXES]
     c_e = [a.effective_damping for a in AXES]
     mu = [a.coulomb_friction for a in AXES]
     signs = [math.copysign(1.0, v) for v in v0]
+    tz = kline.tooth_period
+    previous = None  # dense output of the step before
+
+    def past(t: float) -> tuple[float, float]:
+        if previous is None or t <= 0.0:
+            return x0[0], x0[1]
+        y = previous(t)
+        return float(y[0]), float(y[1])
 
     def rhs(t: float, y: np.ndarray) -> list[float]:
-        f = kline.force(t, (y[0], y[1], y[2]), (y[3], y[4], y[5]))
+        px, py = past(t - tz)
+        depth = kline.workpiece_top - y[2]
+        f = kline.chip_force(t, (y[0], y[1], y[2]), (y[0] - px, y[1] - py), depth)
         acc = [(drive[i] - f[i] - c_e[i] * y[3 + i] - mu[i] * signs[i]) / m_e[i] for i in range(3)]
         return [y[3], y[4], y[5], *acc]
 
-    sol = solve_ivp(
-        rhs, (0.0, t_end), [*x0, *v0], method='DOP853', rtol=1e-12, atol=1e-15, max_step=1e-3
-    )
-    assert sol.success
-    return sol.y[:, -1]
+    state, t0 = [*x0, *v0], 0.0
+    while t0 < t_end:
+        t1 = min(t0 + tz, t_end)
+        sol = solve_ivp(
+            rhs,
+            (t0, t1),
+            state,
+            method='DOP853',
+            rtol=1e-12,
+            atol=1e-15,
+            max_step=1e-3,
+            dense_output=True,
+        )
+        assert sol.success
+        previous, state, t0 = sol.sol, sol.y[:, -1], t1
+    return np.asarray(state)
 
 
 @pytest.mark.parametrize(
@@ -61,6 +87,7 @@ def test_rk4_matches_dop853_with_kline_force(specific_energy, helix_deg, torque)
     v0 = (0.01, 0.01, -0.0002)
     plant = ThreeAxisPlant(AXES, kline, initial_position=x0, substeps=4)
     _set_velocity(plant, v0)
+    kline.commit(0.0, x0, v0)  # the state the test set replaces the one the plant committed
     lowest = [abs(v) for v in v0]
     cutting_steps = 0
     for _ in range(1000):

@@ -26,7 +26,7 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 
 # Chávez-Conde section 5: r1 … r9.
 BEZIER_R = (12870, 91520, 288288, 524160, 600600, 443520, 205920, 54912, 6435)
@@ -64,7 +64,7 @@ def blend(delta: float) -> tuple[float, float, float]:
     return psi, d1, d2
 
 
-class BezierRestToRest:
+class BezierRestToRest(Trajectory):
     """All three axes move from `start` to `end` between t1 and t2, at rest at both ends."""
 
     PREFIX = 'bezier'
@@ -90,8 +90,8 @@ class BezierRestToRest:
             raise ValueError('start, end, t1 and t2 must be finite')
         if not t2 > t1:
             raise ValueError(f't2 must be > t1, got t1={t1!r}, t2={t2!r}')
-        self.start: tuple[float, float, float] = start_t  # type: ignore[assignment]
-        self.end: tuple[float, float, float] = end_t  # type: ignore[assignment]
+        self.start: tuple[float, float, float] = start_t
+        self.end: tuple[float, float, float] = end_t
         self.t1 = float(t1)
         self.t2 = float(t2)
         self.end_time = self.t2

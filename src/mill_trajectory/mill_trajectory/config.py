@@ -10,13 +10,14 @@ from typing import Any
 
 from mill_common.parameters import (
     ParamSpec,
-    algorithm_specs,
     algorithm_values,
     boolean,
     in_range,
     non_negative,
     one_of,
+    positive,
 )
+from mill_common.signals import AXES
 
 from mill_trajectory.base import Trajectory
 from mill_trajectory.registry import TRAJECTORIES
@@ -24,7 +25,7 @@ from mill_trajectory.registry import TRAJECTORIES
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
     specs = [
-        ('trajectory', ParamSpec('trajectory', 'linear', 'path type', one_of(*TRAJECTORIES))),
+        ('trajectory', ParamSpec('trajectory', 'linear', 'path type', TRAJECTORIES.check())),
         (
             'duration',
             ParamSpec(
@@ -54,6 +55,62 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         ),
     ]
     specs += [
+        (
+            'timing',
+            ParamSpec(
+                'timing',
+                'lockstep',
+                'lockstep: answer each /clock tick of the plant with the reference ahead of it; '
+                'realtime: start the job once every axis of `axes` has reported its position, '
+                'first moving there from where the axes stand (approach.*), and publish the '
+                'reference on the system clock every publish_period',
+                one_of('lockstep', 'realtime'),
+                True,
+            ),
+        ),
+        (
+            'axes',
+            ParamSpec(
+                'axes',
+                ['x', 'y', 'z'],
+                'realtime: the axes whose states start the job',
+                _axes,
+                True,
+            ),
+        ),
+        (
+            'publish_period',
+            ParamSpec(
+                'publish_period',
+                0.01,
+                'realtime: wall time between reference messages [s]; each covers preview_time '
+                'ahead',
+                in_range(1e-4, 1.0),
+                True,
+            ),
+        ),
+        (
+            'approach.speed',
+            ParamSpec(
+                'speed',
+                0.002,
+                'realtime: peak speed of the move from where the axes stand to the start point '
+                '[m/s]',
+                positive,
+                True,
+            ),
+        ),
+        (
+            'approach.max_distance',
+            ParamSpec(
+                'max_distance',
+                0.02,
+                'realtime: refuse to start when an axis stands further than this from the start '
+                'point [m]',
+                non_negative,
+                True,
+            ),
+        ),
         (
             'feed_override.enabled',
             ParamSpec(
@@ -100,7 +157,14 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('max', 1.5, 'largest accepted feed override [-]', in_range(0.0, 10.0)),
         ),
     ]
-    return specs + algorithm_specs(TRAJECTORIES.values())
+    return specs + TRAJECTORIES.parameter_specs()
+
+
+def _axes(value: Any) -> str | None:
+    if not isinstance(value, list | tuple) or not value:
+        return 'must be a non-empty list of axis names'
+    bad = [a for a in value if a not in AXES]
+    return f'must name axes among {", ".join(AXES)}, got {bad[0]!r}' if bad else None
 
 
 @dataclass(frozen=True)
@@ -110,7 +174,7 @@ class Job:
 
 
 def build_job(values: dict[str, Any]) -> Job:
-    cls = TRAJECTORIES[values['trajectory']]
+    cls = TRAJECTORIES.get(values['trajectory'])
     own = algorithm_values(cls, values)
     path = cls.from_parameters(own)
     end = path.end_time + values['settle_time']

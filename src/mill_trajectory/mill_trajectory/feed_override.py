@@ -127,7 +127,7 @@ class TimeScaledPath:
         return TrajectorySample(
             s.position,
             (o * v[0], o * v[1], o * v[2]),
-            tuple(o * o * a[i] + slope * v[i] for i in range(3)),
+            (o * o * a[0] + slope * v[0], o * o * a[1] + slope * v[1], o * o * a[2] + slope * v[2]),
         )
 
 

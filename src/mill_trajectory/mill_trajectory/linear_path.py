@@ -11,11 +11,12 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 
 # The paper's job: x = -0.075 m on the first cut (the reading that makes the
 # path continuous; eq. (19) prints +0.075), 80 mm in +y, then 80 mm in +x,
@@ -32,7 +33,7 @@ def _flat(points: Sequence[Sequence[float]]) -> list[float]:
     return [float(v) for p in points for v in p]
 
 
-class LinearPath:
+class LinearPath(Trajectory):
     PREFIX = 'linear'
     PARAMETERS = (
         ParamSpec(
@@ -51,9 +52,9 @@ class LinearPath:
         feed_rate: float = BELTRAN_FEED_RATE,
         start_time: float = 0.0,
     ) -> None:
-        points = [tuple(float(v) for v in p) for p in waypoints]
-        if len(points) < 2 or any(len(p) != 3 for p in points):
+        if len(waypoints) < 2 or any(len(p) != 3 for p in waypoints):
             raise ValueError('waypoints must hold at least two points of three coordinates')
+        points = [(float(p[0]), float(p[1]), float(p[2])) for p in waypoints]
         if not (feed_rate > 0 and math.isfinite(feed_rate)):
             raise ValueError(f'feed_rate must be > 0, got {feed_rate!r}')
         self.points = points
@@ -67,13 +68,17 @@ class LinearPath:
                 raise ValueError('waypoints must not repeat a point (zero-length segment)')
             duration = length / self.feed_rate
             # Beltrán 2013 eq. (19)-(22): velocity (p_f - p_i)/(t_f - t_i) on each segment.
-            velocity = tuple((bj - aj) / duration for aj, bj in zip(a, b, strict=True))
+            velocity = (
+                (b[0] - a[0]) / duration,
+                (b[1] - a[1]) / duration,
+                (b[2] - a[2]) / duration,
+            )
             self._velocities.append(velocity)
             self._starts.append(self._starts[-1] + duration)
         self.end_time = self._starts[-1]
 
     @classmethod
-    def from_parameters(cls, values: dict) -> LinearPath:
+    def from_parameters(cls, values: Mapping[str, Any]) -> LinearPath:
         flat = values['waypoints']
         if len(flat) % 3:
             raise ValueError('linear.waypoints must hold a multiple of 3 numbers')

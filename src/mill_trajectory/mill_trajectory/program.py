@@ -43,7 +43,7 @@ from typing import Any
 
 from mill_common.parameters import ParameterError, ParamSpec, number_list, validate_all
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.bezier import BezierRestToRest
 
 Point = tuple[float, float, float]
@@ -148,7 +148,7 @@ class _Piece:
     bezier: BezierRestToRest | None  # bezier only
 
 
-class ProgramTrajectory:
+class ProgramTrajectory(Trajectory):
     """Segments (linear / bezier / dwell) from `start`, one after the other, from t = 0."""
 
     PREFIX = 'program'

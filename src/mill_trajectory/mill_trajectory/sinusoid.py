@@ -21,14 +21,14 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample
 
 MAHAROF_AMPLITUDE = (0.01, 0.0, 0.0)
 MAHAROF_FREQUENCY = (0.5, 0.5, 0.5)
 DEFAULT_DURATION = 4.0
 
 
-class Sinusoid:
+class Sinusoid(Trajectory):
     PREFIX = 'sinusoid'
     PARAMETERS = (
         ParamSpec('center', [0.0, 0.0, 0.0], 'centre c of x, y, z [m]', number_list(3)),

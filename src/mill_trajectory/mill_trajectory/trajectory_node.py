@@ -12,6 +12,15 @@ feed_override.max]; a non-finite value is ignored and the last one held; both ar
 on /diagnostics as a WARN. Each sample's reference is then computed once, in order, with
 the override in effect when its tick arrives (mill_trajectory.feed_override).
 
+With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
+`axes` has reported its position and as many nodes (the controllers) listen to the reference,
+starts the job at the stamp of the newest of those states
+(the drive's system clock), first moving from where the axes stand to the path's start at
+`approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
+publishes every `publish_period` the points of the sample grid t0 + kT from one sample
+before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
+them at their states' stamps. The job status says when it started (`start_stamp_ns`).
+
 With feed_override.lockstep the node answers overrides instead of ticks: an override stamped
 t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
 point stamped t_k, with the override's ramp velocity[0] (a β-hold) applied over the sample.
@@ -29,14 +38,19 @@ after the first sample whose path time reaches the end of the path, or at `durat
 from __future__ import annotations
 
 import math
+import time
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_common.checks import Rejected, joint_values
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
+from rclpy.clock import Clock as RosClock
+from rclpy.clock import ClockType
 from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -44,6 +58,8 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
+from mill_trajectory.approach import Approach, ApproachError
+from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.config import build_job, parameter_specs
 from mill_trajectory.feed_override import (
     FeedOverride,
@@ -58,18 +74,26 @@ JOB_STATUS_NAME = 'mill_trajectory: job'
 class TrajectoryNode(Node):
     def __init__(self) -> None:
         super().__init__('trajectory')
-        self._path = None
+        self._path: Trajectory  # set by _configure
         self._scaled: TimeScaledPath | None = None
         self._periodic: PeriodicOverridePath | None = None
+        self._override: FeedOverride  # set by _configure
         self._dt_ns = 0
         self._job_end = 0.0
         self._done_sent = False
+        self._done_end = 0.0
         self._next_report = 0.0
+        self._t0: int | None = None  # realtime: job start on the system clock [ns]
+        self._newest_state_ns = 0
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, JointTrajectory] | None = None
-        if self._periodic is not None:
+        self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
+        self._refused = ''
+        if self.params.values['timing'] == 'realtime':
+            self._start_realtime()
+        elif self._periodic is not None:
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_periodic, DATA_QOS
             )
@@ -86,6 +110,8 @@ class TrajectoryNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
+        if self._t0 is not None:
+            raise ValueError('the path cannot change while a realtime job runs')
         if values['feed_override.min'] > values['feed_override.max']:
             raise ValueError('feed_override.min must not exceed feed_override.max')
         if self._scaled is not None:
@@ -117,6 +143,8 @@ class TrajectoryNode(Node):
             return
         self._dt_ns = period_ns(values['sample_period'])
         self._points = max(1, math.ceil(values['preview_time'] * 1e9 / self._dt_ns))
+        if values['timing'] == 'realtime':
+            return
         if values['feed_override.enabled']:
             end = self._end_rule(values)
             self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns), end)
@@ -125,6 +153,76 @@ class TrajectoryNode(Node):
         return JobEnd.of(
             self._path.end_time, values['settle_time'], values['duration'], self._dt_ns
         )
+
+    # -- real time ---------------------------------------------------------------------------
+    def _start_realtime(self) -> None:
+        v = self.params.values
+        if v['feed_override.enabled']:
+            raise ValueError('feed_override is not available with timing realtime')
+        for axis in v['axes']:
+            self.create_subscription(
+                JointState, topics.state(axis), partial(self._on_state, axis), 1
+            )
+        wall = RosClock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(v['publish_period'], self._publish_realtime, clock=wall)
+        self.get_logger().info(
+            f'realtime: the job starts when {", ".join(v["axes"])} report their positions'
+        )
+
+    def _on_state(self, axis: str, msg: JointState) -> None:
+        value = joint_values(msg.name, {'position': msg.position}, axis, ('position',))
+        if isinstance(value, Rejected):
+            self.get_logger().warning(
+                f'dropped a state on {topics.state(axis)}: {value.reason}',
+                throttle_duration_sec=1.0,
+            )
+            return
+        self._positions[axis] = value[0]
+        self._newest_state_ns = max(
+            getattr(self, '_newest_state_ns', 0), from_stamp(msg.header.stamp)
+        )
+
+    def _publish_realtime(self) -> None:
+        v = self.params.values
+        if self._t0 is None:
+            if self._refused or set(self._positions) != set(v['axes']):
+                return
+            if self._ref_pub.get_subscription_count() < len(v['axes']):
+                return  # the controllers (one per axis) are not listening yet
+            here = [self._positions.get(a, 0.0) for a in AXES]
+            try:
+                approach = Approach(
+                    self._path,
+                    here,
+                    v['approach.speed'],
+                    v['approach.max_distance'],
+                    [AXES.index(a) for a in v['axes']],
+                )
+            except ApproachError as exc:
+                self._refused = str(exc)
+                self.get_logger().error(f'job refused: {exc}')
+                self._report(0.0, 'refused', self._refused, level=DiagnosticStatus.ERROR)
+                return
+            self._path = approach
+            self._job_end += approach.duration
+            self._t0 = self._newest_state_ns
+            self.get_logger().info(
+                f'job started; approach of {1e3 * approach.distance:.3f} mm in '
+                f'{approach.duration:.2f} s, ends at t = {self._job_end:.3f} s'
+            )
+        dt_ns = self._dt_ns
+        now = time.time_ns() - self._t0
+        first = max(0, now // dt_ns - 1)
+        count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
+        out = JointTrajectory()
+        out.header.frame_id = self.get_name()
+        out.header.stamp = to_stamp(self._t0 + first * dt_ns)
+        out.joint_names = list(AXES)
+        for i in range(count):
+            sample = self._path.sample(seconds((first + i) * dt_ns))
+            out.points.append(self._point(sample, i * dt_ns))
+        self._ref_pub.publish(out)
+        self._job_status(seconds(now))
 
     def _on_override(self, msg: JointState) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
@@ -148,14 +246,17 @@ class TrajectoryNode(Node):
             slope = 0.0
         if accepted.value != offered:
             slope = 0.0  # a clamped or held override does not ramp
-        t = self._scaled.path_time
+        scaled = self._scaled
+        assert scaled is not None, 'lockstep overrides always scale the path'
+        t = scaled.path_time
         if problem:
             self.get_logger().warning(problem)
             self._report(t, 'running', problem)
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = msg.header.stamp
         out.joint_names = list(AXES)
-        out.points.append(self._point(self._scaled.sample(accepted.value, slope), 0))
+        out.points.append(self._point(scaled.sample(accepted.value, slope), 0))
         self._ref_pub.publish(out)
         self._answer = (ns, out)
         self._job_status(t)
@@ -166,32 +267,35 @@ class TrajectoryNode(Node):
             if ns == self._answer[0]:
                 self._ref_pub.publish(self._answer[1])  # a repeat: the same samples again
             return
+        periodic = self._periodic
+        assert periodic is not None, 'periodic overrides come with feed_override.period'
         k, rem = divmod(ns, self._dt_ns)
         if rem:
             problem = f'override stamped {ns} ns, not a sample: ignored'
             self.get_logger().warning(problem)
-            self._report(self._scaled.path_time, 'running', problem)
+            self._report(periodic.scaled.path_time, 'running', problem)
             return
         offered = msg.position[0] if len(msg.position) else math.nan
         slope = msg.velocity[0] if len(msg.velocity) else 0.0
-        answer = self._periodic.answer(k, float(offered), float(slope))
+        answer = periodic.answer(k, float(offered), float(slope))
         if answer.problem:
             self.get_logger().warning(answer.problem)
-            self._report(self._scaled.path_time, 'running', answer.problem)
+            self._report(periodic.scaled.path_time, 'running', answer.problem)
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = to_stamp(answer.first * self._dt_ns)
         out.joint_names = list(AXES)
         for i, sample in enumerate(answer.samples):
             out.points.append(self._point(sample, i * self._dt_ns))
         self._ref_pub.publish(out)
         self._answer = (ns, out)
-        self._job_status(self._scaled.path_time)
+        self._job_status(periodic.scaled.path_time)
 
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
         if self._scaled is not None:
-            self._publish_scaled(ns)
+            self._publish_scaled(self._scaled, ns)
             t = self._scaled.path_time
         else:
             self._publish_chunk(ns)
@@ -199,33 +303,40 @@ class TrajectoryNode(Node):
 
     def _job_status(self, t: float) -> None:
         done, end = t >= self._job_end, self._job_end
-        if self._scaled is not None and self._dt_ns and self.params.values['feed_override.enabled']:
+        scaled = self._scaled
+        if scaled is not None and self._dt_ns and self.params.values['feed_override.enabled']:
             # The job ends with its path, whatever the override: at a sample found on the way.
-            last = self._scaled.last_sample
-            done = last is not None and self._scaled.sample_index > last
-            end = seconds(last * self._dt_ns) if done else end
+            last = scaled.last_sample
+            done = last is not None and scaled.sample_index > last
+            if last is not None and done:
+                end = seconds(last * self._dt_ns)
         if done and not self._done_sent:
-            self._done_sent = True
+            self._done_sent, self._done_end = True, end
             self._report(t, 'done', end_time=end)
         elif t >= self._next_report:
+            # once done, the job stays done (a graph runs on until it is stopped)
             self._next_report = t + 1.0
-            self._report(t, 'running')
+            if self._done_sent:
+                self._report(t, 'done', end_time=self._done_end)
+            else:
+                self._report(t, 'running')
 
-    def _publish_scaled(self, ns: int) -> None:
+    def _publish_scaled(self, scaled: TimeScaledPath, ns: int) -> None:
         # Each sample once and in order: its path time depends on all earlier overrides.
-        first = max(ns // self._dt_ns, self._scaled.sample_index)
+        first = max(ns // self._dt_ns, scaled.sample_index)
         last = ns // self._dt_ns + self._points
         if first >= last:
             return
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = to_stamp(first * self._dt_ns)
         out.joint_names = list(AXES)
         for k in range(first, last):
-            sample = self._scaled.sample(self._override.value)
+            sample = scaled.sample(self._override.value)
             out.points.append(self._point(sample, (k - first) * self._dt_ns))
         self._ref_pub.publish(out)
 
-    def _point(self, sample, offset_ns: int) -> JointTrajectoryPoint:
+    def _point(self, sample: TrajectorySample, offset_ns: int) -> JointTrajectoryPoint:
         point = JointTrajectoryPoint()
         point.positions = list(sample.position)
         point.velocities = list(sample.velocity)
@@ -235,6 +346,7 @@ class TrajectoryNode(Node):
 
     def _publish_chunk(self, ns: int) -> None:
         out = JointTrajectory()
+        out.header.frame_id = self.get_name()
         out.header.stamp = to_stamp(ns)
         out.joint_names = list(AXES)
         for i in range(self._points):
@@ -243,18 +355,27 @@ class TrajectoryNode(Node):
         self._ref_pub.publish(out)
 
     def _report(
-        self, t: float, state: str, problem: str | None = None, end_time: float | None = None
+        self,
+        t: float,
+        state: str,
+        problem: str | None = None,
+        level: bytes | None = None,
+        end_time: float | None = None,
     ) -> None:
-        values = {
+        values: dict[str, object] = {
             'state': state,
             'time': t,
             'end_time': self._job_end if end_time is None else end_time,
             'feed_override': self._override.value,
         }
+        if self._t0 is not None:
+            values['start_stamp_ns'] = self._t0
+        if level is None:
+            level = DiagnosticStatus.WARN if problem else DiagnosticStatus.OK
         self._diag_pub.publish(
             diagnostic_array(
                 self.get_clock().now().nanoseconds,
-                DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
+                level,
                 JOB_STATUS_NAME,
                 problem or f'job {state}',
                 'mill',

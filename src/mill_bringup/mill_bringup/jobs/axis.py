@@ -21,19 +21,24 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_bag.types import DIAGNOSTIC_ARRAY, decode
-from mill_common.signals import AXES, axis_index
+from mill_bag.types import decode
+from mill_common.signals import AXES, ControlInputs, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
+from mill_controllers.base import AxisController
 from mill_controllers.config import build_controller
 from mill_controllers.force_control import ForceFeedLoop, ForceSampler, tool_depth
+from mill_controllers.trip import FollowingErrorTrip
+from mill_observers.base import Observer
 from mill_observers.config import build_observer
-from mill_plant.config import build_plant
-from mill_plant.sensor import quantize
+from mill_observers.delay import DelayCompensation
+from mill_plant.simulated_machine import SimulatedMachine
+from mill_trajectory.base import TrajectorySample
 from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import FeedOverride, JobEnd, PeriodicOverridePath
 
@@ -45,21 +50,53 @@ from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
+AXIS_NODES = {('mill_controllers', 'axis_controller'), ('mill_observers', 'observer_node')}
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 FORCE_CONTROLLER = ('mill_controllers', 'force_controller_node')
 JOB_STATUS = 'mill_trajectory: job'
 
 
-def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
+def timing_of(scen: Scenario, node: str) -> str:
+    """A node's `timing` parameter (lockstep for nodes that have none)."""
+    return str(scen.parameters(node).get('timing', 'lockstep'))
+
+
+def axis_delays(scen: Scenario) -> dict[int, int]:
+    """command_delay of each axis's controller and observer, which must agree."""
+    delays: dict[int, int] = {}
+    for node in scen.nodes:
+        if (node.package, node.executable) not in AXIS_NODES:
+            continue
+        values = scen.parameters(node.name)
+        i = axis_index(values['axis'])
+        if delays.setdefault(i, values['command_delay']) != values['command_delay']:
+            raise ScenarioError(
+                f'scenario {scen.name}: the {AXES[i]} controller and observer disagree on '
+                'command_delay'
+            )
+    return delays
+
+
+def following_error_trips(scen: Scenario) -> dict[int, FollowingErrorTrip]:
+    """The following-error trip of each axis controller, by axis index."""
+    trips = {}
+    for node in scen.nodes:
+        if (node.package, node.executable) == ('mill_controllers', 'axis_controller'):
+            values = scen.parameters(node.name)
+            trips[axis_index(values['axis'])] = FollowingErrorTrip(values['following_error_limit'])
+    return trips
+
+
+def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[int, Observer]]:
     """Controller and observer cores by axis index, checked to fit together.
 
     ScenarioError if an active axis lacks one, or if a controller designs with the
     observer's model estimate and the observer of its axis estimates none.
     """
     pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
-    controllers: dict[int, Any] = {}
-    observers: dict[int, Any] = {}
+    controllers: dict[int, AxisController] = {}
+    observers: dict[int, Observer] = {}
     names: dict[int, str] = {}
     for node in scen.nodes_of('mill_controllers'):
         if node.executable != 'axis_controller':
@@ -80,9 +117,7 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, Any], dict[int, Any]]:
             f'scenario {scen.name}: axes {missing} lack a controller or an observer'
         )
     for i in active:
-        if getattr(controllers[i], 'needs_model', False) and not getattr(
-            observers[i], 'PROVIDES_MODEL', False
-        ):
+        if controllers[i].needs_model and not observers[i].PROVIDES_MODEL:
             raise ScenarioError(
                 f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
                 f'model estimate, but {names[i]} estimates none (use observer rls)'
@@ -105,10 +140,12 @@ class AdaptiveFeed:
         self.path = PeriodicOverridePath(
             build_job(tv).trajectory, job.dt_ns, tv['feed_override.period'], override, job.end
         )
-        self.refs: dict[int, Any] = {}
+        self.refs: dict[int, TrajectorySample] = {}
         self.rows: list[tuple[float, ...]] = []
 
-    def reference_of(self, k: int, ns: int, force: tuple[float, float, float], z: float):
+    def reference_of(
+        self, k: int, ns: int, force: tuple[float, float, float], z: float
+    ) -> TrajectorySample:
         """The reference of sample k; at a control instant the override is computed first."""
         hit = self.sampler.offer(ns, force)
         if hit is not None:
@@ -144,14 +181,23 @@ class AxisSimulation:
     def __init__(self, job: AxisJob, times: CoreTimer | None) -> None:
         scen = job.scenario
         pv = scen.parameters(job.plant)
-        self.job = job
-        self.plant = build_plant(pv)
+        # The machine behind the plant node's front end: the same backend, the same calls.
+        self.machine = SimulatedMachine(pv)
         self.path = build_job(scen.parameters(job.trajectory)).trajectory
-        self.controllers, self.observers = build_axis_cores(scen)
-        self.active = [AXES.index(a) for a in job.axes]
-        self.resolution = pv['sensor_resolution']
+        controllers, observers = build_axis_cores(scen)
+        self.active = [AXES.index(a) for a in self.machine.axes]
         self.dt_ns = job.dt_ns
         self.dt = seconds(job.dt_ns)
+        delays = axis_delays(scen)
+        self.controllers = controllers
+        self.lead = {i: delays[i] for i in self.active}  # the controllers' aim ahead
+        self.trips = following_error_trips(scen)
+        self.observers = {
+            i: DelayCompensation(observers[i], delays[i], self.dt) for i in self.active
+        }
+        # Commands the plant applies N steps after the step they answer (zero before).
+        self.in_flight: deque[list[float]] = deque([[0.0] * len(self.active)] * pv['command_delay'])
+        self.job = job
         self.feed: AdaptiveFeed | None = None
         if job.force_controller:
             if not job.lockstep:
@@ -163,7 +209,6 @@ class AxisSimulation:
             self.feed = AdaptiveFeed(job)
         self.rec = RunRecord.empty(min(job.samples, job.max_samples), self.dt)
         self.k = -1
-        self.torque = [math.nan] * len(AXES)
         self.clock = times or NoTimer()
 
     def step(self, k: int) -> None:
@@ -171,38 +216,51 @@ class AxisSimulation:
             self.rec = self.rec.grown(2 * len(self.rec.t), self.dt)
         s = self.rec.signals
         t = seconds(k * self.dt_ns)
-        clock, plant, torque = self.clock, self.plant, self.torque
+        clock, machine = self.clock, self.machine
         clock.start()
-        position = plant.position
-        force = plant.cutting_force()
+        measured = machine.read()
+        force = machine.cutting_force()  # of this sample's state, sent with the states
         if self.feed is None:
             ref = self.path.sample(t)
         else:
-            z = quantize(position[2], self.resolution)
+            z = measured[self.active.index(2)] if 2 in self.active else math.nan
             ref = self.feed.reference_of(k, k * self.dt_ns, force, z)
         clock.lap('trajectory')
-        for i in self.active:
-            y = quantize(position[i], self.resolution)
+        efforts = []
+        for i, y in zip(self.active, measured, strict=True):
             clock.start()
-            est = self.observers[i].correct(y)
+            observer = self.observers[i]
+            est = observer.correct(y)
+            model = observer.observer.model_estimate()
             clock.lap('observer')
-            torque[i] = self.controllers[i].compute(t, y, ref.axis(i), est)
+            lead = self.lead[i]
+            if lead:  # the command acts N samples on: aim at the state and reference there
+                t_c = seconds((k + lead) * self.dt_ns)
+                inputs = ControlInputs(t_c, est.position, self.path.sample(t_c).axis(i), est, model)
+            else:
+                inputs = ControlInputs(t, y, ref.axis(i), est, model)
+            u = self.controllers[i].compute(inputs)
             clock.lap('controller')
+            u = self.trips[i].command(t, y - ref.position[i], u)
+            efforts.append(u)
             s['position'][k, i] = y
             s['reference'][k, i] = ref.position[i]
             s['reference_velocity'][k, i] = ref.velocity[i]
             s['estimate_velocity'][k, i] = est.velocity
             s['estimate_disturbance'][k, i] = est.disturbance
-            s['torque'][k, i] = torque[i]
-        u = tuple(torque)
-        s['true_velocity'][k] = plant.velocity
-        s['true_disturbance'][k] = plant.disturbance(u)
+            s['torque'][k, i] = u
+        applied = efforts
+        if self.in_flight:
+            self.in_flight.append(efforts)
+            applied = self.in_flight.popleft()
+        machine.write(applied)
+        _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
         s['force'][k] = force
         clock.start()
-        plant.step(u, self.dt)
+        machine.advance(self.dt)
         clock.lap('plant')
-        for i in self.active:
-            self.observers[i].predict(torque[i])
+        for i, u in zip(self.active, efforts, strict=True):
+            self.observers[i].command(u)
             clock.lap('observer', call=False)  # the second half of the correct call's sample
         self.k = k
 
@@ -214,17 +272,28 @@ class AxisSimulation:
         return False
 
     def record(self) -> RunRecord:
-        rec = self.rec.trimmed(self.k + 1)
+        self.rec = self.rec.trimmed(self.k + 1)
         if self.feed is not None:
             rows = np.array(self.feed.rows, dtype=float)
-            rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
-        return rec
+            self.rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
+        self.rec.events = [
+            f'{AXES[i]} axis: following-error trip at t = {trip.trip.time:.4f} s, '
+            f'|e| = {1e3 * abs(trip.trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
+            for i, trip in sorted(self.trips.items())
+            if trip.trip is not None
+        ]
+        return self.rec
 
 
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
     CLOCK = ('mill_plant', 'plant_node')
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
+
+    @classmethod
+    def runs(cls, scen: Scenario) -> bool:
+        plants = [n for n in scen.nodes if (n.package, n.executable) == cls.CLOCK]
+        return bool(plants) and timing_of(scen, plants[0].name) == 'lockstep'
 
     def __init__(self, scen: Scenario) -> None:
         super().__init__(scen)
@@ -243,13 +312,18 @@ class AxisJob(Job[RunRecord]):
         self.end_time = build_job(tv).end_time
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
+        # Who publishes the states: the plant, or the driver the controllers are told of.
+        controllers = [n for n in scen.nodes if (n.package, n.executable) in AXIS_NODES]
+        self.state_owner = (
+            scen.parameters(controllers[0].name)['plant_node'] if controllers else self.plant
+        )
         forces = [n.name for n in scen.nodes if (n.package, n.executable) == FORCE_CONTROLLER]
         if len(forces) > 1:
             raise ScenarioError(f'scenario {scen.name}: more than one force controller')
         self.force_controller = forces[0] if forces else ''
         # With a feed override the job ends when its path ends: a length the run finds.
         self.override = bool(tv['feed_override.enabled'])
-        self.lockstep = self.override and tv['feed_override.lockstep']
+        self.lockstep = self.override and bool(tv['feed_override.lockstep'])
         self.end = JobEnd.of(
             build_job({**tv, 'settle_time': 0.0, 'duration': 0.0}).end_time,
             tv['settle_time'],
@@ -258,7 +332,6 @@ class AxisJob(Job[RunRecord]):
         )
         self._bound = self._samples
         self._found: int | None = None  # the samples of a run whose end was found
-        self._statuses_read = 0
         if self.override:
             self._check_override(tv)
 
@@ -273,6 +346,11 @@ class AxisJob(Job[RunRecord]):
             raise ScenarioError(
                 f'scenario {name}: the trajectory waits for a lockstep feed override, but no '
                 'force controller sends one'
+            )
+        if self.lockstep and any(axis_delays(self.scenario).values()):
+            raise ScenarioError(
+                f'scenario {name}: controllers with a command_delay aim at references beyond '
+                'those a lockstep feed override has set; use command_delay 0'
             )
         lo = tv['feed_override.min']
         if lo <= 0 and not tv['duration'] > 0:
@@ -341,8 +419,6 @@ class AxisJob(Job[RunRecord]):
         out[topics.GROUND_TRUTH] = JOINT_STATE
         if self.force_controller:
             out[topics.FORCE_CONTROL_STATE] = JOINT_STATE
-        if self.override:
-            out[topics.DIAGNOSTICS] = DIAGNOSTIC_ARRAY  # the trajectory says where the job ends
         return out
 
     def recorded_topics(self) -> dict[str, str]:
@@ -359,34 +435,40 @@ class AxisJob(Job[RunRecord]):
 
     def complete(self, source: MessageSource) -> bool:
         if self.override and self._found is None:
-            end = self._announced_end(source)
-            if end is None:
+            # The trajectory says where the job ends, once its path has ended.
+            status = source.status(JOB_STATUS)
+            if status is None or status.get('state') != 'done':
                 return False
-            self._found = job_steps(end, self.dt_ns)
+            self._found = job_steps(float(status['end_time']), self.dt_ns)
         last_ns = (self.samples - 1) * self.dt_ns
         needed = [topics.state(a) for a in self.axes] + [topics.estimate(a) for a in self.axes]
         return all(source.latest_stamp_ns(t) >= last_ns for t in needed)
 
-    def _announced_end(self, source: MessageSource) -> float | None:
-        """end_time of the trajectory's "done" status, once it has been heard."""
-        messages = source.messages(topics.DIAGNOSTICS)
-        new, self._statuses_read = messages[self._statuses_read :], len(messages)
-        for data in new:
-            for status in decode(DIAGNOSTIC_ARRAY, data).status:
-                values = {kv.key: kv.value for kv in status.values}
-                if status.name == JOB_STATUS and values.get('state') == 'done':
-                    return float(values['end_time'])
-        return None
-
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
-        aside = (topics.DIAGNOSTICS, topics.FORCE_CONTROL_STATE)
-        kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw and t not in aside}
+        aside = topics.FORCE_CONTROL_STATE
+        kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw and t != aside}
         types = {**self.monitor_topics(), **self.recorded_topics()}
-        rec, missing = record_from_raw(kept, types, self.axes, self.samples, self.dt_ns)
+        rec, missing = record_from_raw(
+            kept, types, self.axes, self.samples, self.dt_ns, owners=self.owners()
+        )
         if self.force_controller:
-            rec.force_control = force_control_rows(raw.get(topics.FORCE_CONTROL_STATE, ()))
-            rec.force_control = rec.force_control[rec.force_control[:, 0] <= rec.t[-1]]
+            rows = force_control_rows(raw.get(aside, ()))
+            rec.force_control = rows[rows[:, 0] <= rec.t[-1]]
         return rec, {t: m for t, m in missing.items() if m}
+
+    def owners(self) -> dict[str, str]:
+        """The node each per-axis topic must come from (header.frame_id)."""
+        out = {}
+        for node in self.scenario.nodes:
+            key = (node.package, node.executable)
+            if key not in AXIS_NODES:
+                continue
+            axis = self.scenario.parameters(node.name)['axis']
+            topic = topics.joint_command(axis) if key[0] == 'mill_controllers' else None
+            out[topic or topics.estimate(axis)] = node.name
+        for axis in self.axes:
+            out[topics.state(axis)] = self.state_owner
+        return out
 
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> AxisSimulation:
@@ -394,7 +476,7 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        text = format_summary(summarize(rec, skip), skip)
+        text = '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
         if rec.force_control is None or not len(rec.force_control):
             return text
         lines = [
@@ -411,11 +493,17 @@ class AxisJob(Job[RunRecord]):
         return text + '\n' + '\n'.join(lines)
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
-        out: dict[str, Any] = {'metrics': [vars(m) for m in summarize(rec, skip)]}
+        out: dict[str, Any] = {
+            'metrics': [vars(m) for m in summarize(rec, skip)],
+            'events': rec.events,
+        }
         if rec.force_control is not None:
             out['force_control'] = [vars(s) for s in depth_stretches(rec.force_control)]
             out['job_end_time'] = float(rec.t[-1])
         return out
+
+    def foreign(self, rec: RunRecord) -> dict[str, int]:
+        return dict(rec.foreign)
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
@@ -426,6 +514,16 @@ class AxisJob(Job[RunRecord]):
                     max_difference(a[:, i], b[:, i]) if (a.shape == b.shape) else math.inf
                 )
         return out
+
+
+def max_difference(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest |a − b| over all entries; 0 where both are NaN, inf where only one is."""
+    if a.shape != b.shape:
+        return math.inf
+    diff = np.abs(a - b)
+    diff[np.isnan(a) & np.isnan(b)] = 0.0
+    diff[np.isnan(diff)] = np.inf
+    return float(diff.max()) if diff.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -474,13 +572,3 @@ def force_control_rows(messages: Sequence[bytes]) -> np.ndarray:
         rows[ns] = [seconds(ns), *list(msg.position)[: len(FORCE_CONTROL) - 1]]
     out = np.array([rows[ns] for ns in sorted(rows)], dtype=float)
     return out.reshape(-1, len(FORCE_CONTROL))
-
-
-def max_difference(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest |a − b| over all entries; 0 where both are NaN, inf where only one is."""
-    if a.shape != b.shape:
-        return math.inf
-    diff = np.abs(a - b)
-    diff[np.isnan(a) & np.isnan(b)] = 0.0
-    diff[np.isnan(diff)] = np.inf
-    return float(diff.max()) if diff.size else 0.0

@@ -37,6 +37,10 @@ class MessageSource(Protocol):
         """Serialized messages heard on topic, in arrival order."""
         ...
 
+    def status(self, name: str) -> dict[str, str] | None:
+        """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
+        ...
+
 
 class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
@@ -45,6 +49,10 @@ class Job(ABC, Generic[R]):
     CLOCK: ClassVar[tuple[str, str]]  # (package, executable) of the node that clocks the job
     # How long to wait, after the job is complete, for its last messages [s].
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
+    # Whether the offline simulator reproduces a distributed run of this kind exactly.
+    HAS_OFFLINE_TWIN: ClassVar[bool] = True
+    # Whether the runner deactivates the clock node (lifecycle: brake) when the job is done.
+    BRAKE_AT_END: ClassVar[bool] = False
 
     def __init__(self, scen: Scenario) -> None:
         self.scenario = scen
@@ -125,6 +133,10 @@ class Job(ABC, Generic[R]):
     @abstractmethod
     def summary_json(self, rec: R, skip: float) -> dict[str, Any]:
         """The same as JSON-ready values."""
+
+    def foreign(self, rec: R) -> dict[str, int]:
+        """Messages the record left out per topic: from another sender, or malformed."""
+        return {}
 
     @abstractmethod
     def differences(self, rec: R, other: R) -> dict[str, float]:

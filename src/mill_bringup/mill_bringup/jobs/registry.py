@@ -5,16 +5,17 @@ from __future__ import annotations
 from mill_bringup.jobs.axis import AxisJob
 from mill_bringup.jobs.base import Job
 from mill_bringup.jobs.force import ForceJob
+from mill_bringup.jobs.realtime import RealtimeAxisJob
 from mill_bringup.scenario import Scenario, ScenarioError
 
-JOB_KINDS: tuple[type[Job], ...] = (AxisJob, ForceJob)
+JOB_KINDS: tuple[type[Job], ...] = (AxisJob, RealtimeAxisJob, ForceJob)
 
 
 def job_for(scen: Scenario) -> Job:
     """The scenario's job, checked; ScenarioError names what does not fit."""
     kinds = [kind for kind in JOB_KINDS if kind.runs(scen)]
     if len(kinds) != 1:
-        clocks = ', '.join(' '.join(kind.CLOCK) for kind in JOB_KINDS)
+        clocks = ', '.join(sorted({' '.join(kind.CLOCK) for kind in JOB_KINDS}))
         raise ScenarioError(
             f'scenario {scen.name} must launch exactly one clock node ({clocks}); '
             f'it launches {len(kinds) or "none"}'

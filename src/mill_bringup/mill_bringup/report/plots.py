@@ -375,6 +375,8 @@ def loop_timing_figure(reports: list[RunReport]) -> Figure:
     a = ax[0, 0]
     for c, r in enumerate(reports):
         w = r.run.state_wall_ns
+        if w is None:
+            continue  # a record without arrival times (the caller passes runs that have them)
         ok = (w[1:] > 0) & (w[:-1] > 0)
         periods = (w[1:] - w[:-1])[ok] / 1e6
         if periods.size:

@@ -1,0 +1,128 @@
+"""The three-axis job on the wall clock: the drive keeps its own time (timing realtime).
+
+The same graph as the lockstep axis job (mill_bringup.jobs.axis), with every node's
+`timing` realtime and no sim time: the drive ticks every sample period, stamps its states
+with the system clock and holds the newest command; the trajectory starts the job once it
+hears every axis (first moving there from where the axes stand) and says so on /diagnostics
+(`start_stamp_ns`); the job is complete when it reports done. A realtime run depends on the
+machine's timing, so it has no offline twin; its summary adds, per axis, the drive's
+fraction of periods without a fresh command and the state → command latency.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
+from mill_bringup.jobs.base import MessageSource
+from mill_bringup.metrics import RunRecord, format_summary, summarize
+from mill_bringup.realtime_record import realtime_record
+from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.simulation import CoreTimer
+from mill_common import topics
+
+JOB_STATUS = 'mill_trajectory: job'
+DRIVE_STATUS = 'mill_plant: realtime'
+DRIVE_FIGURES = ('late_fraction', 'latency_median_ms', 'latency_p99_ms', 'latency_max_ms')
+
+
+class RealtimeAxisJob(AxisJob):
+    KIND = 'axis-realtime'
+    HAS_OFFLINE_TWIN = False
+    BRAKE_AT_END = True  # the drive keeps running on its own clock: brake it first
+
+    @classmethod
+    def runs(cls, scen: Scenario) -> bool:
+        plants = [n for n in scen.nodes if (n.package, n.executable) == cls.CLOCK]
+        return bool(plants) and timing_of(scen, plants[0].name) == 'realtime'
+
+    def __init__(self, scen: Scenario) -> None:
+        super().__init__(scen)
+        lockstep = [n.name for n in scen.nodes if timing_of(scen, n.name) != 'realtime']
+        if lockstep:
+            raise ScenarioError(
+                f'the plant runs in realtime but {", ".join(lockstep)} in lockstep: '
+                'set timing realtime on every node (run_scenario --timing realtime)'
+            )
+        self.start_ns: int | None = None
+        self.drive: dict[str, str] = {}
+
+    @property
+    def sim_time(self) -> float:
+        return self.end_time  # the path; an approach move, if any, comes on top
+
+    def prepare_graph(self, monitored: bool) -> None:
+        pass  # no lockstep start: the drive ticks from its activation on
+
+    def monitor_topics(self) -> dict[str, str]:
+        out = super().monitor_topics()
+        for axis in self.axes:
+            out[topics.joint_command(axis)] = JOINT_STATE
+        return out
+
+    def recorded_topics(self) -> dict[str, str]:
+        return {
+            k: v for k, v in super().recorded_topics().items() if k not in self.monitor_topics()
+        }
+
+    def sim_time_stamps(self) -> bool:
+        return False
+
+    def _job(self, source: MessageSource) -> dict[str, str] | None:
+        status = source.status(JOB_STATUS)
+        if status is not None and 'start_stamp_ns' in status:
+            self.start_ns = int(status['start_stamp_ns'])
+            self.end_time = float(status['end_time'])
+        return status
+
+    def progress(self, source: MessageSource) -> float:
+        status = self._job(source)
+        return float(status['time']) if status is not None and 'time' in status else -math.inf
+
+    def complete(self, source: MessageSource) -> bool:
+        status = self._job(source)
+        if status is None:
+            return False
+        if status.get('state') == 'refused':
+            raise ScenarioError(f'the trajectory refused the job: {status["message"]}')
+        drive = source.status(DRIVE_STATUS)
+        if drive is not None:
+            self.drive = drive
+        return status.get('state') == 'done'
+
+    def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
+        if self.start_ns is None:
+            raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
+        rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner)
+        return rec, {}
+
+    def simulation(self, times: CoreTimer | None = None) -> Any:
+        raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
+
+    def drive_figures(self) -> dict[str, dict[str, float]]:
+        """Per axis: late fraction and latency median/p99/max [ms], from the drive's status."""
+        out = {}
+        for axis in self.axes:
+            out[axis] = {f: float(self.drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
+        return out
+
+    def summary(self, rec: RunRecord, skip: float) -> str:
+        lines = [format_summary(summarize(rec, skip), skip)]
+        lines.append(
+            'axis   periods without a fresh command   state->command latency [ms]: '
+            'median    p99     max'
+        )
+        for axis, f in self.drive_figures().items():
+            lines.append(
+                f'{axis:>4}   {100 * f["late_fraction"]:30.2f} %   {f["latency_median_ms"]:27.3f} '
+                f'{f["latency_p99_ms"]:7.3f} {f["latency_max_ms"]:7.3f}'
+            )
+        return '\n'.join(lines)
+
+    def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
+        out = super().summary_json(rec, skip)
+        out['drive'] = self.drive_figures()
+        out['start_stamp_ns'] = self.start_ns
+        return out

@@ -1,0 +1,105 @@
+"""The record of a realtime run: samples at the drive's own stamps. ROS-free.
+
+On the wall clock the drive stamps each state with its acquisition time, so samples are not
+on a grid: sample i is the i-th state stamp at or after the job's start t0 (the trajectory
+reports it on /diagnostics), t_i = stamp_i − t0. The reference is the trajectory's points
+interpolated at each stamp (mill_common.reference_buffer, as the controllers take it), the
+estimate and command are the ones stamped like the state they answer, the ground truth the
+one the simulated drive published with it. Latency of a command: its arrival (the
+recorder's receive time, where the bag has one) minus the stamp of the state it answers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from mill_bag.types import decode
+from mill_common.reference_buffer import ReferenceBuffer
+from mill_common.signals import AXES, AxisReference
+
+from mill_bringup.metrics import SIGNALS, RunRecord
+from mill_common import topics
+
+JOINT_STATE = 'sensor_msgs/msg/JointState'
+JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
+
+
+def _ns(stamp: Any) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def _by_stamp(messages: Sequence[bytes]) -> dict[int, Any]:
+    out = {}
+    for data in messages:
+        msg = decode(JOINT_STATE, data)
+        out[_ns(msg.header.stamp)] = msg
+    return out
+
+
+def realtime_record(
+    raw: Mapping[str, Sequence[bytes]],
+    axes: Sequence[str],
+    t0: int,
+    end_time: float,
+    owner: str = '',
+) -> RunRecord:
+    """Samples of the job [t0, t0 + end_time] at the stamps of the first axis's states.
+
+    owner: the drive's node name; states sent by any other node are not the machine's.
+    """
+    states = {a: _by_stamp(raw.get(topics.state(a), ())) for a in axes}
+    if owner:
+        states = {
+            a: {ns: m for ns, m in s.items() if m.header.frame_id == owner}
+            for a, s in states.items()
+        }
+    end_ns = t0 + round(end_time * 1e9)
+    stamps = sorted(ns for ns in states[axes[0]] if t0 <= ns <= end_ns)
+    n = len(stamps)
+    rec = RunRecord(
+        np.array([(ns - t0) * 1e-9 for ns in stamps]),
+        {s: np.full((n, len(AXES)), np.nan) for s in SIGNALS},
+    )
+    sig = rec.signals
+    refs = {a: ReferenceBuffer() for a in axes}
+    for data in raw.get(topics.REFERENCE, ()):
+        msg = decode(JOINT_TRAJECTORY, data)
+        base = _ns(msg.header.stamp)
+        names = list(msg.joint_names)
+        for p in msg.points:
+            at = base + _ns(p.time_from_start)
+            for a in axes:
+                if a in names:
+                    j = names.index(a)
+                    vel = p.velocities[j] if len(p.velocities) > j else 0.0
+                    acc = p.accelerations[j] if len(p.accelerations) > j else 0.0
+                    refs[a].add(at, AxisReference(p.positions[j], vel, acc))
+    estimates = {a: _by_stamp(raw.get(topics.estimate(a), ())) for a in axes}
+    commands = {a: _by_stamp(raw.get(topics.joint_command(a), ())) for a in axes}
+    truth = _by_stamp(raw.get(topics.GROUND_TRUTH, ()))
+    for k, ns in enumerate(stamps):
+        for a in axes:
+            i = AXES.index(a)
+            state = states[a].get(ns)
+            if state is not None and len(state.position):
+                sig['position'][k, i] = state.position[0]
+            ref = refs[a].at(ns)
+            if ref is not None:
+                sig['reference'][k, i] = ref.position
+                sig['reference_velocity'][k, i] = ref.velocity
+            est = estimates[a].get(ns)
+            if est is not None and len(est.velocity) and len(est.effort):
+                sig['estimate_velocity'][k, i] = est.velocity[0]
+                sig['estimate_disturbance'][k, i] = est.effort[0]
+            cmd = commands[a].get(ns)
+            if cmd is not None and len(cmd.effort):
+                sig['torque'][k, i] = cmd.effort[0]
+        gt = truth.get(ns)
+        if gt is not None:
+            for j, name in enumerate(gt.name):
+                if name in AXES:
+                    sig['true_velocity'][k, AXES.index(name)] = gt.velocity[j]
+                    sig['true_disturbance'][k, AXES.index(name)] = gt.effort[j]
+    return rec

@@ -1,0 +1,136 @@
+"""A node's inputs under watch: bad messages dropped and counted, silence reported.
+
+Every node that subscribes keeps an `InputGuard`. Its callbacks check each message
+(mill_common.checks) and tell the guard what they dropped (`drop`) and what they used
+(`heard`). A steady-clock timer (`tick`, four times a second) does the rest:
+
+- an input quiet for `warn_after` seconds is a WARN, for `error_after` an ERROR, on
+  /diagnostics and in the log, naming the topic and the node expected to publish it; an
+  input that has never been heard is reported as waiting (the graph may still be starting);
+- when an outage ends, its length is logged and reported;
+- in lockstep, an input silent for `error_after` ends the node with that message (exit 3):
+  nobody hangs silently; in real time the node keeps running and keeps reporting;
+- dropped messages are counted per topic and reported at most once a second each.
+
+The status goes to /diagnostics as `<node>: inputs` every second and at once on a change.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+
+from mill_common import topics
+from mill_common.checks import DropCounter, Rejected
+from mill_common.node_main import request_exit
+from mill_common.ros import diagnostic_status, diagnostics_of
+from mill_common.watch import InputWatch, Level
+
+LEVELS = {
+    Level.OK: DiagnosticStatus.OK,
+    Level.WARN: DiagnosticStatus.WARN,
+    Level.ERROR: DiagnosticStatus.ERROR,
+}
+
+
+class InputGuard:
+    def __init__(
+        self,
+        node: Node,
+        warn_after: Callable[[], float],
+        error_after: Callable[[], float],
+        exit_on_silence: bool,
+        stamp_ns: Callable[[], int],
+        extra: Callable[[], tuple[bytes, str, dict[str, object]]] | None = None,
+    ) -> None:
+        self.node = node
+        self._warn_after = warn_after
+        self._error_after = error_after
+        self.exit_on_silence = exit_on_silence
+        self._stamp_ns = stamp_ns
+        self._extra = extra  # the node's own state for the status: (level, message, values)
+        self.watches: dict[str, InputWatch] = {}
+        self.drops = DropCounter()
+        self._levels: dict[str, Level] = {}
+        self._next_status = 0.0
+        self._pub = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        node.create_timer(0.25, self.tick, clock=steady)
+
+    def watch(self, topic: str, publisher: str) -> InputWatch:
+        w = InputWatch(topic, publisher, self._warn_after(), self._error_after())
+        self.watches[topic] = w
+        return w
+
+    def heard(self, topic: str) -> None:
+        w = self.watches[topic]
+        ended = w.heard(time.monotonic())
+        if ended is not None:
+            self.node.get_logger().info(
+                f'{topic} (from {w.publisher}) back after {ended:.2f} s of silence'
+            )
+            self._publish(force=True)
+
+    def drop(self, topic: str, rejected: Rejected, sender: str = '') -> None:
+        if self.drops.drop(topic, rejected, time.monotonic()):
+            who = f' from {sender}' if sender else ''
+            self.node.get_logger().warning(
+                f'dropped a message on {topic}{who}: {rejected.reason} '
+                f'({self.drops.counts[topic]} so far)'
+            )
+            self._publish(force=True)
+
+    def tick(self) -> None:
+        now = time.monotonic()
+        for topic, w in self.watches.items():
+            w.warn_after, w.error_after = self._warn_after(), self._error_after()
+            level = Level.OK if w.waiting else w.level(now)
+            old = self._levels.get(topic, Level.OK)
+            self._levels[topic] = level
+            if level > old:
+                text = w.describe(now)
+                if level is Level.ERROR:
+                    self.node.get_logger().error(text)
+                else:
+                    self.node.get_logger().warning(text)
+                self._publish(force=True)
+            if level is Level.ERROR and self.exit_on_silence:
+                request_exit(self.node, 3, w.describe(now))
+        self._publish()
+
+    def level(self) -> Level:
+        return max(self._levels.values(), default=Level.OK)
+
+    def _publish(self, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now < self._next_status:
+            return
+        self._next_status = now + 1.0
+        values: dict[str, object] = {}
+        quiet = []
+        for topic, w in self.watches.items():
+            values[f'{topic}.silence_s'] = round(w.silence(now), 3)
+            values[f'{topic}.dropped'] = self.drops.counts.get(topic, 0)
+            values[f'{topic}.outages'] = w.outages
+            if w.outages:
+                values[f'{topic}.last_outage_s'] = round(w.last_outage, 3)
+            if self._levels.get(topic, Level.OK) is not Level.OK:
+                quiet.append(w.describe(now))
+            elif w.waiting:
+                values[f'{topic}.waiting'] = True
+        level = LEVELS[self.level()]
+        message = '; '.join(quiet) or 'inputs arriving'
+        if self.drops.total:
+            last = '; '.join(f'{t}: {r}' for t, r in self.drops.last_reason.items())
+            message += f'; dropped {self.drops.total} bad messages (last: {last})'
+            level = max(level, DiagnosticStatus.WARN)
+        name = self.node.get_name()
+        statuses = [diagnostic_status(level, f'{name}: inputs', message, name, values)]
+        if self._extra is not None:
+            extra_level, extra_message, extra_values = self._extra()
+            statuses.append(diagnostic_status(extra_level, name, extra_message, name, extra_values))
+        self._pub.publish(diagnostics_of(self._stamp_ns(), statuses))

@@ -1,0 +1,53 @@
+"""Following-error trip of one axis, as a machine tool has it (LinuxCNC's FERROR). ROS-free.
+
+Every sample the controller's following error e = measured position − reference is
+compared with the axis's limit. The first |e| above it latches a trip: from then on the
+controller sends no torque but the brake request (a non-finite effort, which the drive
+answers by braking the axis: velocity 0, position held) until the trip is reset — by the
+node's `reset_trip` service or by setting its `following_error_limit` again. The trip
+remembers when and with which error it happened, for /diagnostics and the log.
+
+The same object runs in the controller node and in the offline simulator, so a run that
+trips does so at the same sample in both.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+BRAKE = math.nan  # the effort that asks the drive to brake the axis
+
+
+@dataclass(frozen=True)
+class Trip:
+    time: float  # [s]
+    error: float  # following error that tripped [m]
+    limit: float  # [m]
+
+
+class FollowingErrorTrip:
+    def __init__(self, limit: float) -> None:
+        if not limit > 0.0:
+            raise ValueError(f'following_error_limit must be > 0 (inf: no trip), got {limit!r}')
+        self.limit = limit
+        self.trip: Trip | None = None
+
+    @property
+    def tripped(self) -> bool:
+        return self.trip is not None
+
+    def check(self, t: float, error: float) -> bool:
+        """True once |error| has exceeded the limit (latched); NaN errors do not trip."""
+        if self.trip is None and abs(error) > self.limit:
+            self.trip = Trip(t, error, self.limit)
+        return self.trip is not None
+
+    def command(self, t: float, error: float, effort: float) -> float:
+        """The effort to send: the law's, or the brake request once tripped."""
+        return BRAKE if self.check(t, error) else effort
+
+    def reset(self) -> Trip | None:
+        """Clear the trip; returns the one cleared, if any."""
+        trip, self.trip = self.trip, None
+        return trip

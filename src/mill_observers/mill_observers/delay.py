@@ -1,0 +1,70 @@
+"""An observer in a loop with N samples between measurement and actuation. ROS-free.
+
+A digital loop always has delay: a command computed from y(k) acts from the next period on
+(real time: the drive applies the newest command at its next tick), or N periods later in
+general. Two things then go wrong with an observer written for N = 0:
+
+- it predicts with u(k) while the machine runs on u(k − N): the estimate of the disturbance
+  absorbs the difference, and with a fast observer (Beltrán's 700 rad/s) the compensation
+  loop oscillates and grows — one sample of delay is enough on the slotting job;
+- the controller computes a command for period k + N from the state at k.
+
+`DelayCompensation` fixes both, in the manner of a Smith predictor: the observer's time
+update uses the command that really acts over [k, k + 1), u(k − N), and the estimate it
+returns is the one for the period the new command will act in, x̂(k + N | k), propagated
+through the commands already sent but not yet applied. An observer whose model can be run
+ahead (`ModelPredictor`: the GPI observer) propagates its own state; for the others the
+position is extrapolated with the estimated velocity. With N = 0 it is the plain observer.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Sequence
+from typing import Protocol, runtime_checkable
+
+from mill_common.signals import Estimate
+
+from mill_observers.base import Observer
+
+
+@runtime_checkable
+class ModelPredictor(Protocol):
+    def predicted(self, inputs: Sequence[float]) -> Estimate:
+        """The estimate after further time updates with these inputs (state unchanged)."""
+        ...
+
+
+class DelayCompensation:
+    def __init__(self, observer: Observer, delay: int, sample_period: float) -> None:
+        if isinstance(delay, bool) or not isinstance(delay, int) or delay < 0:
+            raise ValueError(f'delay must be a whole number of samples >= 0, got {delay!r}')
+        self.observer = observer
+        self.delay = delay
+        self.T = sample_period
+        # The commands that act over the next N periods: u(k − N) … u(k − 1). Before the
+        # first command the drive holds none: zero input.
+        self.pending: deque[float] = deque([0.0] * delay)
+
+    def correct(self, y: float) -> Estimate:
+        """Measurement update with y(k); the estimate for period k + N."""
+        est = self.observer.correct(y)
+        if self.delay == 0:
+            return est
+        self.observer.predict(self.pending[0])  # what acts over [k, k + 1)
+        later = list(self.pending)[1:]
+        if isinstance(self.observer, ModelPredictor):
+            ahead = self.observer.predicted(later)
+            return ahead
+        lead = self.delay * self.T
+        return Estimate(est.position + lead * est.velocity, est.velocity, est.disturbance)
+
+    def command(self, u: float) -> None:
+        """The command computed at sample k (acts from k + N; a braked axis gets no input)."""
+        u = u if math.isfinite(u) else 0.0
+        if self.delay == 0:
+            self.observer.predict(u)
+            return
+        self.pending.popleft()
+        self.pending.append(u)

@@ -1,0 +1,92 @@
+"""Parameters of the drive front end (timing, watchdog, owners), as data. ROS-free."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from mill_common.parameters import (
+    ParamSpec,
+    boolean,
+    in_range,
+    non_negative_int,
+    one_of,
+    positive_int,
+)
+
+TIMINGS = ('lockstep', 'realtime')
+
+
+def _owners(value: Any) -> str | None:
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        return 'must list 3 node names (the owners of x, y, z commands)'
+    if not all(isinstance(v, str) for v in value):
+        return 'must list node names (strings); "" accepts commands from any node'
+    return None
+
+
+DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
+    (
+        'timing',
+        ParamSpec(
+            'timing',
+            'lockstep',
+            'lockstep: the plant is the clock and waits for the commands of each step; '
+            'realtime: it advances on the wall clock at the sample rate and applies the newest '
+            'command it holds (zero-order hold), as a drive does',
+            one_of(*TIMINGS),
+            True,
+        ),
+    ),
+    (
+        'command_owners',
+        ParamSpec(
+            'command_owners',
+            ['x_controller', 'y_controller', 'z_controller'],
+            'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
+            'any other node are ignored and reported; "" accepts any',
+            _owners,
+            True,
+        ),
+    ),
+    (
+        'command_delay',
+        ParamSpec(
+            'command_delay',
+            0,
+            'lockstep: samples N between the step a command answers and the step the plant '
+            'applies it from (a transport delay; the first N steps get zero input); realtime '
+            'has one sample by nature and ignores it',
+            non_negative_int,
+            True,
+        ),
+    ),
+    (
+        'brake_after',
+        ParamSpec(
+            'brake_after',
+            10,
+            'realtime: periods in a row without a fresh command after which the axis is braked',
+            positive_int,
+        ),
+    ),
+    (
+        'command_report_time',
+        ParamSpec(
+            'command_report_time',
+            0.5,
+            'wall time without the command an axis waits for before /diagnostics says so [s]',
+            in_range(0.01, 60.0),
+        ),
+    ),
+    (
+        'autostart',
+        ParamSpec(
+            'autostart',
+            True,
+            'configure and activate by itself (lockstep: once its peers are matched); false: '
+            'wait for the lifecycle transitions configure and activate',
+            boolean,
+            True,
+        ),
+    ),
+)

@@ -1,0 +1,65 @@
+"""The simulated three-axis machine as a drive backend (mill_plant.backend). ROS-free.
+
+The plant models (three_axis / multi_axis, built by mill_plant.config.build_plant) with
+the encoder model (sensor.quantize). Efforts are held between `advance` calls; a NaN
+effort brakes its axis (the plant's safety path), as does an axis that is not under
+control. For analysis it also offers what only a simulation knows: the true velocities,
+the lumped disturbance ξ of each axis and the cutting force.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+from mill_common.signals import AXES
+
+from mill_plant.backend import DriveBackend, Vector3
+from mill_plant.config import build_plant
+from mill_plant.sensor import quantize
+
+
+class SimulatedMachine(DriveBackend):
+    SIMULATED: ClassVar[bool] = True
+
+    def __init__(self, values: dict[str, Any]) -> None:
+        super().__init__(values['axes'])
+        self.plant = build_plant(values)
+        self.resolution = values['sensor_resolution']
+        self._index = [AXES.index(a) for a in self.axes]
+        self._units = {a: self.plant_unit(values, AXES.index(a)) for a in self.axes}
+        # Every machine axis: an axis not under control gets NaN, i.e. is braked.
+        self._held = [math.nan] * len(AXES)
+
+    @staticmethod
+    def plant_unit(values: dict[str, Any], i: int) -> str:
+        model = values['axis_model'][i]
+        return 'V' if model in ('transfer_function', 'velocity_drive') else 'N·m'
+
+    def read(self) -> list[float]:
+        position = self.plant.position
+        return [quantize(position[i], self.resolution) for i in self._index]
+
+    def write(self, efforts: Sequence[float]) -> None:
+        for i, u in zip(self._index, efforts, strict=True):
+            self._held[i] = float(u)
+
+    @property
+    def held(self) -> tuple[float, ...]:
+        """The input of every machine axis (x, y, z) held now."""
+        return tuple(self._held)
+
+    def advance(self, dt: float) -> None:
+        self.last_report = self.plant.step(tuple(self._held), dt)
+
+    def input_units(self) -> dict[str, str]:
+        return dict(self._units)
+
+    # -- what only a simulation knows (analysis topics) ------------------------------------
+    def truth(self) -> tuple[Vector3, Vector3, Vector3]:
+        """True positions, velocities and lumped disturbances ξ of x, y, z (before a step)."""
+        return self.plant.position, self.plant.velocity, self.plant.disturbance(self.held)
+
+    def cutting_force(self) -> Vector3:
+        return self.plant.cutting_force()

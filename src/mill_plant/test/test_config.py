@@ -1,0 +1,97 @@
+"""The plant's parameter table and registries: every piece chosen by name, built from values."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from mill_common.parameters import ParameterError
+from mill_plant.config import build_cutting, build_plant, force_process_specs, parameter_specs
+from mill_plant.cutting import CuttingForceModel, NoCutting, StepForce
+from mill_plant.harmonic_force import HarmonicForce
+from mill_plant.kline_force import KlineCuttingForce
+from mill_plant.multi_axis import MultiAxisPlant
+from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
+
+DEFAULTS = {name: spec.default for name, spec in parameter_specs()}
+# Changeable at run time: the node's own settings, not the machine's.
+NODE_ONLY = {
+    'publish_ground_truth',
+    'lockstep_timeout',
+    'startup_timeout',
+    'min_subscribers',
+    'brake_after',
+    'command_report_time',
+}
+
+
+def test_the_table_names_every_parameter_once_and_freezes_the_plant() -> None:
+    names = [name for name, _ in parameter_specs()]
+    assert len(names) == len(set(names))
+    for name, spec in parameter_specs():
+        assert spec.name == name
+        assert spec.read_only == (name not in NODE_ONLY), name
+    for registry in (CUTTING_MODELS, AXIS_MODELS):
+        for cls in registry.classes():
+            for spec in cls.PARAMETERS:
+                if cls.PREFIX != 'rigid':  # the rigid model's keep their plain names
+                    assert f'{cls.PREFIX}.{spec.name}' in names
+    assert {'mass', 'pitch', 'coulomb_friction'} <= set(names)
+    assert 'rigid.mass' not in names
+
+
+@pytest.mark.parametrize(
+    ('name', 'cls'),
+    [
+        ('kline', KlineCuttingForce),
+        ('step', StepForce),
+        ('harmonic', HarmonicForce),
+        ('none', NoCutting),
+    ],
+)
+def test_cutting_models_are_built_by_name(name: str, cls: type[CuttingForceModel]) -> None:
+    assert CUTTING_MODELS.get(name) is cls
+    assert name == cls.PREFIX
+    force = build_cutting({**DEFAULTS, 'cutting_model': name})
+    assert type(force) is cls
+
+
+def test_cutting_values_reach_the_model_in_its_units() -> None:
+    values = {**DEFAULTS, 'kline.helix_angle': 30.0, 'kline.spindle_speed': 3000.0}
+    kline = build_cutting(values)
+    assert isinstance(kline, KlineCuttingForce)
+    assert kline.helix_angle == math.radians(30.0)  # degrees on the node, radians inside
+    assert kline.spindle_speed_rpm == 3000.0
+    step = build_cutting({**DEFAULTS, 'cutting_model': 'step', 'step.start_time': 0.25})
+    assert step.force(0.2, (0, 0, 0), (0, 0, 0)) == (0.0, 0.0, 0.0)
+    assert step.force(0.25, (0, 0, 0), (0, 0, 0)) == (0.0, 100.0, 0.0)
+
+
+def test_an_unknown_cutting_model_is_refused_by_name() -> None:
+    spec = dict(parameter_specs())['cutting_model']
+    assert spec.check('chatter') == 'must be one of: kline, step, harmonic, none'
+    with pytest.raises(ParameterError) as info:
+        build_cutting({**DEFAULTS, 'cutting_model': 'chatter'})
+    assert info.value.name == 'cutting_model'
+
+
+def test_a_bad_cutting_value_names_its_full_parameter() -> None:
+    with pytest.raises(ParameterError) as info:
+        build_cutting({**DEFAULTS, 'cutting_model': 'harmonic', 'harmonic.teeth': 0})
+    assert info.value.name == 'harmonic.teeth'
+
+
+def test_axis_models_come_from_their_registry() -> None:
+    values = {**DEFAULTS, 'axis_model': ['rigid', 'flexible', 'velocity_drive']}
+    plant = build_plant(values)
+    assert isinstance(plant, MultiAxisPlant)
+    assert [type(m) for m in plant.models] == [AXIS_MODELS.get(n) for n in values['axis_model']]
+
+
+def test_the_force_process_node_shares_the_lockstep_timeouts() -> None:
+    ours = dict(force_process_specs())
+    plant = dict(parameter_specs())
+    assert ours['lockstep_timeout'] is plant['lockstep_timeout']
+    assert ours['startup_timeout'] is plant['startup_timeout']
+    assert ours['min_subscribers'].default == 1  # the force controller only
+    assert all(s.read_only for n, s in ours.items() if n.startswith('force_process.'))
