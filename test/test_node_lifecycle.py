@@ -48,3 +48,49 @@ def test_sigterm_exits_cleanly(start_node) -> None:
     code, _out, err = node.wait(timeout=30)
     assert code == 0, err
     assert 'Traceback' not in err, err
+
+
+# ros2 launch escalates to SIGTERM when a process has not ended 5 s after its SIGINT
+# (sigterm_timeout): the deadline comes from launch, not from a speed we measure.
+LAUNCH_SIGTERM_TIMEOUT = 5.0
+
+
+@pytest.mark.system
+def test_ctrl_c_ends_a_running_graph_before_launch_escalates(start_node) -> None:
+    from mill_bringup.graph import module_of
+    from mill_common.ros import DATA_QOS
+    from sensor_msgs.msg import JointState
+
+    from mill_bringup import scenario
+    from mill_common import topics
+
+    scen = scenario.load('slotting')
+    nodes = {n.name: start_node(module_of(n.package, n.executable), n.name) for n in scen.nodes}
+    with ros_node('ctrl_c_probe') as (probe, executor):
+        states: list[JointState] = []
+        probe.create_subscription(JointState, topics.state('x'), states.append, DATA_QOS)
+
+        def stepping() -> bool:
+            executor.spin_once(timeout_sec=0.05)
+            return len(states) > 50  # the lockstep job runs
+
+        assert wait_until(stepping, 300), 'the job never started'
+    t0 = time.monotonic()
+    for node in nodes.values():  # the terminal's SIGINT, then the one launch forwards
+        node.proc.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    for node in nodes.values():
+        if node.alive():
+            node.proc.send_signal(signal.SIGINT)
+    ended: dict[str, float] = {}
+    while len(ended) < len(nodes) and time.monotonic() - t0 < 30:
+        for name, node in nodes.items():
+            if name not in ended and not node.alive():
+                ended[name] = time.monotonic() - t0
+        time.sleep(0.01)
+    late = {n: round(t, 2) for n, t in ended.items() if t > LAUNCH_SIGTERM_TIMEOUT}
+    assert len(ended) == len(nodes) and not late, (ended, late)
+    for name, node in nodes.items():
+        code, _out, err = node.wait(timeout=5)
+        assert code == 0, f'{name}: {err}'
+        assert 'Traceback' not in err, f'{name}: {err}'

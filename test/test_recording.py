@@ -37,6 +37,8 @@ from sensor_msgs.msg import JointState
 from mill_common import topics
 from test.conftest import wait_until
 
+Q = topics.qualify  # a contract name as the bag holds it (default namespace)
+
 T_NS = 1_000_000
 AXES = ('x', 'y', 'z')
 PNGS = {
@@ -139,12 +141,12 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
     listed = {t['topic_metadata']['name']: t for t in meta['topics_with_message_count']}
     assert {name: t['message_count'] for name, t in listed.items()} == dict(by_mcap)
     contract = {
-        **{topics.state(a): 'sensor_msgs/msg/JointState' for a in AXES},
-        **{topics.estimate(a): 'sensor_msgs/msg/JointState' for a in AXES},
-        **{topics.joint_command(a): 'sensor_msgs/msg/JointState' for a in AXES},
-        topics.REFERENCE: 'trajectory_msgs/msg/JointTrajectory',
-        topics.GROUND_TRUTH: 'sensor_msgs/msg/JointState',
-        topics.CUTTING_FORCE: 'geometry_msgs/msg/WrenchStamped',
+        **{Q(topics.state(a)): 'sensor_msgs/msg/JointState' for a in AXES},
+        **{Q(topics.estimate(a)): 'sensor_msgs/msg/JointState' for a in AXES},
+        **{Q(topics.joint_command(a)): 'sensor_msgs/msg/JointState' for a in AXES},
+        Q(topics.REFERENCE): 'trajectory_msgs/msg/JointTrajectory',
+        Q(topics.GROUND_TRUTH): 'sensor_msgs/msg/JointState',
+        Q(topics.CUTTING_FORCE): 'geometry_msgs/msg/WrenchStamped',
         topics.CLOCK: 'rosgraph_msgs/msg/Clock',
         topics.DIAGNOSTICS: 'diagnostic_msgs/msg/DiagnosticArray',
     }
@@ -159,24 +161,24 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
     # once more for each re-offer), /clock with every 10th step, the ground truth and
     # force of every step it took (0..K-1, perhaps K); the controllers a command and the
     # observers an estimate for every state (repeats of step 0 answered or not).
-    state_k = ks[topics.state('x')]
+    state_k = ks[Q(topics.state('x'))]
     K = max(state_k)
     repeats = state_k.count(0) - 1
     assert K >= 2000  # the job's 2001 samples at least
     for axis in AXES:
-        k = ks[topics.state(axis)]
+        k = ks[Q(topics.state(axis))]
         assert k.count(0) == 1 + repeats and once_each([v for v in k if v], 1), axis
         assert len(k) == K + 1 + repeats
         for kind in (topics.estimate(axis), topics.joint_command(axis)):
-            k = ks[kind]
+            k = ks[Q(kind)]
             assert 1 <= k.count(0) <= 1 + repeats, kind
             assert once_each([v for v in k if v], 1) and K - 1 <= max(k) <= K, kind
-    clock = ks[topics.CLOCK]
+    clock = ks[Q(topics.CLOCK)]
     assert clock.count(0) == 1 + repeats and once_each([v for v in clock if v], 10, 10)
     assert len(clock) == K // 10 + 1 + repeats
     for name in (topics.GROUND_TRUTH, topics.CUTTING_FORCE):
-        assert once_each(ks[name]) and len(ks[name]) in (K, K + 1), name
-    ref = ks[topics.REFERENCE]  # one per /clock tick the trajectory answered
+        assert once_each(ks[Q(name)]) and len(ks[Q(name)]) in (K, K + 1), name
+    ref = ks[Q(topics.REFERENCE)]  # one per /clock tick the trajectory answered
     assert once_each([v for v in ref if v], 10, 10) and max(ref) >= 10 * (K // 10) - 10
 
 
@@ -248,7 +250,7 @@ def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_
     )
     try:
         # stepping, and the first flushes are on disk
-        assert wait_until(lambda: metadata_counts(bag).get(topics.state('x'), 0) > 200, 120)
+        assert wait_until(lambda: metadata_counts(bag).get(Q(topics.state('x')), 0) > 200, 120)
         proc.send_signal(sig)
         _out, err = proc.communicate(timeout=60)
     finally:
@@ -260,13 +262,13 @@ def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_
     assert wait_until(lambda: not processes_mentioning(str(run_dir)), 10), 'nodes left running'
     by_rosbags, by_mcap, ks = both_readers(bag)  # complete: summary and footer written
     assert by_rosbags == by_mcap == metadata_counts(bag)
-    states = sorted(set(ks[topics.state('x')]))
+    states = sorted(set(ks[Q(topics.state('x'))]))
     assert states == list(range(len(states))) and len(states) > 200
 
 
 # -- the standalone recorder ----------------------------------------------------------------
 
-RECORDED = (topics.state('x'), topics.CUTTING_FORCE, topics.CLOCK)
+RECORDED = tuple(Q(t) for t in (topics.state('x'), topics.CUTTING_FORCE, topics.CLOCK))
 
 
 @contextlib.contextmanager
@@ -347,7 +349,7 @@ def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
         for k in range(n):
             plant.publish(k)
             time.sleep(0.001)
-        expected = {topics.state('x'): n, topics.CUTTING_FORCE: n, topics.CLOCK: n // 10}
+        expected = {Q(topics.state('x')): n, Q(topics.CUTTING_FORCE): n, topics.CLOCK: n // 10}
         # metadata.yaml is refreshed while recording: it shows every message before the end
         assert wait_until(lambda: metadata_counts(bag) == expected, 30), metadata_counts(bag)
     recorder.proc.send_signal(sig)
@@ -355,8 +357,8 @@ def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
     assert code == 0, err
     by_rosbags, by_mcap, ks = both_readers(bag)
     assert by_rosbags == by_mcap == expected
-    assert ks[topics.state('x')] == list(range(n))
-    assert sorted(ks[topics.CLOCK]) == list(range(0, n, 10))
+    assert ks[Q(topics.state('x'))] == list(range(n))
+    assert sorted(ks[Q(topics.CLOCK)]) == list(range(0, n, 10))
     assert metadata_counts(bag) == expected
 
 
@@ -381,7 +383,7 @@ def test_sigkill_loses_at_most_the_last_second(start_node, tmp_path):
     reader = open_bag(bag)
     rows = list(reader.read())
     assert reader.truncated == [next(bag.glob('*.mcap'))]
-    state = [cdr_stamp_ns(d) // T_NS for t, _, _, _, d in rows if t == topics.state('x')]
+    state = [cdr_stamp_ns(d) // T_NS for t, _, _, _, d in rows if t == Q(topics.state('x'))]
     assert state == list(range(len(state)))  # a whole prefix: nothing lost in between
     before_last_second = max(k for k, w in enumerate(plant.walls) if w <= killed_ns - 10**9)
     assert before_last_second < len(state) <= kill_at + 1

@@ -26,6 +26,7 @@ setup(
             'offline_sim = mill_bringup.offline:main',
             'benchmark = mill_bringup.benchmark:main',
             'report = mill_bringup.report.cli:main',
+            'job_watch = mill_bringup.job_watch:main',
         ],
     },
 )

@@ -128,7 +128,9 @@ class TopicRecorder:
     topics / regex select what discovery subscribes to (neither: every topic;
     both: either); `tap(topic, type)` gives a callback for a raw subscription the
     node has already, `subscribe(topic, type, qos)` subscribes before the topic
-    is discovered (so the first message is not missed).
+    is discovered (so the first message is not missed). Relative names are resolved
+    as the node resolves them (its namespace and remappings), as `ros2 bag record`
+    does; the bag holds absolute names.
     """
 
     def __init__(
@@ -146,7 +148,7 @@ class TopicRecorder:
     ) -> None:
         self.node = node
         self.sim_time = sim_time
-        self.names = {t if t.startswith('/') else '/' + t for t in topics}
+        self.names = {self.resolve(t) for t in topics}
         try:
             self.regex = re.compile(regex) if regex else None
         except re.error as exc:
@@ -165,12 +167,20 @@ class TopicRecorder:
             self._timers.append(node.create_timer(discovery_period, self.discover, clock=steady))
 
     # -- what to record ------------------------------------------------------------------------
+    def resolve(self, topic: str) -> str:
+        """The absolute name of `topic` for this node; BagError for an invalid name."""
+        try:
+            return self.node.resolve_topic_name(topic)
+        except (ValueError, RuntimeError) as exc:
+            raise BagError(f'topic name {topic!r} is not valid: {exc}') from None
+
     def matches(self, topic: str) -> bool:
         if not self.names and self.regex is None:
             return not any(part.startswith('_') for part in topic.split('/'))  # no hidden topics
         return topic in self.names or bool(self.regex and self.regex.search(topic))
 
     def _entry(self, topic: str, msgtype: str) -> _Topic:
+        topic = self.resolve(topic)
         if topic in self._topics:
             raise BagError(f'topic {topic} is recorded twice')
         message_definition(msgtype)  # fails early for a type without definition

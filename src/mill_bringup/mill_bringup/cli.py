@@ -63,12 +63,15 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
             scen.add_override(f'{node.name}.timing={args.timing}')
             if args.timing == 'realtime':
                 scen.add_override(f'{node.name}.use_sim_time=false')
-    if getattr(args, 'delay', None) is not None:
-        if args.delay < 0:
-            raise ScenarioError(f'--delay must be a whole number >= 0, got {args.delay}')
+    delay = getattr(args, 'delay', None)
+    if delay is None and getattr(args, 'timing', None) == 'realtime':
+        delay = 1  # a command computed from the state of tick k acts from tick k + 1
+    if delay is not None:
+        if delay < 0:
+            raise ScenarioError(f'--delay must be a whole number >= 0, got {delay}')
         for node in scen.nodes:
             if node.package in ('mill_plant', 'mill_controllers', 'mill_observers'):
-                scen.add_override(f'{node.name}.command_delay={args.delay}')
+                scen.add_override(f'{node.name}.command_delay={delay}')
     if args.duration is not None:
         if not args.duration > 0:
             raise ScenarioError(f'--duration must be > 0, got {args.duration}')

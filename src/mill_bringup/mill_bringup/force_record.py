@@ -189,33 +189,60 @@ class ForceBagRun:
 
 
 def is_force_bag(counts: Mapping[str, int]) -> bool:
-    """A force job's bag: the force samples and the force stream between them."""
-    return topics.CUTTING_FORCE_TRACE in counts and topics.FORCE_CONTROL_STATE in counts
+    """A force job's bag: the force stream and the force controller's state, in a namespace."""
+    return bool(
+        set(topics.namespaces_with(counts, topics.CUTTING_FORCE_TRACE))
+        & set(topics.namespaces_with(counts, topics.FORCE_CONTROL_STATE))
+    )
 
 
-def read_force_run(path: str | Path) -> ForceBagRun:
+def read_force_run(path: str | Path, namespace: str | None = None) -> ForceBagRun:
     """J_c and the record of a force job from its bag, by topic names and types only.
 
     The sample period is estimated from the force stamps (sample k stamped at the ns nearest
     k T); the number of samples comes from the trajectory's job status on /diagnostics (its
     end_time, the job's duration), or, without it, from the last override; the reference
-    force and the reference model (ξ, ω_n) from /mill/force_control/state.
+    force and the reference model (ξ, ω_n) from mill/force_control/state. The job may run in
+    any namespace; `namespace` chooses one where the bag holds several.
     """
     bag = open_bag(path)
-    raw: dict[str, list[bytes]] = {t: [] for t in FORCE_TOPICS}
-    end_time = None
+    by_name: dict[str, list[tuple[str, bytes]]] = {}
+    statuses: list[Any] = []
     for topic, msgtype, _log, _pub, data in bag.read():
-        if topic in FORCE_TOPICS:
-            if msgtype != FORCE_TOPICS[topic]:
+        if topic == topics.DIAGNOSTICS and msgtype == DIAGNOSTIC_ARRAY:
+            statuses.append(decode(msgtype, data))
+        else:
+            by_name.setdefault(topic, []).append((msgtype, data))
+    found = topics.namespaces_with(by_name, topics.CUTTING_FORCE_TRACE)
+    if namespace is not None:
+        found = [ns for ns in found if ns == topics.namespace(namespace)]
+    if len(found) != 1:
+        where = ', '.join(found) or 'none'
+        raise BagError(
+            f'{bag.path}: one force job wanted, found it in namespaces: {where} '
+            '(choose one with --namespace)'
+        )
+    ns = found[0]
+    raw: dict[str, list[bytes]] = {t: [] for t in FORCE_TOPICS}
+    for topic, msgtype in FORCE_TOPICS.items():
+        for got, data in by_name.get(topics.qualify(topic, ns), ()):
+            if got != msgtype:
                 raise BagError(
-                    f'{bag.path}: topic {topic} has type {msgtype}, expected {FORCE_TOPICS[topic]}'
+                    f'{bag.path}: topic {topics.qualify(topic, ns)} has type {got}, '
+                    f'expected {msgtype}'
                 )
             raw[topic].append(data)
-        elif topic == topics.DIAGNOSTICS and msgtype == DIAGNOSTIC_ARRAY and end_time is None:
-            for status in decode(msgtype, data).status:
-                values = {kv.key: kv.value for kv in status.values}
-                if status.name == 'mill_trajectory: job' and 'end_time' in values:
-                    end_time = float(values['end_time'])
+    end_time = None
+    for array in statuses:
+        for status in array.status:
+            values = {kv.key: kv.value for kv in status.values}
+            if (
+                end_time is None
+                and status.name == 'mill_trajectory: job'
+                and 'end_time' in values
+                and topics.from_machine(status.hardware_id, ns)
+            ):
+                end_time = float(values['end_time'])
     if not raw[topics.CUTTING_FORCE] or not raw[topics.CUTTING_FORCE_TRACE]:
         raise BagError(f'{bag.path} holds no force job: no force samples or force stream')
     stamps = np.array(sorted({cdr_stamp_ns(d) or 0 for d in raw[topics.CUTTING_FORCE]}))

@@ -31,12 +31,21 @@ def state_windows(
 ) -> list[tuple[float, float, int, float, float]]:
     """(start, end, samples, mean force [N], mean override) of /mill/force_control/state
     per time window [edges[i], edges[i+1]) of a recorded run."""
-    rows = []
-    for _topic, _type, _log, _pub, data in open_bag(bag_path).read([topics.FORCE_CONTROL_STATE]):
+    # The run may be under a machine namespace; a bag of several machines is refused.
+    per_name: dict[str, list[tuple[float, float, float]]] = {}
+    for name, _type, _log, _pub, data in open_bag(bag_path).read():
+        if not topics.namespaces_with([name], topics.FORCE_CONTROL_STATE):
+            continue
         msg = joint_state_cdr(data)
         if msg is not None:
             t = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
-            rows.append((t, msg.position[0], msg.position[3]))  # force, override (STATE_NAMES)
+            # force, override (STATE_NAMES)
+            per_name.setdefault(name, []).append((t, msg.position[0], msg.position[3]))
+    if len(per_name) > 1:
+        raise WindowError(
+            f'{bag_path}: force control states of several machines: {sorted(per_name)}'
+        )
+    rows = next(iter(per_name.values()), [])
     if not rows:
         raise WindowError(f'{bag_path}: no {topics.FORCE_CONTROL_STATE} messages')
     table = np.array(rows)

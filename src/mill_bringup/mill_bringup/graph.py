@@ -1,9 +1,11 @@
 """The node processes of a scenario: launch, supervise, stop; and the progress display.
 
 Each node runs as `ros2 run` would start it (`python -m MODULE --ros-args -r __node:=NAME
---params-file SCENARIO --params-file OVERRIDES`), in its own session, with its output in
-RUN_DIR/logs/NAME.log. A node dies with the process that started it, whatever ends that
-process (Linux PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
+[-r __ns:=NAMESPACE] --params-file SCENARIO --params-file PARAMETERS`), in its own session,
+with its output in RUN_DIR/logs/NAME.log. RUN_DIR/parameters.yaml holds every node's values
+with the overrides, keyed `/**/NAME` so that they apply under the graph's namespace too.
+A node dies with the process that started it, whatever ends that process (Linux
+PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
 """
 
 from __future__ import annotations
@@ -19,9 +21,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-import yaml
-
-from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError
+from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError, dump_parameters
 
 PR_SET_PDEATHSIG = 1
 
@@ -88,15 +88,14 @@ class Graph:
         self.logs: dict[str, Path] = {}
         self._log_dir = run_dir / 'logs'
         self._log_dir.mkdir(parents=True, exist_ok=True)
-        self._overrides = run_dir / 'overrides.yaml'
+        self._parameters = run_dir / 'parameters.yaml'
         self._env = env
 
     def launch(self, nodes: Iterable[NodeLaunch]) -> None:
         """Start these nodes of the scenario, each in its own process."""
         # Written at each launch: the job may have adjusted the scenario since the last one.
-        self._overrides.write_text(
-            yaml.safe_dump({n: {'ros__parameters': p} for n, p in self.scen.overrides.items()})
-        )
+        self._parameters.write_text(dump_parameters(self.scen.node_parameters()))
+        remaps = [arg for rule in self.scen.remappings() for arg in ('-r', rule)]
         for node in nodes:
             cmd = [
                 sys.executable,
@@ -105,10 +104,11 @@ class Graph:
                 '--ros-args',
                 '-r',
                 f'__node:={node.name}',
+                *remaps,
                 '--params-file',
                 str(self.scen.path),
                 '--params-file',
-                str(self._overrides),
+                str(self._parameters),
             ]
             again = node.name in self.procs
             self.logs[node.name] = self._log_dir / f'{node.name}.log'
@@ -165,16 +165,31 @@ class Graph:
 
 
 class Progress:
-    """One live bar with the ETA on a terminal (tqdm), a plain line every 5 s otherwise."""
+    """One live bar with the ETA on a terminal (tqdm), a plain line every 5 s otherwise.
 
-    def __init__(self, total: float, unit: str = 's', quiet: bool = False) -> None:
+    total None: not known (a count and the rate, no share); label: what is progressing;
+    decimals: of the values shown (0 for counts); delay: no display during the first
+    seconds (a short task shows none).
+    """
+
+    def __init__(
+        self,
+        total: float | None,
+        unit: str = 's',
+        quiet: bool = False,
+        label: str = '',
+        decimals: int = 2,
+        delay: float = 0.0,
+    ) -> None:
         self.total = total
         self.quiet = quiet
+        self.label = label
+        self.decimals = decimals
         self.tty = sys.stderr.isatty()
         self._bar: Any = None
-        self._next = 0.0
         self._value = 0.0
         self._started = time.monotonic()
+        self._next = self._started + delay
         self._unit = unit
 
     def note(self, text: str) -> None:
@@ -190,16 +205,26 @@ class Progress:
         if self.quiet or not value > self._value:
             return
         if self.tty:
+            if self._bar is None and time.monotonic() < self._next:
+                return
             if self._bar is None:
                 from tqdm import tqdm
 
+                d = self.decimals
+                known = self.total is not None
                 self._bar = tqdm(
-                    total=round(self.total, 3),
+                    total=round(self.total, 3) if self.total is not None else None,
+                    desc=self.label or None,
                     unit=self._unit,
                     file=sys.stderr,
                     dynamic_ncols=True,
-                    bar_format='{l_bar}{bar}| {n:.2f}/{total:.2f} {unit} '
-                    '[{elapsed}<{remaining}{postfix}]',
+                    bar_format=(
+                        f'{{l_bar}}{{bar}}| {{n:.{d}f}}/{{total:.{d}f}} {{unit}} '
+                        '[{elapsed}<{remaining}{postfix}]'
+                        if known
+                        else f'{{desc}}: {{n:.{d}f}} {{unit}} '
+                        '[{elapsed}, {rate_fmt}{postfix}]'
+                    ),
                 )
             self._bar.update(round(value - self._value, 3))
             if extra:
@@ -210,8 +235,13 @@ class Progress:
         now = time.monotonic()
         if now >= self._next:
             self._next = now + 5.0
-            share = 100.0 * value / self.total if self.total > 0 else 100.0
-            line = f'{value:.2f} / {self.total:.2f} {self._unit} ({share:.0f} %)'
+            d = self.decimals
+            if self.total is None:
+                line = f'{value:.{d}f} {self._unit}'
+            else:
+                share = 100.0 * value / self.total if self.total > 0 else 100.0
+                line = f'{value:.{d}f} / {self.total:.{d}f} {self._unit} ({share:.0f} %)'
+            line = f'{self.label}: {line}' if self.label else line
             print(line + (f', {extra}' if extra else ''), file=sys.stderr, flush=True)
 
     def close(self) -> None:

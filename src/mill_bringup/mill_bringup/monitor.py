@@ -8,11 +8,17 @@ With `record=RecordOptions(...)` a TopicRecorder writes every topic of the graph
 rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only to the
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
 /diagnostics is also kept decoded, for the faults the summary reports.
+
+The monitor runs in the graph's namespace (and with its remappings), so the job's relative
+topic names resolve as the nodes resolve them; of the shared /diagnostics it reports only
+the statuses of its own machine.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import re
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,6 +40,14 @@ class RecordOptions:
     compression: str = 'zstd'
 
 
+def _own_topics(namespace: str) -> str:
+    """What discovery adds to a run's bag: every topic in the root namespace; under a machine
+    namespace its own topics and the global logs (not another machine's topics)."""
+    if namespace == topics.ROOT:
+        return ''
+    return f'^{re.escape(namespace)}/|^/(rosout|parameter_events)$'
+
+
 class Monitor(Node):
     def __init__(
         self,
@@ -41,14 +55,27 @@ class Monitor(Node):
         record: RecordOptions | None = None,
         recorded: Mapping[str, str] | None = None,
         name: str = 'mill_monitor',
+        namespace: str = topics.ROOT,
+        remappings: Sequence[str] = (),
+        timed: Iterable[str] = (),
     ) -> None:
-        super().__init__(name)
+        rules = [
+            arg for rule in remappings if not rule.startswith('__ns:=') for arg in ('-r', rule)
+        ]
+        super().__init__(
+            name, namespace=namespace, cli_args=['--ros-args', *rules] if rules else None
+        )
         self.raw: dict[str, list[bytes]] = {}
+        self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
         if record is not None:
             self.recorder = TopicRecorder(
-                self, record.path, sim_time=record.sim_time, compression=record.compression
+                self,
+                record.path,
+                regex=_own_topics(self.get_namespace()),
+                sim_time=record.sim_time,
+                compression=record.compression,
             )
         for topic, msgtype in kept.items():
             self._keep(topic, msgtype)
@@ -64,7 +91,14 @@ class Monitor(Node):
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
-        keep = store.append
+        keep: Callable[[bytes], None] = store.append
+        arrivals = self.arrivals.get(topic)
+        if arrivals is not None:  # when each message came, on the system clock (latency)
+
+            def keep(data: bytes) -> None:
+                store.append(data)
+                arrivals.append(time.time_ns())
+
         if self.recorder is not None:
             tap = self.recorder.tap(topic, msgtype)
 
@@ -80,6 +114,9 @@ class Monitor(Node):
     def messages(self, topic: str) -> Sequence[bytes]:
         return self.raw.get(topic, ())
 
+    def arrival_ns(self, topic: str) -> Sequence[int]:
+        return self.arrivals.get(topic, ())
+
     def latest_stamp_ns(self, topic: str) -> int:
         """Stamp of the newest message of a topic (one writer delivers in order), -1 if none.
 
@@ -94,7 +131,7 @@ class Monitor(Node):
         """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
         for array in reversed(self.diagnostics):
             for s in array.status:
-                if s.name == name:
+                if s.name == name and topics.from_machine(s.hardware_id, self.get_namespace()):
                     values = {kv.key: kv.value for kv in s.values}
                     level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
                     return values | {'message': s.message, 'level': str(level)}
@@ -105,7 +142,8 @@ class Monitor(Node):
         seen: dict[str, None] = {}
         for array in self.diagnostics:
             for s in array.status:
-                if s.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR):
+                mine = topics.from_machine(s.hardware_id, self.get_namespace())
+                if mine and s.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR):
                     seen.setdefault(f'{s.name}: {s.message}', None)
         return list(seen)
 

@@ -9,13 +9,16 @@ after it, so the runner's summary and the report of its bag agree exactly.
 `read_run` reads a bag by topic names and types only (the contract of
 mill_common.topics): the sample period is the greatest common divisor of the state
 stamps and the job length comes from the trajectory's job status on /diagnostics,
-so a bag from `ros2 bag record` with these topics works as well as ours.
+so a bag from `ros2 bag record` with these topics works as well as ours. The run may be
+under a machine namespace (`/machine2/mill/x/state`): `read_run` finds it from the topic
+names, or is told which one when a bag holds several machines; of the shared /diagnostics it
+reads only that machine's statuses.
 """
 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +39,9 @@ from mill_common.timebase import job_steps
 
 from mill_bringup.metrics import RunRecord
 from mill_common import topics as topic_names
+
+# progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
+ProgressCallback = Callable[[str, int, int | None], None]
 
 
 def record_topics(axes: Sequence[str]) -> dict[str, str]:
@@ -153,15 +159,20 @@ def record_from_raw(
     n: int,
     dt_ns: int,
     workers: int = 1,
+    progress: ProgressCallback | None = None,
     owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
     """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
     reader both call. With workers > 1 the topics are split between forked processes, each
     running build_record on its share; every (sample, axis) value comes from one topic, so
-    the merged record is the one a single call gives."""
+    the merged record is the one a single call gives. `progress('decoding', done, total)`
+    is called now and then with the number of messages decoded."""
     listened = list(raw)
+    total = sum(len(raw[t]) for t in listened)
     if workers <= 1:
         messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
+        if progress is not None:
+            messages = _counted(messages, lambda done: progress('decoding', done, total))
         return build_record(messages, axes, n, dt_ns, listened, owners)
     import multiprocessing
 
@@ -172,12 +183,21 @@ def record_from_raw(
         i = loads.index(min(loads))
         groups[i].append(topic)
         loads[i] += len(raw[topic])
-    _SHARED = (raw, types, list(axes), n, dt_ns, owners)
+    context = multiprocessing.get_context('fork')
+    decoded = context.Value('q', 0)  # messages decoded by all workers, for progress
+    _SHARED = (raw, types, list(axes), n, dt_ns, decoded, owners)
     try:
-        with multiprocessing.get_context('fork').Pool(workers) as pool:
-            parts = pool.map(_record_part, [g for g in groups if g])
+        with context.Pool(workers) as pool:
+            pending = pool.map_async(_record_part, [g for g in groups if g])
+            while not pending.ready():
+                pending.wait(0.5)
+                if progress is not None:
+                    progress('decoding', decoded.value, total)
+            parts = pending.get()
     finally:
         _SHARED = None
+    if progress is not None:
+        progress('decoding', total, total)
     rec = RunRecord.empty(n, dt_ns / 1e9)
     missing: dict[str, int] = {}
     for signals, part_missing, part_foreign in parts:
@@ -192,12 +212,32 @@ def record_from_raw(
 _SHARED: tuple | None = None
 
 
+def _counted(items: Iterable[Any], report: Callable[[int], None], every: int = 20_000):
+    """The items, calling report(count so far) every `every` items and at the end."""
+    count = 0
+    for count, item in enumerate(items, 1):
+        if count % every == 0:
+            report(count)
+        yield item
+    report(count)
+
+
 def _record_part(
     topics_part: list[str],
 ) -> tuple[dict[str, np.ndarray], dict[str, int], dict[str, int]]:
-    assert _SHARED is not None
-    raw, types, axes, n, dt_ns, owners = _SHARED
+    assert _SHARED is not None, 'set for the worker processes before they start'
+    raw, types, axes, n, dt_ns, decoded, owners = _SHARED
+
+    last = 0
+
+    def add(done: int) -> None:
+        nonlocal last
+        with decoded.get_lock():
+            decoded.value += done - last
+        last = done
+
     messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
+    messages = _counted(messages, add, every=5_000)
     rec, missing = build_record(messages, axes, n, dt_ns, topics_part, owners)
     return rec.signals, missing, rec.foreign
 
@@ -225,45 +265,122 @@ class BagRun:
     notes: list[str] = field(default_factory=list)
 
 
-def read_run(path: str | Path) -> BagRun:
+def run_namespace(names: Iterable[str], where: str, namespace: str | None = None) -> str:
+    """The machine namespace of the mill run among a bag's topic names (BagError if there is
+    none, or several and `namespace` does not choose one)."""
+    names = list(names)
+    found = sorted(
+        {ns for a in AXES for ns in topic_names.namespaces_with(names, topic_names.state(a))}
+    )
+    if namespace is not None:
+        try:
+            wanted = topic_names.namespace(namespace)
+        except ValueError as exc:
+            raise BagError(str(exc)) from None
+        if wanted not in found:
+            raise BagError(
+                f'{where} holds no mill run in namespace {wanted} '
+                f'(runs in: {", ".join(found) or "none"})'
+            )
+        return wanted
+    if not found:
+        present = ', '.join(sorted(names)) or 'none'
+        raise BagError(
+            f'{where} holds no mill run: no /mill/<axis>/state topic in any namespace '
+            f'(sensor_msgs/msg/JointState); its topics: {present}'
+        )
+    if len(found) > 1:
+        raise BagError(
+            f'{where} holds runs in several namespaces ({", ".join(found)}); '
+            'choose one with --namespace'
+        )
+    return found[0]
+
+
+@dataclass
+class _Stream:
+    """The messages of one topic of a bag, as read."""
+
+    msgtype: str
+    data: list[bytes] = field(default_factory=list)
+    log_times: list[int] = field(default_factory=list)
+    publish_times: list[int | None] = field(default_factory=list)
+
+
+def read_run(
+    path: str | Path,
+    namespace: str | None = None,
+    progress: ProgressCallback | None = None,
+) -> BagRun:
     """Read a bag of a mill run into a RunRecord, by topic names and types only.
 
     The sample period is the greatest common divisor of the state stamps; the
     number of samples comes from the trajectory's job status on /diagnostics
     (end_time, as the runner computes it), or, without it, from the last sample
-    every state topic has.
+    every state topic has. The run may be in any namespace; `namespace` chooses the
+    machine in a bag of several. `progress(phase, done, total)` is called now and then, while
+    the bag is read ('reading', messages; total from metadata.yaml, None if it has none)
+    and while its messages are decoded ('decoding').
     """
     bag = open_bag(path)
     wanted_types = record_topics(AXES)
-    raw: dict[str, list[bytes]] = {}
-    walls: dict[str, list[int | None]] = {}  # publish times of the state messages
-    statuses: list[Any] = []
-    feed: list[tuple[int, bytes]] = []
-    feed_type = ''
-    for topic, msgtype, log_time, publish_time, data in bag.read():
-        if topic in wanted_types:
-            if msgtype != wanted_types[topic]:
-                raise BagError(
-                    f'{bag.path}: topic {topic} has type {msgtype}, expected {wanted_types[topic]}'
-                )
-            raw.setdefault(topic, []).append(data)
-            if topic.endswith('/state'):
-                walls.setdefault(topic, []).append(publish_time)
-        elif topic == topic_names.DIAGNOSTICS and msgtype == DIAGNOSTIC_ARRAY:
-            statuses.append(decode(msgtype, data))
-        elif topic == topic_names.FEED_OVERRIDE:
-            feed_type = msgtype
-            feed.append((log_time, data))
+    contract = [*wanted_types, topic_names.FEED_OVERRIDE]
+    # One pass over the bag: every topic that is a contract topic in some namespace is
+    # kept by its absolute name; the namespace is chosen once every name is known.
+    kept: dict[str, _Stream | None] = {}
+    info = (bag.metadata or {}).get('rosbag2_bagfile_information') or {}
+    expected = info.get('message_count') if isinstance(info, dict) else None
+    all_statuses: list[Any] = []
+    read = 0
+    for name, msgtype, log_time, publish_time, data in bag.read():
+        read += 1
+        if progress is not None and read % 20_000 == 0:
+            progress('reading', read, expected)
+        if name == topic_names.DIAGNOSTICS:
+            if msgtype == DIAGNOSTIC_ARRAY:
+                all_statuses.append(decode(msgtype, data))
+            continue
+        if name not in kept:
+            ours = any(topic_names.namespaces_with([name], t) for t in contract)
+            kept[name] = _Stream(msgtype) if ours else None
+        stream = kept[name]
+        if stream is not None:
+            stream.data.append(data)
+            stream.log_times.append(log_time)
+            stream.publish_times.append(publish_time)
+    if progress is not None:
+        progress('reading', read, expected)
     total = sum(bag.counts.values())
     if total == 0:
         raise BagError(f'{bag.path} holds no messages')
+    ns = run_namespace(bag.counts, str(bag.path), namespace)
+    raw: dict[str, list[bytes]] = {}
+    walls: dict[str, list[int | None]] = {}  # publish times of the state messages
+    for topic, msgtype in wanted_types.items():
+        name = topic_names.qualify(topic, ns)
+        stream = kept.get(name)
+        if stream is None:
+            continue
+        if stream.msgtype != msgtype:
+            raise BagError(
+                f'{bag.path}: topic {name} has type {stream.msgtype}, expected {msgtype}'
+            )
+        raw[topic] = stream.data
+        walls[topic] = stream.publish_times
+    feed_stream = kept.get(topic_names.qualify(topic_names.FEED_OVERRIDE, ns))
+    feed = (
+        []
+        if feed_stream is None
+        else list(zip(feed_stream.log_times, feed_stream.data, strict=True))
+    )
+    feed_type = '' if feed_stream is None else feed_stream.msgtype
+    statuses = []
+    for array in all_statuses:
+        array.status = [s for s in array.status if topic_names.from_machine(s.hardware_id, ns)]
+        statuses.append(array)
     axes = [a for a in AXES if topic_names.state(a) in raw]
     if not axes:
-        present = ', '.join(sorted(bag.counts)) or 'none'
-        raise BagError(
-            f'{bag.path} holds no mill run: no /mill/<axis>/state topic '
-            f'(sensor_msgs/msg/JointState); its topics: {present}'
-        )
+        raise BagError(f'{bag.path}: no message on the state topics of namespace {ns}')
     first = topic_names.state(axes[0])
     first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
     stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
@@ -283,7 +400,7 @@ def read_run(path: str | Path) -> BagRun:
     listened = {t: raw[t] for t in record_topics(axes) if t in raw}
     to_decode = sum(len(v) for v in listened.values())
     workers = min(2, os.cpu_count() or 1) if to_decode > 100_000 else 1
-    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers)
+    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers, progress)
     # Wall-clock arrival of each sample of the first axis, where the storage has
     # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
     wall = None

@@ -5,6 +5,7 @@
     run_scenario slotting --duration 5 --compare-offline
     run_scenario slotting --record             # also write the run to a rosbag2 bag (RUN_DIR/bag)
     run_scenario rubio --variant scheme1       # one configuration of a scenario with variants
+    run_scenario slotting --namespace machine2 # every topic under /machine2 (and the monitor)
 
 The same steps for every kind of job (mill_bringup.jobs): check every variant's scenario
 before anything starts; start the nodes, then, once the monitor hears them, the node that
@@ -37,7 +38,8 @@ from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.graph import Graph, GraphError, Progress
 from mill_bringup.jobs.base import Job, simulate
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.scenario import ScenarioError
+from mill_bringup.scenario import Scenario, ScenarioError
+from mill_common import topics
 
 
 class RunError(RuntimeError):
@@ -131,20 +133,34 @@ def run(
     executor = None
     bag: dict[str, Any] | None = None
     try:
-        monitor = Monitor(job.monitor_topics(), options, job.recorded_topics())
+        monitor = Monitor(
+            job.monitor_topics(),
+            options,
+            job.recorded_topics(),
+            namespace=scen.namespace,
+            remappings=scen.remappings(),
+            timed=job.timed_topics(),
+        )
         executor = make_executor()
         executor.add_node(monitor)
         clocks = [n for n in job.clock_nodes if n.name not in external]
         others = [n.name for n in scen.nodes if n not in job.clock_nodes and n.name not in external]
         graph = Graph(scen, run_dir, env, respawn=others if respawn else ())
 
+        clock_check = [0.0]
+
         def spin(when: str) -> None:
             executor.spin_once(timeout_sec=0.05)
+            for _ in range(200):  # take what has queued up, then look at the job again
+                executor.spin_once(timeout_sec=0.0)
             if stop:
                 raise KeyboardInterrupt
             if monitor.recorder is not None and monitor.recorder.error:
                 raise RunError(monitor.recorder.error)
             graph.check(when)
+            if time.monotonic() > clock_check[0]:
+                clock_check[0] = time.monotonic() + 1.0
+                _check_one_clock(monitor, graph, job, env['ROS_DOMAIN_ID'])
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
@@ -272,6 +288,23 @@ def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> Non
         node.destroy_client(client)
 
 
+def _check_one_clock(monitor: Any, graph: Graph, job: Job[Any], domain_id: str) -> None:
+    """RunError when a clock other than this run's own publishes on its /clock.
+
+    Two simulations in one domain would each step to the other's clock ticks. The check
+    is repeated while the run goes on, so that two runs started together are caught too.
+    """
+    ours = sum(1 for n in job.clock_nodes if n.name in graph.procs)
+    clock = monitor.resolve_topic_name(topics.CLOCK)
+    found = monitor.count_publishers(clock)
+    if found > ours:
+        raise RunError(
+            f'{clock} has {found} publishers in ROS_DOMAIN_ID={domain_id}, this run has {ours}: '
+            'another simulation shares the domain; give each run its own --domain-id, or '
+            'run each under its own --namespace with --private-clock'
+        )
+
+
 def format_result(r: RunResult) -> str:
     lines = [
         f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
@@ -302,6 +335,18 @@ def format_result(r: RunResult) -> str:
     return '\n'.join(lines)
 
 
+def _apply_namespace(
+    scen: Scenario, runs: dict[str, Scenario], namespace: str | None, private_clock: bool
+) -> None:
+    """--namespace and --private-clock on the scenario and each of its variants."""
+    for s in (scen, *runs.values()):
+        if namespace is not None:
+            s.set_namespace(namespace)
+        s.private_clock = s.private_clock or private_clock
+    if scen.private_clock and scen.namespace == topics.ROOT:
+        raise ScenarioError('a private clock needs a namespace (--namespace NAME)')
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='run_scenario',
@@ -330,6 +375,18 @@ def main(argv: list[str] | None = None) -> int:
         help='write every topic to a rosbag2 bag (MCAP) in directory BAG, which must not '
         'exist (default: RUN_DIR/bag)',
     )
+    parser.add_argument(
+        '--namespace',
+        metavar='NAME',
+        help="run every node under this machine namespace (default: the scenario's, else /); "
+        '/clock and /diagnostics stay global',
+    )
+    parser.add_argument(
+        '--private-clock',
+        action='store_true',
+        help='remap the simulation clock /clock to NAMESPACE/clock, so that several '
+        'simulated machines can run in one domain at the same time',
+    )
     parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
     parser.add_argument(
         '--external',
@@ -350,6 +407,7 @@ def main(argv: list[str] | None = None) -> int:
     intact = True
     try:
         scen, runs = load_scenario(args)
+        _apply_namespace(scen, runs, args.namespace, args.private_clock)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
         if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
             raise RunError('--compare-offline: a realtime run has no offline twin')

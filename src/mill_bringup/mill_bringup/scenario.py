@@ -2,6 +2,13 @@
 
 The same file feeds `ros2 run ... --params-file`, the runner and the offline
 simulator, so a scenario is defined once.
+
+A node's entry may be keyed `/**/NAME` (applies in any namespace, as the files in config/
+are), `NAME` or `/NAME` (only in the root namespace, as rcl reads parameter files).
+`mill_scenario` may name a `namespace` for the whole graph and ask for a `private_clock`
+(the simulation's /clock remapped into that namespace, so that two simulated machines can
+share a domain). `node_parameters` gives every node its merged values keyed `/**/NAME`, so
+the runner and the launch file apply them in any namespace.
 """
 
 from __future__ import annotations
@@ -23,6 +30,8 @@ from mill_common.parameters import (
     validate,
 )
 
+from mill_common import topics
+
 SCENARIO_KEY = 'mill_scenario'
 SHARED_KEY = '/**'  # what a parameter file gives every node
 
@@ -40,6 +49,24 @@ _Loader.add_implicit_resolver(
 
 def parse_yaml(text: str):
     return yaml.load(text, Loader=_Loader)
+
+
+class _Dumper(yaml.SafeDumper):
+    """Parameter files for rcl: every string quoted (rcl reads a bare `y` or `no` as bool),
+    no anchors and aliases (rcl refuses them)."""
+
+    def ignore_aliases(self, data: Any) -> bool:
+        return True
+
+
+_Dumper.add_representer(
+    str, lambda dumper, value: dumper.represent_scalar('tag:yaml.org,2002:str', value, style='"')
+)
+
+
+def dump_parameters(data: dict[str, Any]) -> str:
+    """YAML text of a parameter file that rcl reads as parse_yaml does."""
+    return yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True)
 
 
 # Which module holds a package's parameter specs and builders.
@@ -88,6 +115,8 @@ class Scenario:
     # Configurations compared by one run: name -> overrides (`variants:` in the file).
     variants: dict[str, list[str]] = field(default_factory=dict)
     paper: str = ''  # which paper's metrics the run prints (mill_bringup.papers)
+    namespace: str = topics.ROOT  # the machine namespace every node of the graph runs in
+    private_clock: bool = False  # remap the simulation's /clock to NAMESPACE/clock
 
     @property
     def name(self) -> str:
@@ -110,7 +139,7 @@ class Scenario:
     def given_parameters(self, name: str) -> dict[str, Any]:
         """What is given to this node alone: its own entry, then the overrides."""
         merged: dict[str, Any] = {}
-        for key in (name, '/' + name):
+        for key in (name, '/' + name, '/**/' + name):
             merged.update(self._entry(key))
         merged.update(self.overrides.get(name, {}))
         return merged
@@ -118,6 +147,28 @@ class Scenario:
     def raw_parameters(self, name: str) -> dict[str, Any]:
         """Parameters a node of this name gets: /** entries, then its own, then overrides."""
         return {**self._entry(SHARED_KEY), **self.given_parameters(name)}
+
+    def node_parameters(self) -> dict[str, Any]:
+        """A parameter file's content: every node's merged values, keyed to apply anywhere."""
+        return {
+            f'/**/{n.name}': {'ros__parameters': self.raw_parameters(n.name)} for n in self.nodes
+        }
+
+    def set_namespace(self, text: str) -> None:
+        """The machine namespace of the graph ('' or '/' is the root)."""
+        try:
+            self.namespace = topics.namespace(text)
+        except ValueError as exc:
+            raise ScenarioError(str(exc)) from None
+
+    def remappings(self) -> list[str]:
+        """ROS remapping rules every node of the graph gets (`-r RULE`)."""
+        rules = []
+        if self.namespace != topics.ROOT:
+            rules.append(f'__ns:={self.namespace}')
+            if self.private_clock:
+                rules.append(f'{topics.CLOCK}:={topics.qualify("clock", self.namespace)}')
+        return rules
 
     def parameters(self, name: str) -> dict[str, Any]:
         """Validated parameter values of one node, as its node would hold them.
@@ -151,7 +202,15 @@ class Scenario:
         if name not in self.variants:
             known = ', '.join(self.variants) or 'none'
             raise ScenarioError(f'scenario {self.name} has no variant {name!r} (has: {known})')
-        copy = Scenario(self.path, self.description, self.nodes, self.raw, paper=self.paper)
+        copy = Scenario(
+            self.path,
+            self.description,
+            self.nodes,
+            self.raw,
+            paper=self.paper,
+            namespace=self.namespace,
+            private_clock=self.private_clock,
+        )
         copy.overrides = {node: dict(values) for node, values in self.overrides.items()}
         for text in self.variants[name]:
             copy.add_override(text)
@@ -166,7 +225,8 @@ class Scenario:
         every /** name is declared by some node of the scenario (or by ROS)."""
         names = {n.name for n in self.nodes}
         for key in self.raw or {}:
-            if key not in (SHARED_KEY, SCENARIO_KEY) and str(key).strip('/') not in names:
+            node = str(key).removeprefix('/**/').strip('/')
+            if key not in (SHARED_KEY, SCENARIO_KEY) and node not in names:
                 raise ScenarioError(
                     f'{self.path}: entry {key!r} is for no node of the scenario '
                     f'(nodes: {", ".join(sorted(names))}; {SHARED_KEY} is for all of them)'
@@ -255,6 +315,14 @@ def load(name_or_path: str) -> Scenario:
         nodes.append(NodeLaunch(*parts))
     scen = Scenario(path, str(entry.get('description', path.stem)), nodes, raw)
     scen.paper = str(entry.get('paper', ''))
+    try:
+        scen.set_namespace(str(entry.get('namespace', '')))
+    except ScenarioError as exc:
+        raise ScenarioError(f'{path}: {exc}') from None
+    private_clock = entry.get('private_clock', False)
+    if not isinstance(private_clock, bool):
+        raise ScenarioError(f'{path}: private_clock must be true or false, got {private_clock!r}')
+    scen.private_clock = private_clock
     for line in entry.get('variants') or []:
         # "name NODE.NAME=VALUE ..." (a string list, so that rcl can read the file too)
         name, *overrides = str(line).split()

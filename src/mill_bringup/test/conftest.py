@@ -71,9 +71,20 @@ def ser(msg: Any) -> bytes:
     return bytes(TS.serialize_cdr(msg, msg.__msgtype__))
 
 
-def write_foreign_bag(directory: Path, storage: str, feed: bool = False) -> tuple[Path, RunRecord]:
+def write_foreign_bag(
+    directory: Path,
+    storage: str,
+    feed: bool = False,
+    namespaces: Sequence[str] = ('/',),
+    foreign_status: bool = False,
+) -> tuple[Path, RunRecord]:
     """The offline simulation of 0.4 s of the job, written by rosbags' Writer as a recorder
-    on wall time would (log time = receive time), with the contract's topics and types."""
+    on wall time would (log time = receive time), with the contract's topics and types.
+
+    With several namespaces each machine publishes the same run under its own; the job
+    status carries the machine's namespace as hardware_id (the root's the old 'mill').
+    foreign_status: first a job status of another machine ('/other') with a wrong end_time.
+    """
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     scen = scenario.load('slotting')
@@ -89,12 +100,33 @@ def write_foreign_bag(directory: Path, storage: str, feed: bool = False) -> tupl
         conns = {}
 
         def put(topic: str, msgtype: str, k: int, msg: Any) -> None:
-            if topic not in conns:
-                conns[topic] = w.add_connection(topic, msgtype, typestore=TS)
-            w.write(conns[topic], WALL0 + k * 3_100_000 + len(conns), ser(msg))
+            for space in namespaces:
+                name = topics.qualify(topic, space)
+                if name not in conns:
+                    conns[name] = w.add_connection(name, msgtype, typestore=TS)
+                w.write(conns[name], WALL0 + k * 3_100_000 + len(conns), ser(msg))
+                if name == topics.DIAGNOSTICS:
+                    break  # global: once
+
+        def job_status(end_time: float, machine: str) -> Any:
+            return status(
+                level=0,
+                name='mill_trajectory: job',
+                message='job running',
+                hardware_id=machine,
+                values=[kv(key='state', value='running'), kv(key='end_time', value=repr(end_time))],
+            )
 
         status = T['diagnostic_msgs/msg/DiagnosticStatus']
         kv = T['diagnostic_msgs/msg/KeyValue']
+        if foreign_status:
+            other = [job_status(0.1, '/other')]
+            put(
+                topics.DIAGNOSTICS,
+                DIAGNOSTIC_ARRAY,
+                0,
+                T[DIAGNOSTIC_ARRAY](header=header(0), status=other),
+            )
         for k in range(n):
             ns = k * dt_ns
             for i, axis in enumerate('xyz'):
@@ -146,20 +178,9 @@ def write_foreign_bag(directory: Path, storage: str, feed: bool = False) -> tupl
                     T[JOINT_TRAJECTORY](header=header(ns), joint_names=list('xyz'), points=points),
                 )
             if k % 100 == 0:
+                machines = [s if s != '/' else 'mill' for s in namespaces]
                 diag = T[DIAGNOSTIC_ARRAY](
-                    header=header(ns),
-                    status=[
-                        status(
-                            level=0,
-                            name='mill_trajectory: job',
-                            message='job running',
-                            hardware_id='mill',
-                            values=[
-                                kv(key='state', value='running'),
-                                kv(key='end_time', value=repr(job.end_time)),
-                            ],
-                        )
-                    ],
+                    header=header(ns), status=[job_status(job.end_time, m) for m in machines]
                 )
                 put(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, k, diag)
                 if feed:  # a feed override (issue 4) as std_msgs/Float64, 1.0 -> 0.8
@@ -177,7 +198,7 @@ def write_foreign_bag(directory: Path, storage: str, feed: bool = False) -> tupl
 def foreign_bag(tmp_path: Path) -> ForeignBag:
     """foreign_bag(storage, feed=False) -> (bag path, the offline RunRecord it holds)."""
 
-    def make(storage: str, feed: bool = False) -> tuple[Path, RunRecord]:
-        return write_foreign_bag(tmp_path, storage, feed)
+    def make(storage: str, feed: bool = False, **kwargs: Any) -> tuple[Path, RunRecord]:
+        return write_foreign_bag(tmp_path, storage, feed, **kwargs)
 
     return make

@@ -81,7 +81,9 @@ def test_state_windows_average_a_recorded_run(tmp_path) -> None:
         )
     )
     w = BagWriter(tmp_path / 'bag')
-    state = w.add_topic(topics.FORCE_CONTROL_STATE, 'sensor_msgs/msg/JointState', [])
+    state = w.add_topic(
+        topics.qualify(topics.FORCE_CONTROL_STATE), 'sensor_msgs/msg/JointState', []
+    )
     names = ['force', 'reference', 'feed_command', 'override', 'beta', 'depth']
     for k in range(20):  # 0.1 s apart: force k, override k/100
         ns = k * 100_000_000

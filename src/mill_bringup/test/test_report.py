@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import subprocess
 import sys
@@ -14,7 +15,9 @@ from mill_bag.types import STRING, typestore
 from mill_bag.writer import BagWriter
 from mill_bringup.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
 from mill_bringup.report.text import feed_text
-from mill_bringup.run_record import read_run
+from mill_bringup.run_record import read_run, record_topics
+
+from mill_common import topics
 
 TS = typestore()
 
@@ -69,6 +72,24 @@ def test_report_command_writes_markdown_and_plots(foreign_bag, tmp_path) -> None
     for name in pngs:
         assert (out / name).stat().st_size > 10_000, name
         assert f']({name})' in text
+
+
+def test_progress_reaches_the_end_of_every_phase(foreign_bag) -> None:
+    path, _ = foreign_bag('mcap')
+    seen: dict[str, list[tuple[int, int | None]]] = {}
+
+    def progress(phase: str, done: int, total: int | None) -> None:
+        seen.setdefault(phase, []).append((done, total))
+
+    run = read_run(path, progress=progress)
+    assert list(seen) == ['reading', 'decoding']
+    # Reading: every message of the bag, against metadata.yaml's count.
+    assert seen['reading'][-1] == (run.message_count, run.message_count)
+    # Decoding: every message of the record's topics.
+    decoded = sum(run.bag.counts[topics.qualify(t)] for t in record_topics(run.axes))
+    assert seen['decoding'][-1] == (decoded, decoded)
+    for phase in seen.values():
+        assert all(b >= a for (a, _), (b, _) in itertools.pairwise(phase))
 
 
 # -- report metrics -------------------------------------------------------------------------

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_bringup.metrics import SIGNALS, summarize
 from mill_bringup.run_record import read_run, record_from_raw, record_topics
 from mill_common.signals import AXES
+
+from mill_common import topics
 
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
@@ -32,7 +35,7 @@ def test_record_built_in_two_processes_equals_one(foreign_bag) -> None:
     for topic, _type, _log, _pub, data in open_bag(path).read():
         raw.setdefault(topic, []).append(data)
     types = record_topics(AXES)
-    raw = {t: raw[t] for t in types}
+    raw = {t: raw[topics.qualify(t)] for t in types}
     one, missing_one = record_from_raw(raw, types, AXES, 401, 1_000_000, workers=1)
     two, missing_two = record_from_raw(raw, types, AXES, 401, 1_000_000, workers=2)
     assert missing_one == missing_two == dict.fromkeys(missing_one, 0)
@@ -40,3 +43,26 @@ def test_record_built_in_two_processes_equals_one(foreign_bag) -> None:
     for name in SIGNALS:
         np.testing.assert_array_equal(one[name], two[name], err_msg=name)
         assert np.isfinite(one[name]).any(), name
+
+
+def test_a_namespaced_run_reads_as_the_root_one(foreign_bag) -> None:
+    path, rec = foreign_bag('mcap', namespaces=('/machine2',))
+    run = read_run(path)
+    assert (run.n, run.axes, run.missing) == (rec.t.size, ['x', 'y', 'z'], {})
+    for name in SIGNALS:
+        np.testing.assert_array_equal(run.record[name], rec[name], err_msg=name)
+    assert run.job_end_source == 'job status on /diagnostics'
+
+
+def test_a_bag_of_two_machines_needs_a_namespace(foreign_bag) -> None:
+    # The other machine's job status comes first, with a wrong end_time: it must be ignored.
+    path, rec = foreign_bag('mcap', namespaces=('/a', '/b'), foreign_status=True)
+    with pytest.raises(BagError, match=r'several namespaces \(/a, /b\); choose one'):
+        read_run(path)
+    with pytest.raises(BagError, match='no mill run in namespace /c'):
+        read_run(path, 'c')
+    for space in ('a', '/b'):
+        run = read_run(path, space)
+        assert run.n == rec.t.size  # from this machine's end_time, not /other's 0.1 s
+        for name in SIGNALS:
+            np.testing.assert_array_equal(run.record[name], rec[name], err_msg=name)

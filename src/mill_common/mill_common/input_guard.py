@@ -129,8 +129,11 @@ class InputGuard:
             message += f'; dropped {self.drops.total} bad messages (last: {last})'
             level = max(level, DiagnosticStatus.WARN)
         name = self.node.get_name()
-        statuses = [diagnostic_status(level, f'{name}: inputs', message, name, values)]
+        machine = topics.machine_id(self.node.get_namespace())
+        statuses = [diagnostic_status(level, f'{name}: inputs', message, machine, values)]
         if self._extra is not None:
             extra_level, extra_message, extra_values = self._extra()
-            statuses.append(diagnostic_status(extra_level, name, extra_message, name, extra_values))
+            statuses.append(
+                diagnostic_status(extra_level, name, extra_message, machine, extra_values)
+            )
         self._pub.publish(diagnostics_of(self._stamp_ns(), statuses))

@@ -377,7 +377,7 @@ class AxisControllerNode(Node):
                 level,
                 f'mill_controllers: {self.axis} trip',
                 message,
-                f'axis_{self.axis}',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )
@@ -416,7 +416,7 @@ class AxisControllerNode(Node):
                 DiagnosticStatus.OK,
                 f'mill_controllers: {self.axis} switch',
                 f'switched to {name}',
-                f'axis_{self.axis}',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )

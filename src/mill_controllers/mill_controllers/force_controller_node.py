@@ -169,9 +169,8 @@ class ForceControllerNode(Node):
             'held_samples': self._loop.held_samples,
             'clamped_samples': self._clamped,
         }
-        self._diag_pub.publish(
-            diagnostic_array(ns, level, STATUS_NAME, message, 'mill_controllers', values)
-        )
+        machine = topics.machine_id(self.get_namespace())
+        self._diag_pub.publish(diagnostic_array(ns, level, STATUS_NAME, message, machine, values))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -60,6 +60,17 @@ class DelayCompensation:
         lead = self.delay * self.T
         return Estimate(est.position + lead * est.velocity, est.velocity, est.disturbance)
 
+    def coast(self, u: float) -> None:
+        """A period without a measurement (a state lost on the way): the model runs on with
+        the command that acted over it; `u` is the command sent in that period."""
+        u = u if math.isfinite(u) else 0.0
+        if self.delay == 0:
+            self.observer.predict(u)
+            return
+        self.observer.predict(self.pending[0])
+        self.pending.popleft()
+        self.pending.append(u)
+
     def command(self, u: float) -> None:
         """The command computed at sample k (acts from k + N; a braked axis gets no input)."""
         u = u if math.isfinite(u) else 0.0

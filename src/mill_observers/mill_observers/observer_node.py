@@ -39,6 +39,8 @@ from mill_observers.delay import DelayCompensation
 from mill_observers.registry import OBSERVERS
 from mill_observers.switching import EstimateBlend
 
+MAX_COAST = 100  # periods the model runs on without a state before it just resumes
+
 
 class ObserverNode(Node):
     def __init__(self) -> None:
@@ -57,7 +59,9 @@ class ObserverNode(Node):
             'command': v['controller_node'] or f'{axis}_controller',
         }
         self._topics = {'state': topics.state(axis), 'command': topics.joint_command(axis)}
-        grid = None if self.realtime else period_ns(v['sample_period'])
+        self._dt_ns = period_ns(v['sample_period'])
+        self._coasted = 0  # real time: periods run on without their state
+        grid = None if self.realtime else self._dt_ns
         self._stamps = {'state': StampCheck(grid), 'command': StampCheck(grid)}
         self._states: dict[int, float] = {}
         self._last_estimate: JointState | None = None
@@ -168,8 +172,13 @@ class ObserverNode(Node):
                 ns = max(self._states)  # nothing stale: the newest state only
                 self._states = {ns: self._states[ns]}
                 if self._last_ns is not None:
-                    held = self._newest_command
-                    comp.command(0.0 if held is None else held)
+                    held = 0.0 if self._newest_command is None else self._newest_command
+                    # Periods whose state never reached us: the model runs on without one.
+                    missed = min(round((ns - self._last_ns) / self._dt_ns) - 1, MAX_COAST)
+                    for _ in range(max(missed, 0)):
+                        comp.coast(held)
+                    self._coasted += max(missed, 0)
+                    comp.command(held)
             elif self._last_ns is not None:
                 u = self._commands.pop(self._last_ns, None)
                 if u is None:

@@ -473,9 +473,13 @@ class DriveNode(LifecycleNode):
         else:
             self.get_logger().error(f'axis {axis}: {message}')
         status = diagnostic_status(
-            level, AXIS_STATUS.format(axis), message, f'axis_{axis}', {'step': self._k}
+            level, AXIS_STATUS.format(axis), message, self._machine(), {'step': self._k}
         )
         self._diag_pub.publish(diagnostics_of(self._stamp_now(), [status]))
+
+    def _machine(self) -> str:
+        """hardware_id of our statuses: the machine's namespace."""
+        return topics.machine_id(self.get_namespace())
 
     def _stamp_now(self) -> int:
         if self.timing == 'lockstep':
@@ -519,7 +523,7 @@ class DriveNode(LifecycleNode):
                 level,
                 name,
                 message or ('running' if self.active else 'waiting'),
-                'mill_plant',
+                self._machine(),
                 values,
             )
         ]
@@ -530,7 +534,7 @@ class DriveNode(LifecycleNode):
                     DiagnosticStatus.ERROR,
                     OWNERSHIP_STATUS,
                     f'foreign publishers ignored: {seen}',
-                    'mill_plant',
+                    self._machine(),
                     {'foreign_messages': self._foreign_messages},
                 )
             )

@@ -201,8 +201,9 @@ class ForceProcessNode(Node):
             'faults': self._faults,
             'wall_s': time.monotonic() - self._wall_start,
         }
+        machine = topics.machine_id(self.get_namespace())
         self._diag_pub.publish(
-            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, 'mill_plant', values)
+            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, machine, values)
         )
 
 

@@ -13,10 +13,11 @@ on /diagnostics as a WARN. Each sample's reference is then computed once, in ord
 the override in effect when its tick arrives (mill_trajectory.feed_override).
 
 With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
-`axes` has reported its position and as many nodes (the controllers) listen to the reference,
-starts the job at the stamp of the newest of those states
-(the drive's system clock), first moving from where the axes stand to the path's start at
-`approach.speed` (or refusing, with the distance, beyond `approach.max_distance`), and
+`axes` has reported its position, every axis has an estimate publisher (its observer) and as
+many nodes (the controllers) listen to the reference, starts the job at the stamp of the
+newest of those states (the drive's system clock), first moving from where the axes stand
+to the path's start at `approach.speed` (or refusing, with the distance, beyond
+`approach.max_distance`), and
 publishes every `publish_period` the points of the sample grid t0 + kT from one sample
 before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
 them at their states' stamps. The job status says when it started (`start_stamp_ns`).
@@ -189,6 +190,8 @@ class TrajectoryNode(Node):
                 return
             if self._ref_pub.get_subscription_count() < len(v['axes']):
                 return  # the controllers (one per axis) are not listening yet
+            if any(self.count_publishers(topics.estimate(a)) < 1 for a in v['axes']):
+                return  # an observer is not up yet: its controller could not act
             here = [self._positions.get(a, 0.0) for a in AXES]
             try:
                 approach = Approach(
@@ -311,10 +314,10 @@ class TrajectoryNode(Node):
             if last is not None and done:
                 end = seconds(last * self._dt_ns)
         if done and not self._done_sent:
-            self._done_sent, self._done_end = True, end
-            self._report(t, 'done', end_time=end)
-        elif t >= self._next_report:
-            # once done, the job stays done (a graph runs on until it is stopped)
+            self._done_end = end
+        # Once done, the job stays done (a graph runs on until it is stopped).
+        if (done and not self._done_sent) or t >= self._next_report:
+            self._done_sent = self._done_sent or done
             self._next_report = t + 1.0
             if self._done_sent:
                 self._report(t, 'done', end_time=self._done_end)
@@ -378,7 +381,7 @@ class TrajectoryNode(Node):
                 level,
                 JOB_STATUS_NAME,
                 problem or f'job {state}',
-                'mill',
+                topics.machine_id(self.get_namespace()),
                 values,
             )
         )

@@ -41,6 +41,10 @@ class MessageSource(Protocol):
         """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
         ...
 
+    def arrival_ns(self, topic: str) -> Sequence[int]:
+        """Wall-clock arrival [ns, system clock] of each message of a timed topic."""
+        ...
+
 
 class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
@@ -99,6 +103,10 @@ class Job(ABC, Generic[R]):
     def recorded_topics(self) -> dict[str, str]:
         """Topics of the contract a bag records besides the monitored ones."""
         return {}
+
+    def timed_topics(self) -> set[str]:
+        """Topics whose messages' arrival times the monitor keeps (latency)."""
+        return set()
 
     def sim_time_stamps(self) -> bool:
         """Whether the graph runs on sim time (the bag's log time is then the stamp)."""

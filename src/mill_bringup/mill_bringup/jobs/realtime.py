@@ -13,7 +13,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from math import nan
 from typing import Any
+
+import numpy as np
+from mill_bag.cdr import cdr_stamp_ns
 
 from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
@@ -26,6 +30,35 @@ from mill_common import topics
 JOB_STATUS = 'mill_trajectory: job'
 DRIVE_STATUS = 'mill_plant: realtime'
 DRIVE_FIGURES = ('late_fraction', 'latency_median_ms', 'latency_p99_ms', 'latency_max_ms')
+
+
+def command_timing(
+    rec: RunRecord,
+    raw: Mapping[str, Sequence[bytes]],
+    source: MessageSource,
+    axes: Sequence[str],
+    t0: int,
+) -> dict[str, dict[str, float]]:
+    """Per axis: the share of the job's states no command answered, and the latency from a
+    state's stamp to its command's arrival here [ms] (median, p99, max)."""
+    out = {}
+    for axis in axes:
+        topic = topics.joint_command(axis)
+        stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
+        arrivals = source.arrival_ns(topic)
+        latency = np.array(
+            [(a - s) * 1e-6 for s, a in zip(stamps, arrivals, strict=False) if s is not None]
+        )
+        answered = {s for s in stamps if s is not None}
+        states = t0 + np.round(rec.t * 1e9).astype(np.int64)
+        late = float(np.mean([s not in answered for s in states.tolist()])) if len(states) else nan
+        out[axis] = {
+            'late_fraction': late,
+            'latency_median_ms': float(np.median(latency)) if latency.size else nan,
+            'latency_p99_ms': float(np.percentile(latency, 99)) if latency.size else nan,
+            'latency_max_ms': float(latency.max()) if latency.size else nan,
+        }
+    return out
 
 
 class RealtimeAxisJob(AxisJob):
@@ -48,6 +81,8 @@ class RealtimeAxisJob(AxisJob):
             )
         self.start_ns: int | None = None
         self.drive: dict[str, str] = {}
+        self._source: MessageSource | None = None
+        self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
 
     @property
     def sim_time(self) -> float:
@@ -70,6 +105,9 @@ class RealtimeAxisJob(AxisJob):
     def sim_time_stamps(self) -> bool:
         return False
 
+    def timed_topics(self) -> set[str]:
+        return {topics.joint_command(a) for a in self.axes}
+
     def _job(self, source: MessageSource) -> dict[str, str] | None:
         status = source.status(JOB_STATUS)
         if status is not None and 'start_stamp_ns' in status:
@@ -90,6 +128,7 @@ class RealtimeAxisJob(AxisJob):
         drive = source.status(DRIVE_STATUS)
         if drive is not None:
             self.drive = drive
+        self._source = source
         return status.get('state') == 'done'
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:

@@ -6,6 +6,10 @@ A force job's bags (Rubio 2013: force samples, force stream, overrides) get the 
 Bad input (a path that does not exist, an empty bag, a bag without the mill
 topics, a file that is not MCAP, broken metadata) ends with one line
 `report: error: ...` and exit code 1; bad options with one line and exit code 2.
+
+While a bag is read and decoded, progress goes to stderr as the runner shows it
+(mill_bringup.graph.Progress): a live bar on a terminal, a plain line every 5 s otherwise,
+from 2 s into each phase.
 """
 
 from __future__ import annotations
@@ -22,11 +26,42 @@ from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 
 from mill_bringup.force_record import is_force_bag, read_force_run
+from mill_bringup.graph import Progress
 from mill_bringup.report.analysis import analyse
 from mill_bringup.report.force import force_figure, force_markdown, force_table
 from mill_bringup.report.plots import plot_all
 from mill_bringup.report.text import markdown, text_table
 from mill_bringup.run_record import read_run
+
+
+class _BagProgress:
+    """read_run's progress callback: one Progress per phase (reading, decoding) of a bag."""
+
+    def __init__(self, label: str, quiet: bool) -> None:
+        self.label = label
+        self.quiet = quiet
+        self.phase = ''
+        self.bar: Progress | None = None
+
+    def __call__(self, phase: str, done: int, total: int | None) -> None:
+        if phase != self.phase:
+            self.close()
+            self.phase = phase
+            self.bar = Progress(
+                total,
+                unit='messages',
+                quiet=self.quiet,
+                label=f'{self.label}: {phase}',
+                decimals=0,
+                delay=2.0,  # a short bag shows none (nor before a one-line error)
+            )
+        if self.bar is not None:
+            self.bar.update(done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
 
 
 class _Parser(argparse.ArgumentParser):
@@ -105,6 +140,13 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument('--label', action='append', help='name of each bag in the report')
     parser.add_argument('--no-plots', action='store_true', help='table and report.md only')
+    parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
+    parser.add_argument(
+        '--namespace',
+        metavar='NAME',
+        help='the machine namespace of the run, for a bag that holds several (default: the '
+        "bag's only one)",
+    )
     args = parser.parse_args(argv)
     if args.label and len(args.label) != len(args.bags):
         parser.error(f'{len(args.label)} --label for {len(args.bags)} bags')
@@ -127,8 +169,9 @@ def main(argv: list[str] | None = None) -> int:
     t_start = time.monotonic()
     for bag, label in zip(args.bags, labels, strict=True):
         t0 = time.monotonic()
+        progress = _BagProgress(label, args.quiet)
         try:
-            run = read_run(bag)
+            run = read_run(bag, args.namespace, progress)
         except BagError as exc:
             print(f'report: error: {exc}', file=sys.stderr)
             return 1
@@ -140,6 +183,8 @@ def main(argv: list[str] | None = None) -> int:
                 f'report: error: {bag}: cannot read ({type(exc).__name__}: {exc})', file=sys.stderr
             )
             return 1
+        finally:
+            progress.close()
         if run.n <= 1 or not (run.record.t >= args.skip).any():
             print(
                 f'report: error: {bag}: no samples at t >= {args.skip:g} s '
@@ -188,7 +233,7 @@ def force_report(args: argparse.Namespace, labels: list[str], argv: list[str]) -
     runs = []
     for bag, label in zip(args.bags, labels, strict=True):
         try:
-            runs.append((label, read_force_run(bag)))
+            runs.append((label, read_force_run(bag, args.namespace)))
         except BagError as exc:
             print(f'report: error: {exc}', file=sys.stderr)
             return 1

@@ -1,0 +1,189 @@
+"""What `ros2 launch mill_bringup scenario.launch.py` starts, decided without `launch`. ROS-free.
+
+The launch file (launch/scenario.launch.py) is a thin adapter: it declares ARGUMENTS and
+turns the plan of `plan()` into launch_ros Node actions, so that everything it decides is
+tested here without a ROS install that has `launch`:
+
+- scenario: a name in config/ or a scenario file; its `mill_scenario` entry lists the nodes;
+- namespace: the machine namespace of every node (default: the scenario's, else the root);
+- params_file: a ROS 2 parameter file applied on top of the scenario; its entries are keyed
+  `/**`, `NAME`, `/NAME` or `/**/NAME` and must name nodes of the scenario;
+- timing: `lockstep` or `realtime`, given to every node as its `timing` parameter (empty:
+  what the scenario says);
+- log_level: every node's `--log-level`.
+
+Every node gets one parameter file (written by `write_parameters`) with its merged values
+keyed `/**/NAME`, so they apply under the namespace whatever the keys of the scenario and
+of params_file. The node that clocks the job (plant or force process) is required: its exit
+ends the launch with its exit code. The `job_watch` node ends the launch when the
+trajectory reports the job done.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mill_bringup.scenario import (
+    NodeLaunch,
+    Scenario,
+    ScenarioError,
+    dump_parameters,
+    load,
+    parse_yaml,
+)
+from mill_common import topics
+
+TIMINGS = ('lockstep', 'realtime')
+LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
+# The node that ends the launch once the job is done (mill_bringup.job_watch).
+JOB_WATCH = NodeLaunch('job_watch', 'mill_bringup', 'job_watch')
+
+
+@dataclass(frozen=True)
+class Argument:
+    name: str
+    default: str
+    description: str
+
+
+ARGUMENTS = (
+    Argument(
+        'scenario',
+        'slotting',
+        'scenario name (config/NAME.yaml) or path to a scenario file; its mill_scenario '
+        'entry lists the nodes',
+    ),
+    Argument(
+        'namespace',
+        '',
+        "machine namespace of every node, e.g. machine2; empty: the scenario's, else /. "
+        '/clock and /diagnostics stay global',
+    ),
+    Argument(
+        'params_file',
+        '',
+        'ROS 2 parameter file applied on top of the scenario (entries /**, NODE, /NODE or '
+        '/**/NODE)',
+    ),
+    Argument(
+        'timing',
+        '',
+        "lockstep or realtime: every node's timing parameter; empty: the scenario's",
+    ),
+    Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
+)
+
+
+@dataclass(frozen=True)
+class NodePlan:
+    """One node to start: what launch_ros.actions.Node gets."""
+
+    package: str
+    executable: str
+    name: str
+    namespace: str
+    parameters: list[str]  # parameter files, in order
+    remappings: list[tuple[str, str]]
+    ros_arguments: list[str]
+    required: bool  # its exit ends the launch
+
+
+@dataclass
+class Plan:
+    scenario: Scenario
+    nodes: list[NodePlan] = field(default_factory=list)
+    parameters: dict[str, Any] = field(default_factory=dict)  # the file every node gets
+
+
+def _apply_params_file(scen: Scenario, path: str) -> None:
+    """params_file entries as overrides of the scenario's nodes (ScenarioError if unusable)."""
+    try:
+        raw = parse_yaml(Path(path).read_text())
+    except OSError as exc:
+        raise ScenarioError(f'params_file {path}: {exc.strerror or exc}') from None
+    except Exception as exc:  # yaml errors
+        raise ScenarioError(f'params_file {path}: not valid YAML ({exc})') from None
+    if not isinstance(raw, dict):
+        raise ScenarioError(f'params_file {path}: not a ROS 2 parameter file')
+    names = [n.name for n in scen.nodes]
+    for key, entry in raw.items():
+        values = (entry or {}).get('ros__parameters') if isinstance(entry, dict) else None
+        if not isinstance(values, dict):
+            raise ScenarioError(f'params_file {path}: entry {key!r} has no ros__parameters')
+        if key == '/**':
+            targets = names
+        else:
+            name = str(key).removeprefix('/**/').removeprefix('/')
+            if name not in names:
+                raise ScenarioError(
+                    f'params_file {path}: entry {key!r} names no node of scenario '
+                    f'{scen.name} ({", ".join(names)})'
+                )
+            targets = [name]
+        for name in targets:
+            scen.overrides.setdefault(name, {}).update(values)
+
+
+def plan(
+    scenario: str,
+    namespace: str = '',
+    params_file: str = '',
+    timing: str = '',
+    log_level: str = 'info',
+) -> Plan:
+    """The nodes a launch of this scenario starts; ScenarioError (one line) for bad input."""
+    from mill_bringup.jobs.registry import job_for
+
+    scen = load(scenario)
+    if namespace:
+        scen.set_namespace(namespace)
+    if params_file:
+        _apply_params_file(scen, params_file)
+    if timing:
+        if timing not in TIMINGS:
+            raise ScenarioError(f'timing must be one of {", ".join(TIMINGS)}, got {timing!r}')
+        for node in scen.nodes:
+            scen.overrides.setdefault(node.name, {})['timing'] = timing
+    if log_level not in LOG_LEVELS:
+        raise ScenarioError(f'log_level must be one of {", ".join(LOG_LEVELS)}, got {log_level!r}')
+    job = job_for(scen)  # checks the graph: exactly one clock node
+    for node in scen.nodes:
+        scen.parameters(node.name)  # every value checked before anything starts
+    clocks = {n.name for n in job.clock_nodes}
+    remappings = []
+    if scen.private_clock and scen.namespace != topics.ROOT:
+        remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
+    out = Plan(scen, parameters=scen.node_parameters())
+    for node in [*scen.nodes, JOB_WATCH]:
+        out.nodes.append(
+            NodePlan(
+                package=node.package,
+                executable=node.executable,
+                name=node.name,
+                namespace=scen.namespace,
+                parameters=[],  # filled by write_parameters
+                remappings=list(remappings),
+                ros_arguments=['--log-level', log_level],
+                required=node.name in clocks or node is JOB_WATCH,
+            )
+        )
+    return out
+
+
+def write_parameters(p: Plan, directory: str | None = None) -> Path:
+    """Write the plan's parameter file and give it to every node; returns its path."""
+    folder = Path(directory or tempfile.mkdtemp(prefix='mill_launch_'))
+    path = folder / f'{p.scenario.name}_parameters.yaml'
+    path.write_text(dump_parameters(p.parameters))
+    for node in p.nodes:
+        node.parameters.clear()
+        node.parameters.append(str(path))
+    return path
+
+
+def exit_code(returncode: int) -> int:
+    """A process's return code as a shell reports it (killed by signal N: 128 + N)."""
+    return 128 - returncode if returncode < 0 else min(returncode, 255)

@@ -1,0 +1,220 @@
+"""The launch file without `launch`: what it starts (launch_plan) and that its adapter uses it.
+
+The PyPI wheels ship neither `launch` nor `launch_ros`. What can be checked honestly without
+them is checked here: every node and executable the launch names exists, the arguments are
+the documented ones, bad arguments end in one line, and the launch file, run against
+stand-in `launch` modules that only record what they are given, declares every argument
+and hands every planned node to launch_ros. That launch itself accepts these actions was
+checked by hand with launch built from source (docs/user-guide.md).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import importlib.util
+import sys
+import types
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+from mill_bringup.scenario import ScenarioError, parse_yaml
+
+from mill_bringup import launch_plan
+
+ROOT = Path(__file__).resolve().parents[3]
+LAUNCH_FILE = ROOT / 'src' / 'mill_bringup' / 'launch' / 'scenario.launch.py'
+SCENARIOS = sorted(p.stem for p in (ROOT / 'config').glob('*.yaml'))
+
+
+def _console_scripts() -> dict[tuple[str, str], str]:
+    out = {}
+    for ep in importlib.metadata.entry_points(group='console_scripts'):
+        package = ep.value.split('.')[0]
+        out[(package, ep.name)] = ep.value
+    return out
+
+
+def test_arguments_are_the_documented_ones() -> None:
+    names = [a.name for a in launch_plan.ARGUMENTS]
+    assert names == ['scenario', 'namespace', 'params_file', 'timing', 'log_level']
+    assert all(len(a.description) > 20 for a in launch_plan.ARGUMENTS)
+
+
+@pytest.mark.parametrize('name', SCENARIOS)
+def test_every_planned_node_is_an_executable_of_its_package(name: str, tmp_path: Path) -> None:
+    scripts = _console_scripts()
+    plan = launch_plan.plan(name)
+    path = launch_plan.write_parameters(plan, str(tmp_path))
+    for node in plan.nodes:
+        target = scripts.get((node.package, node.executable))
+        assert target is not None, f'{node.package} has no executable {node.executable}'
+        module = target.partition(':')[0]
+        assert importlib.util.find_spec(module) is not None, module
+        assert node.parameters == [str(path)] and node.namespace == '/'
+        assert node.ros_arguments == ['--log-level', 'info']
+    # Required: the node that clocks the job, and the job watch that ends the launch.
+    required = sorted(n.executable for n in plan.nodes if n.required)
+    clock = 'force_process_node' if name == 'rubio' else 'plant_node'
+    assert required == sorted([clock, 'job_watch'])
+    written = parse_yaml(path.read_text())
+    assert set(written) == {f'/**/{n.name}' for n in plan.scenario.nodes}
+
+
+def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
+    params = tmp_path / 'gains.yaml'
+    params.write_text(
+        'x_controller:\n  ros__parameters:\n    pd.omega_c: 20.0\n'
+        '/**:\n  ros__parameters:\n    sample_period: 0.001\n'
+        '/**/plant:\n  ros__parameters:\n    substeps: 8\n'
+    )
+    plan = launch_plan.plan('slotting', 'machine2', str(params), 'realtime', 'warn')
+    path = launch_plan.write_parameters(plan, str(tmp_path))
+    written = yaml.safe_load(path.read_text())
+    assert written['/**/x_controller']['ros__parameters']['pd.omega_c'] == 20.0
+    assert written['/**/y_controller']['ros__parameters']['pd.omega_c'] == 12.0  # the file's
+    assert written['/**/plant']['ros__parameters']['substeps'] == 8
+    for entry in written.values():
+        assert entry['ros__parameters']['timing'] == 'realtime'
+    for node in plan.nodes:
+        assert node.namespace == '/machine2' and node.remappings == []
+        assert node.ros_arguments == ['--log-level', 'warn']
+
+
+def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
+    text = (ROOT / 'config' / 'slotting.yaml').read_text()
+    marker = '    description:'
+    path = tmp_path / 'two.yaml'
+    path.write_text(text.replace(marker, '    namespace: m2\n    private_clock: true\n' + marker))
+    plan = launch_plan.plan(str(path))
+    assert {n.namespace for n in plan.nodes} == {'/m2'}
+    assert all(n.remappings == [('/clock', '/m2/clock')] for n in plan.nodes)
+
+
+@pytest.mark.parametrize(
+    ('kwargs', 'message'),
+    [
+        ({'timing': 'fast'}, "timing must be one of lockstep, realtime, got 'fast'"),
+        ({'log_level': 'loud'}, 'log_level must be one of debug'),
+        ({'namespace': '9lives'}, "namespace '9lives' is not valid"),
+        ({'scenario': 'nope'}, "no scenario 'nope'"),
+        ({'params_file': 'missing.yaml'}, 'params_file missing.yaml: No such file'),
+    ],
+)
+def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> None:
+    args = {'scenario': 'slotting', **kwargs}
+    with pytest.raises(ScenarioError, match=message) as info:
+        launch_plan.plan(**args)
+    assert '\n' not in str(info.value)
+
+
+def test_params_file_must_name_nodes_of_the_scenario(tmp_path: Path) -> None:
+    params = tmp_path / 'p.yaml'
+    params.write_text('w_controller:\n  ros__parameters:\n    pd.omega_c: 20.0\n')
+    with pytest.raises(ScenarioError, match="entry 'w_controller' names no node"):
+        launch_plan.plan('slotting', params_file=str(params))
+    params.write_text('x_controller:\n  ros__parameters:\n    pd.omega_c: -1.0\n')
+    with pytest.raises(ScenarioError, match=r'pd\.omega_c'):  # checked before anything starts
+        launch_plan.plan('slotting', params_file=str(params))
+
+
+def test_exit_codes_as_a_shell_reports_them() -> None:
+    assert [launch_plan.exit_code(c) for c in (0, 3, -2, -9, 300)] == [0, 3, 130, 137, 255]
+
+
+# -- the launch file against stand-ins that record what they are given ---------------------
+
+
+class _Recorded:
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        self.args, self.kwargs = args, kwargs
+
+
+def _stand_ins(values: dict[str, str]) -> dict[str, types.ModuleType]:
+    def module(name: str, **members: Any) -> types.ModuleType:
+        mod = types.ModuleType(name)
+        mod.__dict__.update(members)
+        return mod
+
+    class LaunchConfiguration:
+        def __init__(self, name: str) -> None:
+            self.name = name
+
+        def perform(self, _context: Any) -> str:
+            return values[self.name]
+
+    kinds = {
+        k: type(k, (_Recorded,), {})
+        for k in (
+            'LaunchDescription',
+            'DeclareLaunchArgument',
+            'OpaqueFunction',
+            'RegisterEventHandler',
+            'Shutdown',
+            'OnProcessExit',
+            'Node',
+        )
+    }
+    actions = ('DeclareLaunchArgument', 'OpaqueFunction', 'RegisterEventHandler', 'Shutdown')
+    return {
+        'launch': module('launch', LaunchDescription=kinds['LaunchDescription']),
+        'launch.actions': module('launch.actions', **{k: kinds[k] for k in actions}),
+        'launch.event_handlers': module(
+            'launch.event_handlers', OnProcessExit=kinds['OnProcessExit']
+        ),
+        'launch.substitutions': module(
+            'launch.substitutions', LaunchConfiguration=LaunchConfiguration
+        ),
+        'launch_ros': module('launch_ros'),
+        'launch_ros.actions': module('launch_ros.actions', Node=kinds['Node']),
+    }
+
+
+def test_launch_file_declares_the_arguments_and_starts_the_plan(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    values = {a.name: a.default for a in launch_plan.ARGUMENTS}
+    values.update(namespace='machine2', log_level='warn')
+    for name, mod in _stand_ins(values).items():
+        monkeypatch.setitem(sys.modules, name, mod)
+    monkeypatch.setattr('tempfile.tempdir', str(tmp_path))
+    spec = importlib.util.spec_from_file_location('scenario_launch', LAUNCH_FILE)
+    launch_file = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(launch_file)
+
+    description = launch_file.generate_launch_description()
+    entities = description.args[0]
+    declared = {
+        e.args[0]: e.kwargs for e in entities if type(e).__name__ == 'DeclareLaunchArgument'
+    }
+    assert list(declared) == [a.name for a in launch_plan.ARGUMENTS]
+    for a in launch_plan.ARGUMENTS:
+        assert declared[a.name] == {'default_value': a.default, 'description': a.description}
+    (opaque,) = [e for e in entities if type(e).__name__ == 'OpaqueFunction']
+
+    actions = opaque.kwargs['function'](object())
+    nodes = [a.kwargs for a in actions if type(a).__name__ == 'Node']
+    plan = launch_plan.plan('slotting', 'machine2', log_level='warn')
+    assert [(n['package'], n['executable'], n['name']) for n in nodes] == [
+        (p.package, p.executable, p.name) for p in plan.nodes
+    ]
+    assert all(n['namespace'] == '/machine2' for n in nodes)
+    assert all(n['ros_arguments'] == ['--log-level', 'warn'] for n in nodes)
+    assert all(Path(n['parameters'][0]).is_file() for n in nodes)
+    handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']
+    watched = sorted(h.kwargs['target_action'].kwargs['name'] for h in handlers)
+    assert watched == ['job_watch', 'plant']
+
+    # The plant ending by itself with code 3 ends the launch and sets the exit code.
+    class Event:
+        returncode = 3
+
+    class Context:
+        is_shutdown = False
+
+    plant = next(h for h in handlers if h.kwargs['target_action'].kwargs['name'] == 'plant')
+    monkeypatch.setattr('atexit.register', lambda f: None)
+    (shutdown,) = plant.kwargs['on_exit'](Event(), Context())
+    assert type(shutdown).__name__ == 'Shutdown'
+    assert launch_file._exit['code'] == 3

@@ -1,0 +1,73 @@
+"""What ends `ros2 launch` with the job: the job_watch node, alone and beside a real graph.
+
+The graph is started from the launch plan (mill_bringup.launch_plan) as launch_ros starts
+Nodes: `--ros-args --log-level L -r __node:=NAME -r __ns:=NS --params-file FILE`.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from mill_bringup.graph import module_of
+
+from mill_bringup import launch_plan
+from mill_common import topics
+from test.conftest import ros_node, wait_until
+
+
+def _status(machine: str, state: str) -> DiagnosticArray:
+    values = [KeyValue(key='state', value=state), KeyValue(key='time', value='1.0')]
+    status = DiagnosticStatus(
+        name='mill_trajectory: job', message=f'job {state}', hardware_id=machine, values=values
+    )
+    return DiagnosticArray(status=[status])
+
+
+@pytest.mark.system
+def test_job_watch_ends_on_its_own_machines_done_only(start_node) -> None:
+    watch = start_node('mill_bringup.job_watch', 'job_watch', '-r', '__ns:=/machine2')
+    with ros_node('status_source') as (node, executor):
+        pub = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        assert wait_until(lambda: pub.get_subscription_count() > 0, 60), 'job_watch never came'
+        for machine, state in (('/machine2', 'running'), ('/machine3', 'done'), ('/', 'done')):
+            pub.publish(_status(machine, state))
+            executor.spin_once(timeout_sec=0.5)
+        time.sleep(1.0)
+        assert watch.alive(), 'ended on a status that is not its machine reporting done'
+        pub.publish(_status('/machine2', 'done'))
+        code, _out, err = watch.wait(timeout=30)
+    assert code == 0, err
+    assert 'job_watch: job done at t = 1.0 s' in err
+
+
+@pytest.mark.system
+def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path) -> None:
+    params = tmp_path / 'short.yaml'
+    params.write_text('/**/trajectory:\n  ros__parameters:\n    duration: 0.2\n')
+    plan = launch_plan.plan('slotting', 'machine_l', str(params), '', 'warn')
+    launch_plan.write_parameters(plan, str(tmp_path))
+    procs = {}
+    for n in plan.nodes:
+        cmd = [sys.executable, '-m', module_of(n.package, n.executable), '--ros-args']
+        cmd += [*n.ros_arguments, '-r', f'__node:={n.name}', '-r', f'__ns:={n.namespace}']
+        for f in n.parameters:
+            cmd += ['--params-file', f]
+        procs[n.name] = subprocess.Popen(
+            cmd, env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+        )
+    try:
+        _out, err = procs['job_watch'].communicate(timeout=600)
+        assert procs['job_watch'].returncode == 0, err
+        assert 'job done at t = 0.2' in err, err
+        assert procs['plant'].poll() is None  # still running: launch would now stop it
+    finally:
+        for p in procs.values():
+            if p.poll() is None:
+                p.terminate()
+        for p in procs.values():
+            p.communicate(timeout=30)

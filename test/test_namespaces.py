@@ -1,0 +1,85 @@
+"""Two machines in one domain: each graph under its own namespace, at the same time.
+
+Both runs share ROS_DOMAIN_ID; each puts every topic under its namespace and keeps its
+simulation clock there (--private-clock; two plants on one /clock are refused, the second
+test), while /diagnostics stays global. Each run must equal its own offline simulation
+sample for sample: the two machines run different laws (adrc and pd), so a state, estimate
+or command of the other machine taken by an observer or a controller would show.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from mill_bag.reader import open_bag
+from mill_bringup.run_record import read_run
+
+from mill_common import topics
+
+DURATION = '0.3'
+SAMPLES = 301  # t = 0 .. 0.3 s at 1 kHz
+
+
+def _runner(ros_env: dict[str, str], out: Path, *args: str) -> subprocess.Popen[str]:
+    cmd = [sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', DURATION]
+    cmd += ['--compare-offline', '--quiet', '--output', str(out), *args]
+    return subprocess.Popen(
+        cmd, env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+
+
+@pytest.mark.system
+def test_two_machines_in_one_domain_each_equal_their_offline_run(ros_env, tmp_path):
+    runs = {
+        'machine_a': ('--controller', 'adrc', '--record', str(tmp_path / 'a_bag')),
+        'machine_b': ('--controller', 'pd'),
+    }
+    procs = {
+        name: _runner(ros_env, tmp_path / name, '--namespace', name, '--private-clock', *args)
+        for name, args in runs.items()
+    }
+    for name, proc in procs.items():
+        _out, err = proc.communicate(timeout=900)
+        assert proc.returncode == 0, f'{name}: {err[-3000:]}'
+    for name in runs:
+        summary = json.loads((tmp_path / name / 'summary.json').read_text())
+        assert summary['samples'] == SAMPLES
+        assert summary['missing_samples'] == {}, name
+        # Every sample of every axis: |e_distributed - e_offline| <= 1e-9 m (the equality
+        # of the default-namespace run, test_lockstep_equality).
+        assert summary['offline_max_difference'] <= 1e-9, name
+        assert summary['problems'] == [], name  # nothing of the other machine's diagnostics
+    # The bag of machine_a holds its own topics under its namespace, none of machine_b's,
+    # and report reads it as the run it is.
+    bag = open_bag(tmp_path / 'a_bag')
+    names = {name for name, *_ in bag.read()}
+    assert topics.qualify(topics.state('x'), 'machine_a') in names
+    assert '/machine_a/clock' in names and topics.DIAGNOSTICS in names
+    assert not [n for n in names if n.startswith('/machine_b') or n.startswith('/mill/')]
+    run = read_run(tmp_path / 'a_bag')
+    assert run.n >= SAMPLES and run.missing == {}
+
+
+@pytest.mark.system
+def test_a_second_clock_in_the_domain_is_refused(ros_env, tmp_path):
+    from rosgraph_msgs.msg import Clock
+
+    from test.conftest import ros_node
+
+    with ros_node('other_simulation') as (node, executor):
+        pub = node.create_publisher(Clock, topics.CLOCK, 10)
+        proc = _runner(ros_env, tmp_path / 'run')
+        deadline = time.monotonic() + 600
+        while proc.poll() is None and time.monotonic() < deadline:
+            pub.publish(Clock())
+            executor.spin_once(timeout_sec=0.1)
+        _out, err = proc.communicate(timeout=60)
+    lines = [line for line in err.splitlines() if line.startswith('run_scenario:')]
+    assert proc.returncode == 1, err[-3000:]
+    assert len(lines) == 1 and '/clock has 1 publishers' in lines[0], err[-3000:]
+    assert 'another simulation shares the domain' in lines[0]
