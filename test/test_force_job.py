@@ -19,8 +19,10 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+from mill_bringup.force_record import read_force_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
+from mill_bringup.run_record import read_run
 from mill_common.ros import DATA_QOS, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs
@@ -64,6 +66,74 @@ def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: 
     assert summary['beta_switches'] == int(np.count_nonzero(np.diff(offline.beta)))
     if name == 'scheme1':
         assert summary['beta_switches'] >= 1
+
+
+@pytest.mark.system
+def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_env, tmp_path):
+    """The Kline job with the force law in lockstep, on a 1 mm cut: the run's length is found
+    by the trajectory (the force law slows the feed), and every sample and control instant
+    equals the offline twin's."""
+    segments = 'trajectory.program.segments=["linear -0.075 -0.104 -0.005 0.003"]'
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting_adaptive_feed'),
+            *('-p', segments, '--compare-offline', '--quiet', '--output', str(out)),
+            *('--record', str(tmp_path / 'bag')),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'summary.json').read_text())
+    scen = scenario.load('slotting_adaptive_feed')
+    scen.add_override(segments)
+    job = job_for(scen)
+    nominal = job.samples  # at override 1
+    offline = simulate(job)
+    assert summary['samples'] == len(offline.t) == job.samples != nominal
+    assert summary['missing_samples'] == {}
+    # the same cores on the same floats: bit-equal (1e-9 m allows nothing but rounding)
+    assert summary['offline_max_difference'] <= 1e-9
+    assert set(summary['differences']) >= {'tracking_error', 'force_control.override'}
+    # its bag: `report` finds the job's length from the "done" status, and the overrides
+    run = read_run(tmp_path / 'bag')
+    assert run.n == job.samples and run.job_end_source == 'job status on /diagnostics'
+    overrides = [v for _, v in run.feed_override]  # the graph ran on until it was stopped
+    assert overrides[: len(offline.force_control)] == offline.force_control[:, 4].tolist()
+
+
+@pytest.mark.system
+def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
+    out, bag = tmp_path / 'run', tmp_path / 'bag'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
+            *('--quiet', '--output', str(out), '--record', str(bag)),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
+    report = subprocess.run(
+        [sys.executable, '-m', 'mill_bringup.report', str(bag / 'scheme1'), '--out', str(out)],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert report.returncode == 0, report.stderr[-3000:]
+    assert 'J_c [N² s]' in report.stdout and (out / 'force.png').is_file()
+    run = read_force_run(bag / 'scheme1')
+    assert run.samples == summary['samples'] and not run.missing and not run.notes
+    # The same stream, the same reference model (ξ, ω_n from the controller's state), the
+    # period estimated from the stamps to well below 1 ns: the same sum to rounding.
+    assert run.record.j_c == pytest.approx(summary['j_c'], rel=1e-12)
 
 
 def _force(ns: int, value: float) -> WrenchStamped:

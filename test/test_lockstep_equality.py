@@ -56,6 +56,8 @@ PAPER_RUNS = [
     ('chavez_conde', 1.0, 1001),
     ('maharof', 0.3, 3001),
     ('hatwesh', 1.1, 4401),
+    # the velocity steps: the first two steps, the RLS warm-up and the first re-tuning
+    ('hatwesh_velocity', 0.5, 2001),
 ]
 
 

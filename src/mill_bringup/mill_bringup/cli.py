@@ -89,7 +89,14 @@ def variants(scen: Scenario, only: str | None = None) -> dict[str, Scenario]:
 
 
 def load_scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Scenario]]:
-    """The scenario named on the command line with its overrides, and the runs it asks for."""
+    """The scenario named on the command line with its overrides, and the runs it asks for.
+
+    The command line's overrides come last: they win over a variant's own.
+    """
     scen = load(args.scenario)
     apply_overrides(scen, args)
-    return scen, variants(scen, args.variant)
+    runs = variants(scen, args.variant)
+    for run in runs.values():
+        if run is not scen:
+            apply_overrides(run, args)
+    return scen, runs

@@ -16,10 +16,14 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
-from mill_bag.types import decode
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.errors import BagError
+from mill_bag.reader import open_bag
+from mill_bag.types import DIAGNOSTIC_ARRAY, decode
 from mill_common.timebase import sample_stamp_ns
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
@@ -98,6 +102,7 @@ def continuous_cost(
     return total
 
 
+JOINT_STATE_TYPE = 'sensor_msgs/msg/JointState'
 FORCE_TOPICS = {
     topics.CUTTING_FORCE: 'geometry_msgs/msg/WrenchStamped',
     topics.CUTTING_FORCE_TRACE: 'trajectory_msgs/msg/JointTrajectory',
@@ -111,19 +116,25 @@ def _ns(stamp: object) -> int:
 
 
 def record_from_messages(
-    raw: Mapping[str, Sequence[bytes]], n: int, period: float, feed_axis: str
+    raw: Mapping[str, Sequence[bytes]],
+    n: int,
+    period: float,
+    feed_axis: str,
+    tolerance_ns: int = 0,
 ) -> tuple[ForceRecord, dict[str, int]]:
     """Serialized force-job messages -> record of samples 0..n−1 and its force stream.
 
-    A message belongs to sample k when its stamp is sample_stamp_ns(k, T); the stream
-    keeps the trace points up to the end of the last sample. Also returns, per topic,
-    how many samples are missing.
+    A message belongs to sample k when its stamp is sample_stamp_ns(k, T) (to tolerance_ns,
+    for a period estimated from a bag's stamps); the stream keeps the trace points up to
+    the end of the last sample. Also returns, per topic, how many samples are missing.
     """
     rec = ForceRecord.empty(n, period)
-    index = {sample_stamp_ns(k, period): k for k in range(n)}
+    index = {}
+    for d in sorted(range(-tolerance_ns, tolerance_ns + 1), key=abs, reverse=True):
+        index.update({sample_stamp_ns(k, period) + d: k for k in range(n)})
     seen: dict[str, set[int]] = {t: set() for t in FORCE_TOPICS}
     measured = _nan(n)
-    end_ns = sample_stamp_ns(n, period)
+    end_ns = sample_stamp_ns(n, period) + tolerance_ns
     trace: list[tuple[int, float]] = []
     for topic, msgtype in FORCE_TOPICS.items():
         for data in raw.get(topic, ()):
@@ -156,3 +167,126 @@ def record_from_messages(
     rec.trace_force = np.array([p[1] for p in trace])
     missing = {t: n - len(ks) for t, ks in seen.items()}
     return rec, {t: m for t, m in missing.items() if m}
+
+
+# -- a force job in a bag (`report`) ----------------------------------------------------------
+
+
+@dataclass
+class ForceBagRun:
+    """What a bag holds of a force job: its record, J_c and how they were found."""
+
+    path: str
+    record: ForceRecord
+    period: float  # one sample, from the force stamps [s]
+    samples: int
+    reference_force: float  # [N]
+    damping: float  # ξ of the reference model eq. (7)
+    omega_n: float  # its ω_n [rad/s]
+    missing: dict[str, int]
+    message_count: int
+    notes: list[str] = field(default_factory=list)
+
+
+def is_force_bag(counts: Mapping[str, int]) -> bool:
+    """A force job's bag: the force stream and the force controller's state, in a namespace."""
+    return bool(
+        set(topics.namespaces_with(counts, topics.CUTTING_FORCE_TRACE))
+        & set(topics.namespaces_with(counts, topics.FORCE_CONTROL_STATE))
+    )
+
+
+def read_force_run(path: str | Path, namespace: str | None = None) -> ForceBagRun:
+    """J_c and the record of a force job from its bag, by topic names and types only.
+
+    The sample period is estimated from the force stamps (sample k stamped at the ns nearest
+    k T); the number of samples comes from the trajectory's job status on /diagnostics (its
+    end_time, the job's duration), or, without it, from the last override; the reference
+    force and the reference model (ξ, ω_n) from mill/force_control/state. The job may run in
+    any namespace; `namespace` chooses one where the bag holds several.
+    """
+    bag = open_bag(path)
+    by_name: dict[str, list[tuple[str, bytes]]] = {}
+    statuses: list[Any] = []
+    for topic, msgtype, _log, _pub, data in bag.read():
+        if topic == topics.DIAGNOSTICS and msgtype == DIAGNOSTIC_ARRAY:
+            statuses.append(decode(msgtype, data))
+        else:
+            by_name.setdefault(topic, []).append((msgtype, data))
+    found = topics.namespaces_with(by_name, topics.CUTTING_FORCE_TRACE)
+    if namespace is not None:
+        found = [ns for ns in found if ns == topics.namespace(namespace)]
+    if len(found) != 1:
+        where = ', '.join(found) or 'none'
+        raise BagError(
+            f'{bag.path}: one force job wanted, found it in namespaces: {where} '
+            '(choose one with --namespace)'
+        )
+    ns = found[0]
+    raw: dict[str, list[bytes]] = {t: [] for t in FORCE_TOPICS}
+    for topic, msgtype in FORCE_TOPICS.items():
+        for got, data in by_name.get(topics.qualify(topic, ns), ()):
+            if got != msgtype:
+                raise BagError(
+                    f'{bag.path}: topic {topics.qualify(topic, ns)} has type {got}, '
+                    f'expected {msgtype}'
+                )
+            raw[topic].append(data)
+    end_time = None
+    for array in statuses:
+        for status in array.status:
+            values = {kv.key: kv.value for kv in status.values}
+            if (
+                end_time is None
+                and status.name == 'mill_trajectory: job'
+                and 'end_time' in values
+                and topics.from_machine(status.hardware_id, ns)
+            ):
+                end_time = float(values['end_time'])
+    if not raw[topics.CUTTING_FORCE] or not raw[topics.CUTTING_FORCE_TRACE]:
+        raise BagError(f'{bag.path} holds no force job: no force samples or force stream')
+    stamps = np.array(sorted({cdr_stamp_ns(d) or 0 for d in raw[topics.CUTTING_FORCE]}))
+    if stamps.size < 3:
+        raise BagError(f'{bag.path}: fewer than three force samples')
+    # k T to the nearest ns: k from a first guess, then the least-squares T through 0.
+    k = np.rint(stamps / np.median(np.diff(stamps))).astype(float)
+    period = float(np.sum(k * stamps) / np.sum(k * k)) / 1e9
+    notes = []
+    if end_time is not None:
+        n = max(1, math.ceil(end_time / period - 1e-9))
+    else:
+        n = len({cdr_stamp_ns(d) for d in raw[topics.FEED_OVERRIDE]})
+        notes.append('no job status on /diagnostics: the samples are those with an override')
+    forces = [
+        decode(FORCE_TOPICS[topics.CUTTING_FORCE], d).wrench.force
+        for d in raw[topics.CUTTING_FORCE]
+    ]
+    feed_axis = max('xyz', key=lambda a: sum(abs(getattr(f, a)) for f in forces))
+    rec, missing = record_from_messages(raw, n, period, feed_axis, tolerance_ns=1)
+    state = decode(JOINT_STATE_TYPE, raw[topics.FORCE_CONTROL_STATE][0])
+    values = dict(zip(state.name, state.position, strict=False))
+    reference = float(values.get('reference', math.nan))
+    if 'model_damping' in values and 'model_natural_frequency' in values:
+        damping, omega_n = values['model_damping'], values['model_natural_frequency']
+    else:
+        # Rubio 2013 §2.3 defaults: ξ = 0.7, rise time of three samples, ω_n = 2.5/T_r
+        damping, omega_n = 0.7, 2.5 / (3.0 * period)
+        notes.append(
+            'the force controller did not publish its reference model: J_c uses the '
+            'defaults ξ = 0.7, ω_n = 2.5/(3T)'
+        )
+    rec.j_c = continuous_cost(rec.trace_ns, rec.trace_force, reference, damping, omega_n)
+    if bag.truncated:
+        notes.append('the bag was not closed: read up to its last complete chunk')
+    return ForceBagRun(
+        str(bag.path),
+        rec,
+        period,
+        n,
+        reference,
+        float(damping),
+        float(omega_n),
+        missing,
+        sum(bag.counts.values()),
+        notes,
+    )

@@ -26,6 +26,10 @@ SIGNALS = (
 )
 
 
+# /mill/force_control/state of each control instant, with its time first
+FORCE_CONTROL = ('t', 'force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+
+
 @dataclass
 class RunRecord:
     """Signals of a run on the sample grid t[k] = k T; absent values are NaN."""
@@ -35,11 +39,32 @@ class RunRecord:
     events: list[str] = field(default_factory=list)  # what happened besides the signals
     # Messages left out per topic: sent by another node than the topic's owner, or malformed.
     foreign: dict[str, int] = field(default_factory=dict)
+    # A job with a force controller: one row per control instant, columns FORCE_CONTROL
+    force_control: np.ndarray | None = None
 
     @classmethod
     def empty(cls, n: int, dt: float) -> RunRecord:
         t = np.arange(n) * dt
         return cls(t, {s: np.full((n, len(AXES)), np.nan) for s in SIGNALS})
+
+    def trimmed(self, n: int) -> RunRecord:
+        """The first n samples (a job that ended before the space it was given)."""
+        return RunRecord(
+            self.t[:n],
+            {k: v[:n] for k, v in self.signals.items()},
+            self.events,
+            self.foreign,
+            self.force_control,
+        )
+
+    def grown(self, n: int, dt: float) -> RunRecord:
+        """Room for n samples t = k dt: the present ones, then NaN."""
+        old = len(self.t)
+        out = RunRecord.empty(n, dt)
+        for k, v in self.signals.items():
+            out.signals[k][:old] = v
+        out.events, out.foreign, out.force_control = self.events, self.foreign, self.force_control
+        return out
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.signals[name]

@@ -452,13 +452,20 @@ def _status_values(status: Any) -> dict[str, str]:
 
 
 def _job_end(statuses: list[Any]) -> tuple[float | None, str]:
+    """end_time of the trajectory's "done" status, else of its first status: with a feed
+    override only the "done" one knows where the job ended."""
+    found = None
     for array in statuses:
         for status in array.status:
             if status.name == 'mill_trajectory: job':
                 values = _status_values(status)
-                if 'end_time' in values:
+                if 'end_time' not in values:
+                    continue
+                if values.get('state') == 'done':
                     return float(values['end_time']), 'job status on /diagnostics'
-    return None, ''
+                if found is None:
+                    found = float(values['end_time'])
+    return found, 'job status on /diagnostics' if found is not None else ''
 
 
 def _plant_status(statuses: list[Any]) -> dict[str, str]:
@@ -545,6 +552,8 @@ def _feed_values(msgtype: str, feed: list, notes: list[str]) -> list[tuple[int, 
             notes.append(f'{topic_names.FEED_OVERRIDE}: cannot decode type {msgtype}')
             return []
         value = getattr(msg, 'data', None)
+        if value is None and len(getattr(msg, 'position', ())):
+            value = msg.position[0]  # sensor_msgs/JointState, the contract's type
         if value is None:
             notes.append(f'{topic_names.FEED_OVERRIDE}: type {msgtype} has no numeric data')
             return []

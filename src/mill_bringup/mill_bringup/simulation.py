@@ -25,6 +25,11 @@ class Simulation(Protocol[R_co]):
         """The record of the samples stepped so far."""
         ...
 
+    def finished(self) -> bool:
+        """The job has ended with the last sample stepped (a job whose length the run finds:
+        a path slowed or sped up by a feed override)."""
+        ...
+
 
 class CoreTimer(Protocol):
     """Time spent in each role's core (benchmark --cores); no-op by default."""
@@ -45,10 +50,12 @@ class NoTimer:
 def run_samples(
     sim: Simulation[R], samples: int, progress: Callable[[int, int], None] | None = None
 ) -> R:
-    """The one offline loop: samples 0 .. samples − 1, in order."""
+    """The one offline loop: samples 0 .. samples − 1 in order, or until the job ends."""
     stride = max(1, samples // 100)
     for k in range(samples):
         sim.step(k)
         if progress is not None and k % stride == 0:
             progress(k, samples)
+        if sim.finished():
+            break
     return sim.record()

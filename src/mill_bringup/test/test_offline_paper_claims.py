@@ -46,7 +46,15 @@ def variant_record(name: str, variant: str):
 
 
 def test_every_scenario_and_variant_loads() -> None:
-    for name in ('slotting', 'beltran', 'chavez_conde', 'maharof', 'hatwesh'):
+    for name in (
+        'slotting',
+        'beltran',
+        'chavez_conde',
+        'maharof',
+        'hatwesh',
+        'hatwesh_velocity',
+        'slotting_adaptive_feed',
+    ):
         scen = scenario.load(name)
         for variant in scen.variants:
             v = scen.variant(variant)

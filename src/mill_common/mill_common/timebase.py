@@ -46,3 +46,10 @@ def sample_stamp_ns(k: int, period_s: float) -> int:
 def sample_index(ns: int, period_s: float) -> int:
     """The sample k whose stamp (sample_stamp_ns) is ns."""
     return round(ns / (period_s * 1e9))
+
+
+def control_instant(j: int, control_period_s: float, dt_ns: int) -> int:
+    """Sample index (on a grid of dt_ns) of control instant j of a slower controller: the
+    first sample stamped at or after its instant j·T_c (sample_stamp_ns), which is where a
+    controller acting on the first sample of each period acts."""
+    return -(-sample_stamp_ns(j, control_period_s) // dt_ns)

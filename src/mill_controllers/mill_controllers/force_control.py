@@ -5,11 +5,20 @@ force sample into the feed override of that sample, the same way in the force-co
 node and in the offline loop (mill_bringup.force_loop):
 
 1. a non-finite force sample is replaced by the last finite one (counted as held);
-2. the law gets the known depth a_dc(t_k) and returns the feed command f_c,k [mm/s];
+2. the law gets the depth of cut a_dc and returns the feed command f_c,k [mm/s]: the known
+   a_dc(t_k) of the time profile (`depth_source: profile`, Rubio 2013), or the depth of the
+   tool below the workpiece top at that sample (`depth_source: position`: the measured z,
+   a_dc = workpiece_top − z; where the tool is not below the top the law keeps the last
+   depth, it cannot be designed for none);
 3. the override o_k = f_c,k / nominal_feed is clamped to [override_min, override_max]; a
    non-finite one holds the last override; the law is told the feed actually applied;
 4. the β-hold of the active β gives the override's slope over the sample,
    ȯ = β(o_k − o_{k−1})/T, so the path speed follows u_k + β(u_k − u_{k−1})τ/T.
+
+`ForceSampler` decides which force samples are control instants (the first sample at or after
+each j·T, T one spindle revolution of the model) and which force the law gets there (the
+peak |force| of the samples since the last instant, or the sample itself), for the node and
+the offline axis job alike.
 """
 
 from __future__ import annotations
@@ -19,8 +28,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Protocol
 
-from mill_common.parameters import ParamSpec, algorithm_values, one_of, positive
+from mill_common.parameters import ParamSpec, algorithm_values, number, one_of, positive
 from mill_common.registry import Registry
+from mill_common.timebase import sample_index, sample_stamp_ns
 from mill_models.force_process import ForceProcessModel
 from mill_models.holds import SampleHold, hold_input
 
@@ -69,6 +79,7 @@ FORCE_CONTROLLERS: Registry[RegisteredForceLaw] = Registry(
     },
 )
 FORCE_COMPONENTS = ('resultant', 'x', 'y', 'z')
+DEPTH_SOURCES = ('profile', 'position')
 
 
 def _override_bound(value: Any) -> str | None:
@@ -134,6 +145,28 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 True,
             ),
         ),
+        (
+            'depth_source',
+            ParamSpec(
+                'depth_source',
+                'profile',
+                'depth of cut the law is told: profile = force_process.depth_profile at the '
+                'control instant (Rubio 2013: a known function of time); position = the '
+                "tool's depth below workpiece_top, from the measured z (/mill/z/state)",
+                one_of(*DEPTH_SOURCES),
+                True,
+            ),
+        ),
+        (
+            'workpiece_top',
+            ParamSpec(
+                'workpiece_top',
+                0.0,
+                'z of the workpiece top surface [m] (depth_source position: a_dc = top − z)',
+                number,
+                True,
+            ),
+        ),
     ]
     # The process model and the law's design are built once (read-only): a law's memory
     # belongs to its design, so a new design means a new node.
@@ -166,6 +199,7 @@ class OverrideCommand:
     force: float  # the force the law used [N] (the last finite one)
     held: bool  # the force sample was not finite
     clamped: bool  # the law's override was outside the range or not finite
+    depth: float = math.nan  # the depth of cut the law was told [mm]
 
 
 class ForceFeedLoop:
@@ -189,6 +223,7 @@ class ForceFeedLoop:
         self.hi = float(override_max)
         self._hold = SampleHold(0.0)
         self._last = 0.0  # the override before the first sample: at rest
+        self._depth = model.depth_at(0.0)  # told when the tool is not below the top
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> ForceFeedLoop:
@@ -204,10 +239,17 @@ class ForceFeedLoop:
     def held_samples(self) -> int:
         return self._hold.held
 
-    def step(self, t: float, reference: float, measured: float) -> OverrideCommand:
+    def step(
+        self, t: float, reference: float, measured: float, depth: float | None = None
+    ) -> OverrideCommand:
+        """One control instant at time t [s]; depth [mm]: the tool's (None: the profile's)."""
         y = self._hold(measured)
         held = not math.isfinite(measured)
-        self.law.set_depth(self.model.depth_at(t))  # the depth is known (Rubio 2013 §2)
+        if depth is None:
+            self._depth = self.model.depth_at(t)  # the depth is known (Rubio 2013 §2)
+        elif depth > 0.0:
+            self._depth = depth
+        self.law.set_depth(self._depth)
         u = self.law.update(reference, y)
         wanted = u / self.nominal_feed
         override = min(self.hi, max(self.lo, wanted)) if math.isfinite(wanted) else self._last
@@ -215,4 +257,43 @@ class ForceFeedLoop:
         beta = self.law.active_beta
         _, slope = hold_input(override, self._last, beta, self.T)
         self._last = override
-        return OverrideCommand(override, slope, u, beta, y, held, override != wanted)
+        return OverrideCommand(override, slope, u, beta, y, held, override != wanted, self._depth)
+
+
+def tool_depth(workpiece_top: float, z: float) -> float:
+    """Depth of the tool below the workpiece top [mm] from z [m] (≤ 0: not cutting)."""
+    return (workpiece_top - z) * 1e3
+
+
+class ForceSampler:
+    """Control instants on a stream of force samples, and the force the law gets at each."""
+
+    def __init__(self, period: float, component: str, measure: str) -> None:
+        if component not in FORCE_COMPONENTS or measure not in ('peak', 'sample'):
+            raise ValueError(f'force component {component!r} or measure {measure!r} unknown')
+        self.T = float(period)
+        self._axis = FORCE_COMPONENTS.index(component) - 1  # -1: the resultant
+        self._peak_mode = measure == 'peak'
+        self._next = 0  # the next control instant
+        self._peak = -0.0  # the largest |force| heard since the last control instant
+
+    def value(self, force: tuple[float, float, float]) -> float:
+        """The controlled quantity of one force sample [N]."""
+        if self._axis < 0:
+            fx, fy, fz = force
+            return math.sqrt(fx * fx + fy * fy + fz * fz)
+        return float(force[self._axis])
+
+    def offer(self, ns: int, force: tuple[float, float, float]) -> tuple[int, float] | None:
+        """The next force sample (stamp ns, in order): (j, force for the law) if it is the
+        first sample at or after control instant j, else None."""
+        value = self.value(force)
+        if math.isfinite(self._peak) and (math.isnan(value) or abs(value) > abs(self._peak)):
+            self._peak = value  # a NaN in the window stays: the law holds the last force
+        if ns < sample_stamp_ns(self._next, self.T):
+            return None  # between control instants
+        j = sample_index(ns, self.T)
+        measured = self._peak if self._peak_mode else value
+        self._peak = -0.0
+        self._next = j + 1
+        return j, measured

@@ -10,10 +10,15 @@ feed), velocity[0] = its β-hold slope over the sample [1/s]. A trajectory in lo
 answers each override with the reference of that sample; any other user of the
 feed-override input may ignore the slope.
 
+With `depth_source: position` the law is told the tool's depth below `workpiece_top` at the
+control instant: the node also follows /mill/z/state and acts once the measured z of the
+instant's stamp has arrived too.
+
 A non-finite force sample is replaced by the last finite one, and an override outside
 [override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
 trajectory, and both are reported on /diagnostics as a WARN. The force, reference, feed
-command, override, active β and depth go to /mill/force_control/state every sample.
+command, override, active β and depth go to /mill/force_control/state every sample, with the
+reference model's ξ and ω_n (so that J_c can be computed from a bag).
 """
 
 from __future__ import annotations
@@ -26,15 +31,31 @@ from geometry_msgs.msg import WrenchStamped
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
-from mill_common.timebase import sample_index, sample_stamp_ns
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from mill_controllers.force_control import ForceFeedLoop, OverrideCommand, parameter_specs
+from mill_controllers.force_control import (
+    ForceFeedLoop,
+    ForceSampler,
+    OverrideCommand,
+    parameter_specs,
+    tool_depth,
+)
 
 STATUS_NAME = 'mill_controllers: force'
-STATE_NAMES = ('force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+# the law's force, reference, feed command, override, active β and depth at the instant, then
+# its reference model eq. (7) (ξ, ω_n): what J_c of eq. (14) compares the force with
+STATE_NAMES = (
+    'force',
+    'reference',
+    'feed_command',
+    'override',
+    'beta',
+    'depth',
+    'model_damping',
+    'model_natural_frequency',
+)
 
 
 class ForceControllerNode(Node):
@@ -43,16 +64,20 @@ class ForceControllerNode(Node):
         self._loop: ForceFeedLoop  # built once by _configure
         self._built = False
         self.params = NodeParameters(self, parameter_specs(), self._configure)
-        self._next_k = 0  # the next control instant
+        v = self.params.values
+        self._sampler = ForceSampler(self._loop.T, v['force_component'], v['force_measure'])
         self._last: tuple[int, JointState] | None = None  # last force stamp and its answer
         self._clamped = 0
-        self._peak = -0.0  # the largest |force| heard since the last control instant
         self._beta = self._loop.law.active_beta
+        # depth_source position: measured z by stamp, and a control instant waiting for it
+        self._z: dict[int, float] = {}
+        self._waiting: tuple[int, int, float] | None = None  # (stamp, j, force)
         self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.create_subscription(WrenchStamped, topics.CUTTING_FORCE, self._on_force, DATA_QOS)
-        v = self.params.values
+        if v['depth_source'] == 'position':
+            self.create_subscription(JointState, topics.state('z'), self._on_z, DATA_QOS)
         self.get_logger().info(
             f'force controller {v["force_controller"]} (β = {self._beta:g}), '
             f'F_r = {v["reference_force"]:g} N, T = {self._loop.T * 1e3:.4f} ms, override in '
@@ -67,35 +92,52 @@ class ForceControllerNode(Node):
             self._built = True
         # reference_force, the only changeable value, is read at every sample
 
-    def _measure(self, msg: WrenchStamped) -> float:
-        f = msg.wrench.force
-        which = self.params.values['force_component']
-        if which == 'resultant':
-            return math.sqrt(f.x * f.x + f.y * f.y + f.z * f.z)
-        return float(getattr(f, which))
-
     def _on_force(self, msg: WrenchStamped) -> None:
         ns = from_stamp(msg.header.stamp)
-        T = self._loop.T
-        if self._last is not None and ns == self._last[0]:
-            self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
+        if self._last is not None and ns <= self._last[0]:
+            if ns == self._last[0]:
+                self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
             return
-        value = self._measure(msg)
-        if math.isfinite(self._peak) and (math.isnan(value) or abs(value) > abs(self._peak)):
-            self._peak = value  # a NaN in the window stays: the law holds the last force
-        if ns < sample_stamp_ns(self._next_k, T):
+        if self._waiting is not None and ns <= self._waiting[0]:
+            return  # a repeat of the instant that waits for its z
+        f = msg.wrench.force
+        hit = self._sampler.offer(ns, (f.x, f.y, f.z))
+        if hit is None:
             return  # between control instants
-        k = sample_index(ns, T)
-        measured = self._peak if self.params.values['force_measure'] == 'peak' else value
-        self._peak = -0.0
+        if self.params.values['depth_source'] == 'position':
+            self._waiting = (ns, *hit)
+            self._act_when_positioned()
+        else:
+            self._act(ns, *hit, None)
+
+    def _on_z(self, msg: JointState) -> None:
+        ns = from_stamp(msg.header.stamp)
+        if self._last is not None and ns <= self._last[0]:
+            return  # an instant already answered
+        self._z[ns] = msg.position[0] if len(msg.position) else math.nan
+        self._act_when_positioned()
+
+    def _act_when_positioned(self) -> None:
+        if self._waiting is None or self._waiting[0] not in self._z:
+            return
+        ns, j, measured = self._waiting
+        self._waiting = None
+        z = self._z[ns]
+        self._z = {s: v for s, v in self._z.items() if s > ns}
+        depth = tool_depth(self.params.values['workpiece_top'], z) if math.isfinite(z) else 0.0
+        self._act(ns, j, measured, depth)
+
+    def _act(self, ns: int, j: int, measured: float, depth: float | None) -> None:
         reference = self.params.values['reference_force']
-        cmd = self._loop.step(k * T, reference, measured)
+        cmd = self._loop.step(j * self._loop.T, reference, measured, depth)
         out = joint_state(ns, ('override',), position=(cmd.override,), velocity=(cmd.slope,))
         self._override_pub.publish(out)
         self._last = (ns, out)
-        self._next_k = k + 1
-        depth = self._loop.model.depth_at(k * T)
-        state = (cmd.force, reference, cmd.feed_command, cmd.override, cmd.beta, depth)
+        model = self._loop.law.designer
+        state = (
+            *(cmd.force, reference, cmd.feed_command, cmd.override, cmd.beta, cmd.depth),
+            *(model.damping, model.omega_n),
+        )
         self._state_pub.publish(joint_state(ns, STATE_NAMES, position=state))
         self._report(ns, cmd, measured)
 

@@ -277,6 +277,7 @@ class DriveNode(LifecycleNode):
         name = self.get_name()
         for axis, y in zip(self.axes, self.backend.read(), strict=True):
             self._state_pubs[axis].publish(joint_state(ns, (axis,), position=(y,), sender=name))
+        self._publish_force(ns)
 
     def _advance_lockstep(self) -> None:
         assert self.backend is not None
@@ -325,6 +326,13 @@ class DriveNode(LifecycleNode):
             truth = self.backend.truth()
             if truth is not None:
                 self._truth_pub.publish(joint_state(ns, MACHINE_AXES, *truth))
+
+    def _publish_force(self, ns: int) -> None:
+        # The cutting force of sample ns depends on its state (position, velocity, time),
+        # not on its commands: sent with the states, a force controller can answer within
+        # the sample (the adaptive-feed job sets the reference of sample k from its force),
+        # and the re-offer of an unanswered step repeats it too.
+        assert self.backend is not None
         if self._force_pub is not None and self._force_pub.get_subscription_count():
             force = self.backend.cutting_force()
             if force is not None:

@@ -135,6 +135,20 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
         (
+            'feed_override.period',
+            ParamSpec(
+                'period',
+                0.0,
+                'with lockstep: the control period T_c of the override sender [s]. 0 = one '
+                'override per sample, answered with that sample (a force job, one sample per '
+                'spindle revolution); > 0 = one override per period, at the first sample at or '
+                'after each j T_c, which sets the reference from that sample up to the next '
+                'control instant (a force controller on a faster axis job)',
+                non_negative,
+                True,
+            ),
+        ),
+        (
             'feed_override.min',
             ParamSpec('min', 0.0, 'smallest accepted feed override [-]', in_range(0.0, 10.0)),
         ),

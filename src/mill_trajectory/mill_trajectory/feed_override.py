@@ -10,12 +10,26 @@ p(τ) of any Trajectory and the override o(k) held over sample k:
 β-hold, ẍ_ref gains ȯ·p'(τ(k)) and τ advances by ȯT²/2 more). o = 1 is the programmed feed, 0
 stops on the path. Values outside [minimum, maximum] are clamped and a non-finite value
 holds the last accepted override; `accept` says which happened so the node can report it.
+
+The job ends when its path ends, whatever the override: `JobEnd` finds the last sample,
+`settle_time` after the first sample whose path time reaches the end of the path (or at
+the `duration` cap, if that comes first).
+
+`PeriodicOverridePath` is the lockstep override of a job whose sender acts once per control
+period T_c on a faster sample grid T (a force controller acting once per spindle revolution
+on a 1 kHz axis job): the override o_j of control instant j (the first sample at or after
+j·T_c, stamped by the sender) sets the reference of the samples from that instant up to
+the one before the next; with a ramp ȯ (β-hold) the override of the i-th sample after the
+instant is o_j + ȯ·i·T, clamped to the range. Each sample is computed once, in order, in the
+trajectory node and in the offline simulator alike.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+from mill_common.timebase import control_instant, job_steps, sample_index
 
 from mill_trajectory.base import Trajectory, TrajectorySample
 
@@ -49,14 +63,46 @@ class FeedOverride:
         return Accepted(clamped)
 
 
+@dataclass(frozen=True)
+class JobEnd:
+    """Where a job with a feed override ends, in samples of period dt_ns."""
+
+    path_end: float  # path time at which the path ends [s]
+    settle_samples: int  # samples after the one where the path ends
+    cap: int | None  # last sample allowed (the duration), None: no cap
+
+    @classmethod
+    def of(cls, path_end: float, settle_time: float, duration: float, dt_ns: int) -> JobEnd:
+        """settle_time [s] of machine time after the path ends; duration > 0 caps the job."""
+        settle = job_steps(settle_time, dt_ns) - 1  # the first sample at or after settle_time
+        cap = job_steps(duration, dt_ns) - 1 if duration > 0 else None
+        return cls(path_end, settle, cap)
+
+
 class TimeScaledPath:
     """A path sampled on its own time τ, which runs at the override's rate."""
 
-    def __init__(self, path: Trajectory, sample_period: float) -> None:
+    def __init__(self, path: Trajectory, sample_period: float, end: JobEnd | None = None) -> None:
         self.path = path
         self._T = sample_period
         self._k = 0
         self._tau = 0.0
+        self._end = end
+        self.last_sample: int | None = None  # the job's last sample, once known
+
+    def _find_end(self) -> None:
+        end, k = self._end, self._k
+        if end is None or self.last_sample is not None:
+            return
+        if self._tau >= end.path_end:
+            last = k + end.settle_samples
+            self.last_sample = last if end.cap is None else min(last, end.cap)
+        elif end.cap is not None and k >= end.cap:
+            self.last_sample = end.cap
+
+    @property
+    def sample_period(self) -> float:
+        return self._T
 
     @property
     def path_time(self) -> float:
@@ -73,6 +119,7 @@ class TimeScaledPath:
         the path time then advances by o·T + ȯ·T²/2 and ẍ_ref gains ȯ·p'.
         """
         s = self.path.sample(self._tau)
+        self._find_end()
         o = override
         self._k += 1
         self._tau += o * self._T + 0.5 * slope * self._T * self._T
@@ -82,3 +129,68 @@ class TimeScaledPath:
             (o * v[0], o * v[1], o * v[2]),
             (o * o * a[0] + slope * v[0], o * o * a[1] + slope * v[1], o * o * a[2] + slope * v[2]),
         )
+
+
+@dataclass(frozen=True)
+class Answer:
+    """The reference samples an override sets: samples first, first + 1, ..."""
+
+    first: int
+    samples: list[TrajectorySample]
+    problem: str | None = None
+
+
+class PeriodicOverridePath:
+    """The lockstep override of a sender acting once per control period (see the module doc)."""
+
+    def __init__(
+        self,
+        path: Trajectory,
+        dt_ns: int,
+        control_period: float,
+        override: FeedOverride,
+        end: JobEnd | None = None,
+    ) -> None:
+        if not control_period >= dt_ns * 1e-9:
+            raise ValueError(
+                f'control period {control_period!r} s is shorter than the sample period'
+            )
+        self.scaled = TimeScaledPath(path, dt_ns * 1e-9, end)
+        self.dt_ns = dt_ns
+        self.period = float(control_period)
+        self.override = override
+
+    @property
+    def next_sample(self) -> int:
+        """The first sample no override has set yet."""
+        return self.scaled.sample_index
+
+    def instant(self, j: int) -> int:
+        """Sample of control instant j."""
+        return control_instant(j, self.period, self.dt_ns)
+
+    def answer(self, k: int, offered: float, slope: float) -> Answer:
+        """Reference samples set by the override stamped at sample k (a control instant).
+
+        Samples from the first one not yet set (k itself in lockstep) up to the one before
+        the next control instant. A clamped or held override does not ramp.
+        """
+        accepted = self.override.accept(offered)
+        problem = accepted.problem
+        if not math.isfinite(slope):
+            problem = f'non-finite override slope {slope} ignored'
+            slope = 0.0
+        if accepted.value != offered:
+            slope = 0.0
+        first = self.next_sample
+        if k != first:
+            note = f'override stamped at sample {k}, expected {first}: it sets samples from {first}'
+            problem = f'{problem}; {note}' if problem else note
+        stop = self.instant(sample_index(max(k, first) * self.dt_ns, self.period) + 1)
+        lo, hi = self.override.minimum, self.override.maximum
+        samples = []
+        T = self.scaled.sample_period
+        for i in range(max(stop - first, 1)):
+            o = min(hi, max(lo, accepted.value + slope * i * T))
+            samples.append(self.scaled.sample(o, slope if lo < o < hi or slope == 0.0 else 0.0))
+        return Answer(first, samples, problem)

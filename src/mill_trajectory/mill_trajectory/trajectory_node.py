@@ -26,6 +26,14 @@ With feed_override.lockstep the node answers overrides instead of ticks: an over
 t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
 point stamped t_k, with the override's ramp velocity[0] (a β-hold) applied over the sample.
 Each newer stamp gets the next sample, in order; a repeated override gets the same answer.
+With feed_override.period T_c > 0 the sender acts once per control period on this node's
+sample grid (a force controller on the 1 kHz axis job): the override stamped at control
+instant j sets the reference from that sample up to the one before instant j + 1, sent as
+one message (mill_trajectory.feed_override.PeriodicOverridePath).
+
+With a feed override the job ends when the path ends, whatever the override: `settle_time`
+after the first sample whose path time reaches the end of the path, or at `duration`. The
+"done" status on /diagnostics then gives the time of that last sample as end_time.
 """
 
 from __future__ import annotations
@@ -54,7 +62,12 @@ from mill_common import topics
 from mill_trajectory.approach import Approach, ApproachError
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.config import build_job, parameter_specs
-from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
+from mill_trajectory.feed_override import (
+    FeedOverride,
+    JobEnd,
+    PeriodicOverridePath,
+    TimeScaledPath,
+)
 
 JOB_STATUS_NAME = 'mill_trajectory: job'
 
@@ -64,9 +77,12 @@ class TrajectoryNode(Node):
         super().__init__('trajectory')
         self._path: Trajectory  # set by _configure
         self._scaled: TimeScaledPath | None = None
+        self._periodic: PeriodicOverridePath | None = None
         self._override: FeedOverride  # set by _configure
+        self._dt_ns = 0
         self._job_end = 0.0
         self._done_sent = False
+        self._done_end = 0.0
         self._next_report = 0.0
         self._t0: int | None = None  # realtime: job start on the system clock [ns]
         self._newest_state_ns = 0
@@ -78,6 +94,10 @@ class TrajectoryNode(Node):
         self._refused = ''
         if self.params.values['timing'] == 'realtime':
             self._start_realtime()
+        elif self._periodic is not None:
+            self.create_subscription(
+                JointState, topics.FEED_OVERRIDE, self._on_override_periodic, DATA_QOS
+            )
         elif self.params.values['feed_override.lockstep']:
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
@@ -108,6 +128,17 @@ class TrajectoryNode(Node):
         if values['feed_override.lockstep']:
             if not values['feed_override.enabled']:
                 raise ValueError('feed_override.lockstep needs feed_override.enabled')
+            if values['feed_override.period'] > 0:
+                self._dt_ns = period_ns(values['sample_period'])
+                self._periodic = PeriodicOverridePath(
+                    self._path,
+                    self._dt_ns,
+                    values['feed_override.period'],
+                    self._override,
+                    self._end_rule(values),
+                )
+                self._scaled = self._periodic.scaled
+                return
             # Samples are stamped by the override's sender: T need not be whole ns here.
             self._scaled = TimeScaledPath(self._path, values['sample_period'])
             return
@@ -116,7 +147,13 @@ class TrajectoryNode(Node):
         if values['timing'] == 'realtime':
             return
         if values['feed_override.enabled']:
-            self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns))
+            end = self._end_rule(values)
+            self._scaled = TimeScaledPath(self._path, seconds(self._dt_ns), end)
+
+    def _end_rule(self, values: dict[str, Any]) -> JobEnd:
+        return JobEnd.of(
+            self._path.end_time, values['settle_time'], values['duration'], self._dt_ns
+        )
 
     # -- real time ---------------------------------------------------------------------------
     def _start_realtime(self) -> None:
@@ -227,6 +264,36 @@ class TrajectoryNode(Node):
         self._answer = (ns, out)
         self._job_status(t)
 
+    def _on_override_periodic(self, msg: JointState) -> None:
+        ns = from_stamp(msg.header.stamp)
+        if self._answer is not None and ns <= self._answer[0]:
+            if ns == self._answer[0]:
+                self._ref_pub.publish(self._answer[1])  # a repeat: the same samples again
+            return
+        periodic = self._periodic
+        assert periodic is not None, 'periodic overrides come with feed_override.period'
+        k, rem = divmod(ns, self._dt_ns)
+        if rem:
+            problem = f'override stamped {ns} ns, not a sample: ignored'
+            self.get_logger().warning(problem)
+            self._report(periodic.scaled.path_time, 'running', problem)
+            return
+        offered = msg.position[0] if len(msg.position) else math.nan
+        slope = msg.velocity[0] if len(msg.velocity) else 0.0
+        answer = periodic.answer(k, float(offered), float(slope))
+        if answer.problem:
+            self.get_logger().warning(answer.problem)
+            self._report(periodic.scaled.path_time, 'running', answer.problem)
+        out = JointTrajectory()
+        out.header.frame_id = self.get_name()
+        out.header.stamp = to_stamp(answer.first * self._dt_ns)
+        out.joint_names = list(AXES)
+        for i, sample in enumerate(answer.samples):
+            out.points.append(self._point(sample, i * self._dt_ns))
+        self._ref_pub.publish(out)
+        self._answer = (ns, out)
+        self._job_status(periodic.scaled.path_time)
+
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
         t = seconds(ns)
@@ -238,11 +305,24 @@ class TrajectoryNode(Node):
         self._job_status(t)
 
     def _job_status(self, t: float) -> None:
-        done = t >= self._job_end
+        done, end = t >= self._job_end, self._job_end
+        scaled = self._scaled
+        if scaled is not None and self._dt_ns and self.params.values['feed_override.enabled']:
+            # The job ends with its path, whatever the override: at a sample found on the way.
+            last = scaled.last_sample
+            done = last is not None and scaled.sample_index > last
+            if last is not None and done:
+                end = seconds(last * self._dt_ns)
+        if done and not self._done_sent:
+            self._done_end = end
+        # Once done, the job stays done (a graph runs on until it is stopped).
         if (done and not self._done_sent) or t >= self._next_report:
             self._done_sent = self._done_sent or done
             self._next_report = t + 1.0
-            self._report(t, 'done' if done else 'running')
+            if self._done_sent:
+                self._report(t, 'done', end_time=self._done_end)
+            else:
+                self._report(t, 'running')
 
     def _publish_scaled(self, scaled: TimeScaledPath, ns: int) -> None:
         # Each sample once and in order: its path time depends on all earlier overrides.
@@ -278,12 +358,17 @@ class TrajectoryNode(Node):
         self._ref_pub.publish(out)
 
     def _report(
-        self, t: float, state: str, problem: str | None = None, level: bytes | None = None
+        self,
+        t: float,
+        state: str,
+        problem: str | None = None,
+        level: bytes | None = None,
+        end_time: float | None = None,
     ) -> None:
         values: dict[str, object] = {
             'state': state,
             'time': t,
-            'end_time': self._job_end,
+            'end_time': self._job_end if end_time is None else end_time,
             'feed_override': self._override.value,
         }
         if self._t0 is not None:

@@ -48,3 +48,50 @@ def test_a_ramping_override_adds_its_slope_to_the_acceleration() -> None:
     # the path time advanced by ∫ o dτ = 0.5·0.1 + 2·0.1²/2
     assert scaled.path_time == pytest.approx(0.06)
     assert scaled.sample(0.7).position[0] == pytest.approx(0.01 * 0.06)
+
+
+def _program(*segments: str):
+    from mill_trajectory.program import ProgramTrajectory
+
+    return ProgramTrajectory.from_parameters({'start': [0.0, 0.0, 0.0], 'segments': list(segments)})
+
+
+def test_the_job_ends_when_the_path_ends_whatever_the_override() -> None:
+    from mill_trajectory.feed_override import JobEnd
+
+    path = _program('linear 0.01 0 0 0.01')  # 1 s of path at override 1
+    end = JobEnd.of(path.end_time, 0.1, 0.0, 1_000_000)
+    assert end.settle_samples == 100 and end.cap is None
+    scaled = TimeScaledPath(path, T, end)
+    k = 0
+    while scaled.last_sample is None:
+        scaled.sample(0.25)
+        k += 1
+    # 4 s of machine time at a quarter of the feed: τ(k) = k T / 4 reaches 1 s at k = 4000
+    # (to the rounding of the sum of 0.25e-3 steps: one sample either way)
+    assert abs(scaled.last_sample - (4000 + 100)) <= 1
+    capped = TimeScaledPath(path, T, JobEnd.of(path.end_time, 0.1, 0.5, 1_000_000))
+    for _ in range(501):
+        capped.sample(0.25)
+    assert capped.last_sample == 500  # the duration ends it first: t = 0.5 s
+
+
+def test_periodic_override_sets_the_samples_up_to_the_next_control_instant() -> None:
+    from mill_trajectory.feed_override import PeriodicOverridePath
+
+    path = _program('linear 0.1 0 0 0.003')
+    period = 1 / 30  # one revolution at 1800 rpm: 33.3 samples of 1 ms
+    lock = PeriodicOverridePath(path, 1_000_000, period, FeedOverride(0.0, 2.0))
+    assert [lock.instant(j) for j in range(4)] == [0, 34, 67, 100]
+    a = lock.answer(0, 0.5, 0.0)
+    assert a.first == 0 and len(a.samples) == 34 and a.problem is None
+    assert all(s.velocity[0] == pytest.approx(0.0015) for s in a.samples)
+    b = lock.answer(34, 5.0, 3.0)  # clamped to 2: no ramp
+    assert b.first == 34 and len(b.samples) == 33 and 'outside' in b.problem
+    assert b.samples[-1].velocity[0] == pytest.approx(0.006)
+    c = lock.answer(67, 1.0, 30.0)  # a β-hold ramp: o = 1 + 30 i T over the period
+    assert [s.velocity[0] for s in c.samples[:3]] == pytest.approx([0.003, 0.00309, 0.00318])
+    assert c.samples[0].acceleration[0] == pytest.approx(30.0 * 0.003)
+    late = lock.answer(200, 1.0, 0.0)  # a gap: it sets the samples from the first unset one
+    assert late.first == 100 and 'expected 100' in late.problem
+    assert lock.next_sample == lock.instant(7)

@@ -5,29 +5,45 @@ observer corrects with y(k) and publishes its estimate; each controller joins st
 estimate and reference of t_k and publishes its command u(k); the plant integrates to k + 1
 and each observer predicts with u(k). `AxisSimulation` makes exactly these calls in this
 order in one process, so the distributed record equals the offline one bit for bit.
+
+With a force controller (the adaptive feed of Rubio 2013 on the Kline job) the plant also
+publishes the cutting force of sample k with its measured positions; at each control instant
+(the first sample at or after each spindle revolution) the force controller turns the peak
+force of the revolution, and the tool's depth from the measured z, into a feed override
+stamped at that sample; the trajectory (`feed_override.lockstep`, `feed_override.period` = one
+revolution) answers with the reference of the samples up to the next control instant, and
+the controllers go on. The job ends when its path ends, whatever the override: the trajectory
+finds the last sample and gives its time as end_time in its "done" status on /diagnostics,
+which the runner waits for; the simulation finds the same sample.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections import deque
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from mill_bag.types import decode
 from mill_common.signals import AXES, ControlInputs, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.base import AxisController
 from mill_controllers.config import build_controller
+from mill_controllers.force_control import ForceFeedLoop, ForceSampler, tool_depth
 from mill_controllers.trip import FollowingErrorTrip
 from mill_observers.base import Observer
 from mill_observers.config import build_observer
 from mill_observers.delay import DelayCompensation
 from mill_plant.simulated_machine import SimulatedMachine
+from mill_trajectory.base import TrajectorySample
 from mill_trajectory.config import build_job
+from mill_trajectory.feed_override import FeedOverride, JobEnd, PeriodicOverridePath
 
 from mill_bringup.jobs.base import Job, MessageSource
-from mill_bringup.metrics import RunRecord, format_summary, summarize
+from mill_bringup.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
 from mill_bringup.run_record import record_from_raw
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
@@ -37,6 +53,8 @@ JOINT_STATE = 'sensor_msgs/msg/JointState'
 AXIS_NODES = {('mill_controllers', 'axis_controller'), ('mill_observers', 'observer_node')}
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
+FORCE_CONTROLLER = ('mill_controllers', 'force_controller_node')
+JOB_STATUS = 'mill_trajectory: job'
 
 
 def timing_of(scen: Scenario, node: str) -> str:
@@ -107,6 +125,56 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[in
     return controllers, observers
 
 
+class AdaptiveFeed:
+    """The force controller and the lockstep override of an axis job, as the graph runs them."""
+
+    def __init__(self, job: AxisJob) -> None:
+        scen = job.scenario
+        cv = scen.parameters(job.force_controller)
+        tv = scen.parameters(job.trajectory)
+        self.loop = ForceFeedLoop.from_parameters(cv)
+        self.sampler = ForceSampler(self.loop.T, cv['force_component'], cv['force_measure'])
+        self.reference = cv['reference_force']
+        self.top = cv['workpiece_top'] if cv['depth_source'] == 'position' else None
+        override = FeedOverride(tv['feed_override.min'], tv['feed_override.max'])
+        self.path = PeriodicOverridePath(
+            build_job(tv).trajectory, job.dt_ns, tv['feed_override.period'], override, job.end
+        )
+        self.refs: dict[int, TrajectorySample] = {}
+        self.rows: list[tuple[float, ...]] = []
+
+    def reference_of(
+        self, k: int, ns: int, force: tuple[float, float, float], z: float
+    ) -> TrajectorySample:
+        """The reference of sample k; at a control instant the override is computed first."""
+        hit = self.sampler.offer(ns, force)
+        if hit is not None:
+            j, measured = hit
+            depth = None
+            if self.top is not None:
+                depth = tool_depth(self.top, z) if math.isfinite(z) else 0.0
+            cmd = self.loop.step(j * self.loop.T, self.reference, measured, depth)
+            answer = self.path.answer(k, cmd.override, cmd.slope)
+            for i, sample in enumerate(answer.samples):
+                self.refs[answer.first + i] = sample
+            self.rows.append(
+                (
+                    seconds(ns),
+                    cmd.force,
+                    self.reference,
+                    cmd.feed_command,
+                    cmd.override,
+                    cmd.beta,
+                    cmd.depth,
+                )
+            )
+        return self.refs.pop(k)
+
+    @property
+    def last_sample(self) -> int | None:
+        return self.path.scaled.last_sample
+
+
 class AxisSimulation:
     """Sample by sample, the calls the graph makes (plant -> observer -> controller -> plant)."""
 
@@ -129,18 +197,37 @@ class AxisSimulation:
         }
         # Commands the plant applies N steps after the step they answer (zero before).
         self.in_flight: deque[list[float]] = deque([[0.0] * len(self.active)] * pv['command_delay'])
-        self.rec = RunRecord.empty(job.samples, self.dt)
+        self.job = job
+        self.feed: AdaptiveFeed | None = None
+        if job.force_controller:
+            if not job.lockstep:
+                raise ScenarioError(
+                    f'scenario {scen.name}: the feed override reaches the trajectory '
+                    "asynchronously, so the job has no offline twin (set the trajectory's "
+                    'feed_override.lockstep and feed_override.period)'
+                )
+            self.feed = AdaptiveFeed(job)
+        self.rec = RunRecord.empty(min(job.samples, job.max_samples), self.dt)
+        self.k = -1
         self.clock = times or NoTimer()
 
     def step(self, k: int) -> None:
+        if k >= len(self.rec.t):
+            self.rec = self.rec.grown(2 * len(self.rec.t), self.dt)
         s = self.rec.signals
         t = seconds(k * self.dt_ns)
         clock, machine = self.clock, self.machine
         clock.start()
-        ref = self.path.sample(t)
+        measured = machine.read()
+        force = machine.cutting_force()  # of this sample's state, sent with the states
+        if self.feed is None:
+            ref = self.path.sample(t)
+        else:
+            z = measured[self.active.index(2)] if 2 in self.active else math.nan
+            ref = self.feed.reference_of(k, k * self.dt_ns, force, z)
         clock.lap('trajectory')
         efforts = []
-        for i, y in zip(self.active, machine.read(), strict=True):
+        for i, y in zip(self.active, measured, strict=True):
             clock.start()
             observer = self.observers[i]
             est = observer.correct(y)
@@ -168,15 +255,27 @@ class AxisSimulation:
             applied = self.in_flight.popleft()
         machine.write(applied)
         _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
-        s['force'][k] = machine.cutting_force()
+        s['force'][k] = force
         clock.start()
         machine.advance(self.dt)
         clock.lap('plant')
         for i, u in zip(self.active, efforts, strict=True):
             self.observers[i].command(u)
             clock.lap('observer', call=False)  # the second half of the correct call's sample
+        self.k = k
+
+    def finished(self) -> bool:
+        last = None if self.feed is None else self.feed.last_sample
+        if last is not None and self.k >= last:
+            self.job.end_at(last)
+            return True
+        return False
 
     def record(self) -> RunRecord:
+        self.rec = self.rec.trimmed(self.k + 1)
+        if self.feed is not None:
+            rows = np.array(self.feed.rows, dtype=float)
+            self.rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
         self.rec.events = [
             f'{AXES[i]} axis: following-error trip at t = {trip.trip.time:.4f} s, '
             f'|e| = {1e3 * abs(trip.trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
@@ -208,8 +307,9 @@ class AxisJob(Job[RunRecord]):
         self.plant, self.trajectory = plants[0].name, trajectories[0].name
         build_axis_cores(scen)  # the axes' cores fit together
         pv = scen.parameters(self.plant)
+        tv = scen.parameters(self.trajectory)
         self.dt_ns = period_ns(pv['sample_period'])
-        self.end_time = build_job(scen.parameters(self.trajectory)).end_time
+        self.end_time = build_job(tv).end_time
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
         # Who publishes the states: the plant, or the driver the controllers are told of.
@@ -217,14 +317,85 @@ class AxisJob(Job[RunRecord]):
         self.state_owner = (
             scen.parameters(controllers[0].name)['plant_node'] if controllers else self.plant
         )
+        forces = [n.name for n in scen.nodes if (n.package, n.executable) == FORCE_CONTROLLER]
+        if len(forces) > 1:
+            raise ScenarioError(f'scenario {scen.name}: more than one force controller')
+        self.force_controller = forces[0] if forces else ''
+        # With a feed override the job ends when its path ends: a length the run finds.
+        self.override = bool(tv['feed_override.enabled'])
+        self.lockstep = self.override and bool(tv['feed_override.lockstep'])
+        self.end = JobEnd.of(
+            build_job({**tv, 'settle_time': 0.0, 'duration': 0.0}).end_time,
+            tv['settle_time'],
+            tv['duration'],
+            self.dt_ns,
+        )
+        self._bound = self._samples
+        self._found: int | None = None  # the samples of a run whose end was found
+        if self.override:
+            self._check_override(tv)
+
+    def _check_override(self, tv: dict[str, Any]) -> None:
+        name = self.scenario.name
+        if self.lockstep and not tv['feed_override.period'] > 0:
+            raise ScenarioError(
+                f'scenario {name}: an axis job in lockstep with its feed override needs the '
+                "trajectory's feed_override.period (the override sender's control period)"
+            )
+        if self.lockstep and not self.force_controller:
+            raise ScenarioError(
+                f'scenario {name}: the trajectory waits for a lockstep feed override, but no '
+                'force controller sends one'
+            )
+        if self.lockstep and any(axis_delays(self.scenario).values()):
+            raise ScenarioError(
+                f'scenario {name}: controllers with a command_delay aim at references beyond '
+                'those a lockstep feed override has set; use command_delay 0'
+            )
+        lo = tv['feed_override.min']
+        if lo <= 0 and not tv['duration'] > 0:
+            raise ScenarioError(
+                f'scenario {name}: with feed_override.min = 0 the path may never end; set '
+                "feed_override.min > 0 or the trajectory's duration"
+            )
+        # The bound of the offline loop: the whole path at the lowest override, or duration.
+        slowest = self.end.path_end / lo / seconds(self.dt_ns) if lo > 0 else math.inf
+        bound = min(slowest + 2 + self.end.settle_samples, (self.end.cap or math.inf) + 1)
+        self._bound = int(bound)
+        if not self.force_controller:
+            return
+        cv = self.scenario.parameters(self.force_controller)
+        loop = ForceFeedLoop.from_parameters(cv)
+        if self.lockstep and abs(tv['feed_override.period'] - loop.T) > 1e-12 * loop.T:
+            raise ScenarioError(
+                f"scenario {name}: the trajectory's feed_override.period "
+                f"{tv['feed_override.period']!r} s is not the force controller's control "
+                f'period, one spindle revolution 60/S_s = {loop.T!r} s'
+            )
+        ranges = (tv['feed_override.min'], tv['feed_override.max'])
+        if ranges != (cv['override.min'], cv['override.max']):
+            raise ScenarioError(
+                f"scenario {name}: the trajectory's feed_override range [{ranges[0]:g}, "
+                f"{ranges[1]:g}] differs from the force controller's override range "
+                f'[{cv["override.min"]:g}, {cv["override.max"]:g}]'
+            )
+
+    def end_at(self, last_sample: int) -> None:
+        """The run found the job's last sample (a job with a feed override)."""
+        self._found = last_sample + 1
 
     @property
     def samples(self) -> int:
-        return self._samples
+        """The job's samples; with a feed override, at override 1 until a run found them."""
+        return self._found if self._found is not None else self._samples
+
+    @property
+    def max_samples(self) -> int:
+        return self._bound
 
     @property
     def sim_time(self) -> float:
-        return seconds((self._samples - 1) * self.dt_ns)
+        return seconds((self.samples - 1) * self.dt_ns)
 
     # -- the distributed run ---------------------------------------------------------------
     def prepare_graph(self, monitored: bool) -> None:
@@ -236,7 +407,8 @@ class AxisJob(Job[RunRecord]):
     def upstream_topics(self) -> list[str]:
         # The monitor cannot see from the plant whether an observer's estimates reach it:
         # the plant starts once the monitor has matched their publishers.
-        return [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
+        out = [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
+        return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
 
     def monitor_topics(self) -> dict[str, str]:
         out = {}
@@ -245,6 +417,8 @@ class AxisJob(Job[RunRecord]):
             out[topics.estimate(axis)] = JOINT_STATE
         out[topics.REFERENCE] = JOINT_TRAJECTORY
         out[topics.GROUND_TRUTH] = JOINT_STATE
+        if self.force_controller:
+            out[topics.FORCE_CONTROL_STATE] = JOINT_STATE
         return out
 
     def recorded_topics(self) -> dict[str, str]:
@@ -260,16 +434,26 @@ class AxisJob(Job[RunRecord]):
         return seconds(ns) if ns >= 0 else -math.inf
 
     def complete(self, source: MessageSource) -> bool:
-        last_ns = (self._samples - 1) * self.dt_ns
+        if self.override and self._found is None:
+            # The trajectory says where the job ends, once its path has ended.
+            status = source.status(JOB_STATUS)
+            if status is None or status.get('state') != 'done':
+                return False
+            self._found = job_steps(float(status['end_time']), self.dt_ns)
+        last_ns = (self.samples - 1) * self.dt_ns
         needed = [topics.state(a) for a in self.axes] + [topics.estimate(a) for a in self.axes]
         return all(source.latest_stamp_ns(t) >= last_ns for t in needed)
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
-        kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw}
+        aside = topics.FORCE_CONTROL_STATE
+        kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw and t != aside}
         types = {**self.monitor_topics(), **self.recorded_topics()}
         rec, missing = record_from_raw(
-            kept, types, self.axes, self._samples, self.dt_ns, owners=self.owners()
+            kept, types, self.axes, self.samples, self.dt_ns, owners=self.owners()
         )
+        if self.force_controller:
+            rows = force_control_rows(raw.get(aside, ()))
+            rec.force_control = rows[rows[:, 0] <= rec.t[-1]]
         return rec, {t: m for t, m in missing.items() if m}
 
     def owners(self) -> dict[str, str]:
@@ -292,16 +476,44 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        return '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
+        text = '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
+        if rec.force_control is None or not len(rec.force_control):
+            return text
+        lines = [
+            'force control, per constant depth of cut told (second half of each stretch, '
+            'where the force has settled):',
+            f'{"depth [mm]":>10} {"from [s]":>9} {"to [s]":>8} {"instants":>9} '
+            f'{"force [N]":>10} {"reference [N]":>14} {"override":>9}',
+        ]
+        for s in depth_stretches(rec.force_control):
+            lines.append(
+                f'{s.depth:10.3f} {s.start:9.3f} {s.end:8.3f} {s.instants:9d} '
+                f'{s.force:10.1f} {s.reference:14.1f} {s.override:9.4f}'
+            )
+        return text + '\n' + '\n'.join(lines)
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
-        return {'metrics': [vars(m) for m in summarize(rec, skip)], 'events': rec.events}
+        out: dict[str, Any] = {
+            'metrics': [vars(m) for m in summarize(rec, skip)],
+            'events': rec.events,
+        }
+        if rec.force_control is not None:
+            out['force_control'] = [vars(s) for s in depth_stretches(rec.force_control)]
+            out['job_end_time'] = float(rec.t[-1])
+        return out
 
     def foreign(self, rec: RunRecord) -> dict[str, int]:
         return dict(rec.foreign)
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
-        return {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
+        out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
+        if rec.force_control is not None and other.force_control is not None:
+            a, b = rec.force_control, other.force_control
+            for i, name in enumerate(FORCE_CONTROL[1:], 1):
+                out[f'force_control.{name}'] = (
+                    max_difference(a[:, i], b[:, i]) if (a.shape == b.shape) else math.inf
+                )
+        return out
 
 
 def max_difference(a: np.ndarray, b: np.ndarray) -> float:
@@ -312,3 +524,51 @@ def max_difference(a: np.ndarray, b: np.ndarray) -> float:
     diff[np.isnan(a) & np.isnan(b)] = 0.0
     diff[np.isnan(diff)] = np.inf
     return float(diff.max()) if diff.size else 0.0
+
+
+@dataclass(frozen=True)
+class DepthStretch:
+    """Control instants at one depth of cut, averaged over the second half of the stretch."""
+
+    depth: float  # [mm]
+    start: float  # first instant at this depth [s]
+    end: float  # last instant [s]
+    instants: int
+    force: float  # mean force the law used [N]
+    reference: float  # mean reference [N]
+    override: float  # mean override [-]
+
+
+def depth_stretches(rows: np.ndarray, min_instants: int = 10) -> list[DepthStretch]:
+    """Stretches of at least min_instants control instants told the same depth (to 1 µm)."""
+    col = {name: i for i, name in enumerate(FORCE_CONTROL)}
+    depth = np.round(rows[:, col['depth']], 3)
+    out = []
+    edges = [0, *(np.flatnonzero(np.diff(depth)) + 1).tolist(), len(depth)]
+    for a, b in itertools.pairwise(edges):
+        if b - a < min_instants:
+            continue
+        half = rows[a + (b - a) // 2 : b]
+        out.append(
+            DepthStretch(
+                float(depth[a]),
+                float(rows[a, 0]),
+                float(rows[b - 1, 0]),
+                b - a,
+                float(np.mean(half[:, col['force']])),
+                float(np.mean(half[:, col['reference']])),
+                float(np.mean(half[:, col['override']])),
+            )
+        )
+    return out
+
+
+def force_control_rows(messages: Sequence[bytes]) -> np.ndarray:
+    """/mill/force_control/state messages -> rows (t, force, ..., depth), one per instant."""
+    rows: dict[int, list[float]] = {}
+    for data in messages:
+        msg = decode(JOINT_STATE, data)
+        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+        rows[ns] = [seconds(ns), *list(msg.position)[: len(FORCE_CONTROL) - 1]]
+    out = np.array([rows[ns] for ns in sorted(rows)], dtype=float)
+    return out.reshape(-1, len(FORCE_CONTROL))

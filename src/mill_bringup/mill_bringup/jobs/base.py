@@ -78,6 +78,12 @@ class Job(ABC, Generic[R]):
         """Machine time from the first to the last sample [s]."""
 
     @property
+    def max_samples(self) -> int:
+        """The offline loop's bound: `samples`, or more for a job that ends when its path
+        ends (the simulation then says when it has finished)."""
+        return self.samples
+
+    @property
     def clock_nodes(self) -> list[NodeLaunch]:
         return [n for n in self.scenario.nodes if (n.package, n.executable) == self.CLOCK]
 
@@ -151,4 +157,4 @@ def simulate(
     times: CoreTimer | None = None,
 ) -> R:
     """The job offline: the record the distributed run of the same scenario gives."""
-    return run_samples(job.simulation(times), job.samples, progress)
+    return run_samples(job.simulation(times), job.max_samples, progress)

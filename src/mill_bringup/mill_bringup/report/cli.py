@@ -1,5 +1,8 @@
 """`report BAG [BAG ...]`: options, reading the bags, writing DIR/report.md and the plots.
 
+A force job's bags (Rubio 2013: force samples, force stream, overrides) get the force report
+(mill_bringup.report.force): J_c of eq. (14) computed from the recorded stream.
+
 Bad input (a path that does not exist, an empty bag, a bag without the mill
 topics, a file that is not MCAP, broken metadata) ends with one line
 `report: error: ...` and exit code 1; bad options with one line and exit code 2.
@@ -20,9 +23,12 @@ from pathlib import Path
 from typing import NoReturn
 
 from mill_bag.errors import BagError
+from mill_bag.reader import open_bag
 
+from mill_bringup.force_record import is_force_bag, read_force_run
 from mill_bringup.graph import Progress
 from mill_bringup.report.analysis import analyse
+from mill_bringup.report.force import force_figure, force_markdown, force_table
 from mill_bringup.report.plots import plot_all
 from mill_bringup.report.text import markdown, text_table
 from mill_bringup.run_record import read_run
@@ -145,6 +151,20 @@ def main(argv: list[str] | None = None) -> int:
     if args.label and len(args.label) != len(args.bags):
         parser.error(f'{len(args.label)} --label for {len(args.bags)} bags')
     labels = args.label or labels_for(args.bags)
+    kinds = []
+    for bag in args.bags:
+        try:
+            kinds.append(is_force_bag(bag_topics(bag)))
+        except (BagError, OSError):
+            kinds.append(False)  # read_run below says what is wrong with it
+    if any(kinds):
+        if not all(kinds):
+            print(
+                'report: error: force-job bags and axis-job bags cannot share one report',
+                file=sys.stderr,
+            )
+            return 1
+        return force_report(args, labels, argv)
     reports = []
     t_start = time.monotonic()
     for bag, label in zip(args.bags, labels, strict=True):
@@ -186,6 +206,51 @@ def main(argv: list[str] | None = None) -> int:
     figures = [] if args.no_plots else plot_all(reports, out, workers)
     (out / 'report.md').write_text(markdown(reports, figures, argv) + '\n')
     print(text_table(reports))
+    print(
+        f'report {out / "report.md"} with {len(figures)} plots ({time.monotonic() - t_start:.1f} s)'
+    )
+    return 0
+
+
+def bag_topics(path: Path) -> dict[str, int]:
+    """The topics of a bag (from its metadata.yaml, else by reading it)."""
+    bag = open_bag(path)
+    try:
+        info = bag.metadata['rosbag2_bagfile_information']  # type: ignore[index]
+        return {
+            t['topic_metadata']['name']: int(t.get('message_count', 0))
+            for t in info['topics_with_message_count']
+        }
+    except (KeyError, TypeError):
+        for _ in bag.read(topics=()):
+            pass
+        return dict(bag.counts)
+
+
+def force_report(args: argparse.Namespace, labels: list[str], argv: list[str]) -> int:
+    """A force job's bags (Rubio 2013): J_c of eq. (14) and the override, side by side."""
+    t_start = time.monotonic()
+    runs = []
+    for bag, label in zip(args.bags, labels, strict=True):
+        try:
+            runs.append((label, read_force_run(bag, args.namespace)))
+        except BagError as exc:
+            print(f'report: error: {exc}', file=sys.stderr)
+            return 1
+        except Exception as exc:  # a damaged message in an otherwise readable bag
+            print(
+                f'report: error: {bag}: cannot read ({type(exc).__name__}: {exc})', file=sys.stderr
+            )
+            return 1
+    out = args.out or (args.bags[0].resolve().parent / 'report')
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        print(f'report: error: cannot create {out}: {exc.strerror}', file=sys.stderr)
+        return 1
+    figures = [] if args.no_plots else force_figure(runs, out)
+    (out / 'report.md').write_text(force_markdown(runs, figures, argv) + '\n')
+    print(force_table(runs))
     print(
         f'report {out / "report.md"} with {len(figures)} plots ({time.monotonic() - t_start:.1f} s)'
     )
