@@ -1,13 +1,20 @@
-"""Thin ROS helpers shared by the nodes: QoS, stamps, message construction."""
+"""Thin ROS helpers shared by the nodes: QoS, stamps, message construction, and the
+serialized publish and take of the hot-path messages (mill_common.codec)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
+
+from mill_common.checks import Rejected
+from mill_common.codec import CodecError, encode_joint_state
 
 # Lockstep data must not be lost, and a slow listener (recorder, monitor) must
 # not lose samples while it catches up: reliable, deep history.
@@ -50,6 +57,43 @@ def joint_state(
     msg.velocity = [float(v) for v in velocity]
     msg.effort = [float(v) for v in effort]
     return msg
+
+
+def joint_state_bytes(
+    ns: int,
+    names: Sequence[str],
+    position: Sequence[float] = (),
+    velocity: Sequence[float] = (),
+    effort: Sequence[float] = (),
+    sender: str = '',
+) -> bytes:
+    """`joint_state` as the CDR bytes a publisher sends (`publish(bytes)`): the same message
+    on the wire, without building the rclpy object (mill_common.codec)."""
+    return encode_joint_state(ns, sender, names, position, velocity, effort)
+
+
+def take_serialized(
+    node: Node,
+    msg_type: Any,
+    topic: str,
+    decode: Callable[[bytes], Any],
+    callback: Callable[[Any], None],
+    qos: QoSProfile | int,
+    malformed: Callable[[Rejected], None],
+) -> Subscription:
+    """Subscribe to `topic` taking the serialized bytes; `callback` gets them decoded by
+    `decode` (a mill_common.codec reader: an object with the message's fields), and bytes
+    that are not a `msg_type` go to `malformed` as one Rejected line instead."""
+
+    def take(data: bytes) -> None:
+        try:
+            msg = decode(data)
+        except CodecError as exc:
+            malformed(Rejected(f'malformed message: {exc}'))
+            return
+        callback(msg)
+
+    return node.create_subscription(msg_type, topic, take, qos, raw=True)
 
 
 def first(values: Sequence[float], what: str) -> float:

@@ -39,6 +39,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import Rejected, StampCheck, joint_values, owner_check, point_values
+from mill_common.codec import decode_joint_state, decode_joint_trajectory
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.reference_buffer import ReferenceBuffer
@@ -47,7 +48,8 @@ from mill_common.ros import (
     diagnostic_array,
     from_duration,
     from_stamp,
-    joint_state,
+    joint_state_bytes,
+    take_serialized,
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
@@ -117,6 +119,7 @@ class InputTopic:
     read: Callable[[Any, str], Samples | Rejected]  # (message, axis) -> its samples
     owner: str  # the parameter naming the node that must send it
     hint: str = ''  # what to run when a law needs this input and none has arrived
+    decode: Callable[[bytes], Any] = decode_joint_state  # its CDR bytes -> its fields
 
 
 # Field of ControlInputs -> its topic. The state paces the run (CLOCK_INPUT); the reference
@@ -125,7 +128,11 @@ INPUTS: dict[str, InputTopic] = {
     'position': InputTopic(JointState, topics.state, _position, 'plant_node'),
     'estimate': InputTopic(JointState, topics.estimate, _estimate, 'observer_node'),
     'reference': InputTopic(
-        JointTrajectory, lambda _axis: topics.REFERENCE, _reference, 'trajectory_node'
+        JointTrajectory,
+        lambda _axis: topics.REFERENCE,
+        _reference,
+        'trajectory_node',
+        decode=decode_joint_trajectory,
     ),
     'model': InputTopic(
         JointState, topics.observer_state, _model, 'observer_node', 'run the rls observer'
@@ -163,7 +170,7 @@ class AxisControllerNode(Node):
         }
         self._seen: set[str] = set()  # inputs of which a sample has arrived
         self._last_ns = -1
-        self._last_command: JointState | None = None
+        self._last_command: bytes | None = None
         self._waiting_since: float | None = None
         self._late_references = 0
         self._pub = self.create_publisher(JointState, topics.joint_command(axis), DATA_QOS)
@@ -184,8 +191,15 @@ class AxisControllerNode(Node):
             self.guard.watch(self._topics[slot], self._owners[slot])
         for slot, source in INPUTS.items():
             qos = 1 if self.realtime and slot != REFERENCE_INPUT else DATA_QOS
-            self.create_subscription(
-                source.message, self._topics[slot], partial(self._on_input, slot), qos
+            topic = self._topics[slot]
+            take_serialized(
+                self,
+                source.message,
+                topic,
+                source.decode,
+                partial(self._on_input, slot),
+                qos,
+                partial(self.guard.drop, topic),
             )
         self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -328,12 +342,16 @@ class AxisControllerNode(Node):
         if self._trip.tripped and not was:
             self._report_trip(ns)
         self._last_ns = ns
-        self._last_command = joint_state(ns, (self.axis,), effort=(torque,), sender=self.get_name())
+        self._last_command = joint_state_bytes(
+            ns, (self.axis,), effort=(torque,), sender=self.get_name()
+        )
         self._pub.publish(self._last_command)
         status = self._switch.law.status()
         if status:
             values = tuple(float(v) for v in status.values())
-            self._state_pub.publish(joint_state(ns, tuple(status), values, sender=self.get_name()))
+            self._state_pub.publish(
+                joint_state_bytes(ns, tuple(status), values, sender=self.get_name())
+            )
         record = self._switch.last_switch
         if record is not None and record is not self._reported_switch:
             self._reported_switch = record

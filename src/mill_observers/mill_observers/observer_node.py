@@ -21,12 +21,14 @@ reported and, in lockstep, ends the node after input_timeout (mill_common.input_
 from __future__ import annotations
 
 import time
+from functools import partial
 from typing import Any
 
 from mill_common.checks import Rejected, StampCheck, joint_values, owner_check
+from mill_common.codec import decode_joint_state
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, from_stamp, joint_state
+from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -64,7 +66,7 @@ class ObserverNode(Node):
         grid = None if self.realtime else self._dt_ns
         self._stamps = {'state': StampCheck(grid), 'command': StampCheck(grid)}
         self._states: dict[int, float] = {}
-        self._last_estimate: JointState | None = None
+        self._last_estimate: bytes | None = None
         self._stalled_since: float | None = None
         self._braked_commands = 0
         self._pub = self.create_publisher(JointState, topics.estimate(axis), DATA_QOS)
@@ -79,8 +81,17 @@ class ObserverNode(Node):
         for slot, topic in self._topics.items():
             self.guard.watch(topic, self._owners[slot])
         qos = 1 if self.realtime else DATA_QOS
-        self.create_subscription(JointState, self._topics['state'], self._on_state, qos)
-        self.create_subscription(JointState, self._topics['command'], self._on_command, qos)
+        for slot, callback in (('state', self._on_state), ('command', self._on_command)):
+            topic = self._topics[slot]
+            take_serialized(
+                self,
+                JointState,
+                topic,
+                decode_joint_state,
+                callback,
+                qos,
+                partial(self.guard.drop, topic),
+            )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'axis {axis}: observer {v["observer"]}, timing {v["timing"]}, command_delay '
@@ -188,7 +199,7 @@ class ObserverNode(Node):
             est = blend(comp.correct(self._states.pop(ns)))
             self._last_ns = ns
             self._stalled_since = None
-            self._last_estimate = joint_state(
+            self._last_estimate = joint_state_bytes(
                 ns,
                 (self.axis,),
                 (est.position,),
@@ -201,7 +212,7 @@ class ObserverNode(Node):
             if status:
                 values = tuple(float(v) for v in status.values())
                 self._state_pub.publish(
-                    joint_state(ns, tuple(status), values, sender=self.get_name())
+                    joint_state_bytes(ns, tuple(status), values, sender=self.get_name())
                 )
 
     def _report_waiting(self) -> None:

@@ -37,6 +37,7 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected, StampCheck, joint_values, owner_check
+from mill_common.codec import decode_joint_state, encode_wrench_stamped
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
@@ -45,7 +46,8 @@ from mill_common.ros import (
     diagnostic_status,
     diagnostics_of,
     from_stamp,
-    joint_state,
+    joint_state_bytes,
+    take_serialized,
     to_stamp,
 )
 from mill_common.ros_params import NodeParameters
@@ -144,8 +146,14 @@ class DriveNode(LifecycleNode):
             self._truth_pub = self.create_publisher(JointState, topics.GROUND_TRUTH, DATA_QOS)
             self._force_pub = self.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
         self._command_subs = {
-            a: self.create_subscription(
-                JointState, topics.joint_command(a), partial(self._on_command, a), DATA_QOS
+            a: take_serialized(
+                self,
+                JointState,
+                topics.joint_command(a),
+                decode_joint_state,
+                partial(self._on_command, a),
+                DATA_QOS,
+                partial(self._drop, topics.joint_command(a)),
             )
             for a in self.axes
         }
@@ -276,7 +284,9 @@ class DriveNode(LifecycleNode):
         assert self.backend is not None
         name = self.get_name()
         for axis, y in zip(self.axes, self.backend.read(), strict=True):
-            self._state_pubs[axis].publish(joint_state(ns, (axis,), position=(y,), sender=name))
+            self._state_pubs[axis].publish(
+                joint_state_bytes(ns, (axis,), position=(y,), sender=name)
+            )
         self._publish_force(ns)
 
     def _advance_lockstep(self) -> None:
@@ -325,7 +335,7 @@ class DriveNode(LifecycleNode):
         if self._truth_pub is not None and self._truth_pub.get_subscription_count():
             truth = self.backend.truth()
             if truth is not None:
-                self._truth_pub.publish(joint_state(ns, MACHINE_AXES, *truth))
+                self._truth_pub.publish(joint_state_bytes(ns, MACHINE_AXES, *truth))
 
     def _publish_force(self, ns: int) -> None:
         # The cutting force of sample ns depends on its state (position, velocity, time),
@@ -336,11 +346,7 @@ class DriveNode(LifecycleNode):
         if self._force_pub is not None and self._force_pub.get_subscription_count():
             force = self.backend.cutting_force()
             if force is not None:
-                msg = WrenchStamped()
-                msg.header.stamp = to_stamp(ns)
-                msg.header.frame_id = 'tool'
-                msg.wrench.force.x, msg.wrench.force.y, msg.wrench.force.z = force
-                self._force_pub.publish(msg)
+                self._force_pub.publish(encode_wrench_stamped(ns, 'tool', force))
 
     # -- real time -----------------------------------------------------------------------------
     def _tick(self) -> None:

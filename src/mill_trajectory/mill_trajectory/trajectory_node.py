@@ -40,23 +40,24 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import Rejected, joint_values
+from mill_common.codec import encode_joint_trajectory
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock as RosClock
 from rclpy.clock import ClockType
-from rclpy.duration import Duration
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
-from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
+from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_trajectory.approach import Approach, ApproachError
@@ -70,6 +71,9 @@ from mill_trajectory.feed_override import (
 )
 
 JOB_STATUS_NAME = 'mill_trajectory: job'
+# A trajectory point as mill_common.codec writes it: positions, velocities, accelerations,
+# effort and time_from_start [ns].
+Point = tuple[Sequence[float], Sequence[float], Sequence[float], Sequence[float], int]
 
 
 class TrajectoryNode(Node):
@@ -89,7 +93,7 @@ class TrajectoryNode(Node):
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
-        self._answer: tuple[int, JointTrajectory] | None = None
+        self._answer: tuple[int, bytes] | None = None
         self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
         self._refused = ''
         if self.params.values['timing'] == 'realtime':
@@ -217,14 +221,11 @@ class TrajectoryNode(Node):
         now = time.time_ns() - self._t0
         first = max(0, now // dt_ns - 1)
         count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
-        out = JointTrajectory()
-        out.header.frame_id = self.get_name()
-        out.header.stamp = to_stamp(self._t0 + first * dt_ns)
-        out.joint_names = list(AXES)
+        points = []
         for i in range(count):
             sample = self._path.sample(seconds((first + i) * dt_ns))
-            out.points.append(self._point(sample, i * dt_ns))
-        self._ref_pub.publish(out)
+            points.append(self._point(sample, i * dt_ns))
+        self._ref_pub.publish(self._reference(self._t0 + first * dt_ns, points))
         self._job_status(seconds(now))
 
     def _on_override(self, msg: JointState) -> None:
@@ -255,11 +256,7 @@ class TrajectoryNode(Node):
         if problem:
             self.get_logger().warning(problem)
             self._report(t, 'running', problem)
-        out = JointTrajectory()
-        out.header.frame_id = self.get_name()
-        out.header.stamp = msg.header.stamp
-        out.joint_names = list(AXES)
-        out.points.append(self._point(scaled.sample(accepted.value, slope), 0))
+        out = self._reference(ns, [self._point(scaled.sample(accepted.value, slope), 0)])
         self._ref_pub.publish(out)
         self._answer = (ns, out)
         self._job_status(t)
@@ -284,12 +281,8 @@ class TrajectoryNode(Node):
         if answer.problem:
             self.get_logger().warning(answer.problem)
             self._report(periodic.scaled.path_time, 'running', answer.problem)
-        out = JointTrajectory()
-        out.header.frame_id = self.get_name()
-        out.header.stamp = to_stamp(answer.first * self._dt_ns)
-        out.joint_names = list(AXES)
-        for i, sample in enumerate(answer.samples):
-            out.points.append(self._point(sample, i * self._dt_ns))
+        points = [self._point(sample, i * self._dt_ns) for i, sample in enumerate(answer.samples)]
+        out = self._reference(answer.first * self._dt_ns, points)
         self._ref_pub.publish(out)
         self._answer = (ns, out)
         self._job_status(periodic.scaled.path_time)
@@ -330,32 +323,26 @@ class TrajectoryNode(Node):
         last = ns // self._dt_ns + self._points
         if first >= last:
             return
-        out = JointTrajectory()
-        out.header.frame_id = self.get_name()
-        out.header.stamp = to_stamp(first * self._dt_ns)
-        out.joint_names = list(AXES)
+        points = []
         for k in range(first, last):
             sample = scaled.sample(self._override.value)
-            out.points.append(self._point(sample, (k - first) * self._dt_ns))
-        self._ref_pub.publish(out)
+            points.append(self._point(sample, (k - first) * self._dt_ns))
+        self._ref_pub.publish(self._reference(first * self._dt_ns, points))
 
-    def _point(self, sample: TrajectorySample, offset_ns: int) -> JointTrajectoryPoint:
-        point = JointTrajectoryPoint()
-        point.positions = list(sample.position)
-        point.velocities = list(sample.velocity)
-        point.accelerations = list(sample.acceleration)
-        point.time_from_start = Duration(nanoseconds=offset_ns).to_msg()
-        return point
+    def _point(self, sample: TrajectorySample, offset_ns: int) -> Point:
+        """One JointTrajectoryPoint: positions, velocities, accelerations of x, y, z."""
+        return sample.position, sample.velocity, sample.acceleration, (), offset_ns
+
+    def _reference(self, ns: int, points: list[Point]) -> bytes:
+        """The JointTrajectory of these points stamped ns, serialized (mill_common.codec)."""
+        return encode_joint_trajectory(ns, self.get_name(), AXES, points)
 
     def _publish_chunk(self, ns: int) -> None:
-        out = JointTrajectory()
-        out.header.frame_id = self.get_name()
-        out.header.stamp = to_stamp(ns)
-        out.joint_names = list(AXES)
+        points = []
         for i in range(self._points):
             sample = self._path.sample(seconds(ns + i * self._dt_ns))
-            out.points.append(self._point(sample, i * self._dt_ns))
-        self._ref_pub.publish(out)
+            points.append(self._point(sample, i * self._dt_ns))
+        self._ref_pub.publish(self._reference(ns, points))
 
     def _report(
         self,
