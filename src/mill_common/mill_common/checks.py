@@ -16,7 +16,6 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
-
 # Lockstep: the most a reference message may lead the newest state a node has: the
 # trajectory's preview_time (at most 10 s) plus the plant's clock_period (at most 10 s).
 REFERENCE_LEAD_NS = 20_000_000_000
