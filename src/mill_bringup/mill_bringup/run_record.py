@@ -67,11 +67,12 @@ def build_record(
 
     The one place where messages become signals: the runner's monitor and the
     bag reader both call it. A message belongs to sample k when its header stamp
-    is exactly k T (0 <= k < n); a repeated stamp overwrites with the same values.
+    is exactly k T (0 <= k < n); of a repeated stamp the first message counts (the nodes
+    take the first too), and a reference older than the newest one is left out.
     owners {topic: node}: a message of such a topic whose header.frame_id names another
-    sender is left out, as is a malformed one (too short, no joint); both are counted in
-    the record's `foreign`. Also returns, per listened per-sample topic, how many of the n
-    samples are missing.
+    sender is left out, as is a malformed one (too short, no joint, a reference point off
+    the grid); both are counted in the record's `foreign`. Also returns, per listened
+    per-sample topic, how many of the n samples are missing.
     """
     owners = owners or {}
     rec = RunRecord.empty(n, dt_ns / 1e9)
@@ -83,14 +84,14 @@ def build_record(
     true_v, true_d = s['true_velocity'], s['true_disturbance']
 
     def on_state(k, msg, i):
-        position[k, i] = msg.position[0]
+        position[k, i] = msg.position[list(msg.name).index(AXES[i])]
 
     def on_estimate(k, msg, i):
-        est_v[k, i] = msg.velocity[0]
-        est_d[k, i] = msg.effort[0]
+        j = list(msg.name).index(AXES[i])
+        est_v[k, i], est_d[k, i] = msg.velocity[j], msg.effort[j]
 
     def on_command(k, msg, i):
-        torque[k, i] = msg.effort[0]
+        torque[k, i] = msg.effort[list(msg.name).index(AXES[i])]
 
     def on_truth(k, msg, _i):
         for j, name in enumerate(msg.name):
@@ -113,6 +114,8 @@ def build_record(
         handlers[topic_names.joint_command(axis)] = (on_command, i)
 
     foreign = rec.foreign
+    first: dict[str, set[int]] = {}  # samples of each topic taken already
+    newest_reference = -1
     for topic, msg in messages:
         owner = owners.get(topic)
         if owner is not None and msg.header.frame_id != owner:
@@ -121,17 +124,26 @@ def build_record(
         k, rem = divmod(_ns(msg.header.stamp), dt_ns)
         if rem != 0 or not 0 <= k < n:
             continue
+        taken = first.setdefault(topic, set())
+        if k in taken or (topic == topic_names.REFERENCE and k < newest_reference):
+            continue  # a repeat (the same values) or a message in the past: the first counts
         try:
             if topic == topic_names.REFERENCE:
-                for point in msg.points:
-                    kp = k + _ns(point.time_from_start) // dt_ns
+                offsets = [_ns(point.time_from_start) for point in msg.points]
+                if any(o % dt_ns for o in offsets):
+                    raise ValueError('a point off the sample grid')
+                values = []
+                for point, offset in zip(msg.points, offsets, strict=True):
+                    kp = k + offset // dt_ns
                     if kp >= n:
                         break
                     for j, name in enumerate(msg.joint_names):
                         if name in axes:
-                            i = AXES.index(name)
-                            ref_p[kp, i] = point.positions[j]
-                            ref_v[kp, i] = point.velocities[j]
+                            values.append((kp, AXES.index(name), point, j))
+                for kp, i, point, j in values:
+                    ref_p[kp, i], ref_v[kp, i] = point.positions[j], point.velocities[j]
+                newest_reference = k
+                taken.add(k)
                 continue
             handler = handlers.get(topic)
             if handler is None:
@@ -140,6 +152,7 @@ def build_record(
         except (IndexError, ValueError):
             foreign[topic] = foreign.get(topic, 0) + 1  # malformed: too short, unknown joint
             continue
+        taken.add(k)
         if topic in seen:
             seen[topic].add(k)
     missing = {t: n - len(ks) for t, ks in seen.items()}

@@ -19,7 +19,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Protocol
 
-from mill_common.parameters import ParamSpec, algorithm_values, one_of, positive
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_values,
+    input_watch_specs,
+    one_of,
+    positive,
+)
 from mill_common.registry import Registry
 from mill_models.force_process import ForceProcessModel
 from mill_models.holds import SampleHold, hold_input
@@ -134,6 +140,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 True,
             ),
         ),
+        *input_watch_specs(),
     ]
     # The process model and the law's design are built once (read-only): a law's memory
     # belongs to its design, so a new design means a new node.

@@ -10,7 +10,11 @@ feed), velocity[0] = its β-hold slope over the sample [1/s]. A trajectory in lo
 answers each override with the reference of that sample; any other user of the
 feed-override input may ignore the slope.
 
-A non-finite force sample is replaced by the last finite one, and an override outside
+A force sample stamped before the newest one, or so far ahead that it skips a control
+instant, is dropped, counted and reported on /diagnostics (`<node>: inputs`); silence on
+the force is reported and, on simulated time (in lockstep with the plant), ends the node
+after input_timeout (mill_common.input_guard). A
+non-finite force sample is replaced by the last finite one, and an override outside
 [override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
 trajectory, and both are reported on /diagnostics as a WARN. The force, reference, feed
 command, override, active β and depth go to /mill/force_control/state every sample.
@@ -23,6 +27,8 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+from mill_common.checks import Rejected, StampCheck
+from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
@@ -51,6 +57,16 @@ class ForceControllerNode(Node):
         self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self._stamps = StampCheck(None)  # the force samples' stamps (the sender's grid)
+        self.guard = InputGuard(
+            self,
+            lambda: self.params.values['input_warn_time'],
+            lambda: self.params.values['input_timeout'],
+            # On simulated time the plant that sends the force is the clock (lockstep).
+            exit_on_silence=bool(self.get_parameter('use_sim_time').value),
+            stamp_ns=lambda: self._stamps.newest or 0,
+        )
+        self.guard.watch(topics.CUTTING_FORCE)
         self.create_subscription(WrenchStamped, topics.CUTTING_FORCE, self._on_force, DATA_QOS)
         v = self.params.values
         self.get_logger().info(
@@ -78,8 +94,21 @@ class ForceControllerNode(Node):
         ns = from_stamp(msg.header.stamp)
         T = self._loop.T
         if self._last is not None and ns == self._last[0]:
+            self.guard.heard(topics.CUTTING_FORCE)
             self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
             return
+        problem = self._stamps.check(ns)
+        if problem is None and self._stamps.is_repeat(ns):
+            return  # a sample between control instants again: the first one counts
+        if problem is None and self._last is not None and ns > sample_stamp_ns(self._next_k + 1, T):
+            # The plant's sample period is shorter than T: the first sample at or after the
+            # next instant comes before the one after it.
+            problem = Rejected(f'stamp {ns / 1e9:.6f} s skips the control instant {self._next_k}')
+        if problem is not None:
+            self.guard.drop(topics.CUTTING_FORCE, problem, msg.header.frame_id)
+            return
+        self.guard.heard(topics.CUTTING_FORCE)
+        self._stamps.accept(ns)
         value = self._measure(msg)
         if math.isfinite(self._peak) and (math.isnan(value) or abs(value) > abs(self._peak)):
             self._peak = value  # a NaN in the window stays: the law holds the last force

@@ -146,6 +146,8 @@ class ObserverNode(Node):
             if self.realtime:
                 self.guard.drop(self._topics['state'], Rejected('stamp repeated or in the past'))
             elif ns == self._last_ns and self._last_estimate is not None:
+                if msg.header.frame_id == self._owners['state']:
+                    self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 self._pub.publish(self._last_estimate)  # the plant offered this step again
             return
         got = self._accept('state', msg, 'position')
