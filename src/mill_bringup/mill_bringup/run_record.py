@@ -14,6 +14,7 @@ so a bag from `ros2 bag record` with these topics works as well as ours.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -31,6 +32,7 @@ from mill_bag.types import (
     WRENCH_STAMPED,
     decode,
 )
+from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps
 
@@ -70,8 +72,9 @@ def build_record(
     is exactly k T (0 <= k < n); of a repeated stamp the first message counts (the nodes
     take the first too), and a reference older than the newest one is left out.
     owners {topic: node}: a message of such a topic whose header.frame_id names another
-    sender is left out, as is a malformed one (too short, no joint, a reference point off
-    the grid); both are counted in the record's `foreign`. Also returns, per listened
+    sender is left out, as is a malformed one (what the node reading the topic drops: no
+    joint, too short, not finite, a reference point off the grid; a command's NaN is a brake
+    request and kept); both are counted in the record's `foreign`. Also returns, per listened
     per-sample topic, how many of the n samples are missing.
     """
     owners = owners or {}
@@ -83,15 +86,23 @@ def build_record(
     ref_p, ref_v = s['reference'], s['reference_velocity']
     true_v, true_d = s['true_velocity'], s['true_disturbance']
 
+    def checked(msg, i, fields):  # what the node of the topic would take, or ValueError
+        got = joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
+        if isinstance(got, Rejected):
+            raise ValueError(got.reason)
+        return got
+
     def on_state(k, msg, i):
-        position[k, i] = msg.position[list(msg.name).index(AXES[i])]
+        (position[k, i],) = checked(msg, i, ('position',))
 
     def on_estimate(k, msg, i):
-        j = list(msg.name).index(AXES[i])
-        est_v[k, i], est_d[k, i] = msg.velocity[j], msg.effort[j]
+        _, est_v[k, i], est_d[k, i] = checked(msg, i, ('position', 'velocity', 'effort'))
 
     def on_command(k, msg, i):
-        torque[k, i] = msg.effort[list(msg.name).index(AXES[i])]
+        got = joint_values(msg.name, {'effort': msg.effort}, AXES[i], ('effort',))
+        if isinstance(got, Rejected) and not got.non_finite:
+            raise ValueError(got.reason)
+        torque[k, i] = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
 
     def on_truth(k, msg, _i):
         for j, name in enumerate(msg.name):
@@ -129,19 +140,33 @@ def build_record(
             continue  # a repeat (the same values) or a message in the past: the first counts
         try:
             if topic == topic_names.REFERENCE:
-                offsets = [_ns(point.time_from_start) for point in msg.points]
-                if any(o % dt_ns for o in offsets):
-                    raise ValueError('a point off the sample grid')
-                values = []
-                for point, offset in zip(msg.points, offsets, strict=True):
-                    kp = k + offset // dt_ns
-                    if kp >= n:
-                        break
-                    for j, name in enumerate(msg.joint_names):
-                        if name in axes:
-                            values.append((kp, AXES.index(name), point, j))
-                for kp, i, point, j in values:
-                    ref_p[kp, i], ref_v[kp, i] = point.positions[j], point.velocities[j]
+                if len(msg.points) == 0:
+                    continue  # nothing in it
+                values = []  # all points checked before any is used, as the controllers do
+                for point in msg.points:
+                    offset = _ns(point.time_from_start)
+                    if offset % dt_ns:
+                        raise ValueError('a point off the sample grid')
+                    arrays = {
+                        'positions': point.positions,
+                        'velocities': point.velocities,
+                        'accelerations': point.accelerations,
+                    }
+                    got = point_values(
+                        msg.joint_names,
+                        arrays,
+                        axes,
+                        ['positions'],
+                        ['velocities', 'accelerations'],
+                    )
+                    if isinstance(got, Rejected):
+                        raise ValueError(got.reason)
+                    values.append((k + offset // dt_ns, got['positions'], got['velocities']))
+                for kp, pos, vel in values:
+                    if 0 <= kp < n:
+                        for axis, p_i, v_i in zip(axes, pos, vel, strict=True):
+                            i = AXES.index(axis)
+                            ref_p[kp, i], ref_v[kp, i] = p_i, v_i
                 newest_reference = k
                 taken.add(k)
                 continue

@@ -3,6 +3,8 @@ simulator; the record built in two processes is the one built in one."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
@@ -73,14 +75,17 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
         (state, _state(T, ['w'], [9.0])),  # no joint x: malformed
         (state, _state(T, ['x'], [2.0], sender='intruder')),  # foreign
         (state, _state(T, ['y', 'x'], [9.0, 2.0])),
+        (state, _state(2 * T, ['x'], [math.nan])),  # not finite: malformed, not the first
         (ref, _reference(T, [0, T], 5.0)),
         (ref, _reference(0, [0, T, 2 * T], 9.0)),  # older than the newest reference: left out
         (ref, _reference(2 * T, [0, T // 2], 9.0)),  # a point off the grid: malformed
+        (ref, _reference(2 * T, [0], math.inf)),  # not finite: malformed, not the first
         (ref, _reference(2 * T, [0], 7.0, sender='intruder')),  # foreign
+        (ref, _reference(2 * T, [0], 6.0)),
     ]
     owners = {state: 'plant', ref: 'trajectory'}
     rec, missing = build_record(messages, ['x'], 3, T, [state, ref], owners)
     np.testing.assert_array_equal(rec['position'][:, 0], [1.0, 2.0, np.nan])
-    np.testing.assert_array_equal(rec['reference'][:, 0], [np.nan, 5.0, 5.0])
-    assert rec.foreign == {state: 2, ref: 2}
+    np.testing.assert_array_equal(rec['reference'][:, 0], [np.nan, 5.0, 6.0])
+    assert rec.foreign == {state: 3, ref: 3}
     assert missing == {state: 1}
