@@ -279,7 +279,7 @@ class AxisControllerNode(Node):
             if off is not None:
                 self.guard.drop(topic, Rejected(f'a point at {off} ns is off the grid'), sender)
                 return
-        if slot in self.guard.watches:
+        if topic in self.guard.watches:
             self.guard.heard(topic)
         if not samples:
             return
