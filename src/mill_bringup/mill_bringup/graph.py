@@ -5,12 +5,15 @@ Each node runs as `ros2 run` would start it (`python -m MODULE --ros-args -r __n
 with its output in RUN_DIR/logs/NAME.log. RUN_DIR/parameters.yaml holds every node's values
 with the overrides, keyed `/**/NAME` so that they apply under the graph's namespace too.
 A node dies with the process that started it, whatever ends that process (Linux
-PR_SET_PDEATHSIG): a killed runner never leaves a graph running on its own.
+PR_SET_PDEATHSIG, set in the child before exec; a child whose parent is already gone by then
+ends at once): a killed runner never leaves a graph running on its own. The signal follows
+the thread that started the node: launch from the main thread.
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
 import importlib.metadata
 import os
 import signal
@@ -58,13 +61,15 @@ def vm_hwm_mb(pid: int) -> float:
     return float('nan')
 
 
-def _die_with_parent() -> None:
+def _die_with_parent(parent: int) -> None:
     """In the child before exec: SIGTERM when the parent dies (Linux; elsewhere nothing)."""
     try:
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
     except (OSError, AttributeError):
-        pass
+        return
+    if os.getppid() != parent:  # the parent died between fork and prctl: no signal will come
+        os._exit(1)
 
 
 class Graph:
@@ -119,7 +124,7 @@ class Graph:
                     stderr=subprocess.STDOUT,
                     env=self._env,
                     start_new_session=True,
-                    preexec_fn=_die_with_parent,
+                    preexec_fn=functools.partial(_die_with_parent, os.getpid()),
                 )
 
     def exited(self) -> dict[str, int]:

@@ -17,6 +17,7 @@ reads only that machine's statuses.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -35,6 +36,7 @@ from mill_bag.types import (
     WRENCH_STAMPED,
     decode,
 )
+from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps
 
@@ -75,11 +77,13 @@ def build_record(
 
     The one place where messages become signals: the runner's monitor and the
     bag reader both call it. A message belongs to sample k when its header stamp
-    is exactly k T (0 <= k < n); a repeated stamp overwrites with the same values.
+    is exactly k T (0 <= k < n); of a repeated stamp the first message counts (the nodes
+    take the first too), and a reference older than the newest one is left out.
     owners {topic: node}: a message of such a topic whose header.frame_id names another
-    sender is left out, as is a malformed one (too short, no joint); both are counted in
-    the record's `foreign`. Also returns, per listened per-sample topic, how many of the n
-    samples are missing.
+    sender is left out, as is a malformed one (what the node reading the topic drops: no
+    joint, too short, not finite, a reference point off the grid; a command's NaN is a brake
+    request and kept); both are counted in the record's `foreign`. Also returns, per listened
+    per-sample topic, how many of the n samples are missing.
     """
     owners = owners or {}
     rec = RunRecord.empty(n, dt_ns / 1e9)
@@ -90,15 +94,23 @@ def build_record(
     ref_p, ref_v = s['reference'], s['reference_velocity']
     true_v, true_d = s['true_velocity'], s['true_disturbance']
 
+    def checked(msg, i, fields):  # what the node of the topic would take, or ValueError
+        got = joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
+        if isinstance(got, Rejected):
+            raise ValueError(got.reason)
+        return got
+
     def on_state(k, msg, i):
-        position[k, i] = msg.position[0]
+        (position[k, i],) = checked(msg, i, ('position',))
 
     def on_estimate(k, msg, i):
-        est_v[k, i] = msg.velocity[0]
-        est_d[k, i] = msg.effort[0]
+        _, est_v[k, i], est_d[k, i] = checked(msg, i, ('position', 'velocity', 'effort'))
 
     def on_command(k, msg, i):
-        torque[k, i] = msg.effort[0]
+        got = joint_values(msg.name, {'effort': msg.effort}, AXES[i], ('effort',))
+        if isinstance(got, Rejected) and not got.non_finite:
+            raise ValueError(got.reason)
+        torque[k, i] = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
 
     def on_truth(k, msg, _i):
         for j, name in enumerate(msg.name):
@@ -121,6 +133,8 @@ def build_record(
         handlers[topic_names.joint_command(axis)] = (on_command, i)
 
     foreign = rec.foreign
+    first: dict[str, set[int]] = {}  # samples of each topic taken already
+    newest_reference = -1
     for topic, msg in messages:
         owner = owners.get(topic)
         if owner is not None and msg.header.frame_id != owner:
@@ -129,17 +143,40 @@ def build_record(
         k, rem = divmod(_ns(msg.header.stamp), dt_ns)
         if rem != 0 or not 0 <= k < n:
             continue
+        taken = first.setdefault(topic, set())
+        if k in taken or (topic == topic_names.REFERENCE and k < newest_reference):
+            continue  # a repeat (the same values) or a message in the past: the first counts
         try:
             if topic == topic_names.REFERENCE:
+                if len(msg.points) == 0:
+                    continue  # nothing in it
+                values = []  # all points checked before any is used, as the controllers do
                 for point in msg.points:
-                    kp = k + _ns(point.time_from_start) // dt_ns
-                    if kp >= n:
-                        break
-                    for j, name in enumerate(msg.joint_names):
-                        if name in axes:
-                            i = AXES.index(name)
-                            ref_p[kp, i] = point.positions[j]
-                            ref_v[kp, i] = point.velocities[j]
+                    offset = _ns(point.time_from_start)
+                    if offset % dt_ns:
+                        raise ValueError('a point off the sample grid')
+                    arrays = {
+                        'positions': point.positions,
+                        'velocities': point.velocities,
+                        'accelerations': point.accelerations,
+                    }
+                    got = point_values(
+                        msg.joint_names,
+                        arrays,
+                        axes,
+                        ['positions'],
+                        ['velocities', 'accelerations'],
+                    )
+                    if isinstance(got, Rejected):
+                        raise ValueError(got.reason)
+                    values.append((k + offset // dt_ns, got['positions'], got['velocities']))
+                for kp, pos, vel in values:
+                    if 0 <= kp < n:
+                        for axis, p_i, v_i in zip(axes, pos, vel, strict=True):
+                            i = AXES.index(axis)
+                            ref_p[kp, i], ref_v[kp, i] = p_i, v_i
+                newest_reference = k
+                taken.add(k)
                 continue
             handler = handlers.get(topic)
             if handler is None:
@@ -148,6 +185,7 @@ def build_record(
         except (IndexError, ValueError):
             foreign[topic] = foreign.get(topic, 0) + 1  # malformed: too short, unknown joint
             continue
+        taken.add(k)
         if topic in seen:
             seen[topic].add(k)
     missing = {t: n - len(ks) for t, ks in seen.items()}

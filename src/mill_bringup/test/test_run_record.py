@@ -3,13 +3,18 @@ simulator; the record built in two processes is the one built in one."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from builtin_interfaces.msg import Duration
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_bringup.metrics import SIGNALS, summarize
-from mill_bringup.run_record import read_run, record_from_raw, record_topics
+from mill_bringup.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_common.signals import AXES
+from sensor_msgs.msg import JointState
+from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
 
@@ -66,3 +71,45 @@ def test_a_bag_of_two_machines_needs_a_namespace(foreign_bag) -> None:
         assert run.n == rec.t.size  # from this machine's end_time, not /other's 0.1 s
         for name in SIGNALS:
             np.testing.assert_array_equal(run.record[name], rec[name], err_msg=name)
+
+
+def _state(ns: int, names: list[str], position: list[float], sender: str = 'plant'):
+    msg = JointState(name=names, position=position)
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
+    msg.header.frame_id = sender
+    return msg
+
+
+def _reference(ns: int, offsets_ns: list[int], x: float, sender: str = 'trajectory'):
+    msg = JointTrajectory(joint_names=['x'])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 1_000_000_000)
+    msg.header.frame_id = sender
+    for o in offsets_ns:
+        d = Duration(sec=o // 1_000_000_000, nanosec=o % 1_000_000_000)
+        msg.points.append(JointTrajectoryPoint(positions=[x], velocities=[0.0], time_from_start=d))
+    return msg
+
+
+def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> None:
+    T = 1_000_000
+    state, ref = topics.state('x'), topics.REFERENCE
+    messages = [
+        (state, _state(0, ['x'], [1.0])),
+        (state, _state(0, ['x'], [9.0])),  # a repeat with other values: the first counts
+        (state, _state(T, ['w'], [9.0])),  # no joint x: malformed
+        (state, _state(T, ['x'], [2.0], sender='intruder')),  # foreign
+        (state, _state(T, ['y', 'x'], [9.0, 2.0])),
+        (state, _state(2 * T, ['x'], [math.nan])),  # not finite: malformed, not the first
+        (ref, _reference(T, [0, T], 5.0)),
+        (ref, _reference(0, [0, T, 2 * T], 9.0)),  # older than the newest reference: left out
+        (ref, _reference(2 * T, [0, T // 2], 9.0)),  # a point off the grid: malformed
+        (ref, _reference(2 * T, [0], math.inf)),  # not finite: malformed, not the first
+        (ref, _reference(2 * T, [0], 7.0, sender='intruder')),  # foreign
+        (ref, _reference(2 * T, [0], 6.0)),
+    ]
+    owners = {state: 'plant', ref: 'trajectory'}
+    rec, missing = build_record(messages, ['x'], 3, T, [state, ref], owners)
+    np.testing.assert_array_equal(rec['position'][:, 0], [1.0, 2.0, np.nan])
+    np.testing.assert_array_equal(rec['reference'][:, 0], [np.nan, 5.0, 6.0])
+    assert rec.foreign == {state: 3, ref: 3}
+    assert missing == {state: 1}

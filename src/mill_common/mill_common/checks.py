@@ -3,7 +3,8 @@
 A node never lets a bad message reach its core: it takes the values it needs out of a
 message with `joint_values` (the joint must be named, the arrays long enough, the values
 finite), checks the stamp with a `StampCheck` (on the sample grid in lockstep, newer than
-the last accepted, not ahead of what the node expects) and the sender with `owner_check`.
+the last accepted) and `ahead` (not later than the plant can be) and the sender with
+`owner_check`.
 Each failure is a `Rejected` with a one-line reason; the node drops the message, counts it
 (`DropCounter`) and reports it, rate-limited, on /diagnostics — it never crashes and never
 waits for a message that can never come.
@@ -15,12 +16,21 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+# Lockstep: the most a reference message may lead the newest state a node has: the
+# trajectory's preview_time (at most 10 s) plus the plant's clock_period (at most 10 s).
+REFERENCE_LEAD_NS = 20_000_000_000
+
 
 @dataclass(frozen=True)
 class Rejected:
-    """Why a message was dropped, in one line."""
+    """Why a message was dropped, in one line.
+
+    non_finite: the joint and its entry are there but the value is not finite (a command's
+    NaN is its sender's brake request, not a malformed message).
+    """
 
     reason: str
+    non_finite: bool = False
 
 
 def joint_values(
@@ -45,7 +55,7 @@ def joint_values(
             return Rejected(f'{name} has {len(values)} entries, joint {joint!r} needs {i + 1}')
         v = float(values[i])
         if not math.isfinite(v):
-            return Rejected(f'{name} of joint {joint!r} is {v}')
+            return Rejected(f'{name} of joint {joint!r} is {v}', non_finite=True)
         out.append(v)
     return tuple(out)
 
@@ -98,10 +108,9 @@ class StampCheck:
     def check(self, ns: int) -> Rejected | None:
         if ns < 0:
             return Rejected(f'negative stamp {ns} ns')
-        if self.period_ns is not None and ns % self.period_ns:
-            return Rejected(
-                f'stamp {ns / 1e9:.9f} s is off the sample grid of {self.period_ns / 1e6:g} ms'
-            )
+        problem = off_grid(ns, self.period_ns)
+        if problem is not None:
+            return problem
         if self.newest is not None and ns < self.newest:
             return Rejected(
                 f'stamp {ns / 1e9:.6f} s is in the past (newest {self.newest / 1e9:.6f} s)'
@@ -114,6 +123,28 @@ class StampCheck:
 
     def is_repeat(self, ns: int) -> bool:
         return self.newest is not None and ns == self.newest
+
+
+def off_grid(ns: int, period_ns: int | None) -> Rejected | None:
+    """A stamp that is not a whole multiple of the sample period (None: no grid)."""
+    if period_ns is not None and ns % period_ns:
+        return Rejected(f'stamp {ns / 1e9:.9f} s is off the sample grid of {period_ns / 1e6:g} ms')
+    return None
+
+
+def ahead(ns: int, newest_state: int | None, lead_ns: int) -> Rejected | None:
+    """Lockstep: a stamp later than the plant can be.
+
+    The plant publishes step k + 1 only after every node answered step k, so nothing a node
+    receives can be stamped more than `lead_ns` after the newest state it has accepted (one
+    period for states, estimates and commands; REFERENCE_LEAD_NS for the reference). Before
+    the first state (a node that starts or restarts) anything goes.
+    """
+    if newest_state is None or ns <= newest_state + lead_ns:
+        return None
+    return Rejected(
+        f'stamp {ns / 1e9:.6f} s is ahead of the plant (newest state {newest_state / 1e9:.6f} s)'
+    )
 
 
 def owner_check(frame_id: str, owner: str) -> Rejected | None:

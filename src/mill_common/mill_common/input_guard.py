@@ -61,13 +61,18 @@ class InputGuard:
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         node.create_timer(0.25, self.tick, clock=steady)
 
-    def watch(self, topic: str, publisher: str) -> InputWatch:
-        w = InputWatch(topic, publisher, self._warn_after(), self._error_after())
+    def watch(self, topic: str, publisher: str | None = None) -> InputWatch:
+        """Watch an input; publisher None: named from the ROS graph at its first message."""
+        w = InputWatch(topic, publisher or '', self._warn_after(), self._error_after())
         self.watches[topic] = w
         return w
 
     def heard(self, topic: str) -> None:
         w = self.watches[topic]
+        if not w.publisher:  # the nodes publishing it now, while they are alive to be named
+            infos = self.node.get_publishers_info_by_topic(topic)
+            names = sorted({i.node_name for i in infos} - {'_NODE_NAME_UNKNOWN_'})
+            w.publisher = ', '.join(names) or 'a node discovery has not named'
         ended = w.heard(time.monotonic())
         if ended is not None:
             self.node.get_logger().info(
@@ -86,6 +91,7 @@ class InputGuard:
 
     def tick(self) -> None:
         now = time.monotonic()
+        silent = False
         for topic, w in self.watches.items():
             w.warn_after, w.error_after = self._warn_after(), self._error_after()
             level = Level.OK if w.waiting else w.level(now)
@@ -98,8 +104,12 @@ class InputGuard:
                 else:
                     self.node.get_logger().warning(text)
                 self._publish(force=True)
-            if level is Level.ERROR and self.exit_on_silence:
-                request_exit(self.node, 3, w.describe(now))
+            silent = silent or level is Level.ERROR
+        if silent and self.exit_on_silence:
+            # A dead peer silences what it fed to other nodes as well: name every quiet input,
+            # not only the first one over the limit.
+            quiet = [w.describe(now) for t, w in self.watches.items() if self._levels[t]]
+            request_exit(self.node, 3, '; '.join(quiet))
         self._publish()
 
     def level(self) -> Level:

@@ -364,6 +364,31 @@ def validate_all(
     return out
 
 
+def input_watch_specs() -> list[tuple[str, ParamSpec]]:
+    """How long a node's inputs may be silent (mill_common.input_guard)."""
+    return [
+        (
+            'input_warn_time',
+            ParamSpec(
+                'input_warn_time',
+                1.0,
+                'an input silent this long (after its first message) is reported as WARN [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+        (
+            'input_timeout',
+            ParamSpec(
+                'input_timeout',
+                10.0,
+                'an input silent this long is an ERROR; in lockstep the node then ends with a '
+                'message naming it [s]',
+                in_range(0.01, 3600.0),
+            ),
+        ),
+    ]
+
+
 def axis_node_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters every per-axis node (controller, observer) has."""
     from mill_common.signals import AXES
@@ -407,25 +432,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 True,
             ),
         ),
-        (
-            'input_warn_time',
-            ParamSpec(
-                'input_warn_time',
-                1.0,
-                'an input silent this long (after its first message) is reported as WARN [s]',
-                in_range(0.01, 3600.0),
-            ),
-        ),
-        (
-            'input_timeout',
-            ParamSpec(
-                'input_timeout',
-                10.0,
-                'an input silent this long is an ERROR; in lockstep the node then ends with a '
-                'message naming it [s]',
-                in_range(0.01, 3600.0),
-            ),
-        ),
+        *input_watch_specs(),
         (
             'command_delay',
             ParamSpec(

@@ -55,6 +55,7 @@ class InputWatch:
         return self.last is None
 
     def describe(self, now: float) -> str:
+        source = self.publisher or 'no publisher known'
         if self.waiting:
-            return f'nothing yet on {self.topic} (from {self.publisher})'
-        return f'nothing on {self.topic} for {self.silence(now):.1f} s (from {self.publisher})'
+            return f'nothing yet on {self.topic} (from {source})'
+        return f'nothing on {self.topic} for {self.silence(now):.1f} s (from {source})'

@@ -6,9 +6,11 @@ import math
 
 import pytest
 from mill_common.checks import (
+    REFERENCE_LEAD_NS,
     DropCounter,
     Rejected,
     StampCheck,
+    ahead,
     joint_values,
     owner_check,
     point_values,
@@ -40,6 +42,8 @@ def test_joint_values_of_a_good_message() -> None:
 def test_joint_values_rejects(names, values, reason) -> None:
     out = joint_values(names, values, 'x', ['effort'])
     assert isinstance(out, Rejected) and reason in out.reason
+    # Only a value that is there and not finite is `non_finite` (a command's brake request).
+    assert out.non_finite == (reason.startswith('is '))
 
 
 def test_point_values() -> None:
@@ -80,6 +84,17 @@ def test_stamp_check_in_real_time_has_no_grid() -> None:
     check.accept(1_234_567)
     assert check.check(1_234_568) is None
     assert 'in the past' in check.check(1_000_000).reason
+
+
+def test_ahead_of_the_plant() -> None:
+    T = 1_000_000
+    assert ahead(5 * T, None, T) is None  # no state yet: a (re)starting node takes anything
+    assert ahead(5 * T, 4 * T, T) is None  # the next step
+    assert ahead(4 * T, 4 * T, T) is None
+    got = ahead(6 * T, 4 * T, T)
+    assert isinstance(got, Rejected) and 'ahead of the plant' in got.reason
+    assert ahead(4 * T + REFERENCE_LEAD_NS, 4 * T, REFERENCE_LEAD_NS) is None
+    assert ahead(4 * T + REFERENCE_LEAD_NS + T, 4 * T, REFERENCE_LEAD_NS) is not None
 
 
 def test_owner() -> None:

@@ -13,7 +13,10 @@ command. timing realtime: the node acts on the newest state whose estimate has a
 drops anything older, and interpolates the reference at the state's stamp.
 
 Every message is checked before use (mill_common.checks): sender, joint, array lengths,
-finite values, stamp. A bad one is dropped, counted and reported on /diagnostics; silence
+finite values, stamp (lockstep: on the grid, every reference point too; not older than the
+newest of its input; not later than the plant can be). A repeated stamp in lockstep is the
+same sample offered again: the first message counts. A bad one is dropped, counted and
+reported on /diagnostics; silence
 on an input is reported and, in lockstep, ends the node after input_timeout
 (mill_common.input_guard).
 
@@ -38,7 +41,15 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mill_common.checks import Rejected, StampCheck, joint_values, owner_check, point_values
+from mill_common.checks import (
+    REFERENCE_LEAD_NS,
+    Rejected,
+    StampCheck,
+    ahead,
+    joint_values,
+    owner_check,
+    point_values,
+)
 from mill_common.codec import decode_joint_state, decode_joint_trajectory
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -261,10 +272,14 @@ class AxisControllerNode(Node):
             self.guard.drop(topic, problem, sender)
             return
         ns = from_stamp(msg.header.stamp)
-        if slot != REFERENCE_INPUT:
-            problem = self._stamps[slot].check(ns)
-            if problem is None and self.realtime and self._stamps[slot].is_repeat(ns):
+        stamps = self._stamps[slot]
+        if slot != REFERENCE_INPUT or not self.realtime:
+            problem = stamps.check(ns)
+            if problem is None and self.realtime and stamps.is_repeat(ns):
                 problem = Rejected(f'repeated stamp {ns / 1e9:.6f} s')
+            if problem is None and not self.realtime:
+                lead = REFERENCE_LEAD_NS if slot == REFERENCE_INPUT else self._dt_ns
+                problem = ahead(ns, self._stamps[CLOCK_INPUT].newest, lead)
             if problem is not None:
                 if not (slot == CLOCK_INPUT and ns == self._last_ns):  # a re-offered step
                     self.guard.drop(topic, problem, sender)
@@ -273,20 +288,30 @@ class AxisControllerNode(Node):
         if isinstance(samples, Rejected):
             self.guard.drop(topic, samples, sender)
             return
+        if not self.realtime:
+            off = next((at for at, _ in samples if at % self._dt_ns), None)
+            if off is not None:
+                self.guard.drop(topic, Rejected(f'a point at {off} ns is off the grid'), sender)
+                return
         if topic in self.guard.watches:
             self.guard.heard(topic)
         if not samples:
             return
         self._seen.add(slot)
+        repeat = not self.realtime and stamps.is_repeat(ns)
+        stamps.accept(ns)
         if slot == REFERENCE_INPUT:
+            if repeat:
+                return  # lockstep: the trajectory answered a re-offered tick; the first counts
             for at, ref in samples:
                 self._reference.add(at, ref)
             self._try_pending()
             return
-        self._stamps[slot].accept(ns)
         if slot == CLOCK_INPUT and ns == self._last_ns and self._last_command is not None:
             self._pub.publish(self._last_command)  # the plant offered this step again
             return
+        if repeat:
+            return  # lockstep: a sample offered again; the first one counts
         for at, value in samples:
             if at > self._last_ns:
                 self._offer(slot, at, value)

@@ -28,7 +28,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Protocol
 
-from mill_common.parameters import ParamSpec, algorithm_values, number, one_of, positive
+from mill_common.parameters import (
+    ParamSpec,
+    algorithm_values,
+    input_watch_specs,
+    number,
+    one_of,
+    positive,
+)
 from mill_common.registry import Registry
 from mill_common.timebase import sample_index, sample_stamp_ns
 from mill_models.force_process import ForceProcessModel
@@ -167,6 +174,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 True,
             ),
         ),
+        *input_watch_specs(),
     ]
     # The process model and the law's design are built once (read-only): a law's memory
     # belongs to its design, so a new design means a new node.
@@ -276,6 +284,11 @@ class ForceSampler:
         self._peak_mode = measure == 'peak'
         self._next = 0  # the next control instant
         self._peak = -0.0  # the largest |force| heard since the last control instant
+
+    @property
+    def next_instant(self) -> int:
+        """The index j of the next control instant."""
+        return self._next
 
     def value(self, force: tuple[float, float, float]) -> float:
         """The controlled quantity of one force sample [N]."""

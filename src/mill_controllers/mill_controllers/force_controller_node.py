@@ -14,7 +14,11 @@ With `depth_source: position` the law is told the tool's depth below `workpiece_
 control instant: the node also follows /mill/z/state and acts once the measured z of the
 instant's stamp has arrived too.
 
-A non-finite force sample is replaced by the last finite one, and an override outside
+A force sample stamped before the newest one, or so far ahead that it skips a control
+instant, is dropped, counted and reported on /diagnostics (`<node>: inputs`); silence on
+the force is reported and, on simulated time (in lockstep with the plant), ends the node
+after input_timeout (mill_common.input_guard). A non-finite force sample is replaced by the
+last finite one, and an override outside
 [override.min, override.max] is clamped (a non-finite one holds the last): neither reaches the
 trajectory, and both are reported on /diagnostics as a WARN. The force, reference, feed
 command, override, active β and depth go to /mill/force_control/state every sample, with the
@@ -28,9 +32,12 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+from mill_common.checks import Rejected, StampCheck
+from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
+from mill_common.timebase import sample_stamp_ns
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
@@ -75,6 +82,16 @@ class ForceControllerNode(Node):
         self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
         self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self._stamps = StampCheck(None)  # the force samples' stamps (the sender's grid)
+        self.guard = InputGuard(
+            self,
+            lambda: self.params.values['input_warn_time'],
+            lambda: self.params.values['input_timeout'],
+            # On simulated time the plant that sends the force is the clock (lockstep).
+            exit_on_silence=bool(self.get_parameter('use_sim_time').value),
+            stamp_ns=lambda: self._stamps.newest or 0,
+        )
+        self.guard.watch(topics.CUTTING_FORCE)
         self.create_subscription(WrenchStamped, topics.CUTTING_FORCE, self._on_force, DATA_QOS)
         if v['depth_source'] == 'position':
             self.create_subscription(JointState, topics.state('z'), self._on_z, DATA_QOS)
@@ -94,12 +111,24 @@ class ForceControllerNode(Node):
 
     def _on_force(self, msg: WrenchStamped) -> None:
         ns = from_stamp(msg.header.stamp)
-        if self._last is not None and ns <= self._last[0]:
-            if ns == self._last[0]:
-                self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
+        T = self._loop.T
+        if self._last is not None and ns == self._last[0]:
+            self.guard.heard(topics.CUTTING_FORCE)
+            self._override_pub.publish(self._last[1])  # a repeated sample: the same answer
             return
-        if self._waiting is not None and ns <= self._waiting[0]:
-            return  # a repeat of the instant that waits for its z
+        problem = self._stamps.check(ns)
+        if problem is None and self._stamps.is_repeat(ns):
+            return  # a sample seen already (between instants, or an instant waiting for z)
+        next_j = self._sampler.next_instant
+        if problem is None and self._last is not None and ns > sample_stamp_ns(next_j + 1, T):
+            # The plant's sample period is shorter than T: the first sample at or after the
+            # next instant comes before the one after it.
+            problem = Rejected(f'stamp {ns / 1e9:.6f} s skips the control instant {next_j}')
+        if problem is not None:
+            self.guard.drop(topics.CUTTING_FORCE, problem, msg.header.frame_id)
+            return
+        self.guard.heard(topics.CUTTING_FORCE)
+        self._stamps.accept(ns)
         f = msg.wrench.force
         hit = self._sampler.offer(ns, (f.x, f.y, f.z))
         if hit is None:

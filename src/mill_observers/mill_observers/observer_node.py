@@ -12,9 +12,12 @@ With command_delay N > 0 (real time: 1) the observer runs in the loop's delay
 publishes the estimate of sample k + N, the period its controller's command will act in.
 
 Every message is checked before use: sender (plant_node for states, controller_node for
-commands), joint, finite values, stamp (mill_common.checks); a bad one is dropped, counted and
-reported on /diagnostics. A non-finite command from the controller is its brake request:
-the drive brakes the axis, the observer takes it as no input. Silence on an input is
+commands), joint, finite values, stamp (mill_common.checks; lockstep: on the grid, not older
+than the newest of its input, not later than the plant can be); a bad one is dropped,
+counted and reported on /diagnostics. In lockstep a repeated stamp is the same sample offered
+again: the first message counts. A non-finite effort of the axis's joint from the
+controller is its brake request: the drive brakes the axis, the observer takes it as no
+input. Silence on an input is
 reported and, in lockstep, ends the node after input_timeout (mill_common.input_guard).
 """
 
@@ -24,7 +27,7 @@ import time
 from functools import partial
 from typing import Any
 
-from mill_common.checks import Rejected, StampCheck, joint_values, owner_check
+from mill_common.checks import Rejected, StampCheck, ahead, joint_values, owner_check
 from mill_common.codec import decode_joint_state
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -126,23 +129,26 @@ class ObserverNode(Node):
         """(stamp, value) of a message whose sender, stamp and value are fine, else None."""
         ns = from_stamp(msg.header.stamp)
         topic = self._topics[slot]
-        problem = owner_check(msg.header.frame_id, self._owners[slot]) or self._stamps[slot].check(
-            ns
-        )
+        stamps = self._stamps[slot]
+        problem = owner_check(msg.header.frame_id, self._owners[slot]) or stamps.check(ns)
+        if problem is None and not self.realtime:
+            problem = ahead(ns, self._stamps['state'].newest, self._dt_ns)
         if problem is not None:
-            if problem.reason.startswith('stamp') and ns == self._stamps[slot].newest:
+            if problem.reason.startswith('stamp') and ns == stamps.newest:
                 return None
             if not (slot == 'state' and self._last_ns is not None and ns <= self._last_ns):
                 self.guard.drop(topic, problem, msg.header.frame_id)
             return None
         value = joint_values(msg.name, {field: getattr(msg, field)}, self.axis, (field,))
-        if isinstance(value, Rejected):
-            if slot == 'command' and msg.header.frame_id == self._owners['command']:
-                # The controller's brake request: the drive brakes, no input acts.
-                self._braked_commands += 1
-                return ns, float('nan')
+        if isinstance(value, Rejected) and not (slot == 'command' and value.non_finite):
             self.guard.drop(topic, value, msg.header.frame_id)
             return None
+        if not self.realtime and stamps.is_repeat(ns):
+            return None  # lockstep: the same sample again (a re-offered step); the first counts
+        if isinstance(value, Rejected):
+            # The controller's brake request: the drive brakes, no input acts.
+            self._braked_commands += 1
+            return ns, float('nan')
         return ns, value[0]
 
     def _on_state(self, msg: JointState) -> None:
@@ -151,6 +157,8 @@ class ObserverNode(Node):
             if self.realtime:
                 self.guard.drop(self._topics['state'], Rejected('stamp repeated or in the past'))
             elif ns == self._last_ns and self._last_estimate is not None:
+                if msg.header.frame_id == self._owners['state']:
+                    self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 self._pub.publish(self._last_estimate)  # the plant offered this step again
             return
         got = self._accept('state', msg, 'position')

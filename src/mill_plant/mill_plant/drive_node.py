@@ -20,9 +20,11 @@ published. A period without a fresh command counts as late; after `brake_after` 
 periods in a row the axis is braked until fresh commands return, and /diagnostics says so.
 
 Every command must come from the axis's owner (header.frame_id, `command_owners`); anything
-else — another sender, a stamp that answers no state, an unknown joint — is dropped,
-counted and reported. A non-finite or missing effort from the owner brakes the axis for
-that period and is reported: it is the controller saying it has no valid command.
+else — another sender, a stamp that answers no state, an unknown joint, no effort for the
+joint — is dropped, counted and reported (a rate-limited WARN `mill_plant: inputs` on
+/diagnostics naming the topic and the sender). A non-finite effort of the axis's joint from
+the owner brakes the axis for that period and is reported: it is the controller saying it
+has no valid command.
 """
 
 from __future__ import annotations
@@ -64,6 +66,7 @@ from mill_plant.command_table import CommandTable
 LOCKSTEP_STATUS = 'mill_plant: lockstep'
 REALTIME_STATUS = 'mill_plant: realtime'
 OWNERSHIP_STATUS = 'mill_plant: ownership'
+INPUTS_STATUS = 'mill_plant: inputs'
 AXIS_STATUS = 'mill_plant: {} axis'
 MACHINE_AXES = ('x', 'y', 'z')
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
@@ -233,11 +236,14 @@ class DriveNode(LifecycleNode):
         if problem is not None:
             if self.table.by_axis[axis].stamp == ns and problem.reason.startswith('stamp'):
                 return  # a repeat of an answered step (after a re-offer): harmless
-            self._drop(topic, problem)
+            self._drop(topic, problem, msg.header.frame_id)
             return
         if self.table.by_axis[axis].stamp == ns:
             return  # the owner answered this step again (a re-offered step)
         value = joint_values(msg.name, {'effort': msg.effort}, axis, ('effort',))
+        if isinstance(value, Rejected) and not value.non_finite:
+            self._drop(topic, value, msg.header.frame_id)  # no joint, no effort: malformed
+            return
         if isinstance(value, Rejected):
             # From the owner, for the step it must answer: no valid command, so brake.
             self._nonfinite[axis] += 1
@@ -252,12 +258,17 @@ class DriveNode(LifecycleNode):
         if self.timing == 'lockstep' and self.table.complete(self._k * self._dt_ns):
             self._advance_lockstep()
 
-    def _drop(self, topic: str, problem: Rejected) -> None:
+    def _drop(self, topic: str, problem: Rejected, sender: str) -> None:
         if self._drops.drop(topic, problem, time.monotonic()):
-            self.get_logger().warning(
-                f'dropped a message on {topic}: {problem.reason} '
-                f'({self._drops.counts[topic]} so far)'
+            text = (
+                f'dropped a message on {topic} from {sender or "an unnamed publisher"}: '
+                f'{problem.reason} ({self._drops.counts[topic]} so far)'
             )
+            self.get_logger().warning(text)
+            status = diagnostic_status(
+                DiagnosticStatus.WARN, INPUTS_STATUS, text, 'mill_plant', dict(self._drops.counts)
+            )
+            self._diag_pub.publish(diagnostics_of(self._stamp_now(), [status]))
 
     def _note_foreign(self, topic: str, who: str) -> None:
         seen = self._foreign.setdefault(topic, set())

@@ -15,8 +15,10 @@ Lockstep, one sample per spindle revolution (T = 60/S_s; stamps are the nearest 
    corner), the left value first.
 
 A non-finite reference never reaches the drive: the last feed is held and an ERROR goes to
-/diagnostics. A step whose reference does not arrive within `lockstep_timeout` ends the
-node with a message naming the topic and its publishers.
+/diagnostics. A reference stamped later than the current step is dropped, counted and
+reported (WARN); an older one is a repeat of an answered sample and is ignored. A step
+whose reference does not arrive within `lockstep_timeout` ends the node with a message
+naming the topic and its publishers.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from typing import Any
 from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+from mill_common.checks import DropCounter, Rejected
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
@@ -60,6 +63,7 @@ class ForceProcessNode(Node):
         self._k = 0
         self._feed = (0.0, 0.0)  # last applied (u0, slope) [mm/s, mm/s²]
         self._faults = 0
+        self._drops = DropCounter()
         self._wall_start = time.monotonic()
         self._lockstep = LockstepWatchdog(
             self._wall_start,
@@ -112,8 +116,22 @@ class ForceProcessNode(Node):
         self._force_pub.publish(self._wrench(ns, self._drive.plant.force))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
-        if not self._lockstep.started or from_stamp(msg.header.stamp) != self._stamp_ns():
+        ns = from_stamp(msg.header.stamp)
+        if not self._lockstep.started or ns < self._stamp_ns():
             return  # a repeat of an answered sample, or before the start
+        if ns != self._stamp_ns():
+            reason = (
+                f'stamp {ns / 1e9:.9f} s is not the current step {self._stamp_ns() / 1e9:.9f} s'
+            )
+            if self._drops.drop(topics.REFERENCE, Rejected(reason), time.monotonic()):
+                text = (
+                    f'dropped a message on {topics.REFERENCE} from '
+                    f'{msg.header.frame_id or "an unnamed publisher"}: {reason} '
+                    f'({self._drops.total} so far)'
+                )
+                self.get_logger().warning(text)
+                self._publish_status(DiagnosticStatus.WARN, text)
+            return
         u0, slope = self._command(msg)
         self._publish_trace(self._drive.apply(u0, slope, self._T))
         self._k += 1
@@ -199,6 +217,7 @@ class ForceProcessNode(Node):
             'feed_actual': plant.feed_actual,
             'depth': plant.model.depth_at(plant.time),
             'faults': self._faults,
+            'dropped': self._drops.total,
             'wall_s': time.monotonic() - self._wall_start,
         }
         machine = topics.machine_id(self.get_namespace())

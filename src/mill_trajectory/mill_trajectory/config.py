@@ -13,6 +13,7 @@ from mill_common.parameters import (
     algorithm_values,
     boolean,
     in_range,
+    input_watch_specs,
     non_negative,
     one_of,
     positive,
@@ -156,6 +157,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             'feed_override.max',
             ParamSpec('max', 1.5, 'largest accepted feed override [-]', in_range(0.0, 10.0)),
         ),
+        *input_watch_specs(),
     ]
     return specs + TRAJECTORIES.parameter_specs()
 

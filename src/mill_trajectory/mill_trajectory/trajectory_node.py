@@ -34,6 +34,12 @@ one message (mill_trajectory.feed_override.PeriodicOverridePath).
 With a feed override the job ends when the path ends, whatever the override: `settle_time`
 after the first sample whose path time reaches the end of the path, or at `duration`. The
 "done" status on /diagnostics then gives the time of that last sample as end_time.
+
+In lockstep the input that paces the node (/clock, or the overrides) is watched
+(mill_common.input_guard): a /clock tick off the sample grid or older than the newest is
+dropped and counted; an override with another stamp than the next sample's is dropped and
+counted; silence is reported on /diagnostics naming the topic and the node that published
+it, and after input_timeout the node ends with that message (exit code 3).
 """
 
 from __future__ import annotations
@@ -45,13 +51,14 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mill_common.checks import Rejected, joint_values
+from mill_common.checks import Rejected, StampCheck, joint_values
 from mill_common.codec import encode_joint_trajectory
+from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
-from mill_common.timebase import period_ns, seconds
+from mill_common.timebase import period_ns, sample_stamp_ns, seconds
 from rclpy.clock import Clock as RosClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
@@ -74,6 +81,7 @@ JOB_STATUS_NAME = 'mill_trajectory: job'
 # A trajectory point as mill_common.codec writes it: positions, velocities, accelerations,
 # effort and time_from_start [ns].
 Point = tuple[Sequence[float], Sequence[float], Sequence[float], Sequence[float], int]
+OVERRIDE_STAMP_TOLERANCE_NS = 1000
 
 
 class TrajectoryNode(Node):
@@ -96,17 +104,30 @@ class TrajectoryNode(Node):
         self._answer: tuple[int, bytes] | None = None
         self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
         self._refused = ''
-        if self.params.values['timing'] == 'realtime':
+        self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
+        lockstep = self.params.values['timing'] == 'lockstep'
+        self.guard = InputGuard(
+            self,
+            lambda: self.params.values['input_warn_time'],
+            lambda: self.params.values['input_timeout'],
+            exit_on_silence=lockstep,
+            stamp_ns=lambda: self._ticks.newest or 0,
+        )
+        if not lockstep:
             self._start_realtime()
         elif self._periodic is not None:
+            self.guard.watch(topics.FEED_OVERRIDE)
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_periodic, DATA_QOS
             )
         elif self.params.values['feed_override.lockstep']:
+            self.guard.watch(topics.FEED_OVERRIDE)
             self.create_subscription(
                 JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
             )
         else:
+            self._ticks.period_ns = self._dt_ns
+            self.guard.watch(topics.CLOCK)
             self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
         if self._scaled is not None and not self.params.values['feed_override.lockstep']:
             self.create_subscription(JointState, topics.FEED_OVERRIDE, self._on_override, 10)
@@ -237,10 +258,22 @@ class TrajectoryNode(Node):
 
     def _on_override_lockstep(self, msg: JointState) -> None:
         ns = from_stamp(msg.header.stamp)
-        if self._answer is not None and ns <= self._answer[0]:
-            if ns == self._answer[0]:
-                self._ref_pub.publish(self._answer[1])  # a repeat: the same sample again
+        if self._answer is not None and ns == self._answer[0]:
+            self.guard.heard(topics.FEED_OVERRIDE)
+            self._ref_pub.publish(self._answer[1])  # a repeat: the same sample again
             return
+        scaled = self._scaled
+        assert scaled is not None, 'lockstep overrides always scale the path'
+        # Each override asks for the next sample: t_k of k = the samples answered so far. The
+        # sender's T may differ from ours in the last digits (the force job allows 1e-12 T):
+        # 1 µs is far more than that makes over any job and far less than a period.
+        want = sample_stamp_ns(scaled.sample_index, self.params.values['sample_period'])
+        if abs(ns - want) > OVERRIDE_STAMP_TOLERANCE_NS:
+            what = 'in the past' if ns < want else 'not the next sample'
+            reason = f'stamp {ns / 1e9:.9f} s is {what} (t_k = {want / 1e9:.9f} s)'
+            self.guard.drop(topics.FEED_OVERRIDE, Rejected(reason), msg.header.frame_id)
+            return
+        self.guard.heard(topics.FEED_OVERRIDE)
         offered = msg.position[0] if len(msg.position) else math.nan
         slope = msg.velocity[0] if len(msg.velocity) else 0.0
         accepted = self._override.accept(float(offered))
@@ -250,8 +283,6 @@ class TrajectoryNode(Node):
             slope = 0.0
         if accepted.value != offered:
             slope = 0.0  # a clamped or held override does not ramp
-        scaled = self._scaled
-        assert scaled is not None, 'lockstep overrides always scale the path'
         t = scaled.path_time
         if problem:
             self.get_logger().warning(problem)
@@ -263,18 +294,19 @@ class TrajectoryNode(Node):
 
     def _on_override_periodic(self, msg: JointState) -> None:
         ns = from_stamp(msg.header.stamp)
-        if self._answer is not None and ns <= self._answer[0]:
-            if ns == self._answer[0]:
-                self._ref_pub.publish(self._answer[1])  # a repeat: the same samples again
+        if self._answer is not None and ns == self._answer[0]:
+            self.guard.heard(topics.FEED_OVERRIDE)
+            self._ref_pub.publish(self._answer[1])  # a repeat: the same samples again
             return
         periodic = self._periodic
         assert periodic is not None, 'periodic overrides come with feed_override.period'
         k, rem = divmod(ns, self._dt_ns)
-        if rem:
-            problem = f'override stamped {ns} ns, not a sample: ignored'
-            self.get_logger().warning(problem)
-            self._report(periodic.scaled.path_time, 'running', problem)
+        if rem or (self._answer is not None and ns < self._answer[0]):
+            what = 'not a sample' if rem else 'in the past'
+            reason = f'stamp {ns / 1e9:.9f} s is {what}'
+            self.guard.drop(topics.FEED_OVERRIDE, Rejected(reason), msg.header.frame_id)
             return
+        self.guard.heard(topics.FEED_OVERRIDE)
         offered = msg.position[0] if len(msg.position) else math.nan
         slope = msg.velocity[0] if len(msg.velocity) else 0.0
         answer = periodic.answer(k, float(offered), float(slope))
@@ -289,6 +321,12 @@ class TrajectoryNode(Node):
 
     def _on_clock(self, msg: Clock) -> None:
         ns = from_stamp(msg.clock)
+        problem = self._ticks.check(ns)
+        if problem is not None:
+            self.guard.drop(topics.CLOCK, problem)
+            return
+        self.guard.heard(topics.CLOCK)
+        self._ticks.accept(ns)
         t = seconds(ns)
         if self._scaled is not None:
             self._publish_scaled(self._scaled, ns)

@@ -468,6 +468,7 @@ class AxisJob(Job[RunRecord]):
             out[topic or topics.estimate(axis)] = node.name
         for axis in self.axes:
             out[topics.state(axis)] = self.state_owner
+        out[topics.REFERENCE] = self.trajectory
         return out
 
     # -- offline ---------------------------------------------------------------------------
