@@ -259,7 +259,7 @@ class AxisControllerNode(Node):
         if isinstance(samples, Rejected):
             self.guard.drop(topic, samples, sender)
             return
-        if slot in self.guard.watches:
+        if topic in self.guard.watches:
             self.guard.heard(topic)
         if not samples:
             return
