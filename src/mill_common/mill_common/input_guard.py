@@ -70,6 +70,7 @@ class InputGuard:
         w = self.watches[topic]
         ended = w.heard(time.monotonic())
         if ended is not None:
+            self._levels[topic] = Level.OK  # the status sent now says it is back, not silent
             self.node.get_logger().info(
                 f'{topic} (from {w.publisher}) back after {ended:.2f} s of silence'
             )
