@@ -102,8 +102,9 @@ def run(
 
     respawn: a node other than the clock node that dies is started again (at most 3 times)
     and rejoins the job, instead of ending the run.
-    external: nodes of the scenario that run elsewhere (a hardware driver started on its
-    own): neither launched nor supervised here.
+    external: nodes of the scenario that run elsewhere (a hardware driver, a plant on
+    another host): neither launched nor supervised here; an external clock node with the
+    lifecycle services is activated where it would have been launched.
     """
     unknown = sorted(external - {n.name for n in job.scenario.nodes})
     if unknown:
@@ -173,6 +174,9 @@ def run(
                 raise RunError(f'no publisher appeared on {", ".join(silent)}')
             spin('before the job started')
         graph.launch(clocks)
+        for node in job.clock_nodes:
+            if node.name in external:  # started elsewhere, perhaps waiting to be activated
+                activate(monitor, executor, node.name, progress)
         progress.note(
             f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}); '
             'waiting for discovery'
@@ -264,6 +268,58 @@ def run(
     return result
 
 
+def activate(node: Any, executor: Any, target: str, progress: Progress, wait: float = 5.0) -> None:
+    """Bring a lifecycle node that runs elsewhere to active, where the runner would start it.
+
+    A drive started with autostart false waits for this: it then starts after the graph, as
+    a drive the runner starts itself does. One without the lifecycle services, or active
+    already, is left alone.
+    """
+    from lifecycle_msgs.msg import State, Transition
+    from lifecycle_msgs.srv import ChangeState, GetState
+
+    steps = {
+        State.PRIMARY_STATE_UNCONFIGURED: ['configure', 'activate'],
+        State.PRIMARY_STATE_INACTIVE: ['activate'],
+    }
+    ids = {
+        'configure': Transition.TRANSITION_CONFIGURE,
+        'activate': Transition.TRANSITION_ACTIVATE,
+    }
+    get = node.create_client(GetState, f'{target}/get_state')
+    change = node.create_client(ChangeState, f'{target}/change_state')
+    try:
+        deadline = time.monotonic() + wait
+        while not get.service_is_ready():  # spinning: the job may already be under way
+            if time.monotonic() > deadline:
+                progress.note(f'{target} has no lifecycle services: it starts by itself')
+                return
+            executor.spin_once(timeout_sec=0.05)
+        state = _call(executor, get, GetState.Request())
+        todo = steps.get(state.current_state.id, []) if state is not None else []
+        for name in todo:
+            request = ChangeState.Request()
+            request.transition.id = ids[name]
+            result = _call(executor, change, request)
+            if result is None or not result.success:
+                progress.note(f'{target}: {name} failed')
+                return
+        if todo:
+            progress.note(f'{target}: activated')
+    finally:
+        node.destroy_client(get)
+        node.destroy_client(change)
+
+
+def _call(executor: Any, client: Any, request: Any, timeout: float = 5.0) -> Any:
+    """The response of a service call, None if none came within timeout."""
+    future = client.call_async(request)
+    deadline = time.monotonic() + timeout
+    while not future.done() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.05)
+    return future.result() if future.done() else None
+
+
 def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> None:
     """Ask a lifecycle node (the drive) to deactivate: it brakes every axis."""
     from lifecycle_msgs.msg import Transition
@@ -276,11 +332,8 @@ def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> Non
             return
         request = ChangeState.Request()
         request.transition.id = Transition.TRANSITION_DEACTIVATE
-        future = client.call_async(request)
-        deadline = time.monotonic() + 5.0
-        while not future.done() and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.05)
-        ok = future.done() and future.result().success
+        result = _call(executor, client, request)
+        ok = result is not None and result.success
         progress.note(
             f'{target}: deactivated (axes braked)' if ok else f'{target}: deactivate failed'
         )

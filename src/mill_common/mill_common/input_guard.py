@@ -75,6 +75,7 @@ class InputGuard:
             w.publisher = ', '.join(names) or 'a node discovery has not named'
         ended = w.heard(time.monotonic())
         if ended is not None:
+            self._levels[topic] = Level.OK  # the status sent now says it is back, not silent
             self.node.get_logger().info(
                 f'{topic} (from {w.publisher}) back after {ended:.2f} s of silence'
             )

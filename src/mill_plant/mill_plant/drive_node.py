@@ -11,7 +11,8 @@ measured position of every axis for step k (stamp kT), waits for the command sta
 every active axis, then integrates to k + 1. A step that stays unanswered is offered again
 every second, so a restarted controller or observer rejoins; a missing command is reported
 on /diagnostics after `command_report_time`, naming the axis, the topic and the node that
-should send it; after `lockstep_timeout` the node ends with that message.
+should send it, and when its commands arrive again, with the length of the silence; after
+`lockstep_timeout` the node ends with that message.
 
 timing `realtime`: every sample period of wall time it reads the positions, publishes them
 stamped with the acquisition time on the system clock, and applies the newest command of
@@ -309,10 +310,13 @@ class DriveNode(LifecycleNode):
         ns = self._k * self._dt_ns
         self._apply(ns, self.table.values())
         self._k += 1
+        if self._reported_missing:  # the step waited this long: the outage's length
+            waited = self._lockstep.waited(now)
+            for axis in self._reported_missing:
+                message = f'commands arriving again after {waited:.2f} s of silence'
+                self._report_axis(axis, DiagnosticStatus.OK, message)
+            self._reported_missing.clear()
         self._lockstep.progressed(now)
-        for axis in self._reported_missing:
-            self._report_axis(axis, DiagnosticStatus.OK, 'commands arriving again')
-        self._reported_missing.clear()
         if self._k % max(1, round(1.0 / self._dt)) == 0:
             self._publish_status(force=True)
         self._publish_step()

@@ -1,0 +1,395 @@
+"""Two hosts: the plant in one network namespace, the rest of the graph in another.
+
+Two network namespaces joined by a veth pair stand for two machines on one network: the
+drive host runs `plant_node`, the control host runs `run_scenario --external plant`
+(trajectory, observers, controllers and the runner's monitor). Inside the namespaces DDS
+discovers over the subnet (ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET, a private domain);
+the test process itself stays on loopback. The plant uses Fast DDS over UDP only
+(FASTDDS_BUILTIN_TRANSPORTS=UDPv4): processes in two namespaces of one machine still share
+/dev/shm, and Fast DDS would otherwise carry their data through shared memory, past the
+link.
+
+- A short job across the link equals the offline simulator sample by sample, and its
+  commands crossed the link.
+- The link cut for 2 s (`ip link set DEV down`, then up): the job resumes and still equals
+  the offline run; the plant reports the missing commands and, when they return, how long
+  the step waited; every controller and observer reports the silent state topic (from
+  `plant`) and, when it returns, the length of the silence.
+- The link cut for good, with the timeouts at 3 s: the plant ends with exit code 3 and
+  `lockstep timeout`, naming the command topics and their controllers; on the control host
+  a node ends with exit code 3 naming its silent input, and the runner ends with exit code
+  1 naming that node.
+
+Each test makes its own namespaces (names with this process's id, so parallel runs do not
+meet) and removes them afterwards, also when the test fails. Without the right to create
+network namespaces (not root) the tests are skipped and say why.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO
+
+import pytest
+from mill_common.ros import joint_state
+from rclpy.serialization import serialize_message
+
+from test.conftest import SCENARIO, wait_until
+
+PLANT = 'mill_plant.plant_node'
+RUNNER = 'mill_bringup.runner'
+AXES = ('x', 'y', 'z')
+CUT = 2.0  # [s] the short outage
+# [s] after the link is back, the lost samples are sent again when the reliable writer next
+# announces what it holds: Fast DDS's heartbeat period is 3 s; 1 s more for the backlog.
+RECOVERY = 4.0
+SHORT_TIMEOUT = 3.0  # [s] lockstep_timeout and input_timeout when the link stays down
+_count = itertools.count()
+
+
+def ip(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(['ip', *args], capture_output=True, text=True, timeout=30)
+
+
+def _must(result: subprocess.CompletedProcess[str]) -> None:
+    assert result.returncode == 0, f'{" ".join(result.args)}: {result.stderr.strip()}'
+
+
+class NamespacesUnavailable(Exception):
+    """Network namespaces cannot be created here; str() says why."""
+
+
+class TwoHosts:
+    """Namespace `drive` (the plant) and `control` (the rest), joined by a veth pair.
+
+    A context manager: on the way out, also by an exception, every process in the two
+    namespaces is stopped (only this test's can be there) and the namespaces are deleted.
+    """
+
+    def __init__(self, env: dict[str, str]) -> None:
+        tag = f'{os.getpid()}x{next(_count)}'
+        self.drive, self.control = f'mill-drive-{tag}', f'mill-control-{tag}'
+        self.drive_dev, self.control_dev = f'md{tag}', f'mc{tag}'  # < 16 characters
+        self.env = dict(env, ROS_AUTOMATIC_DISCOVERY_RANGE='SUBNET')
+        self.procs: list[subprocess.Popen[str]] = []
+        self.created: list[str] = []
+
+    def __enter__(self) -> TwoHosts:
+        try:
+            first = ip('netns', 'add', self.drive)
+        except FileNotFoundError:
+            raise NamespacesUnavailable('the ip command (iproute2) is missing') from None
+        if first.returncode != 0:
+            raise NamespacesUnavailable(f'ip netns add: {first.stderr.strip()}')
+        self.created.append(self.drive)
+        try:
+            self._join()
+        except BaseException:
+            self.remove()
+            raise
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.remove()
+
+    def _join(self) -> None:
+        _must(ip('netns', 'add', self.control))
+        self.created.append(self.control)
+        # Made inside the namespaces: the pair never appears among the host's interfaces.
+        _must(
+            ip(
+                *('link', 'add', self.drive_dev, 'netns', self.drive, 'type', 'veth'),
+                *('peer', 'name', self.control_dev, 'netns', self.control),
+            )
+        )
+        for ns, dev, address in (
+            (self.drive, self.drive_dev, '10.231.0.1/24'),
+            (self.control, self.control_dev, '10.231.0.2/24'),
+        ):
+            _must(ip('-n', ns, 'addr', 'add', address, 'dev', dev))
+            _must(ip('-n', ns, 'link', 'set', 'lo', 'up'))
+            _must(ip('-n', ns, 'link', 'set', dev, 'up'))
+
+    def start(
+        self, ns: str, args: list[str], log: IO[str], pipe_stderr: bool, **extra_env: str
+    ) -> subprocess.Popen:
+        """python ARGS in namespace ns; output to log, stderr to a pipe if pipe_stderr."""
+        proc = subprocess.Popen(
+            ['ip', 'netns', 'exec', ns, sys.executable, *args],  # ip execs: the pid is python's
+            env=dict(self.env, **extra_env),
+            stdout=log,
+            stderr=subprocess.PIPE if pipe_stderr else subprocess.STDOUT,
+            text=True,
+            start_new_session=True,
+        )
+        self.procs.append(proc)
+        return proc
+
+    def link(self, up: bool) -> None:
+        _must(ip('-n', self.drive, 'link', 'set', self.drive_dev, 'up' if up else 'down'))
+
+    def received_by_drive(self) -> int:
+        """Bytes the drive host's end of the link has received."""
+        stats = Path(f'/sys/class/net/{self.drive_dev}/statistics/rx_bytes')
+        result = subprocess.run(
+            ['ip', 'netns', 'exec', self.drive, 'cat', str(stats)],
+            capture_output=True,
+            text=True,
+            timeout=30,
+        )
+        _must(result)
+        return int(result.stdout)
+
+    def remove(self) -> None:
+        """SIGINT to what this test started, SIGKILL after 10 s and to anything else left in
+        the namespaces (their children); then delete the namespaces."""
+        for proc in self.procs:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGINT)
+        for proc in self.procs:
+            try:
+                proc.communicate(timeout=10)
+            except subprocess.TimeoutExpired:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.communicate()
+        for ns in self.created:
+            for pid in ip('netns', 'pids', ns).stdout.split():
+                with contextlib.suppress(ProcessLookupError):
+                    os.kill(int(pid), signal.SIGKILL)
+            ip('netns', 'del', ns)
+        self.created = [ns for ns in self.created if ns in ip('netns', 'list').stdout.split()]
+
+
+@pytest.fixture
+def hosts(ros_env: dict[str, str]) -> Iterator[TwoHosts]:
+    try:
+        with TwoHosts(ros_env) as two:
+            yield two
+    except NamespacesUnavailable as exc:
+        pytest.skip(f'network namespaces cannot be created here: {exc}')
+    assert not two.created, f'namespaces left behind: {two.created}'
+
+
+def start_plant(hosts: TwoHosts, log: IO[str], *params: str) -> subprocess.Popen:
+    """The plant as the drive host starts it: the scenario file; inactive until the runner
+    activates it once its graph is up; 3 subscribers per state topic before the first step
+    (controller, observer and the runner's monitor), as the runner asks of its own plant."""
+    args = ['-m', PLANT, '--ros-args', '-r', '__node:=plant', '--params-file', str(SCENARIO)]
+    for p in ('autostart:=false', 'min_subscribers:=3', *params):
+        args += ['-p', f'plant:{p}']
+    return hosts.start(hosts.drive, args, log, False, FASTDDS_BUILTIN_TRANSPORTS='UDPv4')
+
+
+def start_runner(hosts: TwoHosts, out: Path, log: IO[str], *args: str) -> subprocess.Popen:
+    return hosts.start(
+        hosts.control,
+        ['-m', RUNNER, 'slotting', '--external', 'plant', '--output', str(out), *args],
+        log,
+        True,
+    )
+
+
+def wait_for_progress(runner: subprocess.Popen, lines: list[str]) -> None:
+    """Read the runner's stderr until its first progress line: the job is under way."""
+    assert runner.stderr is not None
+    for line in runner.stderr:
+        lines.append(line)
+        if re.match(r'\s*[0-9.]+ / [0-9.]+ s', line):
+            return
+    raise AssertionError('the runner ended before the job started:\n' + ''.join(lines[-20:]))
+
+
+def finish(proc: subprocess.Popen, lines: list[str], timeout: float) -> int:
+    """The rest of the runner's stderr and its exit code; killed after timeout."""
+    assert proc.stderr is not None
+    timer = threading.Timer(timeout, proc.kill)
+    timer.start()
+    try:
+        lines.extend(proc.stderr)
+        return proc.wait()
+    finally:
+        timer.cancel()
+
+
+def silences(text: str, pattern: str) -> list[float]:
+    return [float(m) for m in re.findall(pattern, text)]
+
+
+def command_bytes() -> int:
+    """CDR size of one axis command as the controllers send it."""
+    return len(serialize_message(joint_state(0, ('x',), effort=(0.0,), sender='x_controller')))
+
+
+def stop(proc: subprocess.Popen, timeout: float = 30.0) -> int:
+    proc.send_signal(signal.SIGINT)
+    return proc.wait(timeout=timeout)
+
+
+@pytest.mark.system
+def test_job_across_two_hosts_equals_offline(hosts: TwoHosts, tmp_path: Path) -> None:
+    plant_log = tmp_path / 'plant.log'
+    with open(plant_log, 'w') as plant_out, open(tmp_path / 'run.out', 'w') as out:
+        plant = start_plant(hosts, plant_out)
+        runner = start_runner(hosts, tmp_path / 'run', out, '--duration', '1', '--compare-offline')
+        lines: list[str] = []
+        code = finish(runner, lines, timeout=600)
+        assert code == 0, ''.join(lines[-30:])
+        assert plant.poll() is None, plant_log.read_text()[-3000:]
+        stop(plant)
+    assert 'plant: activated\n' in lines  # the runner started the job on the other host
+    summary = json.loads((tmp_path / 'run' / 'summary.json').read_text())
+    assert summary['samples'] == 1001
+    assert summary['missing_samples'] == {}
+    # Every sample of every axis: |e_distributed - e_offline| <= 1e-9 m.
+    assert summary['offline_max_difference'] <= 1e-9
+    # The plant is not among the runner's processes: it ran on the other host ...
+    assert 'plant' not in summary['peak_rss_mb']
+    # ... and every command of every step reached it through the link (payload alone).
+    assert hosts.received_by_drive() >= len(AXES) * 1001 * command_bytes()
+
+
+@pytest.mark.system
+def test_link_cut_for_two_seconds_job_resumes_both_sides_report(
+    hosts: TwoHosts, tmp_path: Path
+) -> None:
+    run, plant_log = tmp_path / 'run', tmp_path / 'plant.log'
+    with open(plant_log, 'w') as plant_out, open(tmp_path / 'run.out', 'w') as out:
+        plant = start_plant(hosts, plant_out)
+        runner = start_runner(hosts, run, out, '--duration', '1.5', '--compare-offline')
+        lines: list[str] = []
+        wait_for_progress(runner, lines)
+        hosts.link(up=False)
+        time.sleep(CUT)
+        hosts.link(up=True)
+        code = finish(runner, lines, timeout=600)
+        assert code == 0, ''.join(lines[-30:])
+        assert plant.poll() is None, plant_log.read_text()[-3000:]
+        stop(plant)
+    text = plant_log.read_text()
+    summary = json.loads((run / 'summary.json').read_text())
+    assert summary['missing_samples'] == {}
+    assert summary['offline_max_difference'] <= 1e-9  # lockstep: an outage changes no number
+
+    # Drive host: the step pending at the cut cannot complete while the link is down: it
+    # waited >= CUT (and < CUT + RECOVERY). Before its commands came back, the plant warned
+    # that they were missing, naming the axis, the topic and the controller.
+    plant_lines = text.splitlines()
+    back = [
+        (i, m.group(1), float(m.group(2)))
+        for i, line in enumerate(plant_lines)
+        if (m := re.search(r'axis (\w): commands arriving again after ([0-9.]+) s of', line))
+    ]
+    assert back, text[-3000:]
+    i, axis, waited = max(back, key=lambda b: b[2])
+    assert CUT <= waited < CUT + RECOVERY, text[-3000:]
+    topic = f'/mill/{axis}/joint_command'
+    warning = rf'WARN.*axis {axis}: no command for step \d+ on {topic} from {axis}_controller'
+    assert any(re.search(warning, line) for line in plant_lines[:i]), text[-3000:]
+
+    # Control host: every controller and observer warned that the state from the plant was
+    # silent, and logged the length of the silence when it ended (>= CUT, as above).
+    for axis in AXES:
+        state = f'/mill/{axis}/state'
+        for node in (f'{axis}_controller', f'{axis}_observer'):
+            log = (run / 'logs' / f'{node}.log').read_text()
+            warning = rf'WARN.*nothing on {state} for [0-9.]+ s \(from plant\)'
+            assert re.search(warning, log), log[-2000:]
+            back = silences(log, rf'{state} \(from plant\) back after ([0-9.]+) s of silence')
+            assert back and CUT <= max(back) < CUT + RECOVERY, log[-2000:]
+    # The status sent when an input is back says so (no "nothing on ... for 0.0 s").
+    warned = [p for p in summary['problems'] if 'nothing on' in p]
+    assert warned
+    lengths = [float(x) for p in warned for x in re.findall(r' for ([0-9.]+) s', p)]
+    assert lengths and min(lengths) >= 1.0, warned  # input_warn_time
+
+
+@pytest.mark.system
+def test_link_cut_past_the_timeouts_both_sides_stop_named(hosts: TwoHosts, tmp_path: Path) -> None:
+    run, plant_log = tmp_path / 'run', tmp_path / 'plant.log'
+    timeout = f'{SHORT_TIMEOUT!r}'
+    with open(plant_log, 'w') as plant_out, open(tmp_path / 'run.out', 'w') as out:
+        plant = start_plant(hosts, plant_out, f'lockstep_timeout:={timeout}')
+        runner = start_runner(
+            hosts, run, out, '--duration', '1.5', '-p', f'*.input_timeout={timeout}'
+        )
+        lines: list[str] = []
+        wait_for_progress(runner, lines)
+        hosts.link(up=False)
+        code = finish(runner, lines, timeout=120)
+        plant_code = plant.wait(timeout=120)
+    text = plant_log.read_text()
+    runner_err = ''.join(lines)
+    # Drive host: exit 3, the lockstep timeout naming each command topic still missing for
+    # the step and the controller that publishes it.
+    assert plant_code == 3, text[-3000:]
+    error = [line for line in text.splitlines() if line.startswith('plant_node: error:')]
+    assert len(error) == 1, text[-3000:]
+    assert 'lockstep timeout: no command for t = ' in error[0]
+    assert f'after {SHORT_TIMEOUT:g} s on' in error[0]
+    named = re.findall(r'/mill/(\w)/joint_command \(from (\w+)\)', error[0])
+    assert named, error[0]
+    assert all(who == f'{axis}_controller' for axis, who in named), error[0]
+    # Control host: every controller and observer warned that the state from the plant fell
+    # silent; a node ended with exit code 3 naming an input silent for the timeout, and the
+    # runner ended with exit code 1 naming that node.
+    for axis in AXES:
+        for node in (f'{axis}_controller', f'{axis}_observer'):
+            log = (run / 'logs' / f'{node}.log').read_text()
+            warning = rf'WARN.*nothing on /mill/{axis}/state for [0-9.]+ s \(from plant\)'
+            assert re.search(warning, log), log[-2000:]
+    assert code == 1, runner_err[-3000:]
+    ended = r'run_scenario: error: node (\w+) exited with code 3 before the job ended'
+    m = re.search(ended, runner_err)
+    assert m, runner_err[-3000:]
+    log = (run / 'logs' / f'{m.group(1)}.log').read_text()
+    quiet = silences(log, r'error: nothing on /\S+ for ([0-9.]+) s \(from \w+\)')
+    assert quiet and quiet[0] >= SHORT_TIMEOUT, log[-2000:]
+
+
+# A child that ignores SIGINT in a session of its own: only the sweep of the namespace ends it.
+STUBBORN = """
+import signal, subprocess, sys, time
+child = subprocess.Popen(
+    [sys.executable, '-c', 'import signal, time; signal.signal(signal.SIGINT, signal.SIG_IGN); '
+     'time.sleep(600)'], start_new_session=True)
+print(child.pid, flush=True)
+time.sleep(600)
+"""
+
+
+def test_namespaces_are_removed_when_a_test_fails(ros_env: dict[str, str], tmp_path: Path) -> None:
+    log_path = tmp_path / 'stubborn.log'
+    try:
+        with (
+            pytest.raises(RuntimeError, match='the test failed'),
+            TwoHosts(ros_env) as two,
+            open(log_path, 'w') as log,
+        ):
+            proc = two.start(two.drive, ['-c', STUBBORN], log, False)
+            assert wait_until(lambda: log_path.read_text().strip(), 30)
+            raise RuntimeError('the test failed')
+    except NamespacesUnavailable as exc:
+        pytest.skip(f'network namespaces cannot be created here: {exc}')
+    names = ip('netns', 'list').stdout.split()
+    assert two.drive not in names and two.control not in names
+    assert proc.poll() is not None
+    child = Path(f'/proc/{int(log_path.read_text().split()[0])}/stat')
+
+    def gone() -> bool:  # reaped, or a zombie waiting for init
+        try:
+            return child.read_text().rsplit(')', 1)[1].split()[0] == 'Z'
+        except FileNotFoundError:
+            return True
+
+    assert wait_until(gone, 10)
