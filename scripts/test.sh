@@ -2,7 +2,10 @@
 # Installs everything (scripts/install.sh), checks style and types (ruff, mypy on
 # the packages under src/) and runs the whole test suite: unit tests of every
 # package and system tests that start real ROS 2 processes (on loopback, in
-# private domains). Extra arguments go to pytest.
+# private domains). Extra arguments go to pytest (both runs).
+#
+# The unit tests run on every core (pytest-xdist); the system tests one after the other,
+# since each starts a whole graph of processes that shares the machine's cores.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$root/scripts/install.sh"
@@ -10,4 +13,8 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
 cd "$root"
 "$root/.venv/bin/ruff" check src test
 "$root/.venv/bin/mypy"  # settings and the package list: [tool.mypy] in pyproject.toml
-exec "$root/.venv/bin/python" -m pytest "$@"
+pytest_part() {  # exit code 5: none of the chosen tests is of this part
+    "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
+}
+pytest_part -m 'not system' -n auto "$@"
+pytest_part -m system "$@"

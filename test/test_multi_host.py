@@ -293,14 +293,14 @@ def test_link_cut_for_two_seconds_job_resumes_both_sides_report(
     assert back, text[-3000:]
     i, axis, waited = max(back, key=lambda b: b[2])
     assert CUT <= waited < CUT + RECOVERY, text[-3000:]
-    topic = f'/mill/{axis}/joint_command'
+    topic = f'mill/{axis}/joint_command'
     warning = rf'WARN.*axis {axis}: no command for step \d+ on {topic} from {axis}_controller'
     assert any(re.search(warning, line) for line in plant_lines[:i]), text[-3000:]
 
     # Control host: every controller and observer warned that the state from the plant was
     # silent, and logged the length of the silence when it ended (>= CUT, as above).
     for axis in AXES:
-        state = f'/mill/{axis}/state'
+        state = f'mill/{axis}/state'
         for node in (f'{axis}_controller', f'{axis}_observer'):
             log = (run / 'logs' / f'{node}.log').read_text()
             warning = rf'WARN.*nothing on {state} for [0-9.]+ s \(from plant\)'
@@ -337,7 +337,7 @@ def test_link_cut_past_the_timeouts_both_sides_stop_named(hosts: TwoHosts, tmp_p
     assert len(error) == 1, text[-3000:]
     assert 'lockstep timeout: no command for t = ' in error[0]
     assert f'after {SHORT_TIMEOUT:g} s on' in error[0]
-    named = re.findall(r'/mill/(\w)/joint_command \(from (\w+)\)', error[0])
+    named = re.findall(r'mill/(\w)/joint_command \(from (\w+)\)', error[0])
     assert named, error[0]
     assert all(who == f'{axis}_controller' for axis, who in named), error[0]
     # Control host: every controller and observer warned that the state from the plant fell
@@ -346,14 +346,14 @@ def test_link_cut_past_the_timeouts_both_sides_stop_named(hosts: TwoHosts, tmp_p
     for axis in AXES:
         for node in (f'{axis}_controller', f'{axis}_observer'):
             log = (run / 'logs' / f'{node}.log').read_text()
-            warning = rf'WARN.*nothing on /mill/{axis}/state for [0-9.]+ s \(from plant\)'
+            warning = rf'WARN.*nothing on mill/{axis}/state for [0-9.]+ s \(from plant\)'
             assert re.search(warning, log), log[-2000:]
     assert code == 1, runner_err[-3000:]
     ended = r'run_scenario: error: node (\w+) exited with code 3 before the job ended'
     m = re.search(ended, runner_err)
     assert m, runner_err[-3000:]
     log = (run / 'logs' / f'{m.group(1)}.log').read_text()
-    quiet = silences(log, r'error: nothing on /\S+ for ([0-9.]+) s \(from \w+\)')
+    quiet = silences(log, r'error: nothing on \S+ for ([0-9.]+) s \(from \w+\)')
     assert quiet and quiet[0] >= SHORT_TIMEOUT, log[-2000:]
 
 

@@ -44,8 +44,11 @@ class RunningJob:
 
     def _diagnostics(self, msg: DiagnosticArray) -> None:
         for status in msg.status:
-            if status.name == 'mill_controllers: x switch':
-                self.switches.append({kv.key: kv.value for kv in status.values})
+            record = {kv.key: kv.value for kv in status.values}
+            # One switch is one (law, time, outputs): seen twice, it is one status delivered
+            # twice (seen once in a full run), not a second switch.
+            if status.name == 'mill_controllers: x switch' and record not in self.switches:
+                self.switches.append(record)
 
     def _law_state(self, msg: JointState) -> None:
         self.law_state.update(zip(msg.name, msg.position, strict=True))

@@ -161,7 +161,7 @@ def run(
             graph.check(when)
             if time.monotonic() > clock_check[0]:
                 clock_check[0] = time.monotonic() + 1.0
-                _check_one_clock(monitor, graph, job, env['ROS_DOMAIN_ID'])
+                _check_one_clock(monitor, graph, job, env['ROS_DOMAIN_ID'], external)
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
@@ -341,13 +341,16 @@ def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> Non
         node.destroy_client(client)
 
 
-def _check_one_clock(monitor: Any, graph: Graph, job: Job[Any], domain_id: str) -> None:
+def _check_one_clock(
+    monitor: Any, graph: Graph, job: Job[Any], domain_id: str, external: frozenset[str]
+) -> None:
     """RunError when a clock other than this run's own publishes on its /clock.
 
     Two simulations in one domain would each step to the other's clock ticks. The check
     is repeated while the run goes on, so that two runs started together are caught too.
+    An external clock node (a plant on another host) counts as this run's.
     """
-    ours = sum(1 for n in job.clock_nodes if n.name in graph.procs)
+    ours = sum(1 for n in job.clock_nodes if n.name in graph.procs or n.name in external)
     clock = monitor.resolve_topic_name(topics.CLOCK)
     found = monitor.count_publishers(clock)
     if found > ours:

@@ -434,6 +434,17 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
         ),
         *input_watch_specs(),
         (
+            'min_subscribers',
+            ParamSpec(
+                'min_subscribers',
+                0,
+                'lockstep: readers the output topic needs before the node answers a step (the '
+                'plant offers it again), so that the first outputs of a node started mid-job '
+                'reach every reader; run_scenario sets the count of its graph',
+                non_negative_int,
+            ),
+        ),
+        (
             'command_delay',
             ParamSpec(
                 'command_delay',

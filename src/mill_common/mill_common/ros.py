@@ -96,6 +96,20 @@ def take_serialized(
     return node.create_subscription(msg_type, topic, take, qos, raw=True)
 
 
+def readers_ready(node: Node, publisher: Any, need: int) -> bool:
+    """Whether `publisher` has `need` subscribers; else log (once a second) that the node
+    waits for them. A lockstep node started mid-job answers the plant's re-offered step only
+    then, so that its first outputs are not lost to a reader that has not matched it yet."""
+    have = publisher.get_subscription_count()
+    if have >= need:
+        return True
+    node.get_logger().info(
+        f'waiting for {need} readers of {publisher.topic_name} ({have} so far)',
+        throttle_duration_sec=1.0,
+    )
+    return False
+
+
 def first(values: Sequence[float], what: str) -> float:
     """The single value of a one-joint message field; ValueError if it is missing."""
     if len(values) < 1:

@@ -37,6 +37,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from datetime import datetime, timezone
 from functools import partial
 from typing import Any
 
@@ -60,6 +61,7 @@ from mill_common.ros import (
     from_duration,
     from_stamp,
     joint_state_bytes,
+    readers_ready,
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
@@ -297,6 +299,12 @@ class AxisControllerNode(Node):
             self.guard.heard(topic)
         if not samples:
             return
+        if (
+            slot == CLOCK_INPUT
+            and not self.realtime
+            and not readers_ready(self, self._pub, self.params.values['min_subscribers'])
+        ):
+            return  # the plant offers the step again
         self._seen.add(slot)
         repeat = not self.realtime and stamps.is_repeat(ns)
         stamps.accept(ns)
@@ -405,8 +413,13 @@ class AxisControllerNode(Node):
     def _trip_text(self) -> str:
         assert self._trip is not None and self._trip.trip is not None
         trip = self._trip.trip
+        if self.realtime:  # a stamp on the system clock: the time of day says more
+            when = datetime.fromtimestamp(trip.time, timezone.utc).strftime('%H:%M:%S.%f')[:-3]
+            at = f'at {when} UTC'
+        else:
+            at = f'at t = {trip.time:.4f} s'
         return (
-            f'axis {self.axis}: following-error trip at t = {trip.time:.4f} s, '
+            f'axis {self.axis}: following-error trip {at}, '
             f'|e| = {1e3 * abs(trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked '
             '(reset: ~/reset_trip or set following_error_limit)'
         )

@@ -31,7 +31,7 @@ from mill_common.checks import Rejected, StampCheck, ahead, joint_values, owner_
 from mill_common.codec import decode_joint_state
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
+from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, readers_ready, take_serialized
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -165,6 +165,10 @@ class ObserverNode(Node):
         if got is None:
             return
         self.guard.heard(self._topics['state'])
+        if not self.realtime and not readers_ready(
+            self, self._pub, self.params.values['min_subscribers']
+        ):
+            return  # the plant offers the step again
         self._stamps['state'].accept(got[0])
         self._states[got[0]] = got[1]
         self._advance()

@@ -403,6 +403,14 @@ class AxisJob(Job[RunRecord]):
         # observer, monitor), so that the first samples reach the record.
         if monitored:
             self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 3)
+            # A node started again mid-job (--respawn) answers only once the monitor hears it
+            # too: the estimate goes to the controller and the monitor, the command to the
+            # plant and the observer.
+            readers = {'observer_node': 2, 'axis_controller': 2}
+            for node in self.scenario.nodes:
+                if (node.package, node.executable) in AXIS_NODES:
+                    wanted = self.scenario.overrides.setdefault(node.name, {})
+                    wanted.setdefault('min_subscribers', readers[node.executable])
 
     def upstream_topics(self) -> list[str]:
         # The monitor cannot see from the plant whether an observer's estimates reach it:
