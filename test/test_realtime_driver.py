@@ -29,6 +29,19 @@ import sys
 
 import pytest
 
+PERIOD = 0.01  # [s]
+OMEGA_O = 30.0  # [rad/s]
+# The driver's machine in the controllers' and observers' nominal model x'' = b tau + xi:
+# b = 1 / (lead * mass), its lead and carriage masses (no screw inertia) as below.
+LEAD = 0.003175 / (2 * math.pi)
+MASS = {'x': 1.3 * 94.4, 'y': 1.3 * 70.39, 'z': 1.3 * 86.14}
+INPUT_GAINS = [
+    arg
+    for a, m in MASS.items()
+    for node in ('controller', 'observer')
+    for arg in ('-p', f'{a}_{node}.input_gain={1.0 / (LEAD * m)!r}')
+]
+
 DRIVER = r"""
 import math, sys, time
 import rclpy
@@ -36,7 +49,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
-T = 0.005                                    # servo period [s]
+T = float(sys.argv[1])                       # servo period [s]
 AXES = ('x', 'y', 'z')
 # Our own machine: Table 1 carriages, 30 % heavier, 3x friction, 20 N load, 3.175 mm pitch.
 LEAD = 0.003175 / (2 * math.pi)
@@ -118,7 +131,7 @@ def test_a_driver_from_the_contract_alone_tracks_the_slotting_path(ros_env, tmp_
     script.write_text(DRIVER)
     assert 'mill_plant' not in DRIVER
     driver = subprocess.Popen(
-        [sys.executable, str(script)],
+        [sys.executable, str(script), repr(PERIOD)],
         env=ros_env,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
@@ -130,10 +143,16 @@ def test_a_driver_from_the_contract_alone_tracks_the_slotting_path(ros_env, tmp_
             [
                 *(sys.executable, '-m', 'mill_bringup.runner', 'slotting'),
                 *('--timing', 'realtime', '--external', 'plant', '--duration', '4'),
-                *('-p', '*.sample_period=0.005'),
+                *('-p', f'*.sample_period={PERIOD!r}'),
                 # The papers' observer poles (700 rad/s) are for 1 kHz; at 200 Hz, 100 rad/s.
-                *('-p', '*_observer.gpi.omega_o=100.0', '-p', '*_observer.gpi.pole_o=100.0'),
+                *(
+                    '-p',
+                    f'*_observer.gpi.omega_o={OMEGA_O!r}',
+                    '-p',
+                    f'*_observer.gpi.pole_o={OMEGA_O!r}',
+                ),
                 *('-p', 'trajectory.approach.max_distance=0.002'),
+                *INPUT_GAINS,
                 *('--output', str(out), '--quiet'),
             ],
             env=ros_env,

@@ -97,6 +97,7 @@ class DriveNode(LifecycleNode):
         self._foreign_messages = 0
         self._faults: dict[str, int] = {}
         self._nonfinite: dict[str, int] = {}
+        self._brake_requested: set[str] = set()  # axes whose last command was not finite
         self._saturations: dict[str, int] = {}
         self._wall_start = time.monotonic()
         self._next_status = 0.0
@@ -246,14 +247,20 @@ class DriveNode(LifecycleNode):
             self._drop(topic, value, msg.header.frame_id)  # no joint, no effort: malformed
             return
         if isinstance(value, Rejected):
-            # From the owner, for the step it must answer: no valid command, so brake.
+            # From the owner, for the step it must answer: no valid command, so brake. Said
+            # once when it starts (a tripped controller asks for it every sample).
             self._nonfinite[axis] += 1
-            self._report_axis(
-                axis, DiagnosticStatus.ERROR, f'invalid command ({value.reason}): braked'
-            )
+            if axis not in self._brake_requested:
+                self._brake_requested.add(axis)
+                self._report_axis(
+                    axis, DiagnosticStatus.ERROR, f'invalid command ({value.reason}): braked'
+                )
             effort = math.nan
         else:
             effort = value[0]
+            if axis in self._brake_requested:
+                self._brake_requested.discard(axis)
+                self._report_axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
         self._stamps[axis].accept(ns)
         self.table.offer(axis, ns, effort, time.time_ns() if self.timing == 'realtime' else None)
         if self.timing == 'lockstep' and self.table.complete(self._k * self._dt_ns):
