@@ -87,6 +87,12 @@ def node_kind(package: str, executable: str) -> NodeKind:
     return kind
 
 
+def is_lifecycle(package: str, executable: str) -> bool:
+    """Whether a container builds this executable's node as a managed (lifecycle) node."""
+    kind = NODE_FACTORIES.get((package, executable))
+    return kind is not None and kind.lifecycle
+
+
 def factory(kind: NodeKind) -> Callable[..., Node]:
     module, _sep, name = kind.factory.partition(':')
     return getattr(importlib.import_module(module), name)
