@@ -125,6 +125,7 @@ def run(
     plan = processes(scen, layout, external, alone=clock_names - managed)
     # A clock node in a container waits for `activate`, sent once the upstream is heard.
     held = [n for p in plan if p.container for n in p.nodes if n.name in clock_names]
+    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in held}  # put back at the end
     for node in held:
         scen.overrides.setdefault(node.name, {})['autostart'] = False
     first = [p for p in plan if p.container or not clock_names & set(p.node_names)]
@@ -255,6 +256,8 @@ def run(
         progress.close()
         release_node(executor, monitor)
         rclpy.try_shutdown()
+        for name, overrides in given.items():  # the next run of the scenario may differ
+            scen.overrides[name] = overrides
         for sig, handler in previous.items():
             signal.signal(sig, handler)
 
