@@ -87,3 +87,61 @@ def test_paper_scenario_runs_equal_offline(ros_env, tmp_path, name, variant, dur
     assert summary['samples'] == samples
     assert summary['missing_samples'] == {}
     assert summary['offline_max_difference'] <= 1e-9
+
+
+# (layout, processes): every node in one container; the observer and controller of each
+# axis in one (plant and trajectory alone). The runner is one more process.
+LAYOUT_RUNS = [
+    ('single', {'container', 'runner'}),
+    ('per_axis', {'plant', 'trajectory', 'x_axis', 'y_axis', 'z_axis', 'runner'}),
+]
+
+
+@pytest.mark.system
+@pytest.mark.parametrize(('layout', 'processes'), LAYOUT_RUNS)
+def test_layouts_run_equals_offline_simulation(ros_env, tmp_path, layout, processes):
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'mill_bringup.runner',
+            'slotting',
+            '--duration',
+            '0.3',
+            '--layout',
+            layout,
+            '--compare-offline',
+            '--quiet',
+            '--output',
+            str(out),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'summary.json').read_text())
+    assert summary['samples'] == 301  # t = 0 .. 0.3 s at 1 kHz, the start included
+    assert summary['missing_samples'] == {}
+    # Same steps in the same order as offline, whichever process a node runs in: the
+    # lockstep record is bit-identical (no tolerance: the arithmetic is the same).
+    assert summary['offline_max_difference'] == 0.0
+    assert set(summary['peak_rss_mb']) == processes
+    logs = {p.stem for p in (out / 'logs').glob('*.log')}
+    assert logs == processes - {'runner'}
+
+
+def test_bad_layout_is_refused_in_one_line(ros_env, tmp_path):
+    proc = subprocess.run(
+        [sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--layout', 'pairs'],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 1
+    assert proc.stderr == (
+        "run_scenario: error: layout must be one of processes, per_axis, single, got 'pairs'\n"
+    )

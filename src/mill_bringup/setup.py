@@ -27,6 +27,7 @@ setup(
             'benchmark = mill_bringup.benchmark:main',
             'report = mill_bringup.report.cli:main',
             'job_watch = mill_bringup.job_watch:main',
+            'mill_container = mill_bringup.container:main',
         ],
     },
 )

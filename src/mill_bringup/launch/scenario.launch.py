@@ -3,12 +3,15 @@
     ros2 launch mill_bringup scenario.launch.py scenario:=slotting
     ros2 launch mill_bringup scenario.launch.py scenario:=slotting namespace:=machine2 \
         params_file:=my_gains.yaml timing:=lockstep log_level:=warn
+    ros2 launch mill_bringup scenario.launch.py scenario:=slotting layout:=single
     ros2 launch mill_bringup scenario.launch.py --show-args
 
 What it starts is decided by mill_bringup.launch_plan (tested without `launch`): the
 scenario file's nodes, each with its merged parameters, in the namespace, and the
-job_watch node. The node that clocks the job (plant or force process) is required: when it
-exits by itself the launch ends with its exit code. When the trajectory reports the job
+job_watch node; with a layout other than processes, the nodes it puts together run in one
+mill_container process each (they keep their names, parameters and topics). The node
+that clocks the job (plant or force process), or the container holding it, is required:
+when it exits by itself the launch ends with its exit code. When the trajectory reports the job
 done, job_watch exits and the launch ends (code 0). Ctrl-C ends every node.
 run_scenario adds the results summary; this launch file only runs the graph.
 """
@@ -57,7 +60,10 @@ def _graph(context):
         node = Node(
             package=spec.package,
             executable=spec.executable,
-            name=spec.name,
+            # A container gets no node name (it would rename every node in it): its nodes,
+            # given as arguments, keep the scenario's names.
+            name=None if spec.nodes else spec.name,
+            arguments=list(spec.nodes),
             namespace=spec.namespace,
             parameters=spec.parameters,
             remappings=spec.remappings,

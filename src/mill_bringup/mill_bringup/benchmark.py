@@ -1,7 +1,8 @@
-"""Benchmark: speed of the 8-process lockstep job and of the transport under it.
+"""Benchmark: speed of the lockstep job and of the transport under it.
 
     benchmark                    # 10 s of the slotting job + 5000 ping-pong round trips
     benchmark --duration 53.334  # the whole job
+    benchmark --layouts processes,per_axis,single   # the same job in each process layout
     benchmark --record --repeat 3                 # cost of recording every topic
     benchmark --record --duration 53.334 --repeat 1 --round-trips 0
     benchmark --cores            # the algorithm cores alone, offline, µs per call
@@ -11,6 +12,10 @@ the scenario's sample rate, the peak RSS of every process of the graph, and,
 in the same run, the round-trip rate of a plain rclpy ping-pong between two
 processes (same message type, QoS and executor): the most any lockstep loop
 that crosses processes could reach on this machine.
+
+--layout runs the nodes in another process layout (mill_bringup.layout: processes,
+per_axis, single); --layouts runs the job once in each layout given, one after the other,
+and prints steps per second, CPU per step and peak RSS of each.
 
 With --record, the job runs --repeat times without and --repeat times with
 recording every topic to a rosbag2 bag (`run_scenario --record`), alternating,
@@ -168,6 +173,33 @@ def time_cores(name: str, duration: float) -> int:
     return 0
 
 
+def layouts_of(args: argparse.Namespace, scen: scenario_mod.Scenario) -> list[str]:
+    """The layouts to run, checked (ScenarioError, one line, for a bad one)."""
+    if args.layouts is not None:
+        names = [n.strip() for n in args.layouts.split(',')]
+    else:
+        names = [args.layout or scen.layout]
+    for name in names:
+        scenario_mod.check_layout(name)
+    if len(set(names)) != len(names):
+        raise scenario_mod.ScenarioError(f'--layouts names a layout twice: {args.layouts}')
+    if args.record and len(names) > 1:
+        raise scenario_mod.ScenarioError('--record measures one layout; give --layout')
+    return names
+
+
+def layout_figures(result: RunResult) -> dict:
+    return {
+        'processes': len(result.peak_rss_mb) - 1,  # the runner is not one of the graph
+        'steps_per_second': result.steps_per_second,
+        'real_time_factor': result.real_time_factor,
+        'wall_time_s': result.wall_time,
+        'cpu_ms_per_step': result.cpu_ms_per_step,
+        'peak_rss_mb': result.peak_rss_mb,
+        'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
+    }
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='benchmark',
@@ -188,6 +220,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         '--repeat', type=int, default=3, help='runs with and without recording (--record)'
     )
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument(
+        '--layout',
+        metavar='LAYOUT',
+        help="process layout of the nodes: processes, per_axis or single (default: the scenario's)",
+    )
+    group.add_argument(
+        '--layouts',
+        metavar='A,B,...',
+        help='run the job once in each of these layouts, e.g. processes,per_axis,single',
+    )
     parser.add_argument(
         '--cores',
         action='store_true',
@@ -202,6 +245,8 @@ def main(argv: list[str] | None = None) -> int:
     env = ros_environment()
     recording = None
     try:
+        scen = scenario_mod.load(args.scenario)
+        layouts = layouts_of(args, scen)  # checked before anything runs
         pp = None
         if args.round_trips > 0:
             print(
@@ -209,18 +254,24 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
             )
             pp = measure_pingpong(args.round_trips, env)
-        scen = scenario_mod.load(args.scenario)
         for node in scen.nodes_of('mill_trajectory'):
             scen.add_override(f'{node.name}.duration={args.duration!r}')
-        print(
-            f'{scen.name}: {args.duration:g} s of machine time in {len(scen.nodes)} processes ...',
-            file=sys.stderr,
-        )
+        results: dict[str, RunResult] = {}
         with tempfile.TemporaryDirectory() as tmp:
-            if args.record:
-                result, recording = measure_recording(scen, Path(tmp), env, max(1, args.repeat))
-            else:
-                result = run(job_for(scen), Path(tmp), quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+            for layout in layouts:
+                scen.layout = layout
+                print(
+                    f'{scen.name}: {args.duration:g} s of machine time, layout {layout} ...',
+                    file=sys.stderr,
+                )
+                run_dir = Path(tmp) / layout
+                if args.record:
+                    result, recording = measure_recording(scen, run_dir, env, max(1, args.repeat))
+                else:
+                    job = job_for(scen)
+                    result = run(job, run_dir, quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+                results[layout] = result
+        result = results[layouts[0]]
     except (scenario_mod.ScenarioError, RunError, TimeoutError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
@@ -237,6 +288,8 @@ def main(argv: list[str] | None = None) -> int:
         'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
         'cpu_count': os.cpu_count(),
         'load_average_1min': os.getloadavg()[0],
+        'layout': layouts[0],
+        'layouts': {name: layout_figures(r) for name, r in results.items()},
     }
     if pp is not None:
         figures.update(
@@ -249,14 +302,16 @@ def main(argv: list[str] | None = None) -> int:
         )
     if recording is not None:
         figures['recording'] = recording
-    rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(result.peak_rss_mb.items()))
-    lines = [
-        f'lockstep job ({len(scen.nodes)} processes, {rate:g} Hz, executor {executor}, '
-        f'{os.cpu_count()} cores):',
-        f'  {result.steps_per_second:8.0f} steps/s   real-time factor '
-        f'{result.real_time_factor:.2f}   ({result.sim_time:g} s machine time in '
-        f'{result.wall_time:.1f} s, {result.cpu_ms_per_step:.2f} ms CPU per step)',
-    ]
+    lines = [f'lockstep job ({rate:g} Hz, executor {executor}, {os.cpu_count()} cores):']
+    for name, r in results.items():
+        f = layout_figures(r)
+        lines.append(
+            f'  layout {name:<9} {f["processes"]:2d} process{"es" if f["processes"] > 1 else "  "}'
+            f'  {r.steps_per_second:6.0f} '
+            f'steps/s  real-time factor {r.real_time_factor:.2f}  {r.cpu_ms_per_step:.2f} ms '
+            f'CPU per step  peak RSS {f["peak_rss_total_mb"]:.0f} MB  ({r.sim_time:g} s '
+            f'machine time in {r.wall_time:.1f} s)'
+        )
     if pp is not None:
         lines += [
             'transport limit, rclpy ping-pong between two processes:',
@@ -264,7 +319,9 @@ def main(argv: list[str] | None = None) -> int:
             f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
             f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip',
         ]
-    lines.append(f'peak RSS of the graph: {figures["peak_rss_total_mb"]:.0f} MB ({rss})')
+    for name, r in results.items():
+        rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(r.peak_rss_mb.items()))
+        lines.append(f'peak RSS, layout {name}: {rss} MB')
     if recording is not None:
         rec = recording
         lines += [

@@ -1,13 +1,16 @@
 """The node processes of a scenario: launch, supervise, stop; and the progress display.
 
-Each node runs as `ros2 run` would start it (`python -m MODULE --ros-args -r __node:=NAME
-[-r __ns:=NAMESPACE] --params-file SCENARIO --params-file PARAMETERS`), in its own session,
-with its output in RUN_DIR/logs/NAME.log. RUN_DIR/parameters.yaml holds every node's values
-with the overrides, keyed `/**/NAME` so that they apply under the graph's namespace too.
-A node dies with the process that started it, whatever ends that process (Linux
-PR_SET_PDEATHSIG, set in the child before exec; a child whose parent is already gone by then
-ends at once): a killed runner never leaves a graph running on its own. The signal follows
-the thread that started the node: launch from the main thread.
+A node alone in its process runs as `ros2 run` would start it (`python -m MODULE --ros-args
+-r __node:=NAME [-r __ns:=NAMESPACE] --params-file SCENARIO --params-file PARAMETERS`); the
+nodes a layout puts together (mill_bringup.layout) run in one container process
+(`python -m mill_bringup.container NAME ... --ros-args ...`, the same arguments). Each
+process runs in its own session, with its output in RUN_DIR/logs/PROCESS.log.
+RUN_DIR/parameters.yaml holds every node's values with the overrides, keyed `/**/NAME` so
+that they apply under the graph's namespace too. A process dies with the one that started
+it, whatever ends that process (Linux PR_SET_PDEATHSIG, set in the child before exec; a
+child whose parent is already gone by then ends at once): a killed runner never leaves a
+graph running on its own. The signal follows the thread that started the process: launch
+from the main thread.
 """
 
 from __future__ import annotations
@@ -24,9 +27,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from mill_bringup.scenario import NodeLaunch, Scenario, ScenarioError, dump_parameters
+from mill_bringup.layout import Process
+from mill_bringup.scenario import Scenario, ScenarioError, dump_parameters
 
 PR_SET_PDEATHSIG = 1
+
+
+CONTAINER_MODULE = 'mill_bringup.container'
 
 
 class GraphError(RuntimeError):
@@ -73,7 +80,7 @@ def _die_with_parent(parent: int) -> None:
 
 
 class Graph:
-    """The scenario's node processes."""
+    """The scenario's processes (a node alone, or a container of several), keyed by name."""
 
     def __init__(
         self,
@@ -85,7 +92,8 @@ class Graph:
     ) -> None:
         self.scen = scen
         self.procs: dict[str, subprocess.Popen[bytes]] = {}
-        # Nodes started again when they die (ros2 launch's respawn), up to max_restarts each.
+        self.processes: dict[str, Process] = {}
+        # Processes started again when they die (ros2 launch's respawn), up to max_restarts.
         self.respawn = set(respawn)
         self.max_restarts = max_restarts
         self.restarts: dict[str, int] = {}
@@ -96,29 +104,45 @@ class Graph:
         self._parameters = run_dir / 'parameters.yaml'
         self._env = env
 
-    def launch(self, nodes: Iterable[NodeLaunch]) -> None:
-        """Start these nodes of the scenario, each in its own process."""
-        # Written at each launch: the job may have adjusted the scenario since the last one.
-        self._parameters.write_text(dump_parameters(self.scen.node_parameters()))
-        remaps = [arg for rule in self.scen.remappings() for arg in ('-r', rule)]
-        for node in nodes:
-            cmd = [
-                sys.executable,
-                '-m',
+    def node_names(self) -> set[str]:
+        """The nodes of every process launched."""
+        return {name for p in self.processes.values() for name in p.node_names}
+
+    def command(self, process: Process) -> list[str]:
+        """How this process is started: a node's module, or the container with its nodes."""
+        if process.container:
+            start = [CONTAINER_MODULE, *process.node_names, '--ros-args']
+        else:
+            (node,) = process.nodes
+            start = [
                 module_of(node.package, node.executable),
                 '--ros-args',
                 '-r',
                 f'__node:={node.name}',
-                *remaps,
-                '--params-file',
-                str(self.scen.path),
-                '--params-file',
-                str(self._parameters),
             ]
-            again = node.name in self.procs
-            self.logs[node.name] = self._log_dir / f'{node.name}.log'
-            with open(self.logs[node.name], 'a' if again else 'w') as log:
-                self.procs[node.name] = subprocess.Popen(
+        remaps = [arg for rule in self.scen.remappings() for arg in ('-r', rule)]
+        return [
+            sys.executable,
+            '-m',
+            *start,
+            *remaps,
+            '--params-file',
+            str(self.scen.path),
+            '--params-file',
+            str(self._parameters),
+        ]
+
+    def launch(self, processes: Iterable[Process]) -> None:
+        """Start these processes of the scenario's nodes."""
+        # Written at each launch: the job may have adjusted the scenario since the last one.
+        self._parameters.write_text(dump_parameters(self.scen.node_parameters()))
+        for process in processes:
+            cmd = self.command(process)
+            again = process.name in self.procs
+            self.processes[process.name] = process
+            self.logs[process.name] = self._log_dir / f'{process.name}.log'
+            with open(self.logs[process.name], 'a' if again else 'w') as log:
+                self.procs[process.name] = subprocess.Popen(
                     cmd,
                     stdout=log,
                     stderr=subprocess.STDOUT,
@@ -130,16 +154,27 @@ class Graph:
     def exited(self) -> dict[str, int]:
         return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
 
+    def what(self, name: str) -> str:
+        """A process as messages name it: `node NAME`, or `process NAME (nodes A, B)`."""
+        process = self.processes[name]
+        if not process.container:
+            return f'node {name}'
+        return f'process {name} (nodes {", ".join(process.node_names)})'
+
     def check(self, when: str) -> None:
-        """Start a respawned node again; GraphError naming any other node that has exited."""
+        """Start a respawned process again; GraphError naming any other one that has exited."""
         for name, code in self.exited().items():
             count = self.restarts.get(name, 0)
             if name in self.respawn and count < self.max_restarts:
                 self.restarts[name] = count + 1
-                self.notes.append(f'node {name} exited with code {code} {when}: started again')
-                self.launch([self.scen.node(name)])
+                self.notes.append(
+                    f'{self.what(name)} exited with code {code} {when}: started again'
+                )
+                self.launch([self.processes[name]])
                 continue
-            raise GraphError(f'node {name} exited with code {code} {when}:\n' + self.log_tail(name))
+            raise GraphError(
+                f'{self.what(name)} exited with code {code} {when}:\n' + self.log_tail(name)
+            )
 
     def cpu(self) -> float:
         """CPU seconds used so far by the node processes and this process."""

@@ -10,7 +10,10 @@ tested here without a ROS install that has `launch`:
   `/**`, `NAME`, `/NAME` or `/**/NAME` and must name nodes of the scenario;
 - timing: `lockstep` or `realtime`, given to every node as its `timing` parameter (empty:
   what the scenario says);
-- log_level: every node's `--log-level`.
+- log_level: every node's `--log-level`;
+- layout: which nodes share a process (mill_bringup.layout: processes, per_axis, single;
+  empty: what the scenario says). Nodes that share one run in `mill_container`, which gets
+  the same namespace, parameter file and arguments; each node keeps its name.
 
 Every node gets one parameter file (written by `write_parameters`) with its merged values
 keyed `/**/NAME`, so they apply under the namespace whatever the keys of the scenario and
@@ -26,10 +29,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mill_bringup.layout import Process
+from mill_bringup.layout import processes as layout_processes
 from mill_bringup.scenario import (
+    LAYOUTS,
     NodeLaunch,
     Scenario,
     ScenarioError,
+    check_layout,
     dump_parameters,
     load,
     parse_yaml,
@@ -74,21 +81,31 @@ ARGUMENTS = (
         "lockstep or realtime: every node's timing parameter; empty: the scenario's",
     ),
     Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
+    Argument(
+        'layout',
+        '',
+        'which nodes share a process: ' + ', '.join(LAYOUTS) + "; empty: the scenario's",
+    ),
 )
+# What runs the nodes a layout puts together (mill_bringup.container).
+CONTAINER_PACKAGE = 'mill_bringup'
+CONTAINER_EXECUTABLE = 'mill_container'
 
 
 @dataclass(frozen=True)
 class NodePlan:
-    """One node to start: what launch_ros.actions.Node gets."""
+    """One process to start: what launch_ros.actions.Node gets. A container (nodes not
+    empty) is started without a node name: its nodes, given as arguments, keep theirs."""
 
     package: str
     executable: str
-    name: str
+    name: str  # the node's name; for a container, the process's
     namespace: str
     parameters: list[str]  # parameter files, in order
     remappings: list[tuple[str, str]]
     ros_arguments: list[str]
     required: bool  # its exit ends the launch
+    nodes: tuple[str, ...] = ()  # a container's nodes
 
 
 @dataclass
@@ -133,6 +150,7 @@ def plan(
     params_file: str = '',
     timing: str = '',
     log_level: str = 'info',
+    layout: str = '',
 ) -> Plan:
     """The nodes a launch of this scenario starts; ScenarioError (one line) for bad input."""
     from mill_bringup.jobs.registry import job_for
@@ -157,17 +175,20 @@ def plan(
     if scen.private_clock and scen.namespace != topics.ROOT:
         remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
     out = Plan(scen, parameters=scen.node_parameters())
-    for node in [*scen.nodes, JOB_WATCH]:
+    processes = layout_processes(scen, check_layout(layout) if layout else scen.layout)
+    for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
+        first = process.nodes[0]
         out.nodes.append(
             NodePlan(
-                package=node.package,
-                executable=node.executable,
-                name=node.name,
+                package=CONTAINER_PACKAGE if process.container else first.package,
+                executable=CONTAINER_EXECUTABLE if process.container else first.executable,
+                name=process.name,
                 namespace=scen.namespace,
                 parameters=[],  # filled by write_parameters
                 remappings=list(remappings),
                 ros_arguments=['--log-level', log_level],
-                required=node.name in clocks or node is JOB_WATCH,
+                required=bool(clocks & set(process.node_names)) or first is JOB_WATCH,
+                nodes=tuple(process.node_names) if process.container else (),
             )
         )
     return out

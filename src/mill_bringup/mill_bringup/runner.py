@@ -35,10 +35,12 @@ from mill_common.env import ros_environment
 
 from mill_bringup import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
+from mill_bringup.container import is_lifecycle
 from mill_bringup.graph import Graph, GraphError, Progress
 from mill_bringup.jobs.base import Job, simulate
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.layout import processes
+from mill_bringup.scenario import Scenario, ScenarioError, check_layout
 from mill_common import topics
 
 
@@ -97,6 +99,7 @@ def run(
     record_bag: Path | None = None,
     respawn: bool = False,
     external: frozenset[str] = frozenset(),
+    layout: str | None = None,
 ) -> RunResult:
     """Run the job across processes; the record holds samples 0 .. job.samples − 1.
 
@@ -105,12 +108,29 @@ def run(
     external: nodes of the scenario that run elsewhere (a hardware driver, a plant on
     another host): neither launched nor supervised here; an external clock node with the
     lifecycle services is activated where it would have been launched.
+    layout: which nodes share a process (mill_bringup.layout; None: the scenario's). A
+    clock node that is a lifecycle node (the drive) can share one: it then waits for the
+    runner to activate it where it would have been launched. Another clock node keeps a
+    process of its own, started last, so that it cannot start before the monitor hears the
+    nodes upstream. Respawn starts a process again whose nodes are none of the clocks.
     """
     unknown = sorted(external - {n.name for n in job.scenario.nodes})
     if unknown:
         raise RunError(f'--external: scenario {job.scenario.name} has no node {unknown[0]!r}')
     scen = job.scenario
+    layout = check_layout(scen.layout if layout is None else layout)
     job.prepare_graph(monitored=True)
+    clock_names = {n.name for n in job.clock_nodes}
+    managed = {n.name for n in job.clock_nodes if is_lifecycle(n.package, n.executable)}
+    plan = processes(scen, layout, external, alone=clock_names - managed)
+    # A clock node in a container waits for `activate`, sent once the upstream is heard.
+    held = [n for p in plan if p.container for n in p.nodes if n.name in clock_names]
+    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in held}  # put back at the end
+    for node in held:
+        scen.overrides.setdefault(node.name, {})['autostart'] = False
+    first = [p for p in plan if p.container or not clock_names & set(p.node_names)]
+    last = [p for p in plan if p not in first]
+    restartable = [p.name for p in plan if not clock_names & set(p.node_names)]
     env = ros_environment(domain_id=domain_id)
     os.environ.update(env)
     import rclpy
@@ -144,9 +164,7 @@ def run(
         )
         executor = make_executor()
         executor.add_node(monitor)
-        clocks = [n for n in job.clock_nodes if n.name not in external]
-        others = [n.name for n in scen.nodes if n not in job.clock_nodes and n.name not in external]
-        graph = Graph(scen, run_dir, env, respawn=others if respawn else ())
+        graph = Graph(scen, run_dir, env, respawn=restartable if respawn else ())
 
         clock_check = [0.0]
 
@@ -165,7 +183,7 @@ def run(
 
         # The clock node starts last, once the monitor has matched the others' publishers:
         # it cannot see whether their messages reach the monitor.
-        graph.launch([scen.node(n) for n in others])
+        graph.launch(first)
         upstream = job.upstream_topics()
         deadline = time.monotonic() + startup_timeout
         while any(monitor.count_publishers(t) < 1 for t in upstream):
@@ -173,9 +191,10 @@ def run(
                 silent = [t for t in upstream if monitor.count_publishers(t) < 1]
                 raise RunError(f'no publisher appeared on {", ".join(silent)}')
             spin('before the job started')
-        graph.launch(clocks)
+        graph.launch(last)
         for node in job.clock_nodes:
-            if node.name in external:  # started elsewhere, perhaps waiting to be activated
+            # started elsewhere, perhaps waiting to be activated; or held in a container
+            if node.name in external or node in held:
                 activate(monitor, executor, node.name, progress)
         progress.note(
             f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}); '
@@ -237,6 +256,8 @@ def run(
         progress.close()
         release_node(executor, monitor)
         rclpy.try_shutdown()
+        for name, overrides in given.items():  # the next run of the scenario may differ
+            scen.overrides[name] = overrides
         for sig, handler in previous.items():
             signal.signal(sig, handler)
 
@@ -350,7 +371,7 @@ def _check_one_clock(
     is repeated while the run goes on, so that two runs started together are caught too.
     An external clock node (a plant on another host) counts as this run's.
     """
-    ours = sum(1 for n in job.clock_nodes if n.name in graph.procs or n.name in external)
+    ours = sum(1 for n in job.clock_nodes if n.name in graph.node_names() or n.name in external)
     clock = monitor.resolve_topic_name(topics.CLOCK)
     found = monitor.count_publishers(clock)
     if found > ours:
@@ -406,7 +427,8 @@ def _apply_namespace(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='run_scenario',
-        description='Start every node of a scenario in its own process, run the job in '
+        description='Start every node of a scenario (each in its own process, or as --layout '
+        'says), run the job in '
         'lockstep and print its results.',
     )
     add_scenario_arguments(parser)
@@ -456,6 +478,13 @@ def main(argv: list[str] | None = None) -> int:
         action='store_true',
         help='start a node that dies again (not the plant); it rejoins the running job',
     )
+    parser.add_argument(
+        '--layout',
+        metavar='LAYOUT',
+        help='which nodes share a process: processes (each its own), per_axis (observer and '
+        "controller of an axis together), single (all in one); default: the scenario's "
+        '(mill_scenario: layout:), else processes',
+    )
     args = parser.parse_args(argv)
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
@@ -463,6 +492,8 @@ def main(argv: list[str] | None = None) -> int:
     intact = True
     try:
         scen, runs = load_scenario(args)
+        if args.layout is not None:
+            check_layout(args.layout)
         _apply_namespace(scen, runs, args.namespace, args.private_clock)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
         if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
@@ -496,6 +527,7 @@ def main(argv: list[str] | None = None) -> int:
                 record_bag=bags[name],
                 respawn=args.respawn,
                 external=frozenset(args.external),
+                layout=args.layout,
             )
             records[name] = result.record
             intact = intact and result.intact

@@ -34,6 +34,15 @@ from mill_common import topics
 
 SCENARIO_KEY = 'mill_scenario'
 SHARED_KEY = '/**'  # what a parameter file gives every node
+# Which nodes share a process (mill_bringup.layout); `layout:` in mill_scenario, --layout.
+LAYOUTS = ('processes', 'per_axis', 'single')
+
+
+def check_layout(value: object) -> str:
+    """The layout named by value; ScenarioError (one line) if it names none."""
+    if value not in LAYOUTS:
+        raise ScenarioError(f'layout must be one of {", ".join(LAYOUTS)}, got {value!r}')
+    return str(value)
 
 
 class _Loader(yaml.SafeLoader):
@@ -117,6 +126,7 @@ class Scenario:
     paper: str = ''  # which paper's metrics the run prints (mill_bringup.papers)
     namespace: str = topics.ROOT  # the machine namespace every node of the graph runs in
     private_clock: bool = False  # remap the simulation's /clock to NAMESPACE/clock
+    layout: str = LAYOUTS[0]  # which nodes share a process (mill_bringup.layout)
 
     @property
     def name(self) -> str:
@@ -210,6 +220,7 @@ class Scenario:
             paper=self.paper,
             namespace=self.namespace,
             private_clock=self.private_clock,
+            layout=self.layout,
         )
         copy.overrides = {node: dict(values) for node, values in self.overrides.items()}
         for text in self.variants[name]:
@@ -323,6 +334,10 @@ def load(name_or_path: str) -> Scenario:
     if not isinstance(private_clock, bool):
         raise ScenarioError(f'{path}: private_clock must be true or false, got {private_clock!r}')
     scen.private_clock = private_clock
+    try:
+        scen.layout = check_layout(entry.get('layout', LAYOUTS[0]))
+    except ScenarioError as exc:
+        raise ScenarioError(f'{path}: {exc}') from None
     for line in entry.get('variants') or []:
         # "name NODE.NAME=VALUE ..." (a string list, so that rcl can read the file too)
         name, *overrides = str(line).split()

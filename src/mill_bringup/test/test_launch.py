@@ -38,7 +38,7 @@ def _console_scripts() -> dict[tuple[str, str], str]:
 
 def test_arguments_are_the_documented_ones() -> None:
     names = [a.name for a in launch_plan.ARGUMENTS]
-    assert names == ['scenario', 'namespace', 'params_file', 'timing', 'log_level']
+    assert names == ['scenario', 'namespace', 'params_file', 'timing', 'log_level', 'layout']
     assert all(len(a.description) > 20 for a in launch_plan.ARGUMENTS)
 
 
@@ -100,6 +100,7 @@ def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
         ({'namespace': '9lives'}, "namespace '9lives' is not valid"),
         ({'scenario': 'nope'}, "no scenario 'nope'"),
         ({'params_file': 'missing.yaml'}, 'params_file missing.yaml: No such file'),
+        ({'layout': 'pairs'}, "layout must be one of processes, per_axis, single, got 'pairs'"),
     ],
 )
 def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> None:
@@ -107,6 +108,27 @@ def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> 
     with pytest.raises(ScenarioError, match=message) as info:
         launch_plan.plan(**args)
     assert '\n' not in str(info.value)
+
+
+def test_layouts_start_containers_that_keep_the_node_names(tmp_path: Path) -> None:
+    scripts = _console_scripts()
+    per_axis = launch_plan.plan('slotting', layout='per_axis')
+    launch_plan.write_parameters(per_axis, str(tmp_path))
+    containers = {n.name: n.nodes for n in per_axis.nodes if n.nodes}
+    assert containers == {
+        'x_axis': ('x_observer', 'x_controller'),
+        'y_axis': ('y_observer', 'y_controller'),
+        'z_axis': ('z_observer', 'z_controller'),
+    }
+    for node in per_axis.nodes:
+        assert (node.package, node.executable) in scripts
+        if node.nodes:
+            assert (node.package, node.executable) == ('mill_bringup', 'mill_container')
+            assert not node.required
+    (single, watch) = launch_plan.plan('rubio', layout='single').nodes
+    assert single.nodes == ('force_process', 'trajectory', 'force_controller')
+    assert single.required  # it holds the clock node
+    assert (watch.name, watch.nodes, watch.required) == ('job_watch', (), True)
 
 
 def test_params_file_must_name_nodes_of_the_scenario(tmp_path: Path) -> None:
@@ -199,6 +221,7 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
     assert [(n['package'], n['executable'], n['name']) for n in nodes] == [
         (p.package, p.executable, p.name) for p in plan.nodes
     ]
+    assert all(n['arguments'] == [] for n in nodes)
     assert all(n['namespace'] == '/machine2' for n in nodes)
     assert all(n['ros_arguments'] == ['--log-level', 'warn'] for n in nodes)
     assert all(Path(n['parameters'][0]).is_file() for n in nodes)
@@ -218,3 +241,27 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
     (shutdown,) = plant.kwargs['on_exit'](Event(), Context())
     assert type(shutdown).__name__ == 'Shutdown'
     assert launch_file._exit['code'] == 3
+
+
+def test_launch_file_starts_a_container_without_a_node_name(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    values = {a.name: a.default for a in launch_plan.ARGUMENTS}
+    values.update(layout='single')
+    for name, mod in _stand_ins(values).items():
+        monkeypatch.setitem(sys.modules, name, mod)
+    monkeypatch.setattr('tempfile.tempdir', str(tmp_path))
+    spec = importlib.util.spec_from_file_location('scenario_launch', LAUNCH_FILE)
+    launch_file = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(launch_file)
+    entities = launch_file.generate_launch_description().args[0]
+    (opaque,) = [e for e in entities if type(e).__name__ == 'OpaqueFunction']
+    actions = opaque.kwargs['function'](object())
+    nodes = [a.kwargs for a in actions if type(a).__name__ == 'Node']
+    # `name` would become a global __node remap and rename every node of the container.
+    assert [(n['executable'], n['name'], n['arguments']) for n in nodes] == [
+        ('mill_container', None, [n.name for n in launch_plan.load('slotting').nodes]),
+        ('job_watch', 'job_watch', []),
+    ]
+    handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']
+    assert len(handlers) == 2  # the container holds the plant: required, as job_watch

@@ -10,7 +10,7 @@ import tempfile
 import time
 import weakref
 from collections.abc import Callable, Iterator, Sequence
-from typing import TYPE_CHECKING, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from mill_common.env import ros_environment
 from mill_common.param_sources import (
@@ -44,9 +44,20 @@ class NodeExit(Exception):
 _exit_requests: weakref.WeakKeyDictionary[Node, NodeExit] = weakref.WeakKeyDictionary()
 
 
+# Futures the spin loops of run_nodes wait on: a request to end completes them.
+_wakers: list[Any] = []
+
+
+def _wake(future: Any) -> None:
+    if not future.done():
+        future.set_result(True)
+
+
 def request_exit(node: Node, code: int, message: str) -> None:
     """Ask run_node to end `node` after the current callback."""
     _exit_requests.setdefault(node, NodeExit(code, message))
+    for future in list(_wakers):
+        _wake(future)
 
 
 def exit_request(node: Node) -> NodeExit | None:
@@ -90,16 +101,23 @@ def make_executor() -> Executor:
     return SingleThreadedExecutor()
 
 
-def install_stop_handlers() -> list[int]:
-    """SIGINT/SIGTERM only append to the returned list; the spin loop polls it.
+def install_stop_handlers(wake: Callable[[], None] | None = None) -> list[int]:
+    """SIGINT/SIGTERM only append to the returned list (and call `wake`); the spin loop
+    polls it.
 
     rclpy's own handler raises KeyboardInterrupt wherever Python happens to be,
     and inside a callback run by the C++ EventsExecutor that aborts the process
-    (std::terminate). A flag checked between spin_once calls is a clean way out.
+    (std::terminate). A flag checked between spins is a clean way out.
     """
     stop: list[int] = []
+
+    def handler(number: int, _frame: Any) -> None:
+        stop.append(number)
+        if wake is not None:
+            wake()
+
     for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda number, _frame: stop.append(number))
+        signal.signal(signum, handler)
     return stop
 
 
@@ -203,7 +221,25 @@ def run_node(
     if user:
         print(f'{executable}: error: unexpected arguments {user}; use --ros-args', file=sys.stderr)
         return 2
+    return run_nodes([('', make_node)], executable, argv, own_process)
 
+
+def run_nodes(
+    makers: Sequence[tuple[str, Callable[[], Node]]],
+    executable: str,
+    argv: Sequence[str],
+    own_process: bool,
+) -> int:
+    """Run nodes in one process, one ROS context and one executor, until one of them ends or
+    the process is interrupted; returns the process exit code.
+
+    makers: (label, factory) of each node, built in this order; the label ('' for a node
+    alone in its process) prefixes that node's errors. A node that asks to end
+    (`request_exit`) ends the process, and with it the other nodes, as a crash of one node
+    of a ROS 2 component container does. With own_process, the process ends at once once
+    ROS was initialised (end_process).
+    """
+    argv = list(argv)
     # Keep DDS on loopback unless the user chose otherwise (see README, Network).
     for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE',):
         os.environ.setdefault(key, ros_environment({})[key])
@@ -211,6 +247,7 @@ def run_node(
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
+    from rclpy.task import Future
 
     from mill_common import ros_params
 
@@ -224,7 +261,7 @@ def run_node(
         if problem:
             print(f'{executable}: error: --params-file {path}: {problem}', file=sys.stderr)
             return 2
-    # Until the node spins, SIGINT and SIGTERM end the start-up at once (KeyboardInterrupt in
+    # Until the nodes spin, SIGINT and SIGTERM end the start-up at once (KeyboardInterrupt in
     # Python code): building a node can take seconds on a busy machine, longer than launch
     # waits after SIGINT. From then on they only set the flag the spin loop polls.
     for signum in (signal.SIGINT, signal.SIGTERM):
@@ -240,24 +277,33 @@ def run_node(
     sys.stderr.write(kept.text)
     ros_params.command_line = argv
     stop: list[int] = []
-    node = None
+    nodes: list[tuple[str, Node]] = []
     executor = None
     code = 0
+    label = ''
+    ended: Future = Future()  # done when a node asks to end or a stop signal arrives
     try:
-        node = make_node()
+        for label, make_node in makers:
+            nodes.append((label, make_node()))
+        label = ''
         executor = make_executor()
-        executor.add_node(node)
-        stop = install_stop_handlers()
-        while rclpy.ok() and not stop and exit_request(node) is None:
-            executor.spin_once(timeout_sec=0.2)
-        request = exit_request(node)
+        for _label, node in nodes:
+            executor.add_node(node)
+        _wakers.append(ended)
+        stop = install_stop_handlers(wake=lambda: _wake(ended))
+        # The C++ events executor runs callbacks until `ended` is done; the timeout only
+        # bounds how long a signal that arrives while no callback runs waits to be seen.
+        while rclpy.ok() and not stop and _request(nodes) is None:
+            executor.spin_until_future_complete(ended, timeout_sec=0.2)
+        request = _request(nodes)
         if request is not None:
-            raise request
+            label, exit_ = request
+            raise exit_
     except (ParameterError, ValueError) as exc:
-        print(f'{executable}: error: {exc}', file=sys.stderr)
+        print(f'{executable}: {_of(label)}error: {exc}', file=sys.stderr)
         code = 2
     except NodeExit as exc:
-        print(f'{executable}: {"error: " if exc.code else ""}{exc}', file=sys.stderr)
+        print(f'{executable}: {_of(label)}{"error: " if exc.code else ""}{exc}', file=sys.stderr)
         code = exc.code
     except (KeyboardInterrupt, ExternalShutdownException):
         code = 0
@@ -266,15 +312,17 @@ def run_node(
         # SIGTERM must not break the teardown.
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, signal.SIG_IGN)
-        if node is not None:
+        if ended in _wakers:
+            _wakers.remove(ended)
+        for _label, node in nodes:
             deliver_before_exit(node)
         if executor is not None:
             executor.shutdown()
-        if node is not None:
+        for label, node in nodes:
             try:
                 node.destroy_node()
             except ValueError as exc:  # what the node could not finish, e.g. closing a bag
-                print(f'{executable}: error: {exc}', file=sys.stderr)
+                print(f'{executable}: {_of(label)}error: {exc}', file=sys.stderr)
                 code = code or 1
         if rclpy.ok():
             rclpy.try_shutdown()
@@ -284,3 +332,16 @@ def run_node(
     if own_process:
         end_process(code)
     return code
+
+
+def _of(label: str) -> str:
+    return f'{label}: ' if label else ''
+
+
+def _request(nodes: Sequence[tuple[str, Node]]) -> tuple[str, NodeExit] | None:
+    """The first exit one of the nodes asked for, with its label."""
+    for label, node in nodes:
+        request = exit_request(node)
+        if request is not None:
+            return label, request
+    return None

@@ -161,8 +161,8 @@ def joined(law: AxisController) -> tuple[str, ...]:
 
 
 class AxisControllerNode(Node):
-    def __init__(self) -> None:
-        super().__init__('axis_controller')
+    def __init__(self, **options: Any) -> None:
+        super().__init__('axis_controller', **options)
         self._law: BumplessSwitch | None = None
         self._trip: FollowingErrorTrip | None = None
         self._reported_switch: SwitchRecord | None = None

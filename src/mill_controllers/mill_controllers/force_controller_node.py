@@ -66,8 +66,8 @@ STATE_NAMES = (
 
 
 class ForceControllerNode(Node):
-    def __init__(self) -> None:
-        super().__init__('force_controller')
+    def __init__(self, **options: Any) -> None:
+        super().__init__('force_controller', **options)
         self._loop: ForceFeedLoop  # built once by _configure
         self._built = False
         self.params = NodeParameters(self, parameter_specs(), self._configure)

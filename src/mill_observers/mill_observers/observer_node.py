@@ -48,8 +48,8 @@ MAX_COAST = 100  # periods the model runs on without a state before it just resu
 
 
 class ObserverNode(Node):
-    def __init__(self) -> None:
-        super().__init__('observer')
+    def __init__(self, **options: Any) -> None:
+        super().__init__('observer', **options)
         self._comp: DelayCompensation | None = None
         self._blend: EstimateBlend | None = None
         self._last_ns: int | None = None

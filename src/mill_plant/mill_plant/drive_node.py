@@ -80,8 +80,9 @@ class DriveNode(LifecycleNode):
         make_backend: Callable[[dict[str, Any]], DriveBackend],
         specs: Sequence[tuple[str, ParamSpec]],
         name: str = 'plant',
+        **options: Any,
     ) -> None:
-        super().__init__(name)
+        super().__init__(name, **options)
         self._make_backend = make_backend
         self.backend: DriveBackend | None = None
         # Read-only values cannot change; the others are read where they are used.

@@ -53,8 +53,8 @@ MM_PER_M = 1000.0
 
 
 class ForceProcessNode(Node):
-    def __init__(self) -> None:
-        super().__init__('force_process')
+    def __init__(self, **options: Any) -> None:
+        super().__init__('force_process', **options)
         self._drive: DrivenForceProcess  # built once by _configure
         self._built = False
         self.params = NodeParameters(self, force_process_specs(), self._configure)

@@ -9,6 +9,8 @@ advances on the wall clock and holds the newest command, as a drive does).
 
 from __future__ import annotations
 
+from typing import Any
+
 from mill_common.node_main import run_node
 
 from mill_plant.config import parameter_specs
@@ -16,8 +18,9 @@ from mill_plant.drive_node import DriveNode
 from mill_plant.simulated_machine import SimulatedMachine
 
 
-def make_node() -> DriveNode:
-    return DriveNode(SimulatedMachine, parameter_specs())
+def make_node(**options: Any) -> DriveNode:
+    """The plant node; `options` go to rclpy's Node (a container passes `cli_args`)."""
+    return DriveNode(SimulatedMachine, parameter_specs(), **options)
 
 
 def main(argv: list[str] | None = None) -> int:

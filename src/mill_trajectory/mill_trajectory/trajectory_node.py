@@ -85,8 +85,8 @@ OVERRIDE_STAMP_TOLERANCE_NS = 1000
 
 
 class TrajectoryNode(Node):
-    def __init__(self) -> None:
-        super().__init__('trajectory')
+    def __init__(self, **options: Any) -> None:
+        super().__init__('trajectory', **options)
         self._path: Trajectory  # set by _configure
         self._scaled: TimeScaledPath | None = None
         self._periodic: PeriodicOverridePath | None = None

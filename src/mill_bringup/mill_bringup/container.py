@@ -1,0 +1,173 @@
+"""Several nodes of a scenario in one process, one ROS context and one executor.
+
+    mill_container x_observer x_controller --ros-args --params-file config/slotting.yaml
+    python -m mill_bringup.container NODE [NODE ...] --ros-args [-r __ns:=NS] \
+        --params-file SCENARIO [--params-file MORE ...] [-r RULE ...] [--log-level LEVEL]
+
+As a ROS 2 component container composes nodes: each node is created with its own
+`-r __node:=NAME`, so it keeps the name the scenario gives it, and with it its entries of
+the parameter files (`/**/NAME`), its topics and its services. The `--ros-args` of the
+container (namespace, remappings, parameter files, `-p`, log level) apply to every node in
+it, as they would to each node started alone. Which class each NAME is comes from the
+`mill_scenario: launch:` entry (`NAME PACKAGE EXECUTABLE`) of the parameter files given;
+NODE_FACTORIES maps the executable to the node's factory.
+
+A node that ends by itself (a lockstep timeout, a configuration error) ends the container
+with its exit code, its message prefixed by the node's name; Ctrl-C or SIGTERM end them all.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+from mill_bringup.scenario import SCENARIO_KEY
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+PROG = 'mill_container'
+
+
+@dataclass(frozen=True)
+class NodeKind:
+    """How a container builds a node an executable would start alone."""
+
+    factory: str  # 'module:callable', called with rclpy Node options (cli_args)
+    lifecycle: bool  # a managed node: it can wait for `configure`/`activate`
+
+
+# (package, executable) of the scenario's launch entries -> the node it starts.
+NODE_FACTORIES: dict[tuple[str, str], NodeKind] = {
+    ('mill_plant', 'plant_node'): NodeKind('mill_plant.plant_node:make_node', True),
+    ('mill_plant', 'force_process_node'): NodeKind(
+        'mill_plant.force_process_node:ForceProcessNode', False
+    ),
+    ('mill_trajectory', 'trajectory_node'): NodeKind(
+        'mill_trajectory.trajectory_node:TrajectoryNode', False
+    ),
+    ('mill_observers', 'observer_node'): NodeKind(
+        'mill_observers.observer_node:ObserverNode', False
+    ),
+    ('mill_controllers', 'axis_controller'): NodeKind(
+        'mill_controllers.axis_controller_node:AxisControllerNode', False
+    ),
+    ('mill_controllers', 'force_controller_node'): NodeKind(
+        'mill_controllers.force_controller_node:ForceControllerNode', False
+    ),
+}
+
+USAGE = f"""usage: {PROG} NODE [NODE ...] --ros-args --params-file SCENARIO [ROS ARGUMENTS]
+
+Run several nodes of a scenario in one process and one executor (a deployment choice:
+each node keeps its name, parameters and topics, as when it runs in its own process).
+NODE names an entry `NAME PACKAGE EXECUTABLE` of the `{SCENARIO_KEY}: launch:` list of a
+--params-file given. The --ros-args (namespace, remappings, parameter files, -p, log level)
+apply to every node. The first node to end by itself ends the container with its exit code.
+
+executables that can run in a container:
+""" + '\n'.join(f'  {package} {executable}' for package, executable in NODE_FACTORIES)
+
+
+class ContainerError(ValueError):
+    """A container that cannot start; str() says why in one line."""
+
+
+def node_kind(package: str, executable: str) -> NodeKind:
+    kind = NODE_FACTORIES.get((package, executable))
+    if kind is None:
+        known = ', '.join(e for _p, e in NODE_FACTORIES)
+        raise ContainerError(f'{package} {executable} cannot run in a container (can: {known})')
+    return kind
+
+
+def is_lifecycle(package: str, executable: str) -> bool:
+    """Whether a container builds this executable's node as a managed (lifecycle) node."""
+    kind = NODE_FACTORIES.get((package, executable))
+    return kind is not None and kind.lifecycle
+
+
+def factory(kind: NodeKind) -> Callable[..., Node]:
+    module, _sep, name = kind.factory.partition(':')
+    return getattr(importlib.import_module(module), name)
+
+
+def scenario_launch(files: Sequence[str]) -> dict[str, tuple[str, str]]:
+    """NAME -> (package, executable) from the `mill_scenario: launch:` entry of the files."""
+    for path in files:
+        try:
+            raw = yaml.safe_load(Path(path).read_text())
+        except (OSError, yaml.YAMLError):
+            continue  # rcl says what is wrong with the file
+        entry = raw.get(SCENARIO_KEY) if isinstance(raw, dict) else None
+        params = entry.get('ros__parameters') if isinstance(entry, dict) else None
+        lines = params.get('launch') if isinstance(params, dict) else None
+        if not isinstance(lines, list):
+            continue
+        out = {}
+        for line in lines:
+            parts = str(line).split()
+            if len(parts) != 3:
+                raise ContainerError(
+                    f'{path}: launch entry {line!r} is not "name package executable"'
+                )
+            out[parts[0]] = (parts[1], parts[2])
+        return out
+    raise ContainerError(
+        f'no --params-file has a {SCENARIO_KEY}: ros__parameters: launch: list naming the nodes'
+    )
+
+
+def makers(names: Sequence[str], files: Sequence[str]) -> list[tuple[str, Callable[[], Node]]]:
+    """(name, factory) of each node: built with its own name, the container's ROS arguments."""
+    if not names:
+        raise ContainerError('no node named; give NODE ... before --ros-args')
+    doubled = sorted({n for n in names if names.count(n) > 1})
+    if doubled:
+        raise ContainerError(f'node {doubled[0]} named twice')
+    launch = scenario_launch(files)
+    out: list[tuple[str, Callable[[], Node]]] = []
+    for name in names:
+        if name not in launch:
+            raise ContainerError(f'the scenario has no node {name!r} (has: {", ".join(launch)})')
+        out.append((name, _maker(factory(node_kind(*launch[name])), name)))
+    return out
+
+
+def _maker(build: Callable[..., Node], name: str) -> Callable[[], Node]:
+    """A factory of node `name` built by `build` with its own node name."""
+
+    def make() -> Node:
+        options: dict[str, Any] = {'cli_args': ['--ros-args', '-r', f'__node:={name}']}
+        return build(**options)
+
+    return make
+
+
+def main(argv: list[str] | None = None) -> int:
+    from mill_common.node_main import run_nodes
+    from mill_common.param_sources import params_files
+
+    own_process = argv is None
+    argv = list(sys.argv if argv is None else argv)
+    args = argv[1:]
+    user = args[: args.index('--ros-args')] if '--ros-args' in args else args
+    if '-h' in user or '--help' in user:
+        print(USAGE)
+        return 0
+    try:
+        nodes = makers(user, params_files(argv))
+    except ContainerError as exc:
+        print(f'{PROG}: error: {exc}', file=sys.stderr)
+        return 2
+    return run_nodes(nodes, PROG, argv, own_process)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
