@@ -8,16 +8,24 @@ command at its next tick (one sample of delay), holds it, and brakes an axis aft
 without a fresh one. It starts 0.5 mm away from the job's start point, so the job first
 approaches it.
 
-The graph runs with `run_scenario slotting --timing realtime --external plant` at 200 Hz
-for 4 s of the path (after the approach move), with the observers retuned for that rate
-(ω_o = p_o = 100 rad/s; the papers' 700 rad/s is a 1 kHz tuning). Every axis must track: no
-following-error trip (1 mm, the scenario's limit: a trip brakes the axis and the summary
-reports it) and a maximum error after the first second under 0.3 mm. The bound: the ADRC
-loop rejects the extra mass, friction and load as disturbance, so what remains is what the
-simulated plant gives offline at 200 Hz with one sample of delay — 0.07 / 0.10 / 0.02 mm
-max on x / y / z (`offline_sim slotting --duration 6 --delay 1 -p '*.sample_period=0.005'
--p '*_observer.gpi.omega_o=100' -p '*_observer.gpi.pole_o=100'`) — plus the effect of late
-commands; 0.3 mm is three times the former and three times below the trip.
+The graph runs with `run_scenario slotting --timing realtime --external plant --layout single`
+(the driver in its own process, every other node in one container) at 100 Hz for 4 s of the
+path after the approach move, told the driver's machine as docs/hardware-driver.md says a
+different machine must be: the input gain b = 1 / (lead * mass) of its carriages (the
+controllers' and observers' nominal model; with Table 1's gain the loop is unstable on this
+machine, offline too), and observers tuned for the rate (omega_o = p_o = 30 rad/s; the
+papers' 700 rad/s is a 1 kHz tuning). Every axis must track: no following-error trip (1 mm,
+the scenario's limit: a trip brakes the axis and the summary reports it) and a maximum error
+after the first second under 0.3 mm. The bound: offline, with this machine's mass,
+friction and load and one sample of delay, the loop gives 0.053 / 0.001 / 0.058 mm on
+x / y / z (the command is in docs/realtime.md, "A driver's machine"); on top come the
+periods whose command arrives after the tick (about 0.2 % here); 0.3 mm is five times the
+former and three times below the trip.
+
+Measured while writing this test (2-core machine), what does not hold: in the eight-process
+layout the state -> command latency at 100 Hz is about 6 ms median and 16 ms p99, and the
+loop trips; at 200 Hz with 100 rad/s observers it trips in the single layout too. Both are
+open limits of real time here (docs/realtime.md, "Known limitations").
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ import sys
 
 import pytest
 
+LAYOUT = 'single'
 PERIOD = 0.01  # [s]
 OMEGA_O = 30.0  # [rad/s]
 # The driver's machine in the controllers' and observers' nominal model x'' = b tau + xi:
@@ -143,6 +152,7 @@ def test_a_driver_from_the_contract_alone_tracks_the_slotting_path(ros_env, tmp_
             [
                 *(sys.executable, '-m', 'mill_bringup.runner', 'slotting'),
                 *('--timing', 'realtime', '--external', 'plant', '--duration', '4'),
+                *('--layout', LAYOUT),
                 *('-p', f'*.sample_period={PERIOD!r}'),
                 # The papers' observer poles (700 rad/s) are for 1 kHz; at 200 Hz, 100 rad/s.
                 *(

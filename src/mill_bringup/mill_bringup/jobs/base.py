@@ -112,6 +112,11 @@ class Job(ABC, Generic[R]):
         """Whether the graph runs on sim time (the bag's log time is then the stamp)."""
         return True
 
+    def started_ns(self) -> int | None:
+        """When the job started on the system clock, if the graph says so (realtime); else
+        the runner counts from the first progress it hears."""
+        return None
+
     @abstractmethod
     def progress(self, source: MessageSource) -> float:
         """Machine time the run has reached [s] (−inf before the first sample)."""

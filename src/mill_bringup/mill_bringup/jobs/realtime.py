@@ -105,6 +105,9 @@ class RealtimeAxisJob(AxisJob):
     def sim_time_stamps(self) -> bool:
         return False
 
+    def started_ns(self) -> int | None:
+        return self.start_ns
+
     def timed_topics(self) -> set[str]:
         return {topics.joint_command(a) for a in self.axes}
 
@@ -135,23 +138,35 @@ class RealtimeAxisJob(AxisJob):
         if self.start_ns is None:
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
         rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner)
+        if self._source is not None:
+            self.received = command_timing(rec, raw, self._source, self.axes, self.start_ns)
         return rec, {}
 
     def simulation(self, times: CoreTimer | None = None) -> Any:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
     def drive_figures(self) -> dict[str, dict[str, float]]:
-        """Per axis: late fraction and latency median/p99/max [ms], from the drive's status."""
+        """Per axis: late fraction and latency median/p99/max [ms], from the drive's status;
+        a driver that does not report them: as the runner received the commands."""
         out = {}
         for axis in self.axes:
-            out[axis] = {f: float(self.drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
+            if f'{axis}.late_fraction' in self.drive or axis not in self.received:
+                out[axis] = {f: float(self.drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
+            else:
+                out[axis] = dict(self.received[axis])
         return out
+
+    def figures_source(self) -> str:
+        """Where drive_figures come from, for the summary."""
+        if any(f'{a}.late_fraction' in self.drive for a in self.axes) or not self.received:
+            return 'the drive'
+        return 'the commands as the runner received them'
 
     def summary(self, rec: RunRecord, skip: float) -> str:
         lines = [format_summary(summarize(rec, skip), skip)]
         lines.append(
             'axis   periods without a fresh command   state->command latency [ms]: '
-            'median    p99     max'
+            f'median    p99     max   (from {self.figures_source()})'
         )
         for axis, f in self.drive_figures().items():
             lines.append(
