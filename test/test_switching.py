@@ -102,7 +102,7 @@ def running_job(ros_env, *runner_args: str) -> Iterator[RunningJob]:
 
 @pytest.mark.system
 def test_controller_switch_mid_job_is_bumpless(ros_env) -> None:
-    with running_job(ros_env, 'slotting', '--duration', '6') as job:
+    with running_job(ros_env, 'slotting', '--duration', '3') as job:
         assert job.started(1_000_000_000), 'job never ran'
         refused = job.controller.set('controller', 'cascade_pi')
         assert not refused.successful and 'V' in refused.reason, refused.reason
