@@ -47,7 +47,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.signal
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -67,6 +66,14 @@ from mill_controllers.model_reference import (
     ForceControlDesigner,
     RstController,
 )
+
+
+def lfilter(b: Any, a: Any, x: Any, zi: Any) -> Any:
+    """scipy.signal.lfilter, imported on first use (scipy.signal takes a second to load)."""
+    from scipy.signal import lfilter as scipy_lfilter
+
+    return scipy_lfilter(b, a, x, zi=zi)
+
 
 PAPER_BETAS: tuple[float, ...] = tuple(1.0 - (i - 1) / 4.0 for i in range(1, 10))
 
@@ -162,13 +169,13 @@ class _Shadow:
         self._ref_den = ref.den
         self._zi = np.zeros(max(len(self._ref_num), len(self._ref_den)) - 1)
         if len(r_history):
-            y, self._zi = scipy.signal.lfilter(
+            y, self._zi = lfilter(
                 self._ref_num, self._ref_den, np.asarray(r_history, dtype=float), zi=self._zi
             )
             self.ref_out.extend(float(v) for v in y[-n:])
 
     def _filter_reference(self, r: float) -> None:
-        y, self._zi = scipy.signal.lfilter(self._ref_num, self._ref_den, [r], zi=self._zi)
+        y, self._zi = lfilter(self._ref_num, self._ref_den, [r], zi=self._zi)
         self.ref_out.append(float(y[0]))
 
     def advance(self, reference: ContinuousReference) -> None:

@@ -42,7 +42,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal
 
 from mill_models.force_process import ForceProcessPlant, affine_input_exponential
 from mill_models.quadrature import simpson
@@ -76,13 +75,17 @@ class DiscreteTF:
     def step_response(self, n: int, amplitude: float = 1.0) -> np.ndarray:
         """Output samples y_0..y_{n−1} for u_k = amplitude (k ≥ 0), zero initial state."""
         u = np.full(n, float(amplitude))
-        return scipy.signal.lfilter(self.num, self.den, u)
+        from scipy.signal import lfilter  # slow to load: only where a hold is run
+
+        return lfilter(self.num, self.den, u)
 
 
 def as_state_space(system: Sequence) -> StateSpace:
     """(num, den) in s (highest power first) or (A, B, C, D) → float arrays (A, B, C, D)."""
     if len(system) == 2:
-        a, b, c, d = scipy.signal.tf2ss(
+        from scipy.signal import tf2ss
+
+        a, b, c, d = tf2ss(
             np.atleast_1d(np.asarray(system[0], dtype=float)),
             np.atleast_1d(np.asarray(system[1], dtype=float)),
         )
@@ -156,7 +159,9 @@ def froh_discretize(system: Sequence, T: float, beta: float) -> DiscreteTF:
     extra pole at z = 0 of eq. (6) (order n + 1); for β = 0 it is the ZOH model (order n).
     """
     ad, bd, cd, dd = froh_state_space(system, T, beta)
-    num, den = scipy.signal.ss2tf(ad, bd, cd, dd)
+    from scipy.signal import ss2tf
+
+    num, den = ss2tf(ad, bd, cd, dd)
     num = np.asarray(num, dtype=float).reshape(-1)
     den = np.asarray(den, dtype=float).reshape(-1)
     num = np.concatenate([np.zeros(len(den) - len(num)), num])

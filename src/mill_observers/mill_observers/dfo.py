@@ -44,7 +44,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 import scipy.linalg
-import scipy.signal
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -224,7 +223,9 @@ class Dfo(Observer):
         for i, w in enumerate(omegas):
             scale[3 + 2 * i] *= w
         ad_s = ad / scale[None, :] * scale[:, None]
-        res = scipy.signal.place_poles(ad_s.T, h[:, None], z)
+        from scipy.signal import place_poles  # imported when designed: it is slow to load
+
+        res = place_poles(ad_s.T, h[:, None], z)
         l_s = np.asarray(res.gain_matrix, dtype=float)[0]
         l_gain = l_s / scale
         self._ad, self._bd, self._h = ad, bd, h

@@ -40,7 +40,6 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.signal
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -104,8 +103,10 @@ class _DiscreteSs:
     """x(k+1) = Ad x(k) + Bd w(k), out(k) = Cd x(k) + Dd w(k), scalar in and out."""
 
     def __init__(self, num: np.ndarray, den: np.ndarray, T: float, method: str) -> None:
-        a, b, c, d = scipy.signal.tf2ss(num, den)
-        ad, bd, cd, dd, _ = scipy.signal.cont2discrete((a, b, c, d), T, method=method)
+        from scipy.signal import cont2discrete, tf2ss  # slow to load: only when designed
+
+        a, b, c, d = tf2ss(num, den)
+        ad, bd, cd, dd, _ = cont2discrete((a, b, c, d), T, method=method)
         self.ad = np.asarray(ad, dtype=float)
         self.bd = np.asarray(bd, dtype=float)[:, 0]
         self.cd = np.asarray(cd, dtype=float)[0]

@@ -134,6 +134,10 @@ class DriveNode(LifecycleNode):
         }
         self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
         self._k = 0
+        # Realtime: ticks that came more than half a period late (the machine does not hold
+        # the sample rate), in all and since the last report.
+        self._overruns = 0
+        self._overruns_reported = 0
         self._faults = dict.fromkeys(self.axes, 0)
         self._nonfinite = dict.fromkeys(self.axes, 0)
         self._saturations = dict.fromkeys(self.axes, 0)
@@ -376,6 +380,8 @@ class DriveNode(LifecycleNode):
         if self.backend is None:
             return
         ns = time.time_ns()  # acquisition time on the system clock
+        if self._recent and self.active and ns - self._recent[-1] > 1.5 * self._dt_ns:
+            self._overruns += 1
         self._publish_states(ns)
         self._recent.append(ns)
         if self.active:
@@ -445,6 +451,16 @@ class DriveNode(LifecycleNode):
     def _watch_realtime(self) -> None:
         if not self.active:
             return
+        if self._overruns > self._overruns_reported and time.monotonic() >= self._next_status:
+            late = self._overruns - self._overruns_reported
+            self._overruns_reported = self._overruns
+            text = (
+                f'sample rate not held: {late} ticks came more than half a period '
+                f'({0.5e-6 * self._dt_ns:g} ms) late in the last second; lower the rate or '
+                'compose the nodes (run_scenario --layout single)'
+            )
+            self.get_logger().warning(text)
+            self._publish_status(force=True, message=text, level=DiagnosticStatus.WARN)
         now_ns = time.time_ns()
         for axis, c in self.table.by_axis.items():
             quiet = (now_ns - c.stamp) * 1e-9 if c.stamp >= 0 else math.inf
@@ -515,7 +531,11 @@ class DriveNode(LifecycleNode):
             return self._k * self._dt_ns
         return time.time_ns()
 
-    def _publish_status(self, force: bool = False, message: str | None = None) -> None:
+    def _publish_status(
+        self, force: bool = False, message: str | None = None, level: bytes | None = None
+    ) -> None:
+        """The drive's status; `message` (a fault, ERROR unless `level` says otherwise) is
+        published at once, the running status once a second."""
         now = time.monotonic()
         if not force and now < self._next_status:
             return
@@ -531,12 +551,13 @@ class DriveNode(LifecycleNode):
         if self.timing == 'lockstep':
             values['mean_wait_ms'] = 1e3 * self._wait_sum / steps
             values['max_wait_ms'] = 1e3 * self._wait_max
-        level = DiagnosticStatus.OK
+        given, level = level, DiagnosticStatus.OK
         for axis in self.axes:
             values[f'{axis}.faults'] = self._faults[axis]
             values[f'{axis}.saturations'] = self._saturations[axis]
             values[f'{axis}.invalid_commands'] = self._nonfinite[axis]
             if self.timing == 'realtime':
+                values['overruns'] = self._overruns
                 values[f'{axis}.late_fraction'] = self.table.late_fraction(axis)
                 for key, v in self.table.latency_stats(axis).items():
                     values[f'{axis}.latency_{key}_ms'] = 1e3 * v
@@ -546,7 +567,7 @@ class DriveNode(LifecycleNode):
             level = DiagnosticStatus.ERROR
         name = LOCKSTEP_STATUS if self.timing == 'lockstep' else REALTIME_STATUS
         if message is not None:
-            level = DiagnosticStatus.ERROR
+            level = given if given is not None else DiagnosticStatus.ERROR
         statuses = [
             diagnostic_status(
                 level,

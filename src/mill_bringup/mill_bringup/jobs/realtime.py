@@ -173,10 +173,17 @@ class RealtimeAxisJob(AxisJob):
                 f'{axis:>4}   {100 * f["late_fraction"]:30.2f} %   {f["latency_median_ms"]:27.3f} '
                 f'{f["latency_p99_ms"]:7.3f} {f["latency_max_ms"]:7.3f}'
             )
+        overruns = int(float(self.drive.get('overruns', '0')))
+        if overruns:
+            lines.append(
+                f'WARNING: the drive ticked more than half a period late {overruns} times: '
+                'this machine does not hold the sample rate in this layout'
+            )
         return '\n'.join(lines)
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         out = super().summary_json(rec, skip)
         out['drive'] = self.drive_figures()
+        out['drive_overruns'] = int(float(self.drive.get('overruns', '0')))
         out['start_stamp_ns'] = self.start_ns
         return out
