@@ -157,10 +157,10 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
         qos = meta_topic['offered_qos_profiles']
         assert qos and all(q['reliability'] == 'reliable' for q in qos), name
 
-    # What the lockstep says was published. The plant published states 0..K (step 0
-    # once more for each re-offer), /clock with every 10th step, the ground truth and
-    # force of every step it took (0..K-1, perhaps K); the controllers a command and the
-    # observers an estimate for every state (repeats of step 0 answered or not).
+    # What the lockstep says was published. The plant published states 0..K and the cutting
+    # force with them (step 0 once more for each re-offer), /clock with every 10th step,
+    # the ground truth of every step it took (0..K-1, perhaps K); the controllers a command
+    # and the observers an estimate for every state (repeats of step 0 answered or not).
     state_k = ks[Q(topics.state('x'))]
     K = max(state_k)
     repeats = state_k.count(0) - 1
@@ -176,8 +176,11 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
     clock = ks[Q(topics.CLOCK)]
     assert clock.count(0) == 1 + repeats and once_each([v for v in clock if v], 10, 10)
     assert len(clock) == K // 10 + 1 + repeats
-    for name in (topics.GROUND_TRUTH, topics.CUTTING_FORCE):
-        assert once_each(ks[Q(name)]) and len(ks[Q(name)]) in (K, K + 1), name
+    force = ks[Q(topics.CUTTING_FORCE)]
+    assert force.count(0) == 1 + repeats and once_each([v for v in force if v], 1)
+    assert len(force) == K + 1 + repeats
+    truth = ks[Q(topics.GROUND_TRUTH)]
+    assert once_each(truth) and len(truth) in (K, K + 1)
     ref = ks[Q(topics.REFERENCE)]  # one per /clock tick the trajectory answered
     assert once_each([v for v in ref if v], 10, 10) and max(ref) >= 10 * (K // 10) - 10
 
