@@ -172,16 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         progress = _BagProgress(label, args.quiet)
         try:
             run = read_run(bag, args.namespace, progress)
-        except BagError as exc:
-            print(f'report: error: {exc}', file=sys.stderr)
-            return 1
-        except OSError as exc:
-            print(f'report: error: {bag}: {exc.strerror or exc}', file=sys.stderr)
-            return 1
-        except Exception as exc:  # a damaged message in an otherwise readable bag
-            print(
-                f'report: error: {bag}: cannot read ({type(exc).__name__}: {exc})', file=sys.stderr
-            )
+        except Exception as exc:
+            print(f'report: error: {unreadable(bag, exc)}', file=sys.stderr)
             return 1
         finally:
             progress.close()
@@ -227,6 +219,16 @@ def bag_topics(path: Path) -> dict[str, int]:
         return dict(bag.counts)
 
 
+def unreadable(bag: Path, exc: Exception) -> str:
+    """The one line report prints for a bag it cannot read."""
+    if isinstance(exc, BagError):
+        return str(exc)
+    if isinstance(exc, OSError):
+        return f'{bag}: {exc.strerror or exc}'
+    # A damaged message in an otherwise readable bag.
+    return f'{bag}: cannot read ({type(exc).__name__}: {exc})'
+
+
 def force_report(args: argparse.Namespace, labels: list[str], argv: list[str]) -> int:
     """A force job's bags (Rubio 2013): J_c of eq. (14) and the override, side by side."""
     t_start = time.monotonic()
@@ -234,13 +236,8 @@ def force_report(args: argparse.Namespace, labels: list[str], argv: list[str]) -
     for bag, label in zip(args.bags, labels, strict=True):
         try:
             runs.append((label, read_force_run(bag, args.namespace)))
-        except BagError as exc:
-            print(f'report: error: {exc}', file=sys.stderr)
-            return 1
-        except Exception as exc:  # a damaged message in an otherwise readable bag
-            print(
-                f'report: error: {bag}: cannot read ({type(exc).__name__}: {exc})', file=sys.stderr
-            )
+        except Exception as exc:
+            print(f'report: error: {unreadable(bag, exc)}', file=sys.stderr)
             return 1
     out = args.out or (args.bags[0].resolve().parent / 'report')
     try:
