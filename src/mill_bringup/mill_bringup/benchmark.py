@@ -195,6 +195,7 @@ def layout_figures(result: RunResult) -> dict:
         'real_time_factor': result.real_time_factor,
         'wall_time_s': result.wall_time,
         'cpu_ms_per_step': result.cpu_ms_per_step,
+        'cpu_ms_per_step_by_process': result.cpu_ms_per_step_by_process,
         'peak_rss_mb': result.peak_rss_mb,
         'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
     }
@@ -322,6 +323,9 @@ def main(argv: list[str] | None = None) -> int:
     for name, r in results.items():
         rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(r.peak_rss_mb.items()))
         lines.append(f'peak RSS, layout {name}: {rss} MB')
+    for name, r in results.items():  # where the time goes: one busy process bounds the rate
+        cpu = ', '.join(f'{k} {v:.2f}' for k, v in sorted(r.cpu_ms_per_step_by_process.items()))
+        lines.append(f'CPU per step, layout {name}: {cpu} ms')
     if recording is not None:
         rec = recording
         lines += [

@@ -178,7 +178,12 @@ class Graph:
 
     def cpu(self) -> float:
         """CPU seconds used so far by the node processes and this process."""
-        return time.process_time() + sum(cpu_seconds(p.pid) for p in self.procs.values())
+        return sum(self.cpu_by_process().values())
+
+    def cpu_by_process(self) -> dict[str, float]:
+        """CPU seconds used so far by each node process and by this one ('runner')."""
+        used = {n: cpu_seconds(p.pid) for n, p in self.procs.items()}
+        return used | {'runner': time.process_time()}
 
     def peak_rss(self) -> dict[str, float]:
         return {n: vm_hwm_mb(p.pid) for n, p in self.procs.items() if p.poll() is None}

@@ -59,6 +59,7 @@ class RunResult:
     steps_per_second: float
     cpu_ms_per_step: float
     peak_rss_mb: dict[str, float]
+    cpu_ms_per_step_by_process: dict[str, float]
     domain_id: str
     missing_samples: dict[str, int]
     summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
@@ -136,6 +137,7 @@ def run(
     import rclpy
     from mill_common.node_main import install_stop_handlers, make_executor, release_node
     from rclpy.signals import SignalHandlerOptions
+    from rclpy.task import Future
 
     from mill_bringup.monitor import Monitor, RecordOptions
 
@@ -168,10 +170,12 @@ def run(
 
         clock_check = [0.0]
 
+        never = Future()
+
         def spin(when: str) -> None:
-            executor.spin_once(timeout_sec=0.05)
-            for _ in range(200):  # take what has queued up, then look at the job again
-                executor.spin_once(timeout_sec=0.0)
+            # Take messages for 50 ms, then look at the job again. (Polling with
+            # spin_once(0) costs tens of µs per call even with nothing to take.)
+            executor.spin_until_future_complete(never, timeout_sec=0.05)
             if stop:
                 raise KeyboardInterrupt
             if monitor.recorder is not None and monitor.recorder.error:
@@ -202,7 +206,7 @@ def run(
         )
         t_start = time.monotonic()
         t_first: float | None = None
-        cpu_first = 0.0
+        cpu_first: dict[str, float] = {}
         reached, last_change = -float('inf'), t_start
         while not job.complete(monitor):
             spin('before the job ended')
@@ -211,7 +215,7 @@ def run(
             if t > reached:
                 reached, last_change = t, now
                 if t_first is None:
-                    t_first, cpu_first = now, graph.cpu()
+                    t_first, cpu_first = now, graph.cpu_by_process()
             if t_first is None:
                 if now - t_start > startup_timeout:
                     raise RunError(f'no step within {startup_timeout:g} s of the start')
@@ -226,7 +230,12 @@ def run(
         started = job.started_ns()
         if started is not None:  # the job's own start (progress reports come once a second)
             wall = max((time.time_ns() - started) * 1e-9, 1e-9)
-        cpu_ms_per_step = 1e3 * (graph.cpu() - cpu_first) / max(job.samples - 1, 1)
+        steps = max(job.samples - 1, 1)
+        cpu_by_process = {
+            name: 1e3 * (used - cpu_first.get(name, 0.0)) / steps
+            for name, used in graph.cpu_by_process().items()
+        }
+        cpu_ms_per_step = sum(cpu_by_process.values())
         settle = time.monotonic() + job.SETTLE_TIMEOUT
         while time.monotonic() < settle and not job.settled(monitor):
             spin('after the job ended')
@@ -274,6 +283,7 @@ def run(
         real_time_factor=job.sim_time / wall,
         steps_per_second=job.samples / wall,
         cpu_ms_per_step=cpu_ms_per_step,
+        cpu_ms_per_step_by_process=cpu_by_process,
         peak_rss_mb=peak,
         domain_id=env['ROS_DOMAIN_ID'],
         missing_samples=missing,
