@@ -166,6 +166,10 @@ def main(argv: list[str] | None = None) -> int:
     except ContainerError as exc:
         print(f'{PROG}: error: {exc}', file=sys.stderr)
         return 2
+    if len(nodes) > 1:
+        from mill_common.intra_process import bus
+
+        bus().enable()  # messages between these nodes skip DDS (mill_common.intra_process)
     return run_nodes(nodes, PROG, argv, own_process)
 
 

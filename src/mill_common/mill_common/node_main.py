@@ -79,6 +79,9 @@ def format_parameter_help(specs: Sequence[tuple[str, ParamSpec]]) -> str:
 
 
 EXECUTORS = ('single', 'events')
+# In-process messages delivered between two looks at the executor (mill_common.intra_process):
+# enough that the look (tens of µs) costs little, few enough that DDS events wait little.
+DRAIN_BUDGET = 200
 
 
 def make_executor() -> Executor:
@@ -249,7 +252,7 @@ def run_nodes(
     from rclpy.signals import SignalHandlerOptions
     from rclpy.task import Future
 
-    from mill_common import ros_params
+    from mill_common import intra_process, ros_params
 
     for rule in parameter_rules(argv):
         problem = parameter_rule_problem(rule)
@@ -291,10 +294,17 @@ def run_nodes(
             executor.add_node(node)
         _wakers.append(ended)
         stop = install_stop_handlers(wake=lambda: _wake(ended))
-        # The C++ events executor runs callbacks until `ended` is done; the timeout only
-        # bounds how long a signal that arrives while no callback runs waits to be seen.
+        local = intra_process.bus()
         while rclpy.ok() and not stop and _request(nodes) is None:
-            executor.spin_until_future_complete(ended, timeout_sec=0.2)
+            if local.enabled:
+                # Messages between the nodes of this process are delivered here, between
+                # executor events, never inside another callback.
+                local.drain(DRAIN_BUDGET)
+                executor.spin_once(timeout_sec=0.0 if local.pending() else 0.2)
+            else:
+                # The C++ events executor runs callbacks until `ended` is done; the timeout
+                # only bounds how long a signal that arrives while no callback runs waits.
+                executor.spin_until_future_complete(ended, timeout_sec=0.2)
         request = _request(nodes)
         if request is not None:
             label, exit_ = request

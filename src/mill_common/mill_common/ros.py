@@ -1,8 +1,10 @@
 """Thin ROS helpers shared by the nodes: QoS, stamps, message construction, and the
-serialized publish and take of the hot-path messages (mill_common.codec)."""
+serialized publish and take of the hot-path messages (mill_common.codec; in-process
+delivery between the nodes of a container: mill_common.intra_process)."""
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -10,11 +12,12 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.subscription import Subscription
 from sensor_msgs.msg import JointState
 
 from mill_common.checks import Rejected
 from mill_common.codec import CodecError, encode_joint_state
+from mill_common.intra_process import DataInput, data_subscription
+from mill_common.intra_process import data_publisher as data_publisher  # for the nodes
 
 # Lockstep data must not be lost, and a slow listener (recorder, monitor) must
 # not lose samples while it catches up: reliable, deep history.
@@ -72,6 +75,12 @@ def joint_state_bytes(
     return encode_joint_state(ns, sender, names, position, velocity, effort)
 
 
+# The bytes, decoder and decoded message of the last take: in-process delivery
+# (mill_common.intra_process) hands the same bytes object to each reader of a message, and
+# the readers only read what they are given.
+_last_decoded: list[Any] = [None, None, None]
+
+
 def take_serialized(
     node: Node,
     msg_type: Any,
@@ -80,28 +89,39 @@ def take_serialized(
     callback: Callable[[Any], None],
     qos: QoSProfile | int,
     malformed: Callable[[Rejected], None],
-) -> Subscription:
+) -> DataInput:
     """Subscribe to `topic` taking the serialized bytes; `callback` gets them decoded by
     `decode` (a mill_common.codec reader: an object with the message's fields), and bytes
     that are not a `msg_type` go to `malformed` as one Rejected line instead."""
 
     def take(data: bytes) -> None:
+        last = _last_decoded
+        if data is last[0] and decode is last[1]:
+            callback(last[2])  # the same bytes handed to another reader in this process
+            return
         try:
             msg = decode(data)
         except CodecError as exc:
             malformed(Rejected(f'malformed message: {exc}'))
             return
+        last[:] = (data, decode, msg)
         callback(msg)
 
-    return node.create_subscription(msg_type, topic, take, qos, raw=True)
+    return data_subscription(node, msg_type, topic, take, qos)
+
+
+_readers_matched: weakref.WeakSet[Any] = weakref.WeakSet()
 
 
 def readers_ready(node: Node, publisher: Any, need: int) -> bool:
     """Whether `publisher` has `need` subscribers; else log (once a second) that the node
     waits for them. A lockstep node started mid-job answers the plant's re-offered step only
     then, so that its first outputs are not lost to a reader that has not matched it yet."""
+    if publisher in _readers_matched:
+        return True
     have = publisher.get_subscription_count()
     if have >= need:
+        _readers_matched.add(publisher)  # asked once: readers that matched stay for the job
         return True
     node.get_logger().info(
         f'waiting for {need} readers of {publisher.topic_name} ({have} so far)',

@@ -57,6 +57,7 @@ from mill_common.node_main import run_node
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.ros import (
     DATA_QOS,
+    data_publisher,
     diagnostic_array,
     from_duration,
     from_stamp,
@@ -163,6 +164,7 @@ def joined(law: AxisController) -> tuple[str, ...]:
 class AxisControllerNode(Node):
     def __init__(self, **options: Any) -> None:
         super().__init__('axis_controller', **options)
+        self._name = self.get_name()  # the sender of every message; asked once
         self._law: BumplessSwitch | None = None
         self._trip: FollowingErrorTrip | None = None
         self._reported_switch: SwitchRecord | None = None
@@ -186,8 +188,8 @@ class AxisControllerNode(Node):
         self._last_command: bytes | None = None
         self._waiting_since: float | None = None
         self._late_references = 0
-        self._pub = self.create_publisher(JointState, topics.joint_command(axis), DATA_QOS)
-        self._state_pub = self.create_publisher(JointState, topics.controller_state(axis), DATA_QOS)
+        self._pub = data_publisher(self, JointState, topics.joint_command(axis), DATA_QOS)
+        self._state_pub = data_publisher(self, JointState, topics.controller_state(axis), DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self.guard = InputGuard(
             self,
@@ -376,15 +378,13 @@ class AxisControllerNode(Node):
             self._report_trip(ns)
         self._last_ns = ns
         self._last_command = joint_state_bytes(
-            ns, (self.axis,), effort=(torque,), sender=self.get_name()
+            ns, (self.axis,), effort=(torque,), sender=self._name
         )
         self._pub.publish(self._last_command)
         status = self._switch.law.status()
         if status:
             values = tuple(float(v) for v in status.values())
-            self._state_pub.publish(
-                joint_state_bytes(ns, tuple(status), values, sender=self.get_name())
-            )
+            self._state_pub.publish(joint_state_bytes(ns, tuple(status), values, sender=self._name))
         record = self._switch.last_switch
         if record is not None and record is not self._reported_switch:
             self._reported_switch = record

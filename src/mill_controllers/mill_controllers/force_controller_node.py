@@ -35,7 +35,7 @@ from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import Rejected, StampCheck
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, joint_state
+from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp, joint_state
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import sample_stamp_ns
 from rclpy.node import Node
@@ -79,8 +79,8 @@ class ForceControllerNode(Node):
         # depth_source position: measured z by stamp, and a control instant waiting for it
         self._z: dict[int, float] = {}
         self._waiting: tuple[int, int, float] | None = None  # (stamp, j, force)
-        self._override_pub = self.create_publisher(JointState, topics.FEED_OVERRIDE, DATA_QOS)
-        self._state_pub = self.create_publisher(JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
+        self._override_pub = data_publisher(self, JointState, topics.FEED_OVERRIDE, DATA_QOS)
+        self._state_pub = data_publisher(self, JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._stamps = StampCheck(None)  # the force samples' stamps (the sender's grid)
         self.guard = InputGuard(

@@ -31,7 +31,14 @@ from mill_common.checks import Rejected, StampCheck, ahead, joint_values, owner_
 from mill_common.codec import decode_joint_state
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, readers_ready, take_serialized
+from mill_common.ros import (
+    DATA_QOS,
+    data_publisher,
+    from_stamp,
+    joint_state_bytes,
+    readers_ready,
+    take_serialized,
+)
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -50,6 +57,7 @@ MAX_COAST = 100  # periods the model runs on without a state before it just resu
 class ObserverNode(Node):
     def __init__(self, **options: Any) -> None:
         super().__init__('observer', **options)
+        self._name = self.get_name()  # the sender of every message; asked once
         self._comp: DelayCompensation | None = None
         self._blend: EstimateBlend | None = None
         self._last_ns: int | None = None
@@ -72,8 +80,8 @@ class ObserverNode(Node):
         self._last_estimate: bytes | None = None
         self._stalled_since: float | None = None
         self._braked_commands = 0
-        self._pub = self.create_publisher(JointState, topics.estimate(axis), DATA_QOS)
-        self._state_pub = self.create_publisher(JointState, topics.observer_state(axis), DATA_QOS)
+        self._pub = data_publisher(self, JointState, topics.estimate(axis), DATA_QOS)
+        self._state_pub = data_publisher(self, JointState, topics.observer_state(axis), DATA_QOS)
         self.guard = InputGuard(
             self,
             lambda: self.params.values['input_warn_time'],
@@ -217,14 +225,14 @@ class ObserverNode(Node):
                 (est.position,),
                 (est.velocity,),
                 (est.disturbance,),
-                sender=self.get_name(),
+                sender=self._name,
             )
             self._pub.publish(self._last_estimate)
             status = comp.observer.status()
             if status:
                 values = tuple(float(v) for v in status.values())
                 self._state_pub.publish(
-                    joint_state_bytes(ns, tuple(status), values, sender=self.get_name())
+                    joint_state_bytes(ns, tuple(status), values, sender=self._name)
                 )
 
     def _report_waiting(self) -> None:

@@ -46,6 +46,7 @@ from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
 from mill_common.ros import (
     DATA_QOS,
+    data_publisher,
     diagnostic_status,
     diagnostics_of,
     from_stamp,
@@ -83,6 +84,7 @@ class DriveNode(LifecycleNode):
         **options: Any,
     ) -> None:
         super().__init__(name, **options)
+        self._name = self.get_name()  # the sender of every message; asked once
         self._make_backend = make_backend
         self.backend: DriveBackend | None = None
         # Read-only values cannot change; the others are read where they are used.
@@ -144,7 +146,7 @@ class DriveNode(LifecycleNode):
         self._wait_sum = self._wait_max = 0.0
         self._last_publish_wall = time.monotonic()
         self._state_pubs = {
-            a: self.create_publisher(JointState, topics.state(a), DATA_QOS) for a in self.axes
+            a: data_publisher(self, JointState, topics.state(a), DATA_QOS) for a in self.axes
         }
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._clock_pub = None
@@ -153,8 +155,8 @@ class DriveNode(LifecycleNode):
             self._clock_every = max(1, round(v['clock_period'] * 1e9 / self._dt_ns))
         self._truth_pub = self._force_pub = None
         if backend.SIMULATED:
-            self._truth_pub = self.create_publisher(JointState, topics.GROUND_TRUTH, DATA_QOS)
-            self._force_pub = self.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
+            self._truth_pub = data_publisher(self, JointState, topics.GROUND_TRUTH, DATA_QOS)
+            self._force_pub = data_publisher(self, WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
         self._command_subs = {
             a: take_serialized(
                 self,
@@ -306,7 +308,7 @@ class DriveNode(LifecycleNode):
 
     def _publish_states(self, ns: int) -> None:
         assert self.backend is not None
-        name = self.get_name()
+        name = self._name
         for axis, y in zip(self.axes, self.backend.read(), strict=True):
             self._state_pubs[axis].publish(
                 joint_state_bytes(ns, (axis,), position=(y,), sender=name)

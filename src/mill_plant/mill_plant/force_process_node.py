@@ -34,7 +34,7 @@ from mill_common.checks import DropCounter, Rejected
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
-from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import sample_stamp_ns
@@ -72,9 +72,9 @@ class ForceProcessNode(Node):
         )
 
         self._clock_pub = self.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
-        self._force_pub = self.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
-        self._trace_pub = self.create_publisher(
-            JointTrajectory, topics.CUTTING_FORCE_TRACE, DATA_QOS
+        self._force_pub = data_publisher(self, WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
+        self._trace_pub = data_publisher(
+            self, JointTrajectory, topics.CUTTING_FORCE_TRACE, DATA_QOS
         )
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._ref_sub = self.create_subscription(

@@ -55,7 +55,7 @@ from mill_common.checks import Rejected, StampCheck, joint_values
 from mill_common.codec import encode_joint_trajectory
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, diagnostic_array, from_stamp
+from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, sample_stamp_ns, seconds
@@ -87,6 +87,7 @@ OVERRIDE_STAMP_TOLERANCE_NS = 1000
 class TrajectoryNode(Node):
     def __init__(self, **options: Any) -> None:
         super().__init__('trajectory', **options)
+        self._name = self.get_name()  # the sender of every message; asked once
         self._path: Trajectory  # set by _configure
         self._scaled: TimeScaledPath | None = None
         self._periodic: PeriodicOverridePath | None = None
@@ -99,7 +100,7 @@ class TrajectoryNode(Node):
         self._t0: int | None = None  # realtime: job start on the system clock [ns]
         self._newest_state_ns = 0
         self.params = NodeParameters(self, parameter_specs(), self._configure)
-        self._ref_pub = self.create_publisher(JointTrajectory, topics.REFERENCE, DATA_QOS)
+        self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, bytes] | None = None
         self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
@@ -373,7 +374,7 @@ class TrajectoryNode(Node):
 
     def _reference(self, ns: int, points: list[Point]) -> bytes:
         """The JointTrajectory of these points stamped ns, serialized (mill_common.codec)."""
-        return encode_joint_trajectory(ns, self.get_name(), AXES, points)
+        return encode_joint_trajectory(ns, self._name, AXES, points)
 
     def _publish_chunk(self, ns: int) -> None:
         points = []

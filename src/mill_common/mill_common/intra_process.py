@@ -1,0 +1,219 @@
+"""Intra-process delivery: nodes that share a process hand each other the serialized bytes.
+
+rclpy has no intra-process communication (rclcpp's `use_intra_process_comms`): a message
+between two nodes of one container still goes through DDS, an executor event and a take
+for every reader. This module is that shortcut for the hot-path topics of a container
+(`mill_container`, the `per_axis` and `single` layouts):
+
+- a publisher made with `data_publisher` publishes to DDS as always (the runner, a
+  recorder, a tool, a node on another host hear it) and puts the same bytes in a queue
+  for each subscriber of the topic in this process;
+- a subscription made with `data_subscription` takes from DDS only while no node of this
+  process publishes its topic; once one does, its DDS subscription is destroyed and it
+  gets that publisher's bytes from the queue instead;
+- the spin loop (`mill_common.node_main.run_nodes`) drains the queue between executor
+  events, so callbacks never run inside one another and each sees the bytes a DDS take
+  would have given it, in the order they were published.
+
+A topic has one legitimate publisher (docs/reliability.md, "one owner per axis"); when it
+is in this process, messages of any other publisher on the topic are not taken here at
+all. A check once a second names such publishers in the subscribing node's log.
+
+Off unless `enable()` is called (a process of one node gains nothing); the environment
+variable MILL_INTRA_PROCESS=0 keeps it off in a container too (to measure the difference).
+"""
+
+from __future__ import annotations
+
+import os
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.publisher import Publisher
+from rclpy.qos import QoSProfile
+from rclpy.serialization import serialize_message
+from rclpy.subscription import Subscription
+
+ENV = 'MILL_INTRA_PROCESS'
+CHECK_PERIOD = 1.0  # s between looks for publishers outside the process on a local topic
+
+
+class DataOutput(Protocol):
+    """What a node uses of a publisher (rclpy's Publisher has it too)."""
+
+    @property
+    def topic_name(self) -> str: ...
+
+    def publish(self, msg: Any) -> None: ...
+
+    def get_subscription_count(self) -> int: ...
+
+
+class DataInput(Protocol):
+    """What a node uses of a subscription (rclpy's Subscription has it too)."""
+
+    def get_publisher_count(self) -> int: ...
+
+
+@dataclass(eq=False)
+class _Input:
+    node: Node
+    msg_type: Any
+    topic: str  # resolved name
+    callback: Callable[[bytes], None]
+    qos: QoSProfile | int
+    dds: Subscription | None = None
+
+    def get_publisher_count(self) -> int:
+        if self.dds is not None:
+            return self.dds.get_publisher_count()
+        return self.node.count_publishers(self.topic)
+
+
+class _Output:
+    """A publisher whose bytes also go straight to this process's subscribers."""
+
+    def __init__(self, bus: IntraProcess, publisher: Publisher, topic: str) -> None:
+        self._bus = bus
+        self._publisher = publisher
+        self._topic = topic
+        self._inputs = bus.inputs(topic)  # the list itself: later subscribers join it
+
+    @property
+    def topic_name(self) -> str:
+        return self._topic
+
+    def publish(self, msg: Any) -> None:
+        self._publisher.publish(msg)
+        if self._inputs:
+            data = msg if isinstance(msg, bytes) else serialize_message(msg)
+            queue = self._bus.queue
+            for listener in self._inputs:
+                queue.append((listener.callback, data))
+
+    def get_subscription_count(self) -> int:
+        """Readers over DDS and in this process."""
+        return self._publisher.get_subscription_count() + len(self._inputs)
+
+
+class IntraProcess:
+    """The delivery of one process: its local publishers, subscribers and the queue."""
+
+    def __init__(self) -> None:
+        self.enabled = False
+        self.queue: deque[tuple[Callable[[bytes], None], bytes]] = deque()
+        self._inputs: dict[str, list[_Input]] = {}
+        self._outputs: dict[str, int] = {}  # resolved topic -> local publishers
+        self._reported: dict[str, frozenset[str]] = {}
+        self._checking = False
+
+    def enable(self) -> None:
+        self.enabled = os.environ.get(ENV, '1') != '0'
+
+    def inputs(self, topic: str) -> list[_Input]:
+        return self._inputs.setdefault(topic, [])
+
+    def local(self, topic: str) -> bool:
+        """Whether a node of this process publishes `topic` (resolved)."""
+        return self._outputs.get(topic, 0) > 0
+
+    # -- what nodes call ---------------------------------------------------------------------
+    def publisher(self, node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
+        publisher = node.create_publisher(msg_type, topic, qos)
+        if not self.enabled:
+            return publisher
+        resolved = publisher.topic_name
+        self._outputs[resolved] = self._outputs.get(resolved, 0) + 1
+        for listener in self.inputs(resolved):
+            self._drop_dds(listener)
+        self._watch(node)
+        return _Output(self, publisher, resolved)
+
+    def subscribe(
+        self,
+        node: Node,
+        msg_type: Any,
+        topic: str,
+        callback: Callable[[bytes], None],
+        qos: QoSProfile | int,
+    ) -> DataInput:
+        if not self.enabled:
+            return node.create_subscription(msg_type, topic, callback, qos, raw=True)
+        resolved = node.resolve_topic_name(topic)
+        listener = _Input(node, msg_type, resolved, callback, qos)
+        self.inputs(resolved).append(listener)
+        if not self.local(resolved):
+            listener.dds = node.create_subscription(msg_type, resolved, callback, qos, raw=True)
+        self._watch(node)
+        return listener
+
+    # -- what the spin loop calls ------------------------------------------------------------
+    def pending(self) -> bool:
+        return bool(self.queue)
+
+    def drain(self, budget: int) -> None:
+        """Deliver queued messages, at most `budget` (callbacks may queue more)."""
+        queue = self.queue
+        for _ in range(budget):
+            if not queue:
+                return
+            callback, data = queue.popleft()
+            callback(data)
+
+    # -- internals ---------------------------------------------------------------------------
+    @staticmethod
+    def _drop_dds(listener: _Input) -> None:
+        if listener.dds is not None:
+            listener.node.destroy_subscription(listener.dds)
+            listener.dds = None
+
+    def _watch(self, node: Node) -> None:
+        if self._checking:
+            return
+        self._checking = True
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        node.create_timer(CHECK_PERIOD, self._check_outsiders, clock=steady)
+
+    def _check_outsiders(self) -> None:
+        """Name, once per change, publishers outside this process on a topic taken here."""
+        for topic, listeners in self._inputs.items():
+            if not listeners or not self.local(topic):
+                continue
+            node = listeners[0].node
+            infos = node.get_publishers_info_by_topic(topic)
+            outside = len(infos) - self._outputs[topic]
+            names = frozenset(f'{i.node_namespace.rstrip("/")}/{i.node_name}' for i in infos)
+            if outside > 0 and self._reported.get(topic) != names:
+                self._reported[topic] = names
+                node.get_logger().warning(
+                    f'{topic}: {outside} publisher(s) besides the one in this process '
+                    f'({", ".join(sorted(names))}); their messages are not taken here'
+                )
+
+
+_BUS = IntraProcess()
+
+
+def bus() -> IntraProcess:
+    """This process's delivery."""
+    return _BUS
+
+
+def data_publisher(node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
+    """A publisher of a hot-path topic; delivers in-process too when enabled."""
+    return _BUS.publisher(node, msg_type, topic, qos)
+
+
+def data_subscription(
+    node: Node,
+    msg_type: Any,
+    topic: str,
+    callback: Callable[[bytes], None],
+    qos: QoSProfile | int,
+) -> DataInput:
+    """A raw (bytes) subscription; takes from this process's publisher when there is one."""
+    return _BUS.subscribe(node, msg_type, topic, callback, qos)
