@@ -4,6 +4,7 @@
     benchmark --duration 53.334  # the whole job
     benchmark --layouts processes,per_axis,single   # the same job in each process layout
     benchmark --record --repeat 3                 # cost of recording every topic
+    benchmark --layouts processes,single --realtime 100,250,500,1000   # rates each holds
     benchmark --record --duration 53.334 --repeat 1 --round-trips 0
     benchmark --cores            # the algorithm cores alone, offline, µs per call
 
@@ -21,6 +22,11 @@ With --record, the job runs --repeat times without and --repeat times with
 recording every topic to a rosbag2 bag (`run_scenario --record`), alternating,
 and prints the slowdown of the median steps per second, the bag size per
 simulated second and the time `report` takes on the last bag.
+
+With --realtime RATES, the job also runs on the wall clock (`--timing realtime`) at each
+rate in each layout, slowest first, and the benchmark prints the late periods, the state ->
+command latency and the highest rate each layout holds with < 1 % of periods without a
+fresh command (mill_bringup.realtime_sweep).
 
 With --cores, no ROS: the scenario runs in the offline simulator and the time spent in
 each role's core (trajectory, observer, controller, plant) is printed per call: the
@@ -42,7 +48,9 @@ from pathlib import Path
 from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
+from mill_bringup import realtime_sweep
 from mill_bringup import scenario as scenario_mod
+from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
@@ -233,6 +241,18 @@ def main(argv: list[str] | None = None) -> int:
         help='run the job once in each of these layouts, e.g. processes,per_axis,single',
     )
     parser.add_argument(
+        '--realtime',
+        metavar='RATES',
+        help='also run the job on the wall clock at these sample rates [Hz] in each layout, '
+        'e.g. 100,250,500,1000, and print the highest rate each layout holds',
+    )
+    parser.add_argument(
+        '--realtime-duration',
+        type=float,
+        default=3.0,
+        help='machine time of each realtime run [s]',
+    )
+    parser.add_argument(
         '--cores',
         action='store_true',
         help='time the algorithm cores alone (offline, no ROS) and print µs per call',
@@ -248,6 +268,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scen = scenario_mod.load(args.scenario)
         layouts = layouts_of(args, scen)  # checked before anything runs
+        rates = realtime_sweep.parse_rates(args.realtime) if args.realtime else []
         pp = None
         if args.round_trips > 0:
             print(
@@ -255,8 +276,7 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
             )
             pp = measure_pingpong(args.round_trips, env)
-        for node in scen.nodes_of('mill_trajectory'):
-            scen.add_override(f'{node.name}.duration={args.duration!r}')
+        set_duration(scen, args.duration)
         results: dict[str, RunResult] = {}
         with tempfile.TemporaryDirectory() as tmp:
             for layout in layouts:
@@ -273,7 +293,15 @@ def main(argv: list[str] | None = None) -> int:
                     result = run(job, run_dir, quiet=True, domain_id=env['ROS_DOMAIN_ID'])
                 results[layout] = result
         result = results[layouts[0]]
-    except (scenario_mod.ScenarioError, RunError, TimeoutError) as exc:
+        sweep = realtime_sweep.sweep(
+            args.scenario,
+            layouts,
+            rates,
+            args.realtime_duration,
+            env['ROS_DOMAIN_ID'],
+            progress=lambda text: print(text, file=sys.stderr),
+        )
+    except (scenario_mod.ScenarioError, RunError, TimeoutError, ValueError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
     rate = 1.0 / scen.parameters(scen.nodes_of('mill_plant')[0].name)['sample_period']
@@ -303,6 +331,11 @@ def main(argv: list[str] | None = None) -> int:
         )
     if recording is not None:
         figures['recording'] = recording
+    if sweep:
+        figures['realtime'] = [vars(p) for p in sweep]
+        figures['realtime_highest_held_hz'] = {
+            name: realtime_sweep.highest_held(sweep, name) for name in layouts
+        }
     lines = [f'lockstep job ({rate:g} Hz, executor {executor}, {os.cpu_count()} cores):']
     for name, r in results.items():
         f = layout_figures(r)
@@ -343,6 +376,8 @@ def main(argv: list[str] | None = None) -> int:
             f'  report on the bag ({result.sim_time:g} s job): {rec["report_seconds"]:.1f} s '
             f'wall, {rec["report_cpu_seconds"]:.1f} s CPU (exit code {rec["report_exit_code"]})',
         ]
+    if sweep:
+        lines += realtime_sweep.format_sweep(sweep, layouts)
     lines.append(f'load average (1 min) at the end: {figures["load_average_1min"]:.2f}')
     print('\n'.join(lines))
     if args.json:

@@ -58,13 +58,19 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
             raise ScenarioError(f'--controller: scenario {scen.name} has no axis controller')
         for node in axis_controllers:
             scen.add_override(f'{node.name}.controller={args.controller}')
-    if getattr(args, 'timing', None):
+    set_timing(scen, getattr(args, 'timing', None), getattr(args, 'delay', None))
+    if args.duration is not None:
+        set_duration(scen, args.duration)
+
+
+def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> None:
+    """--timing and --delay on every node that has them."""
+    if timing:
         for node in scen.nodes:
-            scen.add_override(f'{node.name}.timing={args.timing}')
-            if args.timing == 'realtime':
+            scen.add_override(f'{node.name}.timing={timing}')
+            if timing == 'realtime':
                 scen.add_override(f'{node.name}.use_sim_time=false')
-    delay = getattr(args, 'delay', None)
-    if delay is None and getattr(args, 'timing', None) == 'realtime':
+    if delay is None and timing == 'realtime':
         delay = 1  # a command computed from the state of tick k acts from tick k + 1
     if delay is not None:
         if delay < 0:
@@ -72,11 +78,14 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
         for node in scen.nodes:
             if node.package in ('mill_plant', 'mill_controllers', 'mill_observers'):
                 scen.add_override(f'{node.name}.command_delay={delay}')
-    if args.duration is not None:
-        if not args.duration > 0:
-            raise ScenarioError(f'--duration must be > 0, got {args.duration}')
-        for node in scen.nodes_of('mill_trajectory'):
-            scen.add_override(f'{node.name}.duration={args.duration!r}')
+
+
+def set_duration(scen: Scenario, duration: float) -> None:
+    """--duration: the machine time the trajectory runs."""
+    if not duration > 0:
+        raise ScenarioError(f'--duration must be > 0, got {duration}')
+    for node in scen.nodes_of('mill_trajectory'):
+        scen.add_override(f'{node.name}.duration={duration!r}')
 
 
 def variants(scen: Scenario, only: str | None = None) -> dict[str, Scenario]:

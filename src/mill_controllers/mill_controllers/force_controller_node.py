@@ -28,14 +28,23 @@ reference model's ξ and ω_n (so that J_c can be computed from a bag).
 from __future__ import annotations
 
 import math
+from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import Rejected, StampCheck
+from mill_common.codec import decode_joint_state, decode_wrench_stamped
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp, joint_state
+from mill_common.ros import (
+    DATA_QOS,
+    data_publisher,
+    diagnostic_array,
+    from_stamp,
+    joint_state,
+    take_serialized,
+)
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import sample_stamp_ns
 from rclpy.node import Node
@@ -92,9 +101,21 @@ class ForceControllerNode(Node):
             stamp_ns=lambda: self._stamps.newest or 0,
         )
         self.guard.watch(topics.CUTTING_FORCE)
-        self.create_subscription(WrenchStamped, topics.CUTTING_FORCE, self._on_force, DATA_QOS)
+        force, z = topics.CUTTING_FORCE, topics.state('z')
+        take_serialized(
+            self,
+            WrenchStamped,
+            force,
+            decode_wrench_stamped,
+            self._on_force,
+            DATA_QOS,
+            partial(self.guard.drop, force),
+        )
         if v['depth_source'] == 'position':
-            self.create_subscription(JointState, topics.state('z'), self._on_z, DATA_QOS)
+            z_dropped = partial(self.guard.drop, z)
+            take_serialized(
+                self, JointState, z, decode_joint_state, self._on_z, DATA_QOS, z_dropped
+            )
         self.get_logger().info(
             f'force controller {v["force_controller"]} (β = {self._beta:g}), '
             f'F_r = {v["reference_force"]:g} N, T = {self._loop.T * 1e3:.4f} ms, override in '
@@ -109,7 +130,7 @@ class ForceControllerNode(Node):
             self._built = True
         # reference_force, the only changeable value, is read at every sample
 
-    def _on_force(self, msg: WrenchStamped) -> None:
+    def _on_force(self, msg: Any) -> None:
         ns = from_stamp(msg.header.stamp)
         T = self._loop.T
         if self._last is not None and ns == self._last[0]:
@@ -139,7 +160,7 @@ class ForceControllerNode(Node):
         else:
             self._act(ns, *hit, None)
 
-    def _on_z(self, msg: JointState) -> None:
+    def _on_z(self, msg: Any) -> None:
         ns = from_stamp(msg.header.stamp)
         if self._last is not None and ns <= self._last[0]:
             return  # an instant already answered

@@ -53,7 +53,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.linalg
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -119,6 +118,8 @@ def discrete_gpi_gains(
     aug = np.zeros((4, 4))
     aug[:3, :3] = cont
     aug[2, 3] = 1.0
+    import scipy.linalg  # here: the other laws' processes need not load it (about 20 MB)
+
     phi = scipy.linalg.expm(aug)  # exact ZOH of d/dτ (τ = t/T) for e, ė; I is summed
     a_d = phi[:3, :3]
     b_d = phi[:3, 3].copy()

@@ -46,22 +46,29 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import Rejected, StampCheck, joint_values
-from mill_common.codec import encode_joint_trajectory
+from mill_common.codec import decode_joint_state, encode_joint_trajectory
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp
+from mill_common.ros import (
+    DATA_QOS,
+    data_publisher,
+    diagnostic_array,
+    from_stamp,
+    take_serialized,
+)
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import period_ns, sample_stamp_ns, seconds
 from rclpy.clock import Clock as RosClock
 from rclpy.clock import ClockType
 from rclpy.node import Node
+from rclpy.qos import QoSProfile
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -118,20 +125,16 @@ class TrajectoryNode(Node):
             self._start_realtime()
         elif self._periodic is not None:
             self.guard.watch(topics.FEED_OVERRIDE)
-            self.create_subscription(
-                JointState, topics.FEED_OVERRIDE, self._on_override_periodic, DATA_QOS
-            )
+            self._take_override(self._on_override_periodic, DATA_QOS)
         elif self.params.values['feed_override.lockstep']:
             self.guard.watch(topics.FEED_OVERRIDE)
-            self.create_subscription(
-                JointState, topics.FEED_OVERRIDE, self._on_override_lockstep, DATA_QOS
-            )
+            self._take_override(self._on_override_lockstep, DATA_QOS)
         else:
             self._ticks.period_ns = self._dt_ns
             self.guard.watch(topics.CLOCK)
             self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
         if self._scaled is not None and not self.params.values['feed_override.lockstep']:
-            self.create_subscription(JointState, topics.FEED_OVERRIDE, self._on_override, 10)
+            self._take_override(self._on_override, 10)
         self.get_logger().info(
             f'{self.params.values["trajectory"]} path, job ends at t = {self._job_end:.3f} s'
         )
@@ -187,8 +190,14 @@ class TrajectoryNode(Node):
         if v['feed_override.enabled']:
             raise ValueError('feed_override is not available with timing realtime')
         for axis in v['axes']:
-            self.create_subscription(
-                JointState, topics.state(axis), partial(self._on_state, axis), 1
+            take_serialized(
+                self,
+                JointState,
+                topics.state(axis),
+                decode_joint_state,
+                partial(self._on_state, axis),
+                1,
+                partial(self._state_dropped, axis),
             )
         wall = RosClock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(v['publish_period'], self._publish_realtime, clock=wall)
@@ -196,13 +205,22 @@ class TrajectoryNode(Node):
             f'realtime: the job starts when {", ".join(v["axes"])} report their positions'
         )
 
-    def _on_state(self, axis: str, msg: JointState) -> None:
+    def _take_override(self, callback: Callable[[Any], None], qos: QoSProfile | int) -> None:
+        malformed = partial(self.guard.drop, topics.FEED_OVERRIDE)
+        take_serialized(
+            self, JointState, topics.FEED_OVERRIDE, decode_joint_state, callback, qos, malformed
+        )
+
+    def _state_dropped(self, axis: str, rejected: Rejected) -> None:
+        self.get_logger().warning(
+            f'dropped a state on {topics.state(axis)}: {rejected.reason}',
+            throttle_duration_sec=1.0,
+        )
+
+    def _on_state(self, axis: str, msg: Any) -> None:
         value = joint_values(msg.name, {'position': msg.position}, axis, ('position',))
         if isinstance(value, Rejected):
-            self.get_logger().warning(
-                f'dropped a state on {topics.state(axis)}: {value.reason}',
-                throttle_duration_sec=1.0,
-            )
+            self._state_dropped(axis, value)
             return
         self._positions[axis] = value[0]
         self._newest_state_ns = max(
@@ -250,14 +268,14 @@ class TrajectoryNode(Node):
         self._ref_pub.publish(self._reference(self._t0 + first * dt_ns, points))
         self._job_status(seconds(now))
 
-    def _on_override(self, msg: JointState) -> None:
+    def _on_override(self, msg: Any) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
         accepted = self._override.accept(float(offered))
         if accepted.problem:
             self.get_logger().warning(accepted.problem)
             self._report(self.get_clock().now().nanoseconds * 1e-9, 'running', accepted.problem)
 
-    def _on_override_lockstep(self, msg: JointState) -> None:
+    def _on_override_lockstep(self, msg: Any) -> None:
         ns = from_stamp(msg.header.stamp)
         if self._answer is not None and ns == self._answer[0]:
             self.guard.heard(topics.FEED_OVERRIDE)
@@ -293,7 +311,7 @@ class TrajectoryNode(Node):
         self._answer = (ns, out)
         self._job_status(t)
 
-    def _on_override_periodic(self, msg: JointState) -> None:
+    def _on_override_periodic(self, msg: Any) -> None:
         ns = from_stamp(msg.header.stamp)
         if self._answer is not None and ns == self._answer[0]:
             self.guard.heard(topics.FEED_OVERRIDE)
