@@ -206,6 +206,7 @@ def layout_figures(result: RunResult) -> dict:
         'cpu_ms_per_step_by_process': result.cpu_ms_per_step_by_process,
         'peak_rss_mb': result.peak_rss_mb,
         'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
+        'peak_pss_total_mb': result.peak_pss_mb,
     }
 
 
@@ -343,7 +344,8 @@ def main(argv: list[str] | None = None) -> int:
             f'  layout {name:<9} {f["processes"]:2d} process{"es" if f["processes"] > 1 else "  "}'
             f'  {r.steps_per_second:6.0f} '
             f'steps/s  real-time factor {r.real_time_factor:.2f}  {r.cpu_ms_per_step:.2f} ms '
-            f'CPU per step  peak RSS {f["peak_rss_total_mb"]:.0f} MB  ({r.sim_time:g} s '
+            f'CPU per step  peak RSS {f["peak_rss_total_mb"]:.0f} MB, PSS '
+            f'{f["peak_pss_total_mb"]:.0f} MB  ({r.sim_time:g} s '
             f'machine time in {r.wall_time:.1f} s)'
         )
     if pp is not None:

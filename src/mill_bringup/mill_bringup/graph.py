@@ -68,6 +68,19 @@ def vm_hwm_mb(pid: int) -> float:
     return float('nan')
 
 
+def pss_mb(pid: int | str = 'self') -> float:
+    """Proportional set size of a live process [MB]: its resident memory with each page
+    shared among processes (libraries) divided among them; NaN if unreadable. Unlike the RSS,
+    the PSS of several processes adds up to the memory they use together."""
+    try:
+        for line in Path(f'/proc/{pid}/smaps_rollup').read_text().splitlines():
+            if line.startswith('Pss:'):
+                return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return float('nan')
+
+
 def _die_with_parent(parent: int) -> None:
     """In the child before exec: SIGTERM when the parent dies (Linux; elsewhere nothing)."""
     try:
@@ -184,6 +197,11 @@ class Graph:
         """CPU seconds used so far by each node process and by this one ('runner')."""
         used = {n: cpu_seconds(p.pid) for n, p in self.procs.items()}
         return used | {'runner': time.process_time()}
+
+    def pss(self) -> float:
+        """Memory the node processes and this one use together now (sum of PSS) [MB]."""
+        live = [p.pid for p in self.procs.values() if p.poll() is None]
+        return sum(pss_mb(pid) for pid in live) + pss_mb()
 
     def peak_rss(self) -> dict[str, float]:
         return {n: vm_hwm_mb(p.pid) for n, p in self.procs.items() if p.poll() is None}

@@ -60,6 +60,7 @@ class RunResult:
     cpu_ms_per_step: float
     peak_rss_mb: dict[str, float]
     cpu_ms_per_step_by_process: dict[str, float]
+    peak_pss_mb: float  # graph + runner, sampled once a second (RSS counts libraries per process)
     domain_id: str
     missing_samples: dict[str, int]
     summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
@@ -169,6 +170,7 @@ def run(
         graph = Graph(scen, run_dir, env, respawn=restartable if respawn else ())
 
         clock_check = [0.0]
+        peak_pss = [0.0]
 
         never = Future()
 
@@ -183,6 +185,7 @@ def run(
             graph.check(when)
             if time.monotonic() > clock_check[0]:
                 clock_check[0] = time.monotonic() + 1.0
+                peak_pss[0] = max(peak_pss[0], graph.pss())
                 _check_one_clock(monitor, graph, job, env['ROS_DOMAIN_ID'], external)
 
         # The clock node starts last, once the monitor has matched the others' publishers:
@@ -243,6 +246,7 @@ def run(
             for node in job.clock_nodes:
                 deactivate(monitor, executor, node.name, progress)
         peak = graph.peak_rss()
+        peak_pss[0] = max(peak_pss[0], graph.pss())
         graph.stop()
         progress.close()
         if monitor.recorder is not None:
@@ -284,6 +288,7 @@ def run(
         steps_per_second=job.samples / wall,
         cpu_ms_per_step=cpu_ms_per_step,
         cpu_ms_per_step_by_process=cpu_by_process,
+        peak_pss_mb=peak_pss[0],
         peak_rss_mb=peak,
         domain_id=env['ROS_DOMAIN_ID'],
         missing_samples=missing,
@@ -402,7 +407,7 @@ def format_result(r: RunResult) -> str:
         f'wall time {r.wall_time:.1f} s, real-time factor {r.real_time_factor:.2f}, '
         f'{r.steps_per_second:.0f} steps/s, {r.cpu_ms_per_step:.2f} ms CPU per step',
         f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
-        f'({len(r.peak_rss_mb)} processes)',
+        f'({len(r.peak_rss_mb)} processes), {r.peak_pss_mb:.0f} MB in use together (PSS)',
     ]
     if r.missing_samples:
         lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
