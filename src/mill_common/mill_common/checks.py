@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 # Lockstep: the most a reference message may lead the newest state a node has: the
 # trajectory's preview_time (at most 10 s) plus the plant's clock_period (at most 10 s).
@@ -90,6 +91,39 @@ def point_values(
         if bad:
             return Rejected(f'{name} holds {bad[0]}')
         out[name] = picked
+    return out
+
+
+def axis_points(
+    joint_names: Sequence[str], points: Sequence[Any], joint: str
+) -> list[tuple[float, float, float]] | Rejected:
+    """(position, velocity, acceleration) of `joint` in every point of a trajectory message,
+    checked as `point_values` checks one point (positions required; velocities and
+    accelerations may be empty: zeros). The joint is looked up once per message: a
+    controller reads every point of every reference message."""
+    names = list(joint_names)
+    if joint not in names:
+        return Rejected(f'no joint {joint!r} in joint_names {names}')
+    i, n = names.index(joint), len(names)
+    out = []
+    isfinite = math.isfinite
+    for p in points:
+        values = []
+        for name, array in (
+            ('positions', p.positions),
+            ('velocities', p.velocities),
+            ('accelerations', p.accelerations),
+        ):
+            if not len(array) and name != 'positions':
+                values.append(0.0)
+                continue
+            if len(array) < n:
+                return Rejected(f'{name} has {len(array)} entries for {n} joint names')
+            v = float(array[i])
+            if not isfinite(v):
+                return Rejected(f'{name} holds {v}')
+            values.append(v)
+        out.append((values[0], values[1], values[2]))
     return out
 
 

@@ -11,6 +11,7 @@ from mill_common.checks import (
     Rejected,
     StampCheck,
     ahead,
+    axis_points,
     joint_values,
     owner_check,
     point_values,
@@ -65,6 +66,35 @@ def test_point_values() -> None:
     got = point_values(['x', 'y', 'z'], bad, ['y'], ['positions'], ['accelerations'])
     assert isinstance(got, Rejected) and 'nan' in got.reason
     assert "no joint 'w'" in point_values(['x'], point, ['w'], ['positions']).reason
+
+
+class Point:
+    def __init__(self, positions, velocities=(), accelerations=()) -> None:
+        self.positions, self.velocities, self.accelerations = positions, velocities, accelerations
+
+
+@pytest.mark.parametrize(
+    'point',
+    [
+        Point([1.0, 2.0, 3.0], [], [0.1, 0.2, 0.3]),
+        Point([1.0, 2.0, 3.0], [4.0, 5.0, 6.0]),
+        Point([1.0, 2.0]),
+        Point([1.0, math.inf, 3.0]),
+        Point([1.0, 2.0, 3.0], [4.0, 5.0, 6.0], [0.1, math.nan, 0.3]),
+        Point([1.0, 2.0, 3.0], [4.0]),
+    ],
+)
+@pytest.mark.parametrize('joint', ['x', 'y', 'w'])
+def test_axis_points_reads_each_point_as_point_values_does(point, joint) -> None:
+    names = ['x', 'y', 'z']
+    one = point_values(names, vars(point), [joint], ['positions'], ['velocities', 'accelerations'])
+    got = axis_points(names, [point, point], joint)
+    if isinstance(one, Rejected):
+        assert isinstance(got, Rejected)
+        assert got.reason.split(' ')[:2] == one.reason.split(' ')[:2]
+    else:
+        expected = (one['positions'][0], one['velocities'][0], one['accelerations'][0])
+        assert got == [expected, expected]
 
 
 def test_stamp_check_in_lockstep() -> None:

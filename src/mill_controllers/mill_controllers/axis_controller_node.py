@@ -47,9 +47,9 @@ from mill_common.checks import (
     Rejected,
     StampCheck,
     ahead,
+    axis_points,
     joint_values,
     owner_check,
-    point_values,
 )
 from mill_common.codec import decode_joint_state, decode_joint_trajectory
 from mill_common.input_guard import InputGuard
@@ -97,22 +97,14 @@ def _estimate(msg: JointState, axis: str) -> Samples | Rejected:
 
 
 def _reference(msg: JointTrajectory, axis: str) -> Samples | Rejected:
+    got = axis_points(msg.joint_names, msg.points, axis)
+    if isinstance(got, Rejected):
+        return got  # the whole message: a partial reference is no reference
     ns0 = from_stamp(msg.header.stamp)
-    out: Samples = []
-    for p in msg.points:
-        arrays = {
-            'positions': p.positions,
-            'velocities': p.velocities,
-            'accelerations': p.accelerations,
-        }
-        got = point_values(
-            msg.joint_names, arrays, [axis], ['positions'], ['velocities', 'accelerations']
-        )
-        if isinstance(got, Rejected):
-            return got  # the whole message: a partial reference is no reference
-        (pos,), (vel,), (acc,) = got['positions'], got['velocities'], got['accelerations']
-        out.append((ns0 + from_duration(p.time_from_start), AxisReference(pos, vel, acc)))
-    return out
+    return [
+        (ns0 + from_duration(p.time_from_start), AxisReference(*values))
+        for p, values in zip(msg.points, got, strict=True)
+    ]
 
 
 def _model(msg: JointState, axis: str) -> Samples | Rejected:
