@@ -151,6 +151,19 @@ class IntraProcess:
         self._watch(node)
         return listener
 
+    def unsubscribe(self, node: Node, handle: DataInput) -> None:
+        """End a subscription made by `subscribe`: no more messages reach its callback."""
+        if isinstance(handle, _Input):
+            listeners = self.inputs(handle.topic)
+            if handle in listeners:
+                listeners.remove(handle)
+            self._drop_dds(handle)
+            for i, (callback, _data) in reversed(list(enumerate(self.queue))):
+                if callback is handle.callback:
+                    del self.queue[i]  # queued for it already: not delivered either
+        elif isinstance(handle, Subscription):
+            node.destroy_subscription(handle)
+
     # -- what the spin loop calls ------------------------------------------------------------
     def pending(self) -> bool:
         return bool(self.queue)
@@ -206,6 +219,11 @@ def bus() -> IntraProcess:
 def data_publisher(node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
     """A publisher of a hot-path topic; delivers in-process too when enabled."""
     return _BUS.publisher(node, msg_type, topic, qos)
+
+
+def data_unsubscribe(node: Node, handle: DataInput) -> None:
+    """End a subscription made by `data_subscription` (or `take_serialized`)."""
+    _BUS.unsubscribe(node, handle)
 
 
 def data_subscription(

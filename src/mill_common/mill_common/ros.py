@@ -16,8 +16,10 @@ from sensor_msgs.msg import JointState
 
 from mill_common.checks import Rejected
 from mill_common.codec import CodecError, encode_joint_state
-from mill_common.intra_process import DataInput, data_subscription
+from mill_common.intra_process import DataInput as DataInput  # for the nodes
 from mill_common.intra_process import data_publisher as data_publisher  # for the nodes
+from mill_common.intra_process import data_subscription
+from mill_common.intra_process import data_unsubscribe as data_unsubscribe  # for the nodes
 
 # Lockstep data must not be lost, and a slow listener (recorder, monitor) must
 # not lose samples while it catches up: reliable, deep history.

@@ -132,3 +132,32 @@ def test_a_publisher_outside_the_process_is_named(make_node) -> None:
         bus._check_outsiders()
         time.sleep(0.05)
     assert '/intruder' in bus._reported['/mill/x/state']
+
+
+def test_unsubscribed_it_gets_nothing_more_not_even_what_was_queued(make_node) -> None:
+    from sensor_msgs.msg import JointState
+
+    bus = enabled()
+    plant, trajectory, observer = make_node('plant'), make_node('trajectory'), make_node('obs')
+    out = bus.publisher(plant, JointState, TOPIC, DATA_QOS)
+    gone: list[bytes] = []
+    kept: list[bytes] = []
+    handle = bus.subscribe(trajectory, JointState, TOPIC, gone.append, DATA_QOS)
+    bus.subscribe(observer, JointState, TOPIC, kept.append, DATA_QOS)
+    out.publish(b'first')
+    bus.unsubscribe(trajectory, handle)
+    out.publish(b'second')
+    bus.drain(10)
+    assert gone == [] and kept == [b'first', b'second']
+    assert out.get_subscription_count() == 1 + out._publisher.get_subscription_count()
+
+
+def test_off_unsubscribing_destroys_the_dds_subscription(make_node) -> None:
+    from sensor_msgs.msg import JointState
+
+    bus = IntraProcess()
+    node = make_node('trajectory')
+    handle = bus.subscribe(node, JointState, TOPIC, print, DATA_QOS)
+    assert len(list(node.subscriptions)) == 1
+    bus.unsubscribe(node, handle)
+    assert not list(node.subscriptions)

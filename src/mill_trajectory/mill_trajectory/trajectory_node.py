@@ -57,7 +57,9 @@ from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
     DATA_QOS,
+    DataInput,
     data_publisher,
+    data_unsubscribe,
     diagnostic_array,
     from_stamp,
     take_serialized,
@@ -111,6 +113,7 @@ class TrajectoryNode(Node):
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, bytes] | None = None
         self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
+        self._state_subs: dict[str, DataInput] = {}  # realtime: until the job has started
         self._refused = ''
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         lockstep = self.params.values['timing'] == 'lockstep'
@@ -190,7 +193,7 @@ class TrajectoryNode(Node):
         if v['feed_override.enabled']:
             raise ValueError('feed_override is not available with timing realtime')
         for axis in v['axes']:
-            take_serialized(
+            self._state_subs[axis] = take_serialized(
                 self,
                 JointState,
                 topics.state(axis),
@@ -253,6 +256,9 @@ class TrajectoryNode(Node):
             self._path = approach
             self._job_end += approach.duration
             self._t0 = self._newest_state_ns
+            for sub in self._state_subs.values():  # where the axes stood is all it needed
+                data_unsubscribe(self, sub)
+            self._state_subs.clear()
             self.get_logger().info(
                 f'job started; approach of {1e3 * approach.distance:.3f} mm in '
                 f'{approach.duration:.2f} s, ends at t = {self._job_end:.3f} s'
