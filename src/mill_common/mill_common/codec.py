@@ -234,6 +234,15 @@ def encode_wrench_stamped(
     return bytes(buf)
 
 
+def encode_clock(ns: int) -> bytes:
+    """rosgraph_msgs/Clock holding `ns` (the simulation clock the lockstep plant publishes)."""
+    sec, nanosec = divmod(ns, 1_000_000_000)
+    try:
+        return bytes(HEADER_LE) + _STAMP.pack(sec, nanosec)
+    except struct.error:
+        raise CodecError(f'clock {ns} ns does not fit builtin_interfaces/Time') from None
+
+
 # -- reading ----------------------------------------------------------------------------------
 class _Order:
     """The structs of one byte order."""

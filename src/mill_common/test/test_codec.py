@@ -18,6 +18,7 @@ from mill_common.codec import (
     decode_joint_state,
     decode_joint_trajectory,
     decode_wrench_stamped,
+    encode_clock,
     encode_joint_state,
     encode_joint_trajectory,
     encode_wrench_stamped,
@@ -225,6 +226,23 @@ def test_wrench_stamped_agrees_with_rclpy_both_ways(ns, frame, force, torque) ->
     )
     back = deserialize_message(ours, WrenchStamped)
     assert bits((back.wrench.force.x, back.wrench.torque.z)) == bits((force[0], torque[2]))
+
+
+# -- rosgraph_msgs/Clock --------------------------------------------------------------------------
+@EXAMPLES
+@given(stamps_ns)
+def test_clock_equals_rclpy_serialization(ns) -> None:
+    from rosgraph_msgs.msg import Clock
+
+    sec, nanosec = split(ns)
+    assert encode_clock(ns) == serialize_message(Clock(clock=Time(sec=sec, nanosec=nanosec)))
+    back = deserialize_message(encode_clock(ns), Clock)
+    assert (back.clock.sec, back.clock.nanosec) == (sec, nanosec)
+
+
+def test_a_clock_out_of_range_is_refused() -> None:
+    with pytest.raises(codec.CodecError, match='does not fit'):
+        encode_clock(2**31 * 1_000_000_000)
 
 
 # -- malformed input ----------------------------------------------------------------------------

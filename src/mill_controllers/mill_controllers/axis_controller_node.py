@@ -351,12 +351,13 @@ class AxisControllerNode(Node):
 
     def _act(self, ns: int, inputs: dict[str, Any]) -> None:
         self._waiting_since = None
+        switch = self._switch
         est, y, ref = inputs['estimate'], inputs['position'], inputs['reference']
         t = seconds(ns)
         if self._lead_ns:  # the command acts N samples on: aim at the state there
             t, y = seconds(ns + self._lead_ns), est.position
         try:
-            torque = self._switch.compute(ControlInputs(t, y, ref, est, inputs.get('model')))
+            torque = switch.compute(ControlInputs(t, y, ref, est, inputs.get('model')))
         except ValueError as exc:
             self.get_logger().error(f'no valid command for t = {t:.4f} s: {exc}: braking')
             torque = BRAKE
@@ -373,11 +374,11 @@ class AxisControllerNode(Node):
             ns, (self.axis,), effort=(torque,), sender=self._name
         )
         self._pub.publish(self._last_command)
-        status = self._switch.law.status()
+        status = switch.law.status()
         if status:
             values = tuple(float(v) for v in status.values())
             self._state_pub.publish(joint_state_bytes(ns, tuple(status), values, sender=self._name))
-        record = self._switch.last_switch
+        record = switch.last_switch
         if record is not None and record is not self._reported_switch:
             self._reported_switch = record
             self._report_switch(ns, record)

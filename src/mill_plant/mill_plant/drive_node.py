@@ -40,7 +40,7 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected, StampCheck, joint_values, owner_check
-from mill_common.codec import decode_joint_state, encode_wrench_stamped
+from mill_common.codec import decode_joint_state, encode_clock, encode_wrench_stamped
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
@@ -52,7 +52,6 @@ from mill_common.ros import (
     from_stamp,
     joint_state_bytes,
     take_serialized,
-    to_stamp,
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
@@ -296,14 +295,14 @@ class DriveNode(LifecycleNode):
     def _publish_step(self) -> None:
         ns = self._k * self._dt_ns
         if self._clock_pub is not None and self._k % self._clock_every == 0:
-            self._clock_pub.publish(ClockMsg(clock=to_stamp(ns)))
+            self._clock_pub.publish(encode_clock(ns))
         self._publish_states(ns)
         self._last_publish_wall = time.monotonic()
 
     def _reoffer(self) -> None:
         ns = self._k * self._dt_ns
         if self._clock_pub is not None:
-            self._clock_pub.publish(ClockMsg(clock=to_stamp(ns)))
+            self._clock_pub.publish(encode_clock(ns))
         self._publish_states(ns)
 
     def _publish_states(self, ns: int) -> None:

@@ -31,6 +31,7 @@ from builtin_interfaces.msg import Duration
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected
+from mill_common.codec import encode_clock
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
@@ -112,7 +113,7 @@ class ForceProcessNode(Node):
 
     def _publish_sample(self) -> None:
         ns = self._stamp_ns()
-        self._clock_pub.publish(ClockMsg(clock=to_stamp(ns)))
+        self._clock_pub.publish(encode_clock(ns))
         self._force_pub.publish(self._wrench(ns, self._drive.plant.force))
 
     def _on_reference(self, msg: JointTrajectory) -> None:
