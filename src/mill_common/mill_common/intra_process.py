@@ -123,6 +123,7 @@ class IntraProcess:
 
     # -- what nodes call ---------------------------------------------------------------------
     def publisher(self, node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
+        """A publisher of a hot-path topic; delivers in-process too when enabled."""
         publisher = node.create_publisher(msg_type, topic, qos)
         if not self.enabled:
             return publisher
@@ -141,6 +142,7 @@ class IntraProcess:
         callback: Callable[[bytes], None],
         qos: QoSProfile | int,
     ) -> DataInput:
+        """A raw (bytes) subscription; takes from this process's publisher when there is one."""
         if not self.enabled:
             return node.create_subscription(msg_type, topic, callback, qos, raw=True)
         resolved = node.resolve_topic_name(topic)
@@ -216,22 +218,7 @@ def bus() -> IntraProcess:
     return _BUS
 
 
-def data_publisher(node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
-    """A publisher of a hot-path topic; delivers in-process too when enabled."""
-    return _BUS.publisher(node, msg_type, topic, qos)
-
-
-def data_unsubscribe(node: Node, handle: DataInput) -> None:
-    """End a subscription made by `data_subscription` (or `take_serialized`)."""
-    _BUS.unsubscribe(node, handle)
-
-
-def data_subscription(
-    node: Node,
-    msg_type: Any,
-    topic: str,
-    callback: Callable[[bytes], None],
-    qos: QoSProfile | int,
-) -> DataInput:
-    """A raw (bytes) subscription; takes from this process's publisher when there is one."""
-    return _BUS.subscribe(node, msg_type, topic, callback, qos)
+# What the nodes call: publishers and raw (bytes) subscriptions of the hot-path topics.
+data_publisher = _BUS.publisher
+data_subscription = _BUS.subscribe
+data_unsubscribe = _BUS.unsubscribe
