@@ -43,7 +43,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.linalg
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -97,6 +96,8 @@ def affine_input_exponential(a: np.ndarray, b: np.ndarray, h: float) -> np.ndarr
     m[:n, :n] = a
     m[:n, n] = np.asarray(b, dtype=float).reshape(n)
     m[n, n + 1] = 1.0
+    import scipy.linalg  # here: the processes that never sample a force loop need not load it
+
     return scipy.linalg.expm(m * h)
 
 

@@ -43,7 +43,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.linalg
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -212,6 +211,8 @@ class Dfo(Observer):
         aug = np.zeros((n + 1, n + 1))
         aug[:n, :n] = f * self._T
         aug[:n, n] = g * self._T
+        import scipy.linalg  # here: a process without a DFO need not load it (about 20 MB)
+
         phi = scipy.linalg.expm(aug)
         ad, bd = phi[:n, :n], phi[:n, n]
         poles = self.continuous_poles(omegas)

@@ -20,7 +20,6 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.linalg
 from mill_common.parameters import ParameterError, ParamSpec, positive, validate_all
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
@@ -48,6 +47,21 @@ def _expm1_complex(s: complex) -> complex:
         math.expm1(re) * math.cos(im) - 2.0 * math.sin(0.5 * im) ** 2,
         math.exp(re) * math.sin(im),
     )
+
+
+def _exp_nilpotent(m: np.ndarray) -> np.ndarray:
+    """exp(M) of a nilpotent M (Mⁿ = 0 for n × n): the series stops, Σ_{k<n} Mᵏ/k!, exact.
+
+    The GPI model is a chain of integrators, so its ZOH sampling needs no general matrix
+    exponential (and the observer process no scipy.linalg, about 20 MB)."""
+    n = m.shape[0]
+    out, term = np.eye(n), np.eye(n)
+    for k in range(1, n):
+        term = term @ m / k
+        out = out + term
+    if np.any(term @ m):
+        raise ValueError('the matrix is not nilpotent')
+    return out
 
 
 class GpiObserver(Observer):
@@ -108,7 +122,7 @@ class GpiObserver(Observer):
         augmented[:n, :n] = shift
         augmented[1, n] = 1.0
         # Exact ZOH sampling over one period (dimensionless: N/T·T = N).
-        phi = scipy.linalg.expm(augmented)
+        phi = _exp_nilpotent(augmented)
         self._ad_s = phi[:n, :n]  # exp(N): entries 1/(j−i)!
         self._bd_s = (self._b * T * T) * phi[:n, n]  # b·T²·[1/2, 1, 0, …]
         # W = exp(N) − I summed directly (strictly upper triangular, no subtraction of 1).
@@ -134,9 +148,9 @@ class GpiObserver(Observer):
         # O(W, e₀ᵀ) is unit upper triangular: triangular solve, perfectly conditioned.
         last = np.zeros(n)
         last[-1] = 1.0
-        self._l_s = psi_w @ scipy.linalg.solve_triangular(obs, last, lower=False)
+        self._l_s = psi_w @ np.linalg.solve(obs, last)
         # Current-estimator gain M = Ad⁻¹·L; exp(N)⁻¹ = exp(−N) exactly.
-        ad_inv = scipy.linalg.expm(-shift)
+        ad_inv = _exp_nilpotent(-shift)
         self._m_s = ad_inv @ self._l_s
         self._w_roots = w_roots
 

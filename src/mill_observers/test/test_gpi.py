@@ -240,3 +240,20 @@ def test_negative_input_gain_is_handled() -> None:
         x += v * T + 0.5 * (-B) * 0.01 * T * T
         v += (-B) * 0.01 * T
     assert est.disturbance == pytest.approx(0.0, abs=1e-6)
+
+
+def test_the_sampling_series_is_the_matrix_exponential() -> None:
+    import numpy as np
+    import pytest
+    import scipy.linalg
+    from mill_observers.gpi import _exp_nilpotent
+
+    n = 7
+    shift = np.eye(n, k=1)
+    augmented = np.zeros((n + 1, n + 1))
+    augmented[:n, :n] = shift
+    augmented[1, n] = 1.0
+    for m in (augmented, -shift, 0.3 * shift):
+        assert np.max(np.abs(_exp_nilpotent(m) - scipy.linalg.expm(m))) < 1e-15
+    with pytest.raises(ValueError, match='not nilpotent'):
+        _exp_nilpotent(np.eye(3, k=1) + np.eye(3, k=-1))
