@@ -48,6 +48,7 @@ def run_and_kill(ros_env, tmp_path, victim: str, at: float) -> tuple[int, str, d
     stdout = proc.stdout.read() if proc.stdout else ''
     code = proc.wait(timeout=600)
     assert killed, 'the run ended before the kill: ' + ''.join(lines[-5:])
+    assert (out / 'summary.json').exists(), f'no summary (exit {code}):\n' + ''.join(lines[-30:])
     summary = json.loads((out / 'summary.json').read_text())
     return code, stdout + ''.join(lines), summary
 
