@@ -71,6 +71,9 @@ NODE names an entry `NAME PACKAGE EXECUTABLE` of the `{SCENARIO_KEY}: launch:` l
 --params-file given. The --ros-args (namespace, remappings, parameter files, -p, log level)
 apply to every node. The first node to end by itself ends the container with its exit code.
 
+Messages between the nodes of the container are handed over in the process (they still go
+to DDS for every other reader); MILL_INTRA_PROCESS=0 sends them through DDS only.
+
 executables that can run in a container:
 """ + '\n'.join(f'  {package} {executable}' for package, executable in NODE_FACTORIES)
 
