@@ -188,7 +188,18 @@ def start_plant(hosts: TwoHosts, log: IO[str], *params: str) -> subprocess.Popen
     args = ['-m', PLANT, '--ros-args', '-r', '__node:=plant', '--params-file', str(SCENARIO)]
     for p in ('autostart:=false', 'min_subscribers:=3', *params):
         args += ['-p', f'plant:{p}']
-    return hosts.start(hosts.drive, args, log, False, FASTDDS_BUILTIN_TRANSPORTS='UDPv4')
+    plant = hosts.start(hosts.drive, args, log, False, FASTDDS_BUILTIN_TRANSPORTS='UDPv4')
+    # The drive host is up before the control host starts. Started the other way round (the
+    # runner's participant before the plant's), the runner here never discovered the plant's
+    # services: both "hosts" are one machine (one machine-id, one /dev/shm), which two real
+    # hosts are not. Waiting for the node to say it is up is no fixed start-up time.
+    log.flush()
+    deadline = time.monotonic() + 300.0
+    while 'waiting for configure' not in Path(log.name).read_text():
+        assert plant.poll() is None, Path(log.name).read_text()[-3000:]
+        assert time.monotonic() < deadline, 'the plant never came up'
+        time.sleep(0.1)
+    return plant
 
 
 def start_runner(hosts: TwoHosts, out: Path, log: IO[str], *args: str) -> subprocess.Popen:

@@ -21,11 +21,13 @@ from __future__ import annotations
 import argparse
 import datetime as dt
 import json
+import math
 import os
 import resource
 import signal
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -202,7 +204,14 @@ def run(
         for node in job.clock_nodes:
             # started elsewhere, perhaps waiting to be activated; or held in a container
             if node.name in external or node in held:
-                activate(monitor, executor, node.name, progress)
+                activate(
+                    monitor,
+                    executor,
+                    node.name,
+                    progress,
+                    started=lambda: job.progress(monitor) > -math.inf,
+                    wait=startup_timeout,
+                )
         progress.note(
             f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]}); '
             'waiting for discovery'
@@ -307,12 +316,20 @@ def run(
     return result
 
 
-def activate(node: Any, executor: Any, target: str, progress: Progress, wait: float = 5.0) -> None:
+def activate(
+    node: Any,
+    executor: Any,
+    target: str,
+    progress: Progress,
+    started: Callable[[], bool],
+    wait: float,
+) -> None:
     """Bring a lifecycle node that runs elsewhere to active, where the runner would start it.
 
     A drive started with autostart false waits for this: it then starts after the graph, as
-    a drive the runner starts itself does. One without the lifecycle services, or active
-    already, is left alone.
+    a drive the runner starts itself does. One that runs by itself (`started`: its first
+    step has arrived), or is active already, is left alone. Discovering the services of a
+    node on another host or in a busy process can take long: wait for them up to `wait` s.
     """
     from lifecycle_msgs.msg import State, Transition
     from lifecycle_msgs.srv import ChangeState, GetState
@@ -328,11 +345,18 @@ def activate(node: Any, executor: Any, target: str, progress: Progress, wait: fl
     get = node.create_client(GetState, f'{target}/get_state')
     change = node.create_client(ChangeState, f'{target}/change_state')
     try:
-        deadline = time.monotonic() + wait
+        t0 = time.monotonic()
+        said = False
         while not get.service_is_ready():  # spinning: the job may already be under way
-            if time.monotonic() > deadline:
-                progress.note(f'{target} has no lifecycle services: it starts by itself')
+            if started():
+                progress.note(f'{target} has no lifecycle services: it started by itself')
                 return
+            if time.monotonic() - t0 > wait:
+                progress.note(f'{target}: no lifecycle services and no step within {wait:g} s')
+                return
+            if not said and time.monotonic() - t0 > 5.0:
+                progress.note(f'waiting for the lifecycle services of {target} (discovery)')
+                said = True
             executor.spin_once(timeout_sec=0.05)
         state = _call(executor, get, GetState.Request())
         todo = steps.get(state.current_state.id, []) if state is not None else []
@@ -350,7 +374,7 @@ def activate(node: Any, executor: Any, target: str, progress: Progress, wait: fl
         node.destroy_client(change)
 
 
-def _call(executor: Any, client: Any, request: Any, timeout: float = 5.0) -> Any:
+def _call(executor: Any, client: Any, request: Any, timeout: float = 30.0) -> Any:
     """The response of a service call, None if none came within timeout."""
     future = client.call_async(request)
     deadline = time.monotonic() + timeout
