@@ -129,9 +129,19 @@ def run(
     plan = processes(scen, layout, external, alone=clock_names - managed)
     # A clock node in a container waits for `activate`, sent once the upstream is heard.
     held = [n for p in plan if p.container for n in p.nodes if n.name in clock_names]
-    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in held}  # put back at the end
+    touched = [n for n in scen.nodes if respawn or n in held]
+    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in touched}  # put back at the end
     for node in held:
         scen.overrides.setdefault(node.name, {})['autostart'] = False
+    if respawn:
+        # A restarted node takes as long to start as any node: the plant must not give up on
+        # its commands, nor its peers on its messages, before it can be back.
+        for node in scen.nodes:
+            name = 'lockstep_timeout' if node.name in clock_names else None
+            if node.package in ('mill_controllers', 'mill_observers'):
+                name = 'input_timeout'
+            if name is not None:
+                scen.overrides.setdefault(node.name, {}).setdefault(name, startup_timeout)
     first = [p for p in plan if p.container or not clock_names & set(p.node_names)]
     last = [p for p in plan if p not in first]
     restartable = [p.name for p in plan if not clock_names & set(p.node_names)]
@@ -518,7 +528,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         '--respawn',
         action='store_true',
-        help='start a node that dies again (not the plant); it rejoins the running job',
+        help='start a node that dies again (not the plant); it rejoins the running job (the '
+        'plant and the peers then wait for a node as long as a start-up may take)',
     )
     parser.add_argument(
         '--layout',
