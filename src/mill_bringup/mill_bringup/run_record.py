@@ -582,13 +582,21 @@ def _realtime_run(
 
 
 def _feed_values(msgtype: str, feed: list, notes: list[str]) -> list[tuple[int, float]]:
+    """(log time, override) of each override sent; a stamped answer repeated for a
+    re-offered sample (the force controller answers step 0 as often as the plant offers
+    it) is one override, not several."""
     out = []
+    last_stamp: int | None = None
     for log_time, data in feed:
         try:
             msg = decode(msgtype, data)
         except Exception:
             notes.append(f'{topic_names.FEED_OVERRIDE}: cannot decode type {msgtype}')
             return []
+        stamp = cdr_stamp_ns(data) if hasattr(msg, 'header') else None
+        if stamp is not None and stamp == last_stamp:
+            continue
+        last_stamp = stamp
         value = getattr(msg, 'data', None)
         if value is None and len(getattr(msg, 'position', ())):
             value = msg.position[0]  # sensor_msgs/JointState, the contract's type

@@ -113,3 +113,22 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
     np.testing.assert_array_equal(rec['reference'][:, 0], [np.nan, 5.0, 6.0])
     assert rec.foreign == {state: 3, ref: 3}
     assert missing == {state: 1}
+
+
+def test_a_repeated_answer_to_a_reoffered_sample_is_one_override() -> None:
+    from mill_bringup.run_record import _feed_values
+    from rclpy.serialization import serialize_message
+
+    def override(stamp_ns: int, value: float) -> bytes:
+        # every array filled: rclpy's serialize_message pads a message with an empty
+        # float64 array beyond its CDR length (the wire does not), which no reader accepts
+        msg = JointState(name=['override'], position=[value], velocity=[0.0], effort=[0.0])
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+        return serialize_message(msg)
+
+    # step 0 answered three times (the plant re-offered it), then two instants
+    sent = [(0, 1.1), (0, 1.1), (0, 1.1), (34_000_000, 1.4), (67_000_000, 1.4)]
+    feed = [(10 + i, override(s, v)) for i, (s, v) in enumerate(sent)]
+    notes: list[str] = []
+    values = _feed_values('sensor_msgs/msg/JointState', feed, notes)
+    assert values == [(10, 1.1), (13, 1.4), (14, 1.4)] and notes == []
