@@ -3,6 +3,7 @@
     benchmark                    # 10 s of the slotting job + 5000 ping-pong round trips
     benchmark --duration 53.334  # the whole job
     benchmark --layouts processes,per_axis,single   # the same job in each process layout
+    benchmark --layouts processes,single --repeat 5  # five runs of each, taken in turn
     benchmark --record --repeat 3                 # cost of recording every topic
     benchmark --layouts processes,single --realtime 100,250,500,1000   # rates each holds
     benchmark --record --duration 53.334 --repeat 1 --round-trips 0
@@ -16,7 +17,10 @@ that crosses processes could reach on this machine.
 
 --layout runs the nodes in another process layout (mill_bringup.layout: processes,
 per_axis, single); --layouts runs the job once in each layout given, one after the other,
-and prints steps per second, CPU per step and peak RSS of each.
+and prints steps per second, CPU per step and peak RSS of each. With --repeat N each layout
+runs N times, the layouts taken in turn (A B A B ...) so that a machine that speeds up or
+slows down during the benchmark weighs on every layout alike; the median steps per second
+and the range of the N runs are printed, the other figures are those of the median run.
 
 With --record, the job runs --repeat times without and --repeat times with
 recording every topic to a rosbag2 bag (`run_scenario --record`), alternating,
@@ -196,6 +200,17 @@ def layouts_of(args: argparse.Namespace, scen: scenario_mod.Scenario) -> list[st
     return names
 
 
+def schedule(layouts: list[str], repeat: int) -> list[tuple[int, str]]:
+    """(run index, layout) in the order they run: the layouts in turn, `repeat` rounds."""
+    return [(i, name) for i in range(repeat) for name in layouts]
+
+
+def median_run(runs: list[RunResult]) -> RunResult:
+    """The run of the median steps per second (the lower middle one of an even count)."""
+    ordered = sorted(runs, key=lambda r: r.steps_per_second)
+    return ordered[(len(ordered) - 1) // 2]
+
+
 def layout_figures(result: RunResult) -> dict:
     return {
         'processes': len(result.peak_rss_mb) - 1,  # the runner is not one of the graph
@@ -228,7 +243,10 @@ def main(argv: list[str] | None = None) -> int:
         'and report time',
     )
     parser.add_argument(
-        '--repeat', type=int, default=3, help='runs with and without recording (--record)'
+        '--repeat',
+        type=int,
+        help='runs of the job in each layout, taken in turn (default 1); with --record, '
+        'runs with and without recording (default 3)',
     )
     group = parser.add_mutually_exclusive_group()
     group.add_argument(
@@ -259,6 +277,9 @@ def main(argv: list[str] | None = None) -> int:
         help='time the algorithm cores alone (offline, no ROS) and print µs per call',
     )
     args = parser.parse_args(argv)
+    repeat = args.repeat if args.repeat is not None else (3 if args.record else 1)
+    if repeat < 1:
+        parser.error(f'--repeat must be at least 1, got {repeat}')
     if args.cores:
         return time_cores(args.scenario, args.duration)
     if args.executor:
@@ -278,21 +299,24 @@ def main(argv: list[str] | None = None) -> int:
             )
             pp = measure_pingpong(args.round_trips, env)
         set_duration(scen, args.duration)
-        results: dict[str, RunResult] = {}
+        runs: dict[str, list[RunResult]] = {name: [] for name in layouts}
         with tempfile.TemporaryDirectory() as tmp:
-            for layout in layouts:
+            # --record repeats inside its one layout (measure_recording)
+            for i, layout in schedule(layouts, 1 if args.record else repeat):
                 scen.layout = layout
+                which = f', run {i + 1}/{repeat}' if repeat > 1 and not args.record else ''
                 print(
-                    f'{scen.name}: {args.duration:g} s of machine time, layout {layout} ...',
+                    f'{scen.name}: {args.duration:g} s of machine time, layout {layout}{which} ...',
                     file=sys.stderr,
                 )
-                run_dir = Path(tmp) / layout
+                run_dir = Path(tmp) / f'{layout}-{i}'
                 if args.record:
-                    result, recording = measure_recording(scen, run_dir, env, max(1, args.repeat))
+                    result, recording = measure_recording(scen, run_dir, env, repeat)
                 else:
                     job = job_for(scen)
                     result = run(job, run_dir, quiet=True, domain_id=env['ROS_DOMAIN_ID'])
-                results[layout] = result
+                runs[layout].append(result)
+        results = {name: median_run(r) for name, r in runs.items()}
         result = results[layouts[0]]
         sweep = realtime_sweep.sweep(
             args.scenario,
@@ -319,7 +343,13 @@ def main(argv: list[str] | None = None) -> int:
         'cpu_count': os.cpu_count(),
         'load_average_1min': os.getloadavg()[0],
         'layout': layouts[0],
-        'layouts': {name: layout_figures(r) for name, r in results.items()},
+        'layouts': {
+            name: {
+                **layout_figures(r),
+                'steps_per_second_runs': [x.steps_per_second for x in runs[name]],
+            }
+            for name, r in results.items()
+        },
     }
     if pp is not None:
         figures.update(
@@ -338,11 +368,15 @@ def main(argv: list[str] | None = None) -> int:
             name: realtime_sweep.highest_held(sweep, name) for name in layouts
         }
     lines = [f'lockstep job ({rate:g} Hz, executor {executor}, {os.cpu_count()} cores):']
+    if repeat > 1 and not args.record:
+        lines.append(f'  (median of {repeat} runs of each layout, taken in turn; range in [])')
     for name, r in results.items():
         f = layout_figures(r)
+        rates = [x.steps_per_second for x in runs[name]]
+        spread = f' [{min(rates):.0f}-{max(rates):.0f}]' if len(rates) > 1 else ''
         lines.append(
             f'  layout {name:<9} {f["processes"]:2d} process{"es" if f["processes"] > 1 else "  "}'
-            f'  {r.steps_per_second:6.0f} '
+            f'  {r.steps_per_second:6.0f}{spread} '
             f'steps/s  real-time factor {r.real_time_factor:.2f}  {r.cpu_ms_per_step:.2f} ms '
             f'CPU per step  peak RSS {f["peak_rss_total_mb"]:.0f} MB, PSS '
             f'{f["peak_pss_total_mb"]:.0f} MB  ({r.sim_time:g} s '

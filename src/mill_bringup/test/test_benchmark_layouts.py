@@ -47,3 +47,37 @@ def test_main_refuses_a_bad_layout_in_one_line(capsys: pytest.CaptureFixture[str
     assert (
         err == "benchmark: error: layout must be one of processes, per_axis, single, got 'pairs'\n"
     )
+
+
+def test_repeated_layouts_run_in_turn() -> None:
+    from mill_bringup.benchmark import schedule
+
+    assert schedule(['single', 'processes'], 3) == [
+        (0, 'single'),
+        (0, 'processes'),
+        (1, 'single'),
+        (1, 'processes'),
+        (2, 'single'),
+        (2, 'processes'),
+    ]
+    assert schedule(['per_axis'], 1) == [(0, 'per_axis')]
+
+
+@pytest.mark.parametrize(
+    ('rates', 'median'),
+    [([300.0], 300.0), ([500.0, 200.0, 400.0], 400.0), ([500.0, 200.0, 400.0, 100.0], 200.0)],
+)
+def test_the_median_run_stands_for_its_layout(rates: list[float], median: float) -> None:
+    from types import SimpleNamespace
+
+    from mill_bringup.benchmark import median_run
+
+    runs = [SimpleNamespace(steps_per_second=r) for r in rates]
+    assert median_run(runs).steps_per_second == median  # type: ignore[arg-type]
+
+
+def test_repeat_below_one_is_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(['slotting', '--repeat', '0'])
+    assert exc.value.code == 2
+    assert '--repeat must be at least 1, got 0' in capsys.readouterr().err
