@@ -209,3 +209,56 @@ def test_controller_without_observer_is_named(start_node) -> None:
     ]
     assert warnings, out + log
     assert any('mill/x/estimate' in line for line in warnings), warnings
+
+
+@pytest.mark.system
+def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
+    start_node,
+) -> None:
+    """Braked before the first command is where every realtime job starts: the drive says
+    nothing about it. A brake asked for later (a non-finite command) is still an ERROR."""
+    plant = start_node(
+        PLANT,
+        'plant',
+        *plant_args(
+            axes='["x"]',
+            min_subscribers='1',
+            cutting_model='none',
+            timing='realtime',
+            sample_period='0.01',
+        ),
+    )
+    statuses: list[DiagnosticStatus] = []
+    answered: list[int] = []
+    with ros_node('x_controller') as (node, executor):  # the owner the scenario names
+        pub = node.create_publisher(JointState, COMMAND, DATA_QOS)
+
+        def on_state(msg: JointState) -> None:
+            # finite for 50 ticks, then the brake request (NaN) of a tripped controller
+            effort = FINITE if len(answered) < 50 else math.nan
+            answered.append(from_stamp(msg.header.stamp))
+            pub.publish(
+                joint_state(
+                    from_stamp(msg.header.stamp), ('x',), effort=(effort,), sender='x_controller'
+                )
+            )
+
+        node.create_subscription(JointState, STATE, on_state, DATA_QOS)
+        node.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS, lambda m: statuses.extend(m.status), 10
+        )
+
+        def braked_on_request() -> bool:
+            return any('invalid command' in s.message for s in statuses)
+
+        assert spin_until(executor, braked_on_request, 120), (
+            f'{len(answered)} states answered; statuses: {[s.message for s in statuses]}'
+        )
+        spin_until(executor, lambda: False, 1.5)  # the running status after it, once a second
+        assert plant.alive(), plant.stop()[2]
+    errors = [s for s in statuses if s.level == DiagnosticStatus.ERROR]
+    first_request = next(i for i, s in enumerate(errors) if 'invalid command' in s.message)
+    assert errors[:first_request] == [], [s.message for s in errors]  # nothing before it
+    assert any(s.message == 'axis x braked' for s in errors[first_request:]), [
+        s.message for s in errors
+    ]

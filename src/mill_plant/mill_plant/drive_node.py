@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from functools import partial
 from typing import Any
 
@@ -334,8 +334,12 @@ class DriveNode(LifecycleNode):
             self._publish_status(force=True)
         self._publish_step()
 
-    def _apply(self, ns: int, efforts: list[float]) -> None:
-        """Write the efforts, publish the analysis topics of sample ns, integrate one period."""
+    def _apply(self, ns: int, efforts: list[float], held: Collection[str] = ()) -> None:
+        """Write the efforts, publish the analysis topics of sample ns, integrate one period.
+
+        held: axes the drive holds braked before their first command (realtime): that is
+        the state a job starts from, not a fault to report.
+        """
         assert self.backend is not None
         backend = self.backend
         backend.write(efforts)
@@ -346,12 +350,12 @@ class DriveNode(LifecycleNode):
             return
         for axis in self.axes:
             i = MACHINE_AXES.index(axis)
-            if report.faulted[i]:
+            if report.faulted[i] and axis not in held:
                 self._faults[axis] += 1
                 if self._faults[axis] == 1:
                     self.get_logger().error(
-                        f'non-finite command on {topics.joint_command(axis)} at '
-                        f't = {seconds(ns):.4f} s: axis {axis} braked'
+                        f'axis {axis} braked at t = {seconds(ns):.4f} s: no finite command '
+                        f'on {topics.joint_command(axis)} to apply'
                     )
                     self._publish_status(force=True, message=f'axis {axis} braked')
             if report.saturated[i]:
@@ -385,9 +389,11 @@ class DriveNode(LifecycleNode):
             self._overruns += 1
         self._publish_states(ns)
         self._recent.append(ns)
+        held: Collection[str] = self.axes  # inactive: every axis held braked, as expected
         if self.active:
             tick = self.table.take()
             efforts = tick.efforts
+            held = [a for a, c in self.table.by_axis.items() if c.stamp < 0]  # none came yet
             for axis in tick.newly_braked:
                 owner = self.owners[axis] or 'its controller'
                 self._report_axis(
@@ -400,7 +406,7 @@ class DriveNode(LifecycleNode):
                 self._report_axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
         else:
             efforts = [math.nan] * len(self.axes)
-        self._apply(ns, efforts)
+        self._apply(ns, efforts, held)
         self._k += 1
 
     # -- watchdog, start-up, diagnostics -------------------------------------------------------
