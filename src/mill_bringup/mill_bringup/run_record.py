@@ -40,6 +40,7 @@ from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps
 
+from mill_bringup.bag_status import job_end, job_start, plant_status
 from mill_bringup.metrics import RunRecord
 from mill_bringup.realtime_record import realtime_record
 from mill_common import topics as topic_names
@@ -429,7 +430,7 @@ def read_run(
     first = topic_names.state(axes[0])
     first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
     stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
-    start_ns = _job_start(statuses)
+    start_ns = job_start(statuses)
     if start_ns is not None:  # the drive's own clock: no sample grid
         return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
     diffs = np.diff(stamps)
@@ -437,7 +438,7 @@ def read_run(
     if dt_ns <= 0:
         raise BagError(f'{bag.path}: fewer than two samples on {first}')
     notes = []
-    end_time, source = _job_end(statuses)
+    end_time, source = job_end(statuses)
     if end_time is not None:
         n = job_steps(end_time, dt_ns)
     else:
@@ -477,52 +478,12 @@ def read_run(
         end_time=end_time,
         job_end_source=source,
         state_wall_ns=wall,
-        plant_status=_plant_status(statuses),
+        plant_status=plant_status(statuses),
         feed_override=feed_values,
         message_count=total,
         size_bytes=size,
         notes=notes,
     )
-
-
-def _status_values(status: Any) -> dict[str, str]:
-    return {kv.key: kv.value for kv in status.values}
-
-
-def _job_end(statuses: list[Any]) -> tuple[float | None, str]:
-    """end_time of the trajectory's "done" status, else of its first status: with a feed
-    override only the "done" one knows where the job ended."""
-    found = None
-    for array in statuses:
-        for status in array.status:
-            if status.name == 'mill_trajectory: job':
-                values = _status_values(status)
-                if 'end_time' not in values:
-                    continue
-                if values.get('state') == 'done':
-                    return float(values['end_time']), 'job status on /diagnostics'
-                if found is None:
-                    found = float(values['end_time'])
-    return found, 'job status on /diagnostics' if found is not None else ''
-
-
-def _plant_status(statuses: list[Any]) -> dict[str, str]:
-    for array in reversed(statuses):
-        for status in array.status:
-            if status.name in ('mill_plant: lockstep', 'mill_plant: realtime'):
-                return _status_values(status) | {'message': status.message}
-    return {}
-
-
-def _job_start(statuses: list[Any]) -> int | None:
-    """The start stamp of a realtime job, from the trajectory's status (None: lockstep)."""
-    for array in reversed(statuses):
-        for status in array.status:
-            if status.name == 'mill_trajectory: job':
-                values = _status_values(status)
-                if 'start_stamp_ns' in values:
-                    return int(values['start_stamp_ns'])
-    return None
 
 
 def _realtime_run(
@@ -536,7 +497,7 @@ def _realtime_run(
     total: int,
 ) -> BagRun:
     """A realtime run's record at the drive's stamps, and the commands' timing."""
-    end_time, source = _job_end(statuses)
+    end_time, source = job_end(statuses)
     if end_time is None:
         end_time = (int(stamps[-1]) - start_ns) * 1e-9
     record = realtime_record(raw, axes, start_ns, end_time)
@@ -570,7 +531,7 @@ def _realtime_run(
         end_time=end_time,
         job_end_source=source,
         state_wall_ns=None,
-        plant_status=_plant_status(statuses),
+        plant_status=plant_status(statuses),
         feed_override=None,
         message_count=total,
         size_bytes=sum(f.stat().st_size for f in bag.files),

@@ -1,0 +1,47 @@
+"""What a run's /diagnostics say about its job: where it started and ended, the plant's
+last status. Read from the decoded DiagnosticArray messages of a bag (`run_record`). ROS-free.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+def status_values(status: Any) -> dict[str, str]:
+    return {kv.key: kv.value for kv in status.values}
+
+
+def job_end(statuses: list[Any]) -> tuple[float | None, str]:
+    """end_time of the trajectory's "done" status, else of its first status: with a feed
+    override only the "done" one knows where the job ended."""
+    found = None
+    for array in statuses:
+        for status in array.status:
+            if status.name == 'mill_trajectory: job':
+                values = status_values(status)
+                if 'end_time' not in values:
+                    continue
+                if values.get('state') == 'done':
+                    return float(values['end_time']), 'job status on /diagnostics'
+                if found is None:
+                    found = float(values['end_time'])
+    return found, 'job status on /diagnostics' if found is not None else ''
+
+
+def plant_status(statuses: list[Any]) -> dict[str, str]:
+    for array in reversed(statuses):
+        for status in array.status:
+            if status.name in ('mill_plant: lockstep', 'mill_plant: realtime'):
+                return status_values(status) | {'message': status.message}
+    return {}
+
+
+def job_start(statuses: list[Any]) -> int | None:
+    """The start stamp of a realtime job, from the trajectory's status (None: lockstep)."""
+    for array in reversed(statuses):
+        for status in array.status:
+            if status.name == 'mill_trajectory: job':
+                values = status_values(status)
+                if 'start_stamp_ns' in values:
+                    return int(values['start_stamp_ns'])
+    return None
