@@ -110,6 +110,7 @@ class Graph:
         self.respawn = set(respawn)
         self.max_restarts = max_restarts
         self.restarts: dict[str, int] = {}
+        self.last_restart: float | None = None  # time.monotonic() of the newest restart
         self.notes: list[str] = []
         self.logs: dict[str, Path] = {}
         self._log_dir = run_dir / 'logs'
@@ -184,6 +185,7 @@ class Graph:
                     f'{self.what(name)} exited with code {code} {when}: started again'
                 )
                 self.launch([self.processes[name]])
+                self.last_restart = time.monotonic()
                 continue
             raise GraphError(
                 f'{self.what(name)} exited with code {code} {when}:\n' + self.log_tail(name)

@@ -242,8 +242,13 @@ def run(
                 if now - t_start > startup_timeout:
                     raise RunError(f'no step within {startup_timeout:g} s of the start')
                 continue
-            if now - last_change > stall_timeout:
-                raise RunError(f'the run stalled: no new sample for {stall_timeout:g} s')
+            # A restarted process has as long to come back as any start-up takes.
+            restarting = graph.last_restart is not None and now - graph.last_restart < (
+                startup_timeout
+            )
+            limit = max(stall_timeout, startup_timeout) if restarting else stall_timeout
+            if now - last_change > limit:
+                raise RunError(f'the run stalled: no new sample for {limit:g} s')
             rtf = reached / max(now - t_first, 1e-9)
             progress.update(max(reached, 0.0), f'real-time factor {rtf:.2f}')
         t_end = time.monotonic()
@@ -402,7 +407,8 @@ def main(argv: list[str] | None = None) -> int:
         '--stall-timeout',
         type=float,
         default=30.0,
-        help='give up when no sample arrives for this long [s]',
+        help='give up when no sample arrives for this long [s]; for a process that '
+        '--respawn just started again, at least as long as a start-up may take',
     )
     parser.add_argument(
         '--compare-offline',
