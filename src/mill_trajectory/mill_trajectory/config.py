@@ -15,6 +15,7 @@ from mill_common.parameters import (
     in_range,
     input_watch_specs,
     non_negative,
+    non_negative_int,
     one_of,
     positive,
 )
@@ -62,9 +63,10 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'timing',
                 'lockstep',
                 'lockstep: answer each /clock tick of the plant with the reference ahead of it; '
-                'realtime: start the job once every axis of `axes` has reported its position, '
-                'first moving there from where the axes stand (approach.*), and publish the '
-                'reference on the system clock every publish_period',
+                'realtime: once every axis of `axes` has reported its position, hold the axes '
+                'where they stand until every axis has a command, then start the job, first '
+                'moving to its start (approach.*), and publish the reference on the system '
+                'clock every publish_period',
                 one_of('lockstep', 'realtime'),
                 True,
             ),
@@ -76,6 +78,18 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 ['x', 'y', 'z'],
                 'realtime: the axes whose states start the job',
                 _axes,
+                True,
+            ),
+        ),
+        (
+            'min_subscribers',
+            ParamSpec(
+                'min_subscribers',
+                0,
+                'realtime: readers the reference needs before the job starts, at least one '
+                'per axis (the controllers); run_scenario adds its monitor, so that the record '
+                'has the job from its start',
+                non_negative_int,
                 True,
             ),
         ),

@@ -14,13 +14,16 @@ the override in effect when its tick arrives (mill_trajectory.feed_override).
 
 With timing realtime (a drive on the wall clock, no /clock) it waits until every axis of
 `axes` has reported its position, every axis has an estimate publisher (its observer) and as
-many nodes (the controllers) listen to the reference, starts the job at the stamp of the
-newest of those states (the drive's system clock), first moving from where the axes stand
-to the path's start at `approach.speed` (or refusing, with the distance, beyond
-`approach.max_distance`), and
-publishes every `publish_period` the points of the sample grid t0 + kT from one sample
-before now to `preview_time` ahead, stamped on the system clock; the controllers interpolate
-them at their states' stamps. The job status says when it started (`start_stamp_ns`).
+many nodes (the controllers) listen to the reference. It then holds the axes where they
+stand (the reference is their position, on the grid of the newest state's stamp) until a
+command has come from every axis: only then has each controller got states, estimates and
+the reference (discovery between processes can take seconds after the graph is up). The
+job starts at the grid point of that moment, t0 (the drive's system clock), first moving
+from where the axes stand to the path's start at `approach.speed` (or refusing, with the
+distance, beyond `approach.max_distance`), and publishes every `publish_period` the points
+of the sample grid t0 + kT from one sample before now to `preview_time` ahead, stamped on
+the system clock; the controllers interpolate them at their states' stamps. The job status
+says when it started (`start_stamp_ns`).
 
 With feed_override.lockstep the node answers overrides instead of ticks: an override stamped
 t_k (from a force controller in lockstep with its plant) gets the reference of sample k, one
@@ -108,12 +111,16 @@ class TrajectoryNode(Node):
         self._next_report = 0.0
         self._t0: int | None = None  # realtime: job start on the system clock [ns]
         self._newest_state_ns = 0
+        self._hold_ns: int | None = None  # realtime: grid of the hold before the start [ns]
+        self._approach: Approach  # realtime: set when the hold begins
+        self._answered: set[str] = set()  # realtime: axes whose controller has commanded
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._answer: tuple[int, bytes] | None = None
         self._positions: dict[str, float] = {}  # realtime: the axes' latest positions
         self._state_subs: dict[str, DataInput] = {}  # realtime: until the job has started
+        self._command_subs: dict[str, DataInput] = {}  # realtime: during the hold
         self._refused = ''
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         lockstep = self.params.values['timing'] == 'lockstep'
@@ -226,19 +233,36 @@ class TrajectoryNode(Node):
             self._state_dropped(axis, value)
             return
         self._positions[axis] = value[0]
-        self._newest_state_ns = max(
-            getattr(self, '_newest_state_ns', 0), from_stamp(msg.header.stamp)
-        )
+        self._newest_state_ns = max(self._newest_state_ns, from_stamp(msg.header.stamp))
+
+    def _on_command(self, axis: str, msg: Any) -> None:
+        self._answered.add(axis)  # its controller has states, an estimate and the reference
 
     def _publish_realtime(self) -> None:
         v = self.params.values
-        if self._t0 is None:
+        if self._t0 is None and not self._hold_or_start(v):
+            return
+        assert self._t0 is not None
+        dt_ns = self._dt_ns
+        now = time.time_ns() - self._t0
+        first = max(0, now // dt_ns - 1)
+        count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
+        points = []
+        for i in range(count):
+            sample = self._path.sample(seconds((first + i) * dt_ns))
+            points.append(self._point(sample, i * dt_ns))
+        self._ref_pub.publish(self._reference(self._t0 + first * dt_ns, points))
+        self._job_status(seconds(now))
+
+    def _hold_or_start(self, v: dict[str, Any]) -> bool:
+        """Before the job: wait for the graph, hold the axes, then start; True once started."""
+        if self._hold_ns is None:
             if self._refused or set(self._positions) != set(v['axes']):
-                return
-            if self._ref_pub.get_subscription_count() < len(v['axes']):
-                return  # the controllers (one per axis) are not listening yet
+                return False
+            if self._ref_pub.get_subscription_count() < max(len(v['axes']), v['min_subscribers']):
+                return False  # the controllers (one per axis) or a recorder are not listening yet
             if any(self.count_publishers(topics.estimate(a)) < 1 for a in v['axes']):
-                return  # an observer is not up yet: its controller could not act
+                return False  # an observer is not up yet: its controller could not act
             here = [self._positions.get(a, 0.0) for a in AXES]
             try:
                 approach = Approach(
@@ -252,27 +276,50 @@ class TrajectoryNode(Node):
                 self._refused = str(exc)
                 self.get_logger().error(f'job refused: {exc}')
                 self._report(0.0, 'refused', self._refused, level=DiagnosticStatus.ERROR)
-                return
-            self._path = approach
+                return False
+            self._path = self._approach = approach
             self._job_end += approach.duration
-            self._t0 = self._newest_state_ns
-            for sub in self._state_subs.values():  # where the axes stood is all it needed
-                data_unsubscribe(self, sub)
-            self._state_subs.clear()
+            self._hold_ns = self._newest_state_ns
+            for axis in v['axes']:
+                self._command_subs[axis] = take_serialized(
+                    self,
+                    JointState,
+                    topics.joint_command(axis),
+                    decode_joint_state,
+                    partial(self._on_command, axis),
+                    1,
+                    lambda rejected: None,  # the drive reports malformed commands
+                )
             self.get_logger().info(
-                f'job started; approach of {1e3 * approach.distance:.3f} mm in '
-                f'{approach.duration:.2f} s, ends at t = {self._job_end:.3f} s'
+                'holding the axes where they stand until every controller commands'
             )
         dt_ns = self._dt_ns
-        now = time.time_ns() - self._t0
-        first = max(0, now // dt_ns - 1)
-        count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
-        points = []
-        for i in range(count):
-            sample = self._path.sample(seconds((first + i) * dt_ns))
-            points.append(self._point(sample, i * dt_ns))
-        self._ref_pub.publish(self._reference(self._t0 + first * dt_ns, points))
-        self._job_status(seconds(now))
+        k = (time.time_ns() - self._hold_ns) // dt_ns
+        if self._answered != set(v['axes']):
+            # Where the axes stand (the approach's first point), on the states' grid.
+            here_sample = self._path.sample(0.0)
+            first = max(0, k - 1)
+            count = self._points + math.ceil(v['publish_period'] * 1e9 / dt_ns) + 2
+            points = [self._point(here_sample, i * dt_ns) for i in range(count)]
+            self._ref_pub.publish(self._reference(self._hold_ns + first * dt_ns, points))
+            if time.monotonic() >= self._next_report:  # seconds may pass: say who is missing
+                self._next_report = time.monotonic() + 1.0
+                missing = [topics.joint_command(a) for a in v['axes'] if a not in self._answered]
+                message = f'holding the axes: no command yet on {", ".join(missing)}'
+                self._report(0.0, 'waiting', message, level=DiagnosticStatus.OK)
+            return False
+        # On the hold's grid: the job's first points replace the held ones stamp for stamp.
+        self._t0 = self._hold_ns + max(k, 0) * dt_ns
+        for sub in (*self._state_subs.values(), *self._command_subs.values()):
+            data_unsubscribe(self, sub)  # where the axes stood and who answers: all it needed
+        self._state_subs.clear()
+        self._command_subs.clear()
+        self._next_report = 0.0  # from here on: job time
+        self.get_logger().info(
+            f'job started; approach of {1e3 * self._approach.distance:.3f} mm in '
+            f'{self._approach.duration:.2f} s, ends at t = {self._job_end:.3f} s'
+        )
+        return True
 
     def _on_override(self, msg: Any) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan

@@ -40,18 +40,25 @@ def command_timing(
     t0: int,
 ) -> dict[str, dict[str, float]]:
     """Per axis: the share of the job's states no command answered, and the latency from a
-    state's stamp to its command's arrival here [ms] (median, p99, max)."""
+    state's stamp to its command's arrival here [ms] (median, p99, max) over the commands
+    that answer the job's states (the runner takes no messages while it ends the run, so
+    later ones arrive here late)."""
     out = {}
+    states = (t0 + np.round(rec.t * 1e9).astype(np.int64)).tolist()
+    job = set(states)
     for axis in axes:
         topic = topics.joint_command(axis)
         stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
         arrivals = source.arrival_ns(topic)
         latency = np.array(
-            [(a - s) * 1e-6 for s, a in zip(stamps, arrivals, strict=False) if s is not None]
+            [
+                (a - s) * 1e-6
+                for s, a in zip(stamps, arrivals, strict=False)
+                if s is not None and s in job
+            ]
         )
         answered = {s for s in stamps if s is not None}
-        states = t0 + np.round(rec.t * 1e9).astype(np.int64)
-        late = float(np.mean([s not in answered for s in states.tolist()])) if len(states) else nan
+        late = float(np.mean([s not in answered for s in states])) if states else nan
         out[axis] = {
             'late_fraction': late,
             'latency_median_ms': float(np.median(latency)) if latency.size else nan,
@@ -89,7 +96,14 @@ class RealtimeAxisJob(AxisJob):
         return self.end_time  # the path; an approach move, if any, comes on top
 
     def prepare_graph(self, monitored: bool) -> None:
-        pass  # no lockstep start: the drive ticks from its activation on
+        # No lockstep start: the drive ticks from its activation on. The trajectory starts the
+        # job once the monitor hears it too, or the record would miss the job's first periods
+        # (its participant may be discovered a second or more after the graph's).
+        if monitored:
+            readers = len(self.axes) + 1
+            self.scenario.overrides.setdefault(self.trajectory, {}).setdefault(
+                'min_subscribers', readers
+            )
 
     def monitor_topics(self) -> dict[str, str]:
         out = super().monitor_topics()
@@ -120,7 +134,9 @@ class RealtimeAxisJob(AxisJob):
 
     def progress(self, source: MessageSource) -> float:
         status = self._job(source)
-        return float(status['time']) if status is not None and 'time' in status else -math.inf
+        if status is None or 'start_stamp_ns' not in status:
+            return -math.inf  # not started: the trajectory holds the axes until all answer
+        return float(status['time'])
 
     def complete(self, source: MessageSource) -> bool:
         status = self._job(source)
