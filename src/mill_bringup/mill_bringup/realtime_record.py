@@ -12,9 +12,12 @@ recorder's receive time, where the bag has one) minus the stamp of the state it 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from math import nan
 from typing import Any
 
 import numpy as np
+from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, AxisReference
@@ -103,3 +106,45 @@ def realtime_record(
                     sig['true_velocity'][k, AXES.index(name)] = gt.velocity[j]
                     sig['true_disturbance'][k, AXES.index(name)] = gt.effort[j]
     return rec
+
+
+@dataclass(frozen=True)
+class CommandTiming:
+    """How the commands of one axis answered the job's states, as one listener received them."""
+
+    unanswered: float  # share of the job's states no command answered
+    latency_ms: np.ndarray  # arrival − state stamp of each command answering a job state
+
+    def figures(self) -> dict[str, float]:
+        lat = self.latency_ms
+        return {
+            'late_fraction': self.unanswered,
+            'latency_median_ms': float(np.median(lat)) if lat.size else nan,
+            'latency_p99_ms': float(np.percentile(lat, 99)) if lat.size else nan,
+            'latency_max_ms': float(lat.max()) if lat.size else nan,
+        }
+
+
+def command_timing(
+    rec: RunRecord,
+    raw: Mapping[str, Sequence[bytes]],
+    arrivals: Mapping[str, Sequence[int | None]],
+    axes: Sequence[str],
+    t0: int,
+) -> dict[str, CommandTiming]:
+    """Per axis, from the commands (`raw`) and when each arrived (`arrivals`, system clock
+    [ns], None where unknown): the share of the record's states no command answered, and
+    the latency of the commands that answer them. Commands outside the job (the hold before
+    it, the time a listener took nothing while it ended the run) do not count."""
+    states = (t0 + np.round(rec.t * 1e9).astype(np.int64)).tolist()
+    job = set(states)
+    out = {}
+    for axis in axes:
+        topic = topics.joint_command(axis)
+        stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
+        pairs = zip(stamps, arrivals.get(topic, ()), strict=False)
+        latency = [(a - s) * 1e-6 for s, a in pairs if s is not None and s in job and a is not None]
+        answered = set(stamps)
+        unanswered = float(np.mean([s not in answered for s in states])) if states else nan
+        out[axis] = CommandTiming(unanswered, np.array(latency))
+    return out

@@ -21,7 +21,6 @@ import math
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from math import nan
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +41,7 @@ from mill_common.timebase import job_steps
 
 from mill_bringup.bag_status import job_end, job_start, plant_status
 from mill_bringup.metrics import RunRecord
-from mill_bringup.realtime_record import realtime_record
+from mill_bringup.realtime_record import command_timing, realtime_record
 from mill_common import topics as topic_names
 
 # progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
@@ -501,23 +500,9 @@ def _realtime_run(
     if end_time is None:
         end_time = (int(stamps[-1]) - start_ns) * 1e-9
     record = realtime_record(raw, axes, start_ns, end_time)
-    latency, unanswered = {}, {}
-    states = start_ns + np.round(record.t * 1e9).astype(np.int64)
-    for axis in axes:
-        topic = topic_names.joint_command(axis)
-        cmd_stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
-        arrivals = walls.get(topic, [])
-        latency[axis] = np.array(
-            [
-                (w - s) * 1e-6
-                for s, w in zip(cmd_stamps, arrivals, strict=False)
-                if s is not None and w is not None and start_ns <= s
-            ]
-        )
-        answered = {s for s in cmd_stamps if s is not None}
-        unanswered[axis] = (
-            float(np.mean([s not in answered for s in states.tolist()])) if len(states) else nan
-        )
+    timing = command_timing(record, raw, walls, axes, start_ns)
+    latency = {axis: t.latency_ms for axis, t in timing.items()}
+    unanswered = {axis: t.unanswered for axis, t in timing.items()}
     diffs = np.diff(stamps)
     dt_ns = int(np.median(diffs)) if diffs.size else 0
     notes = ["realtime run: samples at the drive's stamps, the reference interpolated there"]

@@ -1,28 +1,19 @@
-"""The runner's own figures of a realtime run with an external driver (jobs.realtime)."""
+"""How the commands of a realtime run answered the job's states (the runner's summary, the
+report of a bag): realtime_record.command_timing."""
 
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from mill_bringup.jobs.realtime import command_timing
 from mill_bringup.metrics import SIGNALS, RunRecord
+from mill_bringup.realtime_record import command_timing
 from mill_common.ros import joint_state_bytes
 
 from mill_common import topics
 
 T0 = 1_800_000_000_000_000_000  # the job's start on the system clock [ns]
 DT = 10_000_000
-
-
-class Received:
-    """A MessageSource that only says when each command arrived."""
-
-    def __init__(self, arrivals: list[int]) -> None:
-        self.arrivals = arrivals
-
-    def arrival_ns(self, topic: str) -> list[int]:
-        return self.arrivals
 
 
 def test_late_fraction_and_latency_count_the_jobs_states_only() -> None:
@@ -33,8 +24,18 @@ def test_late_fraction_and_latency_count_the_jobs_states_only() -> None:
     stamps = [T0 - DT, T0, T0 + DT, T0 + 3 * DT, T0 + 9 * DT]
     lags = [1_000_000, 2_000_000, 4_000_000, 3_000_000, 3_000_000_000]
     raw = {topics.joint_command('x'): [joint_state_bytes(s, ('x',), effort=(0.0,)) for s in stamps]}
-    source = Received([s + lag for s, lag in zip(stamps, lags, strict=True)])
-    got = command_timing(rec, raw, source, ['x'], T0)['x']  # type: ignore[arg-type]
-    assert got['late_fraction'] == 0.25  # job state 2 got no command
-    assert got['latency_median_ms'] == 3.0
-    assert got['latency_max_ms'] == 4.0  # not the 3 s of the command after the job
+    arrivals = {topics.joint_command('x'): [s + lag for s, lag in zip(stamps, lags, strict=True)]}
+    got = command_timing(rec, raw, arrivals, ['x'], T0)['x']
+    assert got.unanswered == 0.25  # job state 2 got no command
+    assert list(got.latency_ms) == [2.0, 4.0, 3.0]  # not the hold's, not the 3 s after the job
+    figures = got.figures()
+    assert figures['late_fraction'] == 0.25
+    assert (figures['latency_median_ms'], figures['latency_max_ms']) == (3.0, 4.0)
+
+
+def test_a_command_whose_arrival_is_unknown_counts_as_answer_but_not_in_latency() -> None:
+    rec = RunRecord(np.array([0.0]), {s: np.full((1, 3), math.nan) for s in SIGNALS})
+    raw = {topics.joint_command('y'): [joint_state_bytes(T0, ('y',), effort=(0.0,))]}
+    got = command_timing(rec, raw, {topics.joint_command('y'): [None]}, ['y'], T0)['y']
+    assert got.unanswered == 0.0 and got.latency_ms.size == 0
+    assert math.isnan(got.figures()['latency_median_ms'])

@@ -13,16 +13,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from math import nan
 from typing import Any
-
-import numpy as np
-from mill_bag.cdr import cdr_stamp_ns
 
 from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.metrics import RunRecord, format_summary, summarize
-from mill_bringup.realtime_record import realtime_record
+from mill_bringup.realtime_record import command_timing, realtime_record
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
@@ -30,42 +26,6 @@ from mill_common import topics
 JOB_STATUS = 'mill_trajectory: job'
 DRIVE_STATUS = 'mill_plant: realtime'
 DRIVE_FIGURES = ('late_fraction', 'latency_median_ms', 'latency_p99_ms', 'latency_max_ms')
-
-
-def command_timing(
-    rec: RunRecord,
-    raw: Mapping[str, Sequence[bytes]],
-    source: MessageSource,
-    axes: Sequence[str],
-    t0: int,
-) -> dict[str, dict[str, float]]:
-    """Per axis: the share of the job's states no command answered, and the latency from a
-    state's stamp to its command's arrival here [ms] (median, p99, max) over the commands
-    that answer the job's states (the runner takes no messages while it ends the run, so
-    later ones arrive here late)."""
-    out = {}
-    states = (t0 + np.round(rec.t * 1e9).astype(np.int64)).tolist()
-    job = set(states)
-    for axis in axes:
-        topic = topics.joint_command(axis)
-        stamps = [cdr_stamp_ns(d) for d in raw.get(topic, ())]
-        arrivals = source.arrival_ns(topic)
-        latency = np.array(
-            [
-                (a - s) * 1e-6
-                for s, a in zip(stamps, arrivals, strict=False)
-                if s is not None and s in job
-            ]
-        )
-        answered = {s for s in stamps if s is not None}
-        late = float(np.mean([s not in answered for s in states])) if states else nan
-        out[axis] = {
-            'late_fraction': late,
-            'latency_median_ms': float(np.median(latency)) if latency.size else nan,
-            'latency_p99_ms': float(np.percentile(latency, 99)) if latency.size else nan,
-            'latency_max_ms': float(latency.max()) if latency.size else nan,
-        }
-    return out
 
 
 class RealtimeAxisJob(AxisJob):
@@ -155,7 +115,10 @@ class RealtimeAxisJob(AxisJob):
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
         rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner)
         if self._source is not None:
-            self.received = command_timing(rec, raw, self._source, self.axes, self.start_ns)
+            source = self._source
+            arrivals = {t: source.arrival_ns(t) for t in self.timed_topics()}
+            timing = command_timing(rec, raw, arrivals, self.axes, self.start_ns)
+            self.received = {axis: t.figures() for axis, t in timing.items()}
         return rec, {}
 
     def simulation(self, times: CoreTimer | None = None) -> Any:
