@@ -11,7 +11,8 @@ Every command names the state it answers by its stamp. The drive front end
   `brake_after` late ticks in a row the axis is braked (NaN) until fresh commands return.
 
 It also keeps, per axis, the state → command latency of every fresh command: the time the
-command arrived minus the stamp of the state it answers (both on the drive's clock).
+command arrived minus the stamp of the state it answers (both on the drive's clock), in a
+histogram (mill_plant.latency_histogram) whose report does not grow with the run.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
+from mill_plant.latency_histogram import LatencyHistogram
 
 
 @dataclass
@@ -31,7 +32,7 @@ class AxisCommands:
     ticks: int = 0
     late: int = 0
     braked: bool = True  # before the first command an axis is held braked
-    latencies: list[float] = field(default_factory=list)  # [s]
+    latencies: LatencyHistogram = field(default_factory=LatencyHistogram)
 
 
 @dataclass(frozen=True)
@@ -54,7 +55,7 @@ class CommandTable:
             return False
         c.value, c.stamp, c.fresh = value, stamp, True
         if arrived_ns is not None:
-            c.latencies.append((arrived_ns - stamp) * 1e-9)
+            c.latencies.add(arrived_ns - stamp)
         return True
 
     # -- lockstep ------------------------------------------------------------------------------
@@ -99,12 +100,5 @@ class CommandTable:
         return c.late / c.ticks if c.ticks else math.nan
 
     def latency_stats(self, axis: str) -> dict[str, float]:
-        """Median, p99 and max state → command latency [s] of an axis."""
-        lat = np.asarray(self.by_axis[axis].latencies)
-        if not lat.size:
-            return {'median': math.nan, 'p99': math.nan, 'max': math.nan}
-        return {
-            'median': float(np.median(lat)),
-            'p99': float(np.percentile(lat, 99)),
-            'max': float(lat.max()),
-        }
+        """Median, p99 and max state → command latency [s] of an axis (to 1 µs)."""
+        return self.by_axis[axis].latencies.stats()
