@@ -199,6 +199,8 @@ class IntraProcess:
             if not listeners or not self.local(topic):
                 continue
             node = listeners[0].node
+            if node.count_publishers(topic) <= self._outputs[topic]:
+                continue  # the usual case, and 10x cheaper to ask than the publishers' names
             infos = node.get_publishers_info_by_topic(topic)
             outside = len(infos) - self._outputs[topic]
             names = frozenset(f'{i.node_namespace.rstrip("/")}/{i.node_name}' for i in infos)
