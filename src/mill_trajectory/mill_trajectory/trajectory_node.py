@@ -199,21 +199,33 @@ class TrajectoryNode(Node):
         v = self.params.values
         if v['feed_override.enabled']:
             raise ValueError('feed_override is not available with timing realtime')
-        for axis in v['axes']:
-            self._state_subs[axis] = take_serialized(
-                self,
-                JointState,
-                topics.state(axis),
-                decode_joint_state,
-                partial(self._on_state, axis),
-                1,
-                partial(self._state_dropped, axis),
-            )
+        self._state_subs = self._take_each_axis(topics.state, self._on_state, self._state_dropped)
         wall = RosClock(clock_type=ClockType.STEADY_TIME)
         self.create_timer(v['publish_period'], self._publish_realtime, clock=wall)
         self.get_logger().info(
             f'realtime: the job starts when {", ".join(v["axes"])} report their positions'
         )
+
+    def _take_each_axis(
+        self,
+        topic: Callable[[str], str],
+        on_msg: Callable[[str, Any], None],
+        on_malformed: Callable[[str, Rejected], None],
+    ) -> dict[str, DataInput]:
+        """Realtime: a depth-1 subscription (the newest message only) to topic(axis) of each
+        axis of `axes`."""
+        return {
+            axis: take_serialized(
+                self,
+                JointState,
+                topic(axis),
+                decode_joint_state,
+                partial(on_msg, axis),
+                1,
+                partial(on_malformed, axis),
+            )
+            for axis in self.params.values['axes']
+        }
 
     def _take_override(self, callback: Callable[[Any], None], qos: QoSProfile | int) -> None:
         malformed = partial(self.guard.drop, topics.FEED_OVERRIDE)
@@ -280,16 +292,9 @@ class TrajectoryNode(Node):
             self._path = self._approach = approach
             self._job_end += approach.duration
             self._hold_ns = self._newest_state_ns
-            for axis in v['axes']:
-                self._command_subs[axis] = take_serialized(
-                    self,
-                    JointState,
-                    topics.joint_command(axis),
-                    decode_joint_state,
-                    partial(self._on_command, axis),
-                    1,
-                    lambda rejected: None,  # the drive reports malformed commands
-                )
+            self._command_subs = self._take_each_axis(
+                topics.joint_command, self._on_command, lambda axis, rejected: None
+            )  # a malformed command is the drive's to report
             self.get_logger().info(
                 'holding the axes where they stand until every controller commands'
             )
