@@ -262,3 +262,36 @@ def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
     assert any(s.message == 'axis x braked' for s in errors[first_request:]), [
         s.message for s in errors
     ]
+
+
+@pytest.mark.system
+def test_a_foreign_publisher_on_a_command_topic_is_named_also_one_that_comes_later(
+    start_node,
+) -> None:
+    """The drive looks at the publishers of its command and state topics once a second and
+    names any but their owners, even ones that never send (it re-reads the names only when
+    their number changes: the second intruder must still be found)."""
+    plant = start_node(
+        PLANT, 'plant', *plant_args(axes='["x"]', cutting_model='none', startup_timeout='120.0')
+    )
+    messages: list[str] = []
+    with ros_node('first_intruder') as (node, executor):
+        node.create_publisher(JointState, COMMAND, DATA_QOS)
+        node.create_subscription(
+            DiagnosticArray,
+            topics.DIAGNOSTICS,
+            lambda m: messages.extend(s.message for s in m.status if 'ownership' in s.name),
+            10,
+        )
+
+        def named(who: str) -> bool:
+            return any(who in m for m in messages)
+
+        assert spin_until(executor, lambda: named('first_intruder'), 60), messages
+        second = node.create_publisher(JointState, STATE, DATA_QOS)  # same node, other topic
+        assert spin_until(executor, lambda: any(STATE in m for m in messages), 30), messages
+        node.destroy_publisher(second)
+        with ros_node('second_intruder') as (other, _):
+            other.create_publisher(JointState, COMMAND, DATA_QOS)
+            assert spin_until(executor, lambda: named('second_intruder'), 30), messages
+    assert plant.alive(), plant.stop()[2]

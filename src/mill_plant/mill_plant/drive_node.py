@@ -96,6 +96,7 @@ class DriveNode(LifecycleNode):
         self._lockstep_allowed = False  # lockstep: activated (by autostart or the lifecycle)
         self._drops = DropCounter()
         self._foreign: dict[str, set[str]] = {}  # topic -> foreign publishers seen
+        self._publisher_counts: dict[str, int] = {}  # topic -> publishers at the last look
         self._foreign_messages = 0
         self._faults: dict[str, int] = {}
         self._nonfinite: dict[str, int] = {}
@@ -507,14 +508,21 @@ class DriveNode(LifecycleNode):
             owner = self.owners[axis]
             if not owner:
                 continue
-            topic = topics.joint_command(axis)
-            for info in self.get_publishers_info_by_topic(topic):
-                if info.node_name not in (owner, UNKNOWN_NODE):
-                    self._note_foreign(topic, info.node_name)
-            state = topics.state(axis)
-            for info in self.get_publishers_info_by_topic(state):
-                if info.node_name not in (self.get_name(), UNKNOWN_NODE):
-                    self._note_foreign(state, info.node_name)
+            for topic, own in ((topics.joint_command(axis), owner), (topics.state(axis), None)):
+                for name in self._new_publishers(topic):
+                    if name not in (own or self.get_name(), UNKNOWN_NODE):
+                        self._note_foreign(topic, name)
+
+    def _new_publishers(self, topic: str) -> list[str]:
+        """The publishers of `topic` if their number changed since the last look, else none:
+        counting them costs a tenth of naming them, and this runs in the drive's thread."""
+        count = self.count_publishers(topic)
+        if self._publisher_counts.get(topic) == count:
+            return []
+        names = [info.node_name for info in self.get_publishers_info_by_topic(topic)]
+        if UNKNOWN_NODE not in names:  # a name discovery has not given yet: look again
+            self._publisher_counts[topic] = count
+        return names
 
     def _report_axis(self, axis: str, level: bytes, message: str) -> None:
         # rclpy wants one severity per call site: one call each.
