@@ -6,10 +6,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
+from mill_bringup.cli import set_timing
+from mill_bringup.jobs.realtime import RealtimeAxisJob
+from mill_bringup.jobs.registry import job_for
 from mill_bringup.metrics import SIGNALS, RunRecord
 from mill_bringup.realtime_record import command_timing
 from mill_common.ros import joint_state_bytes
 
+from mill_bringup import scenario
 from mill_common import topics
 
 T0 = 1_800_000_000_000_000_000  # the job's start on the system clock [ns]
@@ -39,3 +44,23 @@ def test_a_command_whose_arrival_is_unknown_counts_as_answer_but_not_in_latency(
     got = command_timing(rec, raw, {topics.joint_command('y'): [None]}, ['y'], T0)['y']
     assert got.unanswered == 0.0 and got.latency_ms.size == 0
     assert math.isnan(got.figures()['latency_median_ms'])
+
+
+@pytest.mark.parametrize(
+    'name', ['slotting', 'chavez_conde', 'hatwesh', 'hatwesh_velocity', 'maharof']
+)
+def test_every_axis_scenario_can_start_in_realtime(name: str) -> None:
+    """The trajectory starts a realtime job once its `axes` report their positions: in a
+    one-axis scenario they must be the plant's one axis, or the job never starts."""
+    scen = scenario.load(name)
+    set_timing(scen, 'realtime')
+    job = job_for(scen)
+    assert isinstance(job, RealtimeAxisJob)
+
+
+def test_a_trajectory_waiting_for_other_axes_than_the_plant_drives_is_refused() -> None:
+    scen = scenario.load('chavez_conde')
+    set_timing(scen, 'realtime')
+    scen.add_override('trajectory.axes=["x", "y"]')
+    with pytest.raises(scenario.ScenarioError, match=r'set trajectory\.axes'):
+        job_for(scen)

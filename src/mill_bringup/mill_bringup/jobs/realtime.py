@@ -15,6 +15,8 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from mill_common.signals import AXES
+
 from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.metrics import RunRecord, format_summary, summarize
@@ -45,6 +47,13 @@ class RealtimeAxisJob(AxisJob):
             raise ScenarioError(
                 f'the plant runs in realtime but {", ".join(lockstep)} in lockstep: '
                 'set timing realtime on every node (run_scenario --timing realtime)'
+            )
+        waited = list(scen.parameters(self.trajectory).get('axes', AXES))
+        if sorted(waited) != sorted(self.axes):
+            raise ScenarioError(
+                f'the trajectory starts the job once axes {", ".join(waited)} report their '
+                f'positions, the plant drives {", ".join(self.axes)}: set '
+                f'{self.trajectory}.axes to the same axes'
             )
         self.start_ns: int | None = None
         self.drive: dict[str, str] = {}
