@@ -63,14 +63,13 @@ from sensor_msgs.msg import JointState
 from mill_common import topics
 from mill_plant.backend import DriveBackend
 from mill_plant.command_table import CommandTable
+from mill_plant.ownership import Ownership
 
 LOCKSTEP_STATUS = 'mill_plant: lockstep'
 REALTIME_STATUS = 'mill_plant: realtime'
-OWNERSHIP_STATUS = 'mill_plant: ownership'
 INPUTS_STATUS = 'mill_plant: inputs'
 AXIS_STATUS = 'mill_plant: {} axis'
 MACHINE_AXES = ('x', 'y', 'z')
-UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
 
 
@@ -95,9 +94,7 @@ class DriveNode(LifecycleNode):
         self.active = False
         self._lockstep_allowed = False  # lockstep: activated (by autostart or the lifecycle)
         self._drops = DropCounter()
-        self._foreign: dict[str, set[str]] = {}  # topic -> foreign publishers seen
-        self._publisher_counts: dict[str, int] = {}  # topic -> publishers at the last look
-        self._foreign_messages = 0
+        self.ownership: Ownership | None = None  # set by configure, with the owners
         self._faults: dict[str, int] = {}
         self._nonfinite: dict[str, int] = {}
         self._brake_requested: set[str] = set()  # axes whose last command was not finite
@@ -130,6 +127,7 @@ class DriveNode(LifecycleNode):
         self.axes = list(backend.axes)
         owners = dict(zip(MACHINE_AXES, v['command_owners'], strict=True))
         self.owners = {a: owners[a] for a in self.axes}
+        self.ownership = Ownership(self, self.owners)
         self.table = CommandTable(self.axes, v['brake_after'])
         self._stamps = {
             a: StampCheck(self._dt_ns if self.timing == 'lockstep' else None) for a in self.axes
@@ -238,9 +236,10 @@ class DriveNode(LifecycleNode):
         topic = topics.joint_command(axis)
         ns = from_stamp(msg.header.stamp)
         problem = owner_check(msg.header.frame_id, self.owners[axis])
-        if problem is not None:
-            self._foreign_messages += 1
-            self._note_foreign(topic, msg.header.frame_id or '(unnamed)')
+        sender = msg.header.frame_id or '(unnamed)'
+        owned = self.ownership
+        if problem is not None and owned is not None and owned.message_from(topic, sender):
+            self._foreign_named(topic, sender)
         problem = problem or self._stamps[axis].check(ns) or self._expected_stamp(ns)
         if problem is not None:
             if self.table.by_axis[axis].stamp == ns and problem.reason.startswith('stamp'):
@@ -285,12 +284,9 @@ class DriveNode(LifecycleNode):
             )
             self._diag_pub.publish(diagnostics_of(self._stamp_now(), [status]))
 
-    def _note_foreign(self, topic: str, who: str) -> None:
-        seen = self._foreign.setdefault(topic, set())
-        if who not in seen:
-            seen.add(who)
-            self.get_logger().error(f'foreign publisher {who} on {topic}: its messages are ignored')
-            self._publish_status(force=True)
+    def _foreign_named(self, topic: str, who: str) -> None:
+        self.get_logger().error(f'foreign publisher {who} on {topic}: its messages are ignored')
+        self._publish_status(force=True)
 
     # -- lockstep ------------------------------------------------------------------------------
     def _publish_step(self) -> None:
@@ -503,26 +499,10 @@ class DriveNode(LifecycleNode):
         )
 
     def _check_owners(self) -> None:
-        """Publishers on a command topic other than its owner are foreign: say so, by name."""
-        for axis in self.axes:
-            owner = self.owners[axis]
-            if not owner:
-                continue
-            for topic, own in ((topics.joint_command(axis), owner), (topics.state(axis), None)):
-                for name in self._new_publishers(topic):
-                    if name not in (own or self.get_name(), UNKNOWN_NODE):
-                        self._note_foreign(topic, name)
-
-    def _new_publishers(self, topic: str) -> list[str]:
-        """The publishers of `topic` if their number changed since the last look, else none:
-        counting them costs a tenth of naming them, and this runs in the drive's thread."""
-        count = self.count_publishers(topic)
-        if self._publisher_counts.get(topic) == count:
-            return []
-        names = [info.node_name for info in self.get_publishers_info_by_topic(topic)]
-        if UNKNOWN_NODE not in names:  # a name discovery has not given yet: look again
-            self._publisher_counts[topic] = count
-        return names
+        """Publishers on a command or state topic other than its owner: say so, by name."""
+        if self.ownership is not None:
+            for topic, who in self.ownership.look():
+                self._foreign_named(topic, who)
 
     def _report_axis(self, axis: str, level: bytes, message: str) -> None:
         # rclpy wants one severity per call site: one call each.
@@ -592,15 +572,7 @@ class DriveNode(LifecycleNode):
                 values,
             )
         ]
-        if self._foreign:
-            seen = '; '.join(f'{t}: {", ".join(sorted(w))}' for t, w in self._foreign.items())
-            statuses.append(
-                diagnostic_status(
-                    DiagnosticStatus.ERROR,
-                    OWNERSHIP_STATUS,
-                    f'foreign publishers ignored: {seen}',
-                    self._machine(),
-                    {'foreign_messages': self._foreign_messages},
-                )
-            )
+        foreign = self.ownership.status(self._machine()) if self.ownership is not None else None
+        if foreign is not None:
+            statuses.append(foreign)
         self._diag_pub.publish(diagnostics_of(self._stamp_now(), statuses))

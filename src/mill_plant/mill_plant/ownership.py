@@ -1,0 +1,82 @@
+"""Who publishes on a drive's topics besides their owners (docs/reliability.md, "one owner").
+
+A command topic belongs to its axis's controller, a state topic to the drive itself. A
+foreign sender is found two ways: by a message it sent (`message_from`), and by the ROS
+graph, once a second, even if it never sends (`look`). Each foreign publisher is named once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from mill_common.ros import diagnostic_status
+from rclpy.node import Node
+
+from mill_common import topics
+
+OWNERSHIP_STATUS = 'mill_plant: ownership'
+UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
+
+
+class Ownership:
+    def __init__(self, node: Node, owners: Mapping[str, str]) -> None:
+        """owners: axis -> the node its commands must come from ('' = anyone, not checked)."""
+        self._node = node
+        self._owned = {
+            topic: owner
+            for axis, controller in owners.items()
+            if controller
+            for topic, owner in (
+                (topics.joint_command(axis), controller),
+                (topics.state(axis), node.get_name()),
+            )
+        }
+        self.foreign: dict[str, set[str]] = {}  # topic -> foreign publishers seen
+        self.foreign_messages = 0
+        self._counts: dict[str, int] = {}  # topic -> publishers at the last look
+
+    def message_from(self, topic: str, who: str) -> bool:
+        """A message from a foreign sender; True if it is named for the first time."""
+        self.foreign_messages += 1
+        return self._note(topic, who)
+
+    def look(self) -> list[tuple[str, str]]:
+        """Foreign publishers the graph shows for the first time: (topic, node)."""
+        new = []
+        for topic, owner in self._owned.items():
+            for name in self._new_publishers(topic):
+                if name not in (owner, UNKNOWN_NODE) and self._note(topic, name):
+                    new.append((topic, name))
+        return new
+
+    def status(self, machine: str) -> DiagnosticStatus | None:
+        """ERROR naming every foreign publisher seen, or None while there is none."""
+        if not self.foreign:
+            return None
+        seen = '; '.join(f'{t}: {", ".join(sorted(w))}' for t, w in self.foreign.items())
+        return diagnostic_status(
+            DiagnosticStatus.ERROR,
+            OWNERSHIP_STATUS,
+            f'foreign publishers ignored: {seen}',
+            machine,
+            {'foreign_messages': self.foreign_messages},
+        )
+
+    def _note(self, topic: str, who: str) -> bool:
+        seen = self.foreign.setdefault(topic, set())
+        if who in seen:
+            return False
+        seen.add(who)
+        return True
+
+    def _new_publishers(self, topic: str) -> list[str]:
+        """The publishers of `topic` if their number changed since the last look, else none:
+        counting them costs a tenth of naming them, and this runs in the drive's thread."""
+        count = self._node.count_publishers(topic)
+        if self._counts.get(topic) == count:
+            return []
+        names = [info.node_name for info in self._node.get_publishers_info_by_topic(topic)]
+        if UNKNOWN_NODE not in names:  # a name discovery has not given yet: look again
+            self._counts[topic] = count
+        return names
