@@ -39,6 +39,7 @@ from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.container import is_lifecycle
 from mill_bringup.graph import Graph, GraphError, Progress
 from mill_bringup.jobs.base import Job, simulate
+from mill_bringup.jobs.realtime import RealtimeAxisJob
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.layout import processes
 from mill_bringup.lifecycle_client import activate, deactivate
@@ -513,6 +514,12 @@ def main(argv: list[str] | None = None) -> int:
         print('run_scenario: interrupted', file=sys.stderr)
         return 130
     text = papers.report(scen.paper, records)
+    if text and any(isinstance(job, RealtimeAxisJob) for job in jobs.values()):
+        text = (
+            "note: a realtime run: the paper's experiment is the lockstep run at its own sample "
+            "rate; these figures also depend on how this machine kept the wall clock's rate, and "
+            'the verdicts below are not a reproduction (run without --timing realtime for that)\n'
+        ) + text
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
