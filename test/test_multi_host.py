@@ -120,6 +120,10 @@ class TwoHosts:
             _must(ip('-n', ns, 'addr', 'add', address, 'dev', dev))
             _must(ip('-n', ns, 'link', 'set', 'lo', 'up'))
             _must(ip('-n', ns, 'link', 'set', dev, 'up'))
+            # DDS discovery is multicast (239.255.0.1): a host on a LAN sends it by its
+            # default route; a new namespace has none, and without this route the
+            # participants found each other only now and then.
+            _must(ip('-n', ns, 'route', 'add', '224.0.0.0/4', 'dev', dev))
 
     def start(
         self, ns: str, args: list[str], log: IO[str], pipe_stderr: bool, **extra_env: str
