@@ -66,9 +66,17 @@ def test_a_dead_plant_is_named_and_its_peers_end_after_input_timeout(start_node)
                 executor.spin_once(timeout_sec=0.05)
             return predicate()
 
-        # The job runs (0.3 s of machine time), then the plant dies without a word.
-        assert spin_until(lambda: ticks and ticks[-1] >= 300_000_000, 120), (
-            f'the job never ran: /clock up to {ticks[-1:]}, plant alive {plant.alive()}'
+        def heard(name: str) -> bool:
+            return any(s.name == f'{name}: inputs' for s in statuses)
+
+        # The job runs (0.3 s of machine time) and this listener hears every watcher's
+        # /diagnostics (discovery may match them after the plant's /clock), then the plant
+        # dies without a word.
+        assert spin_until(
+            lambda: ticks and ticks[-1] >= 300_000_000 and all(map(heard, WATCHERS)), 120
+        ), (
+            f'the job never ran: /clock up to {ticks[-1:]}, plant alive {plant.alive()}, '
+            f'status heard from {[n for n in WATCHERS if heard(n)]}'
         )
         assert all(n.alive() for n in nodes.values())
         os.kill(plant.proc.pid, signal.SIGKILL)

@@ -168,6 +168,10 @@ class Graph:
     def exited(self) -> dict[str, int]:
         return {n: p.returncode for n, p in self.procs.items() if p.poll() is not None}
 
+    def restarted_nodes(self) -> dict[str, int]:
+        """How often each node was started again (a container's nodes with their process)."""
+        return {n: c for p, c in self.restarts.items() for n in self.processes[p].node_names}
+
     def what(self, name: str) -> str:
         """A process as messages name it: `node NAME`, or `process NAME (nodes A, B)`."""
         process = self.processes[name]

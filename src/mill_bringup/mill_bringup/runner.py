@@ -43,6 +43,7 @@ from mill_bringup.jobs.realtime import RealtimeAxisJob
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.layout import processes
 from mill_bringup.lifecycle_client import activate, deactivate
+from mill_bringup.lost_samples import split_lost
 from mill_bringup.scenario import Scenario, ScenarioError, check_layout
 from mill_common import topics
 
@@ -65,11 +66,13 @@ class RunResult:
     cpu_ms_per_step_by_process: dict[str, float]
     peak_pss_mb: float  # graph + runner, sampled once a second (RSS counts libraries per process)
     domain_id: str
-    missing_samples: dict[str, int]
+    missing_samples: dict[str, int]  # per topic, not counting lost_with_restarts
     summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
     text: str  # the job's summary as text
     problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
     foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
+    # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
+    lost_with_restarts: dict[str, int] = field(default_factory=dict)
     differences: dict[str, float] | None = None  # against the offline run
     bag: dict[str, Any] | None = None
     record: Any = field(default=None, repr=False)
@@ -285,7 +288,8 @@ def run(
                 'messages': monitor.recorder.message_count,
                 'size_bytes': monitor.recorder.writer.size_bytes,
             }
-        record, missing = job.record(monitor.raw)
+        record, gaps = job.record(monitor.raw)
+        missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
         problems = graph.notes + monitor.problems()
     except GraphError as exc:
         raise RunError(str(exc)) from None
@@ -321,6 +325,7 @@ def run(
         text=job.summary(record, skip),
         problems=problems,
         foreign=job.foreign(record),
+        lost_with_restarts=lost,
         bag=bag,
         record=record,
     )
@@ -363,6 +368,11 @@ def format_result(r: RunResult) -> str:
     ]
     if r.missing_samples:
         lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
+    if r.lost_with_restarts:
+        lines.append(
+            'note: samples lost with their killed sender (started again), not in the record: '
+            f'{r.lost_with_restarts}'
+        )
     if r.foreign:
         lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
     if r.problems:

@@ -151,6 +151,10 @@ class Job(ABC, Generic[R]):
         """Messages the record left out per topic: from another sender, or malformed."""
         return {}
 
+    def owners(self) -> dict[str, str]:
+        """The node each per-sample topic must come from (header.frame_id)."""
+        return {}
+
     @abstractmethod
     def differences(self, rec: R, other: R) -> dict[str, float]:
         """Largest difference per signal between two records of this job (inf: a gap)."""
