@@ -59,7 +59,9 @@ def test_the_job_holds_the_axes_and_names_the_silent_controller_until_it_command
             *node_args('trajectory', timing='realtime', axes='["x"]'),
         ),
         start_node(
-            'mill_observers.observer_node', 'x_observer', *node_args('x_observer', timing='realtime')
+            'mill_observers.observer_node',
+            'x_observer',
+            *node_args('x_observer', timing='realtime'),
         ),
     ]
     jobs: list[DiagnosticStatus] = []
