@@ -176,6 +176,59 @@ def _put_header(buf: bytearray, ns: int, frame_id: str) -> None:
     _put_string(buf, frame_id)
 
 
+class _JointStateLayout:
+    """The bytes of every JointState of one shape (sender, joint names, array lengths) but
+    the stamp and the values: one struct writes, or reads, a message of that shape in one
+    call. Written with zero padding; read only where every byte but the stamp's and the
+    values' is the same, padding included (anything else takes the long way)."""
+
+    __slots__ = ('frame_id', 'names', 'pack', 'segments', 'size', 'slices', 'unpack_from')
+
+    def __init__(self, frame_id: str, name: tuple[str, ...], counts: tuple[int, ...]) -> None:
+        buf = bytearray(HEADER_LE)
+        buf += bytes(_STAMP.size)
+        fmt, segments, start = f'<4s{_STAMP.format[1:]}', [], len(buf)
+        _put_string(buf, frame_id)  # CodecError for a NUL, as on the long way
+        _put_strings(buf, name)
+        for n in counts:  # each array: the constant bytes before its values, then the values
+            buf += _PAD[-(len(buf) - 4) % 4]
+            buf += _U32.pack(n)
+            if n:
+                buf += _PAD[-(len(buf) - 4) % 8]
+            segments.append(bytes(buf[start:]))
+            fmt += f'{len(segments[-1])}s{n}d'
+            buf += bytes(8 * n)
+            start = len(buf)
+        self.frame_id, self.names = frame_id, list(name)
+        self.segments = tuple(segments)
+        layout = struct.Struct(fmt)
+        self.pack, self.unpack_from, self.size = layout.pack, layout.unpack_from, layout.size
+        # where the constant segments and the three arrays sit in what unpack_from returns
+        n1, n2, n3 = counts
+        self.slices = (
+            (3, 4 + n1, 5 + n1 + n2),
+            (
+                slice(4, 4 + n1),
+                slice(5 + n1, 5 + n1 + n2),
+                slice(6 + n1 + n2, 6 + n1 + n2 + n3),
+            ),
+        )
+
+    def read(self, data: bytes) -> JointStateData | None:
+        """The message, if `data` is one of this shape with zero padding; else None."""
+        v = self.unpack_from(data)
+        (a, b, c), (pos, vel, eff) = self.slices
+        if v[0] != HEADER_LE or (v[a], v[b], v[c]) != self.segments:
+            return None
+        header = Header(Time(v[1], v[2]), self.frame_id)
+        return JointStateData(header, list(self.names), v[pos], v[vel], v[eff])
+
+
+_LAYOUTS: dict[tuple[object, ...], _JointStateLayout] = {}
+_MAX_LAYOUTS = 256  # a node sends a few shapes; odd ones beyond these are written each time
+_SECONDS = range(-(2**31), 2**31)  # builtin_interfaces/Time.sec is an int32
+
+
 def encode_joint_state(
     ns: int,
     frame_id: str,
@@ -185,13 +238,17 @@ def encode_joint_state(
     effort: Sequence[float] = (),
 ) -> bytes:
     """sensor_msgs/JointState stamped `ns` [ns since the epoch of its clock]."""
-    buf = bytearray(HEADER_LE)
-    _put_header(buf, ns, frame_id)
-    _put_strings(buf, name)
-    _put_doubles(buf, position)
-    _put_doubles(buf, velocity)
-    _put_doubles(buf, effort)
-    return bytes(buf)
+    key = (frame_id, *name, None, len(position), len(velocity), len(effort))
+    layout = _LAYOUTS.get(key)
+    if layout is None:
+        layout = _JointStateLayout(frame_id, tuple(name), key[-3:])  # type: ignore[arg-type]
+        if len(_LAYOUTS) < _MAX_LAYOUTS:
+            _LAYOUTS[key] = layout
+    sec, nanosec = divmod(ns, 1_000_000_000)
+    if sec not in _SECONDS:
+        raise CodecError(f'stamp {ns} ns does not fit builtin_interfaces/Time')
+    a, b, c = layout.segments
+    return layout.pack(HEADER_LE, sec, nanosec, a, *position, b, *velocity, c, *effort)
 
 
 def encode_joint_trajectory(
@@ -312,6 +369,10 @@ def _get_header(data: bytes, bo: _Order) -> tuple[Header, int]:
 
 def decode_joint_state(data: bytes) -> JointStateData:
     """sensor_msgs/JointState from its CDR bytes; CodecError if they are not one."""
+    for layout in _READ_LAYOUTS.get(len(data), ()):  # a shape seen before: one struct call
+        msg = layout.read(data)
+        if msg is not None:
+            return msg
     bo = _order(data)
     try:
         header, o = _get_header(data, bo)
@@ -321,7 +382,34 @@ def decode_joint_state(data: bytes) -> JointStateData:
         effort, o = _get_doubles(data, o, bo)
     except struct.error:
         raise CodecError(f'JointState cut short ({len(data)} bytes)') from None
+    if o == len(data) and bo is _LE and _read_layouts < _MAX_LAYOUTS:
+        _keep_read_layout(header.frame_id, name, position, velocity, effort, data)
     return JointStateData(header, name, position, velocity, effort)
+
+
+_READ_LAYOUTS: dict[int, list[_JointStateLayout]] = {}  # by message size
+_read_layouts = 0
+
+
+def _keep_read_layout(
+    frame_id: str,
+    name: list[str],
+    position: Sequence[float],
+    velocity: Sequence[float],
+    effort: Sequence[float],
+    data: bytes,
+) -> None:
+    """Keep the layout of a message just read the long way, if it reads it the short way."""
+    global _read_layouts
+    try:
+        layout = _JointStateLayout(
+            frame_id, tuple(name), (len(position), len(velocity), len(effort))
+        )
+    except CodecError:
+        return
+    if layout.size == len(data) and layout.read(data) is not None:
+        _READ_LAYOUTS.setdefault(len(data), []).append(layout)
+        _read_layouts += 1
 
 
 def decode_joint_trajectory(data: bytes) -> JointTrajectoryData:

@@ -53,12 +53,15 @@ def split(ns: int) -> tuple[int, int]:
 def padding(encode: Callable[[], bytes]) -> set[int]:
     """Offsets of the padding bytes our encoder writes (where a different filler shows)."""
     zeros = encode()
-    saved = codec._PAD
+    saved, layouts = codec._PAD, dict(codec._LAYOUTS)
     try:
         codec._PAD = tuple(b'\xaa' * len(p) for p in saved)
+        codec._LAYOUTS.clear()  # the shapes written so far hold zero padding
         filled = encode()
     finally:
         codec._PAD = saved
+        codec._LAYOUTS.clear()
+        codec._LAYOUTS.update(layouts)
     assert len(zeros) == len(filled)
     return {i for i, (a, b) in enumerate(zip(zeros, filled, strict=True)) if a != b}
 
@@ -307,3 +310,61 @@ def test_corrupted_messages_decode_or_raise_codec_error(data) -> None:
 def test_a_nul_in_a_string_cannot_be_encoded() -> None:
     with pytest.raises(CodecError, match='NUL'):
         encode_joint_state(0, 'pl\x00ant', ['x'])
+
+
+def test_a_joint_state_stamp_out_of_range_is_refused_also_for_a_known_shape() -> None:
+    encode_joint_state(0, 'plant', ['x'], [1.0])  # the shape is known from here on
+    for ns in (2**31 * 1_000_000_000, -(2**31) * 1_000_000_000 - 1):
+        with pytest.raises(CodecError, match='does not fit'):
+            encode_joint_state(ns, 'plant', ['x'], [1.0])
+
+
+def test_joint_states_of_more_shapes_than_are_kept_are_written_alike() -> None:
+    # Past the kept layouts each message is laid out anew: the same bytes either way.
+    for i in range(codec._MAX_LAYOUTS + 20):
+        sender, names = f'node_{i}', [f'j{k}' for k in range(i % 4)]
+        values = [float(k) for k in range(i % 3)]
+        data = encode_joint_state(i, sender, names, values, (), values)
+        assert encode_joint_state(i, sender, names, values, (), values) == data
+        back = decode_joint_state(data)
+        assert (back.header.frame_id, back.name, list(back.position)) == (sender, names, values)
+        assert (back.header.stamp.sec, back.header.stamp.nanosec) == (0, i)
+
+
+def _fields(msg: Any) -> tuple[Any, ...]:
+    return (
+        msg.header.stamp.sec,
+        msg.header.stamp.nanosec,
+        msg.header.frame_id,
+        msg.name,
+        bits(msg.position),
+        bits(msg.velocity),
+        bits(msg.effort),
+    )
+
+
+def _long_way(data: bytes) -> Any:
+    kept = dict(codec._READ_LAYOUTS)
+    codec._READ_LAYOUTS.clear()
+    try:
+        return decode_joint_state(data)
+    finally:
+        codec._READ_LAYOUTS.clear()
+        codec._READ_LAYOUTS.update(kept)
+
+
+@settings(max_examples=300, deadline=None)
+@given(joint_states(), st.data())
+def test_a_known_shape_is_read_as_the_long_way_reads_it(values, data) -> None:
+    good = encode_joint_state(*values)
+    decode_joint_state(good)  # its shape is known from here on (if it can be)
+    raw = bytearray(good)
+    for _ in range(data.draw(st.integers(0, 3))):  # a stamp, a value, a count, a padding byte
+        raw[data.draw(st.integers(0, len(raw) - 1))] = data.draw(st.integers(0, 255))
+    try:
+        expected = _fields(_long_way(bytes(raw)))
+    except CodecError:
+        with pytest.raises(CodecError):
+            decode_joint_state(bytes(raw))
+        return
+    assert _fields(decode_joint_state(bytes(raw))) == expected
