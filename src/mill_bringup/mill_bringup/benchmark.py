@@ -52,7 +52,7 @@ from pathlib import Path
 from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
-from mill_bringup import realtime_sweep
+from mill_bringup import floor, realtime_sweep
 from mill_bringup import scenario as scenario_mod
 from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
@@ -234,6 +234,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('scenario', nargs='?', default='slotting')
     parser.add_argument('--duration', type=float, default=10.0, help='machine time to run [s]')
     parser.add_argument('--round-trips', type=int, default=5000, help='ping-pong round trips')
+    parser.add_argument(
+        '--floor-steps',
+        type=int,
+        default=3000,
+        help='steps of the same graph with empty callbacks (mill_bringup.floor), the floor '
+        'the eight-process layout is compared with; 0: not run',
+    )
     parser.add_argument('--executor', choices=EXECUTORS, help='rclpy executor of every node')
     parser.add_argument('--json', type=Path, help='also write the figures to this file')
     parser.add_argument(
@@ -298,6 +305,13 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
             )
             pp = measure_pingpong(args.round_trips, env)
+        floor_figures = None
+        if args.floor_steps > 0:
+            print(
+                f'empty-callback floor: {args.floor_steps} steps in eight processes ...',
+                file=sys.stderr,
+            )
+            floor_figures = floor.measure(args.floor_steps, env)
         set_duration(scen, args.duration)
         runs: dict[str, list[RunResult]] = {name: [] for name in layouts}
         with tempfile.TemporaryDirectory() as tmp:
@@ -360,6 +374,8 @@ def main(argv: list[str] | None = None) -> int:
                 'pingpong_cpu_us_per_round_trip': pp['ping_cpu_us_per_round_trip'],
             }
         )
+    if floor_figures is not None:
+        figures['floor_steps_per_second'] = floor_figures['steps_per_second']
     if recording is not None:
         figures['recording'] = recording
     if sweep:
@@ -388,6 +404,16 @@ def main(argv: list[str] | None = None) -> int:
             f'  {pp["round_trips_per_second"]:8.0f} round trips/s   median '
             f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
             f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip',
+        ]
+    if floor_figures is not None:
+        top = floor_figures['steps_per_second']
+        share = ''
+        if 'processes' in results:
+            ours = results['processes'].steps_per_second
+            share = f'; layout processes at {100 * ours / top:.0f} % of it'
+        lines += [
+            'empty-callback floor, the same graph in eight processes (serialized, no runner):',
+            f'  {top:8.0f} steps/s{share}',
         ]
     for name, r in results.items():
         rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(r.peak_rss_mb.items()))

@@ -1,0 +1,24 @@
+"""The empty-callback floor of the benchmark (mill_bringup.floor) runs and leaves nothing.
+
+Its figure is a speed and is measured by `benchmark`, not here; this test checks that the
+eight processes step together for the number of steps asked, report, and all end.
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+
+import pytest
+from mill_bringup import floor
+
+
+@pytest.mark.system
+def test_the_empty_graph_steps_and_every_process_ends(ros_env) -> None:
+    result = floor.measure(500, ros_env)
+    assert result['steps_per_second'] > 0 and math.isfinite(result['steps_per_second'])
+    assert result['plant_cpu_ms'] > 0
+    left = subprocess.run(
+        ['pgrep', '-f', f'mill_bringup.floor node .* 500$'], capture_output=True, text=True
+    ).stdout.split()
+    assert left == [], left
