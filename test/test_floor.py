@@ -10,6 +10,7 @@ import math
 import subprocess
 
 import pytest
+
 from mill_bringup import floor
 
 
@@ -19,6 +20,6 @@ def test_the_empty_graph_steps_and_every_process_ends(ros_env) -> None:
     assert result['steps_per_second'] > 0 and math.isfinite(result['steps_per_second'])
     assert result['plant_cpu_ms'] > 0
     left = subprocess.run(
-        ['pgrep', '-f', f'mill_bringup.floor node .* 500$'], capture_output=True, text=True
+        ['pgrep', '-f', 'mill_bringup.floor node .* 500$'], capture_output=True, text=True
     ).stdout.split()
     assert left == [], left

@@ -26,8 +26,9 @@ from typing import Any
 
 from mill_common.codec import encode_clock, encode_joint_state, encode_joint_trajectory
 from mill_common.env import apply_to_current_process
-from mill_common.node_main import make_executor
 from mill_common.ros import DATA_QOS
+
+from mill_bringup.pingpong import serve
 
 AXES = ('x', 'y', 'z')
 ROOT = '/mill_floor'
@@ -49,25 +50,9 @@ def stamp(data: bytes) -> int:
     return sec * 1_000_000_000 + nanosec
 
 
-def _node(role: str, build: Callable[[Any, list[Any]], None], steps: int) -> int:
-    """One process: `build(node, done)` makes its endpoints; spins until done or SIGINT."""
-    import rclpy
-    from rclpy.node import Node
-
-    rclpy.init()
-    node = Node(f'floor_{role}')
-    done: list[Any] = []
-    build(node, done)
-    executor = make_executor()
-    executor.add_node(node)
-    deadline = time.monotonic() + 600.0  # never outlive a lost run
-    try:
-        while not done and rclpy.ok() and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.2)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        rclpy.try_shutdown()
+def _node(role: str, steps: int) -> int:
+    """One process of the graph; the plant prints the result."""
+    done = serve(f'floor_{role}', build(role, steps), 600.0)
     if done and done[0] is not True:
         print(json.dumps(done[0]), flush=True)
     return 0
@@ -230,7 +215,7 @@ def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     apply_to_current_process()
     if args[:1] == ['node'] and len(args) == 3 and args[1] in ROLES:
-        return _node(args[1], build(args[1], int(args[2])), int(args[2]))
+        return _node(args[1], int(args[2]))
     if len(args) == 1 and args[0].isdigit():
         print(json.dumps(measure(int(args[0]), dict(os.environ))))
         return 0

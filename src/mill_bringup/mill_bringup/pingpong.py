@@ -11,6 +11,8 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from mill_common.env import apply_to_current_process
@@ -20,32 +22,44 @@ from mill_common.ros import DATA_QOS, joint_state
 PING, PONG = '/mill_bench/ping', '/mill_bench/pong'
 
 
-def pong() -> int:
+def serve(name: str, build: Callable[[Any, list[Any]], None], limit: float) -> list[Any]:
+    """One benchmark process: a node `name` whose endpoints `build(node, done)` makes, spun
+    until something is put in `done`, SIGINT, or `limit` seconds (never outlive a lost run).
+    Returns `done`."""
     import rclpy
     from rclpy.node import Node
-    from sensor_msgs.msg import JointState
 
     rclpy.init()
-    node = Node('mill_pong')
-    pub = node.create_publisher(JointState, PONG, DATA_QOS)
-    done = []
-
-    def echo(msg: JointState) -> None:
-        if msg.name and msg.name[0] == 'stop':
-            done.append(True)
-        pub.publish(msg)
-
-    node.create_subscription(JointState, PING, echo, DATA_QOS)
-    executor = make_executor()
-    executor.add_node(node)
-    deadline = time.monotonic() + 300.0  # never outlive a lost ping
+    done: list[Any] = []
     try:
+        node = Node(name)
+        build(node, done)
+        executor = make_executor()
+        executor.add_node(node)
+        deadline = time.monotonic() + limit
         while not done and rclpy.ok() and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.2)
     except KeyboardInterrupt:
         pass
     finally:
         rclpy.try_shutdown()
+    return done
+
+
+def pong() -> int:
+    from sensor_msgs.msg import JointState
+
+    def build(node: Any, done: list[Any]) -> None:
+        pub = node.create_publisher(JointState, PONG, DATA_QOS)
+
+        def echo(msg: JointState) -> None:
+            if msg.name and msg.name[0] == 'stop':
+                done.append(True)
+            pub.publish(msg)
+
+        node.create_subscription(JointState, PING, echo, DATA_QOS)
+
+    serve('mill_pong', build, 300.0)
     return 0
 
 
