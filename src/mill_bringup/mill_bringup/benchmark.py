@@ -340,7 +340,7 @@ def main(argv: list[str] | None = None) -> int:
             env['ROS_DOMAIN_ID'],
             progress=lambda text: print(text, file=sys.stderr),
         )
-    except (scenario_mod.ScenarioError, RunError, TimeoutError, ValueError) as exc:
+    except (scenario_mod.ScenarioError, RunError, RuntimeError, TimeoutError, ValueError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
     rate = 1.0 / scen.parameters(scen.nodes_of('mill_plant')[0].name)['sample_period']

@@ -36,7 +36,7 @@ CLOCK = f'{ROOT}/clock'
 REFERENCE = f'{ROOT}/reference'
 T_NS = 1_000_000  # 1 kHz, as the job
 CLOCK_EVERY = 10  # steps between /clock ticks (the plant's clock_period of 10 ms)
-WARM_UP = 100  # steps before the clock starts (discovery settles)
+WARM_UP = 100  # steps before the timing starts (the processes settle)
 ROLES = ('trajectory', *(f'{a}_{r}' for r in ('observer', 'controller') for a in AXES), 'plant')
 _STAMP = struct.Struct('<iI')
 
@@ -192,7 +192,12 @@ def measure(steps: int, env: dict[str, str], timeout: float = 600.0) -> dict[str
                     text=True,
                 )
             )
-        out, _ = procs[-1].communicate(timeout=timeout)
+        try:
+            out, _ = procs[-1].communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            raise RuntimeError(
+                f'the empty-callback graph did not run {steps} steps within {timeout:g} s'
+            ) from None
     finally:
         for proc in procs:
             if proc.poll() is None:
@@ -220,7 +225,7 @@ def main(argv: list[str] | None = None) -> int:
         print(json.dumps(measure(int(args[0]), dict(os.environ))))
         return 0
     print(__doc__)
-    return 2
+    return 0 if args[:1] in (['-h'], ['--help']) else 2
 
 
 if __name__ == '__main__':
