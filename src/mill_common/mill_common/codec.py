@@ -226,7 +226,7 @@ class _JointStateLayout:
 
 _LAYOUTS: dict[tuple[object, ...], _JointStateLayout] = {}
 _MAX_LAYOUTS = 256  # a node sends a few shapes; odd ones beyond these are written each time
-_SECONDS = range(-(2**31), 2**31)  # builtin_interfaces/Time.sec is an int32
+_INT32 = 2**31  # builtin_interfaces/Time.sec is an int32
 
 
 def encode_joint_state(
@@ -245,7 +245,7 @@ def encode_joint_state(
         if len(_LAYOUTS) < _MAX_LAYOUTS:
             _LAYOUTS[key] = layout
     sec, nanosec = divmod(ns, 1_000_000_000)
-    if sec not in _SECONDS:
+    if not -_INT32 <= sec < _INT32:
         raise CodecError(f'stamp {ns} ns does not fit builtin_interfaces/Time')
     a, b, c = layout.segments
     return layout.pack(HEADER_LE, sec, nanosec, a, *position, b, *velocity, c, *effort)
