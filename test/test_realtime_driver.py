@@ -22,13 +22,16 @@ x / y / z (the command is in docs/realtime.md, "A driver's machine"); on top com
 periods whose command arrives after the tick (about 0.2 % here); 0.3 mm is five times the
 former and three times below the trip.
 
-The job must also start only once the loop runs: of the job's periods, fewer than 5 % may
-go without a command (as the runner received them; this driver does not report its own
-figures). Before the trajectory held the axes until every controller had commanded (and
-until the runner heard the reference), 0 to 52 % of the job's periods, from its start on,
-had no command the runner heard, while the container or the runner were still being
-discovered (1 of 3 runs of this test with the old trajectory gave 11 %); with the hold,
-0.00 % in three runs by hand.
+The job must also start only once the loop runs: no run of 10 job periods in a row (the
+contract's brake limit) may go without a command (as the runner received them; this driver
+does not report its own figures). Before the trajectory held the axes until every
+controller had commanded (and until the runner heard the reference), 0 to 52 % of the
+job's periods, from its start on, had no command the runner heard, while the container or
+the runner were still being discovered (1 of 3 runs of this test with the old trajectory
+gave 11 %, 44 periods in a row); with the hold, 0.00 % in three runs by hand. The share of
+periods without a command is not bounded here: scattered ones come from the machine's load
+(6.6 % on one axis in one CI run, 2.7 % on the others) and are a speed figure, measured by
+`benchmark --realtime`.
 
 Measured while writing this test (2-core machine), what does not hold: in the eight-process
 layout the state -> command latency at 100 Hz is about 6 ms median and 16 ms p99, and the
@@ -198,4 +201,4 @@ def test_a_driver_from_the_contract_alone_tracks_the_slotting_path(ros_env, tmp_
             summary['problems'],
             summary['drive'],
         )
-        assert summary['drive'][axis]['late_fraction'] < 0.05, (axis, summary['drive'])
+        assert summary['drive'][axis]['longest_late_run'] < 10, (axis, summary['drive'])

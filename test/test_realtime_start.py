@@ -96,8 +96,11 @@ def test_the_job_holds_the_axes_and_names_the_silent_controller_until_it_command
             return [s for s in jobs if values(s).get('state') == 'waiting']
 
         # Discovery may take a minute on a loaded machine; then the hold says so each second.
-        assert spin_until(executor, lambda: len(waiting()) >= 3, 120), (
+        # This node's own subscriptions match in any order (in CI once, the drive's states
+        # reached it only after three statuses had): wait for all three.
+        assert spin_until(executor, lambda: len(waiting()) >= 3 and held and positions, 120), (
             [(s.message, values(s)) for s in jobs],
+            (len(held), len(positions)),
             [n.alive() for n in (plant, *others)],
         )
         for status in waiting():

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from itertools import groupby
 from math import nan
 from typing import Any
 
@@ -114,11 +115,13 @@ class CommandTiming:
 
     unanswered: float  # share of the job's states no command answered
     latency_ms: np.ndarray  # arrival − state stamp of each command answering a job state
+    longest_unanswered: int = 0  # most job states in a row that no command answered
 
     def figures(self) -> dict[str, float]:
         lat = self.latency_ms
         return {
             'late_fraction': self.unanswered,
+            'longest_late_run': float(self.longest_unanswered),
             'latency_median_ms': float(np.median(lat)) if lat.size else nan,
             'latency_p99_ms': float(np.percentile(lat, 99)) if lat.size else nan,
             'latency_max_ms': float(lat.max()) if lat.size else nan,
@@ -145,6 +148,12 @@ def command_timing(
         pairs = zip(stamps, arrivals.get(topic, ()), strict=False)
         latency = [(a - s) * 1e-6 for s, a in pairs if s is not None and s in job and a is not None]
         answered = set(stamps)
-        unanswered = float(np.mean([s not in answered for s in states])) if states else nan
-        out[axis] = CommandTiming(unanswered, np.array(latency))
+        missed = [s not in answered for s in states]
+        unanswered = float(np.mean(missed)) if states else nan
+        out[axis] = CommandTiming(unanswered, np.array(latency), longest_run(missed))
     return out
+
+
+def longest_run(flags: Sequence[bool]) -> int:
+    """The most True values in a row."""
+    return max((sum(1 for _ in group) for flag, group in groupby(flags) if flag), default=0)

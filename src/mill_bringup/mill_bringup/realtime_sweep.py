@@ -128,7 +128,6 @@ def format_sweep(points: Sequence[RatePoint], layouts: Sequence[str]) -> list[st
         best = highest_held(points, layout)
         held = f'{best:g} Hz' if best is not None else 'none of the rates tried'
         lines.append(
-            f'  highest rate with < 1 % late periods and < 1 % late ticks, layout {layout}: '
-            f'{held}'
+            f'  highest rate with < 1 % late periods and < 1 % late ticks, layout {layout}: {held}'
         )
     return lines

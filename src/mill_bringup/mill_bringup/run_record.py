@@ -304,10 +304,12 @@ class BagRun:
     size_bytes: int
     notes: list[str] = field(default_factory=list)
     # A realtime run (the drive's own clock): per axis, the state -> command latency of every
-    # command as the recorder received it [ms], and the share of states no command answered.
+    # command as the recorder received it [ms], the share of states no command answered and
+    # the most of them in a row.
     realtime: bool = False
     command_latency_ms: dict[str, np.ndarray] = field(default_factory=dict)
     unanswered: dict[str, float] = field(default_factory=dict)
+    longest_unanswered: dict[str, int] = field(default_factory=dict)
 
 
 def run_namespace(names: Iterable[str], where: str, namespace: str | None = None) -> str:
@@ -524,6 +526,7 @@ def _realtime_run(
         realtime=True,
         command_latency_ms=latency,
         unanswered=unanswered,
+        longest_unanswered={axis: t.longest_unanswered for axis, t in timing.items()},
     )
 
 

@@ -253,8 +253,10 @@ def run(
             limit = max(stall_timeout, startup_timeout) if restarting else stall_timeout
             if now - last_change > limit:
                 raise RunError(f'the run stalled: no new sample for {limit:g} s')
-            rtf = reached / max(now - t_first, 1e-9)
-            progress.update(max(reached, 0.0), f'real-time factor {rtf:.2f}')
+            # Over the first half second the factor means nothing (one step in a microsecond).
+            elapsed = now - t_first
+            rtf = f'real-time factor {reached / elapsed:.2f}' if elapsed >= 0.5 else ''
+            progress.update(max(reached, 0.0), rtf)
         t_end = time.monotonic()
         t_first = t_first if t_first is not None else t_start
         wall = max(t_end - t_first, 1e-9)

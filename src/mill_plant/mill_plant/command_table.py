@@ -9,6 +9,7 @@ Every command names the state it answers by its stamp. The drive front end
   arrived since the last tick; a tick without a fresh command counts as late (from the
   axis's first command on: before it the job has not started), and after
   `brake_after` late ticks in a row the axis is braked (NaN) until fresh commands return.
+  The longest such run is kept: scattered late ticks cost little, a long run brakes.
 
 It also keeps, per axis, the state → command latency of every fresh command: the time the
 command arrived minus the stamp of the state it answers (both on the drive's clock), in a
@@ -29,6 +30,7 @@ class AxisCommands:
     stamp: int = -1  # stamp of the state it answers [ns]
     fresh: bool = False  # arrived since the last tick
     late_in_row: int = 0
+    longest_late_run: int = 0  # most late ticks in a row (a brake comes at brake_after)
     ticks: int = 0
     late: int = 0
     braked: bool = True  # before the first command an axis is held braked
@@ -85,6 +87,7 @@ class CommandTable:
             else:
                 c.late += 1
                 c.late_in_row += 1
+                c.longest_late_run = max(c.longest_late_run, c.late_in_row)
                 if not c.braked and c.late_in_row >= self.brake_after:
                     c.braked = True
                     braked.append(axis)
@@ -98,6 +101,9 @@ class CommandTable:
     def late_fraction(self, axis: str) -> float:
         c = self.by_axis[axis]
         return c.late / c.ticks if c.ticks else math.nan
+
+    def longest_late_run(self, axis: str) -> int:
+        return self.by_axis[axis].longest_late_run
 
     def latency_stats(self, axis: str) -> dict[str, float]:
         """Median, p99 and max state → command latency [s] of an axis (to 1 µs)."""

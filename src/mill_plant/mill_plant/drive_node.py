@@ -554,6 +554,7 @@ class DriveNode(LifecycleNode):
             if self.timing == 'realtime':
                 values['overruns'] = self._overruns
                 values[f'{axis}.late_fraction'] = self.table.late_fraction(axis)
+                values[f'{axis}.longest_late_run'] = self.table.longest_late_run(axis)
                 for key, v in self.table.latency_stats(axis).items():
                     values[f'{axis}.latency_{key}_ms'] = 1e3 * v
         faults = self.backend.faults() if self.backend is not None else {}

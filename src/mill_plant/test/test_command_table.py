@@ -36,6 +36,7 @@ def test_newest_command_is_held_and_late_ticks_brake_after_n_then_release() -> N
     tick = table.take()
     assert tick.efforts == [-0.5] and tick.resumed == ['x']
     assert table.late_fraction('x') == 4 / 6  # six ticks since the first command, four late
+    assert table.longest_late_run('x') == 4
     stats = table.latency_stats('x')
     assert stats['median'] == 0.0025 and stats['max'] == 0.003
 

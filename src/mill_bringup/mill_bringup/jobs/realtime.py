@@ -27,7 +27,13 @@ from mill_common import topics
 
 JOB_STATUS = 'mill_trajectory: job'
 DRIVE_STATUS = 'mill_plant: realtime'
-DRIVE_FIGURES = ('late_fraction', 'latency_median_ms', 'latency_p99_ms', 'latency_max_ms')
+DRIVE_FIGURES = (
+    'late_fraction',
+    'longest_late_run',
+    'latency_median_ms',
+    'latency_p99_ms',
+    'latency_max_ms',
+)
 
 
 class RealtimeAxisJob(AxisJob):
@@ -134,7 +140,8 @@ class RealtimeAxisJob(AxisJob):
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
     def drive_figures(self) -> dict[str, dict[str, float]]:
-        """Per axis: late fraction and latency median/p99/max [ms], from the drive's status;
+        """Per axis: late fraction, most late periods in a row and latency median/p99/max
+        [ms], from the drive's status (NaN where it does not report one);
         a driver that does not report them: as the runner received the commands."""
         out = {}
         for axis in self.axes:
@@ -153,13 +160,14 @@ class RealtimeAxisJob(AxisJob):
     def summary(self, rec: RunRecord, skip: float) -> str:
         lines = [format_summary(summarize(rec, skip), skip)]
         lines.append(
-            'axis   periods without a fresh command   state->command latency [ms]: '
+            'axis   periods without a fresh command   in a row   state->command latency [ms]: '
             f'median    p99     max   (from {self.figures_source()})'
         )
         for axis, f in self.drive_figures().items():
             lines.append(
-                f'{axis:>4}   {100 * f["late_fraction"]:30.2f} %   {f["latency_median_ms"]:27.3f} '
-                f'{f["latency_p99_ms"]:7.3f} {f["latency_max_ms"]:7.3f}'
+                f'{axis:>4}   {100 * f["late_fraction"]:30.2f} %   {f["longest_late_run"]:8.0f}   '
+                f'{f["latency_median_ms"]:27.3f} {f["latency_p99_ms"]:7.3f} '
+                f'{f["latency_max_ms"]:7.3f}'
             )
         overruns = int(float(self.drive.get('overruns', '0')))
         if overruns:

@@ -67,7 +67,8 @@ def feed_text(r: RunReport) -> str:
 def realtime_text(r: RunReport) -> str:
     """Per axis: states no command answered, and state -> command latency as recorded."""
     rows = [
-        'realtime: axis   states without a command   latency as recorded [ms]: median   p99     max'
+        'realtime: axis   states without a command   in a row   '
+        'latency as recorded [ms]: median   p99     max'
     ]
     for axis in r.run.axes:
         lat = r.run.command_latency_ms.get(axis, np.zeros(0))
@@ -77,10 +78,12 @@ def realtime_text(r: RunReport) -> str:
             else (float('nan'),) * 3
         )
         share = 100 * r.run.unanswered.get(axis, float('nan'))
-        rows.append(f'{axis:>14}   {share:22.2f} %   {med:31.3f} {p99:7.3f} {top:7.3f}')
+        run = r.run.longest_unanswered.get(axis, 0)
+        rows.append(f'{axis:>14}   {share:22.2f} %   {run:8d}   {med:31.3f} {p99:7.3f} {top:7.3f}')
     status = r.run.plant_status
     drive = [
         f'{a}: {100 * float(status[f"{a}.late_fraction"]):.2f} % late'
+        + (f' ({status[key]} in a row)' if (key := f'{a}.longest_late_run') in status else '')
         for a in r.run.axes
         if f'{a}.late_fraction' in status
     ]
