@@ -39,7 +39,7 @@ class RatePoint:
     latency_p99_ms: float  # worst axis
     overruns: int  # drive ticks more than half a period late
     cpu_ms_per_tick: float
-    ticks: int  # of the job
+    ticks: int  # the drive's while active (the basis of overruns), else the job's
 
     @property
     def late_tick_fraction(self) -> float:
@@ -82,7 +82,7 @@ def measure(
         latency_p99_ms=max(f['latency_p99_ms'] for f in drive),
         overruns=int(result.summary['drive_overruns']),
         cpu_ms_per_tick=result.cpu_ms_per_step,
-        ticks=result.samples,
+        ticks=int(result.summary['drive_ticks']) or result.samples,
     )
 
 

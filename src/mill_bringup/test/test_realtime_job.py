@@ -71,3 +71,15 @@ def test_a_trajectory_waiting_for_other_axes_than_the_plant_drives_is_refused() 
     scen.add_override('trajectory.axes=["x", "y"]')
     with pytest.raises(scenario.ScenarioError, match=r'set trajectory\.axes'):
         job_for(scen)
+
+
+def test_the_drives_late_ticks_come_with_its_own_tick_count() -> None:
+    """Late ticks are counted from the drive's activation on (approach and hold included):
+    their share is taken of the drive's ticks over the same span, not of the job's samples."""
+    scen = scenario.load('slotting')
+    set_timing(scen, 'realtime')
+    job = job_for(scen)
+    assert isinstance(job, RealtimeAxisJob)
+    assert job.overruns() == (0, 0)  # a driver that reports neither
+    job.drive = {'overruns': '3', 'active_ticks': '600'}
+    assert job.overruns() == (3, 600)

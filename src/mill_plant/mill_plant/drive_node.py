@@ -135,8 +135,9 @@ class DriveNode(LifecycleNode):
         self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
         self._k = 0
         # Realtime: ticks that came more than half a period late (the machine does not hold
-        # the sample rate), in all and since the last report.
+        # the sample rate), in all and since the last report; ticks while active, their basis.
         self._overruns = 0
+        self._active_ticks = 0
         self._overruns_reported = 0
         self._faults = dict.fromkeys(self.axes, 0)
         self._nonfinite = dict.fromkeys(self.axes, 0)
@@ -382,8 +383,10 @@ class DriveNode(LifecycleNode):
         if self.backend is None:
             return
         ns = time.time_ns()  # acquisition time on the system clock
-        if self._recent and self.active and ns - self._recent[-1] > 1.5 * self._dt_ns:
-            self._overruns += 1
+        if self.active:
+            self._active_ticks += 1
+            if self._recent and ns - self._recent[-1] > 1.5 * self._dt_ns:
+                self._overruns += 1
         self._publish_states(ns)
         self._recent.append(ns)
         held: Collection[str] = self.axes  # inactive: every axis held braked, as expected
@@ -553,6 +556,7 @@ class DriveNode(LifecycleNode):
             values[f'{axis}.invalid_commands'] = self._nonfinite[axis]
             if self.timing == 'realtime':
                 values['overruns'] = self._overruns
+                values['active_ticks'] = self._active_ticks
                 values[f'{axis}.late_fraction'] = self.table.late_fraction(axis)
                 values[f'{axis}.longest_late_run'] = self.table.longest_late_run(axis)
                 for key, v in self.table.latency_stats(axis).items():

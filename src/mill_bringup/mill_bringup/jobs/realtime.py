@@ -157,6 +157,15 @@ class RealtimeAxisJob(AxisJob):
             return 'the drive'
         return 'the commands as the runner received them'
 
+    def overruns(self) -> tuple[int, int]:
+        """The drive's ticks more than half a period late, and its ticks while active (the
+        approach and the hold included; 0 from a driver that does not report them), both from
+        its last status."""
+        return (
+            int(float(self.drive.get('overruns', '0'))),
+            int(float(self.drive.get('active_ticks', '0'))),
+        )
+
     def summary(self, rec: RunRecord, skip: float) -> str:
         lines = [format_summary(summarize(rec, skip), skip)]
         lines.append(
@@ -169,10 +178,11 @@ class RealtimeAxisJob(AxisJob):
                 f'{f["latency_median_ms"]:27.3f} {f["latency_p99_ms"]:7.3f} '
                 f'{f["latency_max_ms"]:7.3f}'
             )
-        overruns = int(float(self.drive.get('overruns', '0')))
+        overruns, ticks = self.overruns()
         if overruns:
+            of = f' of {ticks} ({100 * overruns / ticks:.2f} %)' if ticks else ''
             lines.append(
-                f'WARNING: the drive ticked more than half a period late {overruns} times: '
+                f'WARNING: the drive ticked more than half a period late {overruns} times{of}: '
                 'this machine does not hold the sample rate in this layout'
             )
         return '\n'.join(lines)
@@ -180,6 +190,6 @@ class RealtimeAxisJob(AxisJob):
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         out = super().summary_json(rec, skip)
         out['drive'] = self.drive_figures()
-        out['drive_overruns'] = int(float(self.drive.get('overruns', '0')))
+        out['drive_overruns'], out['drive_ticks'] = self.overruns()
         out['start_stamp_ns'] = self.start_ns
         return out
