@@ -15,11 +15,14 @@ from mill_bringup import floor
 
 
 @pytest.mark.system
-def test_the_empty_graph_steps_and_every_process_ends(ros_env) -> None:
-    result = floor.measure(500, ros_env)
+@pytest.mark.parametrize('listener', [False, True])
+def test_the_empty_graph_steps_and_every_process_ends(ros_env, listener: bool) -> None:
+    result = floor.measure(500, ros_env, listener=listener)
     assert result['steps_per_second'] > 0 and math.isfinite(result['steps_per_second'])
     assert result['plant_cpu_ms'] > 0
     left = subprocess.run(
-        ['pgrep', '-f', 'mill_bringup.floor node .* 500$'], capture_output=True, text=True
+        ['pgrep', '-f', 'mill_bringup.floor node .* 500( listener)?$'],
+        capture_output=True,
+        text=True,
     ).stdout.split()
     assert left == [], left

@@ -47,6 +47,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 from mill_common.env import ros_environment
@@ -225,6 +226,40 @@ def layout_figures(result: RunResult) -> dict:
     }
 
 
+def measure_floor(steps: int, env: dict[str, str]) -> tuple[float, float]:
+    """Steps/s of the empty-callback graph (mill_bringup.floor), without and with a ninth
+    process that reads what the runner reads."""
+    print(f'empty-callback floor: {steps} steps in eight processes ...', file=sys.stderr)
+    alone = floor.measure(steps, env)['steps_per_second']
+    print('... and with a listener that reads what the runner reads', file=sys.stderr)
+    return alone, floor.measure(steps, env, listener=True)['steps_per_second']
+
+
+def floor_lines(floors: Sequence[tuple[float, float]], runs: Sequence[RunResult]) -> list[str]:
+    """The floor's figures; with runs of the processes layout (one after each floor), the
+    layout's share of it, run by run (median and range)."""
+
+    def figure(values: Sequence[float], unit: str) -> str:
+        spread = f' [{min(values):.0f}-{max(values):.0f}]' if len(values) > 1 else ''
+        return f'{statistics.median(values):8.0f}{spread} {unit}'
+
+    alone = [f for f, _ in floors]
+    watched = [w for _, w in floors]
+    out = ['empty-callback floor, the same graph in eight processes (serialized, no runner):']
+    out.append(f'  {figure(alone, "steps/s")}')
+    out.append(f'  {figure(watched, "steps/s")} with a ninth process reading what the runner reads')
+    if runs:
+        ours = [r.steps_per_second for r in runs]
+        share = [100 * o / f for o, f in zip(ours, alone, strict=True)]
+        share_watched = [100 * o / w for o, w in zip(ours, watched, strict=True)]
+        out.append(
+            f'  layout processes at {figure(share, "%").strip()} of the floor, '
+            f'{figure(share_watched, "%").strip()} of the floor with the listener '
+            '(each run against the floor measured just before it)'
+        )
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog='benchmark',
@@ -239,7 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         type=int,
         default=3000,
         help='steps of the same graph with empty callbacks (mill_bringup.floor), the floor '
-        'the eight-process layout is compared with; 0: not run',
+        'the eight-process layout is compared with, run before each run of that layout, '
+        'alone and with a ninth process reading what the runner reads; 0: not run',
     )
     parser.add_argument('--executor', choices=EXECUTORS, help='rclpy executor of every node')
     parser.add_argument('--json', type=Path, help='also write the figures to this file')
@@ -305,13 +341,12 @@ def main(argv: list[str] | None = None) -> int:
                 file=sys.stderr,
             )
             pp = measure_pingpong(args.round_trips, env)
-        floor_figures = None
-        if args.floor_steps > 0:
-            print(
-                f'empty-callback floor: {args.floor_steps} steps in eight processes ...',
-                file=sys.stderr,
-            )
-            floor_figures = floor.measure(args.floor_steps, env)
+        # The floor is measured right before each run of the processes layout (the machine's
+        # speed drifts by tens of per cent in minutes): the share is taken run by run.
+        floors: list[tuple[float, float]] = []  # (floor, floor with listener) steps/s
+        paired = args.floor_steps > 0 and 'processes' in layouts and not args.record
+        if args.floor_steps > 0 and not paired:
+            floors.append(measure_floor(args.floor_steps, env))
         set_duration(scen, args.duration)
         runs: dict[str, list[RunResult]] = {name: [] for name in layouts}
         with tempfile.TemporaryDirectory() as tmp:
@@ -324,6 +359,8 @@ def main(argv: list[str] | None = None) -> int:
                     file=sys.stderr,
                 )
                 run_dir = Path(tmp) / f'{layout}-{i}'
+                if paired and layout == 'processes':
+                    floors.append(measure_floor(args.floor_steps, env))
                 if args.record:
                     result, recording = measure_recording(scen, run_dir, env, repeat)
                 else:
@@ -374,8 +411,9 @@ def main(argv: list[str] | None = None) -> int:
                 'pingpong_cpu_us_per_round_trip': pp['ping_cpu_us_per_round_trip'],
             }
         )
-    if floor_figures is not None:
-        figures['floor_steps_per_second'] = floor_figures['steps_per_second']
+    if floors:
+        figures['floor_steps_per_second_runs'] = [f for f, _ in floors]
+        figures['floor_watched_steps_per_second_runs'] = [w for _, w in floors]
     if recording is not None:
         figures['recording'] = recording
     if sweep:
@@ -405,16 +443,8 @@ def main(argv: list[str] | None = None) -> int:
             f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
             f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip',
         ]
-    if floor_figures is not None:
-        top = floor_figures['steps_per_second']
-        share = ''
-        if 'processes' in results:
-            ours = results['processes'].steps_per_second
-            share = f'; layout processes at {100 * ours / top:.0f} % of it'
-        lines += [
-            'empty-callback floor, the same graph in eight processes (serialized, no runner):',
-            f'  {top:8.0f} steps/s{share}',
-        ]
+    if floors:
+        lines += floor_lines(floors, runs.get('processes', []) if paired else [])
     for name, r in results.items():
         rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(r.peak_rss_mb.items()))
         lines.append(f'peak RSS, layout {name}: {rss} MB')

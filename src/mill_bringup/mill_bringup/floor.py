@@ -1,6 +1,7 @@
 """The lockstep job's graph with empty callbacks: the floor that transport and executor set.
 
     python -m mill_bringup.floor 3000          # start the eight processes, print JSON
+    python -m mill_bringup.floor 3000 listener # and a ninth that reads as the runner does
     python -m mill_bringup.floor node x_observer 3000   # one process of it
 
 The slotting job's topology in eight processes — a plant, a trajectory, three observers,
@@ -10,6 +11,10 @@ a stamp and answer: the plant sends the states of step k (and /clock every 10 st
 observer answers a state with an estimate, a controller answers state and estimate of k with
 the command of k, the plant steps when it has the three commands. No runner listens. What
 the real job runs slower than this is the cost of our own code per step.
+
+With `listener`, a ninth process takes what the runner of a lockstep job takes (states,
+estimates, reference and the plant's ground truth, which the plant then publishes) and does
+nothing with it: the floor of a job that is watched, the cost of the runner's copies apart.
 """
 
 from __future__ import annotations
@@ -38,6 +43,8 @@ T_NS = 1_000_000  # 1 kHz, as the job
 CLOCK_EVERY = 10  # steps between /clock ticks (the plant's clock_period of 10 ms)
 WARM_UP = 100  # steps before the timing starts (the processes settle)
 ROLES = ('trajectory', *(f'{a}_{r}' for r in ('observer', 'controller') for a in AXES), 'plant')
+LISTENER = 'listener'  # the ninth process, started last (the plant waits for it)
+GROUND_TRUTH = f'{ROOT}/ground_truth'
 _STAMP = struct.Struct('<iI')
 
 
@@ -50,9 +57,9 @@ def stamp(data: bytes) -> int:
     return sec * 1_000_000_000 + nanosec
 
 
-def _node(role: str, steps: int) -> int:
+def _node(role: str, steps: int, listener: bool) -> int:
     """One process of the graph; the plant prints the result."""
-    done = serve(f'floor_{role}', build(role, steps), 600.0)
+    done = serve(f'floor_{role}', build(role, steps, listener), 600.0)
     if done and done[0] is not True:
         print(json.dumps(done[0]), flush=True)
     return 0
@@ -87,7 +94,16 @@ def _clock_reader(node: Any, callback: Callable[[bytes], None] | None = None) ->
     node.create_subscription(Clock, CLOCK, callback or (lambda data: None), DATA_QOS, raw=True)
 
 
-def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
+def build(role: str, steps: int, listener: bool = False) -> Callable[[Any, list[Any]], None]:
+    def watcher(node: Any, done: list[Any]) -> None:
+        from sensor_msgs.msg import JointState
+        from trajectory_msgs.msg import JointTrajectory
+
+        reads = [topic(a, name) for a in AXES for name in ('state', 'estimate')]
+        for name in (*reads, GROUND_TRUTH):
+            node.create_subscription(JointState, name, lambda data: None, DATA_QOS, raw=True)
+        node.create_subscription(JointTrajectory, REFERENCE, lambda data: None, DATA_QOS, raw=True)
+
     def observer(node: Any, done: list[Any]) -> None:
         from sensor_msgs.msg import JointState
 
@@ -123,6 +139,8 @@ def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
 
         states = {a: node.create_publisher(JointState, topic(a, 'state'), DATA_QOS) for a in AXES}
         clock = node.create_publisher(Clock, CLOCK, DATA_QOS)
+        truth = node.create_publisher(JointState, GROUND_TRUTH, DATA_QOS) if listener else None
+        readers = 3 if listener else 2  # of each state: observer, controller (and listener)
         answered = dict.fromkeys(AXES, -1)
         k = [0]
         timing: list[float] = []
@@ -133,6 +151,9 @@ def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
                 clock.publish(encode_clock(ns))
             for a, pub in states.items():
                 pub.publish(encode_joint_state(ns, role, (a,), position=(0.0,)))
+            if truth is not None:  # as the plant's: velocity and disturbance of every axis
+                zeros = (0.0,) * len(AXES)
+                truth.publish(encode_joint_state(ns, role, AXES, (), zeros, zeros))
 
         def on_command(axis: str, data: bytes) -> None:
             answered[axis] = stamp(data)
@@ -158,8 +179,10 @@ def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
             )
 
         def ready() -> bool:
-            return clock.get_subscription_count() >= 7 and all(
-                p.get_subscription_count() >= 2 for p in states.values()
+            return (
+                clock.get_subscription_count() >= 7
+                and all(p.get_subscription_count() >= readers for p in states.values())
+                and (truth is None or truth.get_subscription_count() >= 1)
             )
 
         offered = [-1]
@@ -171,6 +194,8 @@ def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
 
         node.create_timer(0.5, offer)
 
+    if role == LISTENER:
+        return watcher
     if role == 'plant':
         return plant
     if role == 'trajectory':
@@ -178,22 +203,26 @@ def build(role: str, steps: int) -> Callable[[Any, list[Any]], None]:
     return observer if role.endswith('observer') else controller
 
 
-def measure(steps: int, env: dict[str, str], timeout: float = 600.0) -> dict[str, float]:
-    """Run the eight processes for `steps` steps (after a warm-up); steps/s and the plant's
-    CPU per step. The other processes end with the plant."""
+def measure(
+    steps: int, env: dict[str, str], timeout: float = 600.0, listener: bool = False
+) -> dict[str, float]:
+    """Run the eight processes (nine with the listener) for `steps` steps (after a warm-up);
+    steps/s and the plant's CPU per step. The other processes end with the plant."""
     procs = []
+    roles = (*ROLES, LISTENER) if listener else ROLES
+    extra = [LISTENER] if listener else []
     try:
-        for role in ROLES:
+        for role in roles:
             procs.append(
                 subprocess.Popen(
-                    [sys.executable, '-m', 'mill_bringup.floor', 'node', role, str(steps)],
+                    [sys.executable, '-m', 'mill_bringup.floor', 'node', role, str(steps), *extra],
                     env=env,
                     stdout=subprocess.PIPE,
                     text=True,
                 )
             )
         try:
-            out, _ = procs[-1].communicate(timeout=timeout)
+            out, _ = procs[ROLES.index('plant')].communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
             raise RuntimeError(
                 f'the empty-callback graph did not run {steps} steps within {timeout:g} s'
@@ -211,7 +240,8 @@ def measure(steps: int, env: dict[str, str], timeout: float = 600.0) -> dict[str
     lines = [line for line in out.splitlines() if line.startswith('{')]
     if not lines:
         raise RuntimeError(
-            f'the empty-callback plant printed no result (exit {procs[-1].returncode})'
+            'the empty-callback plant printed no result '
+            f'(exit {procs[ROLES.index("plant")].returncode})'
         )
     return json.loads(lines[-1])
 
@@ -219,10 +249,13 @@ def measure(steps: int, env: dict[str, str], timeout: float = 600.0) -> dict[str
 def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     apply_to_current_process()
-    if args[:1] == ['node'] and len(args) == 3 and args[1] in ROLES:
-        return _node(args[1], int(args[2]))
+    listener = args[-1:] == [LISTENER] and len(args) > 1
+    if listener:
+        args = args[:-1]
+    if args[:1] == ['node'] and len(args) == 3 and args[1] in (*ROLES, LISTENER):
+        return _node(args[1], int(args[2]), listener)
     if len(args) == 1 and args[0].isdigit():
-        print(json.dumps(measure(int(args[0]), dict(os.environ))))
+        print(json.dumps(measure(int(args[0]), dict(os.environ), listener=listener)))
         return 0
     print(__doc__)
     return 0 if args[:1] in (['-h'], ['--help']) else 2
