@@ -265,6 +265,49 @@ def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
 
 
 @pytest.mark.system
+def test_a_sample_rate_the_machine_cannot_hold_is_said_and_the_drive_keeps_running(
+    start_node,
+) -> None:
+    """10 kHz: a Python timer that publishes a state each tick cannot keep 0.1 ms periods
+    (a tick costs about that much alone), so ticks come more than half a period late. The
+    drive says so on /diagnostics within its first seconds, not only in the summary, and
+    goes on ticking with its axis held."""
+    plant = start_node(
+        PLANT,
+        'plant',
+        *plant_args(
+            axes='["x"]',
+            min_subscribers='1',
+            cutting_model='none',
+            timing='realtime',
+            sample_period='0.0001',
+        ),
+    )
+    statuses: list[DiagnosticStatus] = []
+    states: list[int] = []
+    with ros_node('watcher') as (node, executor):
+        node.create_subscription(
+            JointState, STATE, lambda m: states.append(from_stamp(m.header.stamp)), DATA_QOS
+        )
+        node.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS, lambda m: statuses.extend(m.status), 10
+        )
+
+        def said() -> list[DiagnosticStatus]:
+            return [s for s in statuses if s.message.startswith('sample rate not held')]
+
+        assert spin_until(executor, lambda: bool(said()), 120), [s.message for s in statuses]
+        heard = len(states)
+        spin_until(executor, lambda: len(states) > heard + 100, 30)
+        assert len(states) > heard + 100  # still ticking
+        assert plant.alive(), plant.stop()[2]
+    status = said()[0]
+    assert status.level == DiagnosticStatus.WARN
+    assert '(0.05 ms) late in the last second' in status.message, status.message
+    assert 'lower the rate or compose the nodes' in status.message
+
+
+@pytest.mark.system
 def test_a_foreign_publisher_on_a_command_topic_is_named_also_one_that_comes_later(
     start_node,
 ) -> None:
