@@ -68,6 +68,21 @@ def spin_until(executor: SingleThreadedExecutor, predicate, timeout: float) -> b
     return predicate()
 
 
+def start_realtime_drive(start_node, sample_period: str):
+    """A realtime drive of x alone, its states read by one subscriber."""
+    return start_node(
+        PLANT,
+        'plant',
+        *plant_args(
+            axes='["x"]',
+            min_subscribers='1',
+            cutting_model='none',
+            timing='realtime',
+            sample_period=sample_period,
+        ),
+    )
+
+
 # Command schedule of the braking test, by step k.
 FINITE = 0.05  # N·m: ~99 N of drive force against 0.3 N of Coulomb friction
 NAN_STEPS = range(50, 70)
@@ -217,17 +232,7 @@ def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
 ) -> None:
     """Braked before the first command is where every realtime job starts: the drive says
     nothing about it. A brake asked for later (a non-finite command) is still an ERROR."""
-    plant = start_node(
-        PLANT,
-        'plant',
-        *plant_args(
-            axes='["x"]',
-            min_subscribers='1',
-            cutting_model='none',
-            timing='realtime',
-            sample_period='0.01',
-        ),
-    )
+    plant = start_realtime_drive(start_node, '0.01')
     statuses: list[DiagnosticStatus] = []
     answered: list[int] = []
     with ros_node('x_controller') as (node, executor):  # the owner the scenario names
@@ -272,17 +277,7 @@ def test_a_sample_rate_the_machine_cannot_hold_is_said_and_the_drive_keeps_runni
     (a tick costs about that much alone), so ticks come more than half a period late. The
     drive says so on /diagnostics within its first seconds, not only in the summary, and
     goes on ticking with its axis held."""
-    plant = start_node(
-        PLANT,
-        'plant',
-        *plant_args(
-            axes='["x"]',
-            min_subscribers='1',
-            cutting_model='none',
-            timing='realtime',
-            sample_period='0.0001',
-        ),
-    )
+    plant = start_realtime_drive(start_node, '0.0001')
     statuses: list[DiagnosticStatus] = []
     states: list[int] = []
     with ros_node('watcher') as (node, executor):
