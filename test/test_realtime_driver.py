@@ -28,7 +28,7 @@ does not report its own figures). Before the trajectory held the axes until ever
 controller had commanded (and until the runner heard the reference), 0 to 52 % of the
 job's periods, from its start on, had no command the runner heard, while the container or
 the runner were still being discovered (1 of 3 runs of this test with the old trajectory
-gave 11 %, 44 periods in a row); with the hold, 0.00 % in three runs by hand. The share of
+gave 11 %: 44 periods from the start); with the hold, 0.00 % in three runs by hand. The share of
 periods without a command is not bounded here: scattered ones come from the machine's load
 (6.6 % on one axis in one CI run, 2.7 % on the others) and are a speed figure, measured by
 `benchmark --realtime`.
