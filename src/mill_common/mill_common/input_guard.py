@@ -57,7 +57,10 @@ class InputGuard:
         self.drops = DropCounter()
         self._levels: dict[str, Level] = {}
         self._next_status = 0.0
-        self._pub = node.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        # The node's one publisher on /diagnostics: its other statuses go out here too.
+        self.diagnostics = self._pub = node.create_publisher(
+            DiagnosticArray, topics.DIAGNOSTICS, 10
+        )
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         node.create_timer(0.25, self.tick, clock=steady)
 
