@@ -15,6 +15,7 @@ from mill_common.parameters import (
 from mill_models.axis_data import nominal_input_gain
 
 from mill_controllers.base import AxisController
+from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.registry import CONTROLLERS
 
 
@@ -91,3 +92,14 @@ def build_controller(values: dict[str, Any]) -> AxisController:
     cls = CONTROLLERS.get(values['controller'])
     own = algorithm_values(cls, values)
     return cls.from_parameters(input_gain(values), values['sample_period'], own)
+
+
+def build_loop(values: dict[str, Any]) -> AxisControlLoop:
+    """The controller's per-sample step, as the node and the offline simulator run it."""
+    return AxisControlLoop(
+        build_controller(values),
+        values['sample_period'],
+        values['following_error_limit'],
+        values['command_delay'],
+        values['blend_time'],
+    )

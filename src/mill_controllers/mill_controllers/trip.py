@@ -25,6 +25,14 @@ class Trip:
     error: float  # following error that tripped [m]
     limit: float  # [m]
 
+    def describe(self, axis: str, when: str) -> str:
+        """One line for the log and /diagnostics; `when` says the time as the node has it."""
+        return (
+            f'axis {axis}: following-error trip {when}, |e| = {1e3 * abs(self.error):.3f} mm '
+            f'> {1e3 * self.limit:g} mm: braked (reset: ~/reset_trip or set '
+            'following_error_limit)'
+        )
+
 
 class FollowingErrorTrip:
     def __init__(self, limit: float) -> None:
@@ -51,3 +59,10 @@ class FollowingErrorTrip:
         """Clear the trip; returns the one cleared, if any."""
         trip, self.trip = self.trip, None
         return trip
+
+    def set_limit(self, limit: float) -> Trip | None:
+        """A new limit (setting it, to any value, clears a trip: returns the one cleared)."""
+        if not limit > 0.0:
+            raise ValueError(f'following_error_limit must be > 0 (inf: no trip), got {limit!r}')
+        self.limit = limit
+        return self.reset()

@@ -7,8 +7,8 @@ from dataclasses import fields
 import pytest
 from mill_common.signals import JOINED_INPUTS, AxisReference, ControlInputs, Estimate
 from mill_controllers.adaptive_pi import AdaptivePi
-from mill_controllers.axis_controller_node import INPUTS
 from mill_controllers.base import BASE_INPUTS, AxisController
+from mill_controllers.controller_inputs import INPUTS
 from mill_controllers.registry import CONTROLLERS, make_controller
 from mill_controllers.switching import check_replacement
 

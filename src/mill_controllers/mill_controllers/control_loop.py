@@ -1,0 +1,91 @@
+"""One axis, one sample: what the controller does with its joined inputs. ROS-free.
+
+The controller node and the offline simulator both call `AxisControlLoop.step` once per
+sample, with the measured position of stamp ns, the observer's estimate of that sample and
+the reference points the trajectory sent, so a distributed run equals the offline one by
+construction. A step:
+
+1. aims: with command_delay N the command acts N samples after the state it answers, so
+   the law is evaluated at t + N·T with the observer's predicted position and the
+   reference there (mill_observers.delay estimates that state);
+2. evaluates the law (a BumplessSwitch: it can be replaced between samples); a law that
+   cannot compute (ValueError, a non-finite result) gives the brake request;
+3. checks the following error e = y − r(t), at the state's own stamp, against the trip,
+   which latches the brake request (mill_controllers.trip).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Protocol
+
+from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
+from mill_common.timebase import period_ns, seconds
+
+from mill_controllers.base import AxisController
+from mill_controllers.switching import BumplessSwitch
+from mill_controllers.trip import BRAKE, FollowingErrorTrip
+
+
+class References(Protocol):
+    """The reference of the axis at a stamp, None where it is not known (yet)."""
+
+    def at(self, ns: int) -> AxisReference | None: ...
+
+
+@dataclass(frozen=True)
+class Command:
+    effort: float  # in the law's OUTPUT_UNIT; NaN: the brake request
+    problem: str = ''  # why the law gave no command (the effort is then the brake request)
+    tripped: bool = False  # the following-error trip latched at this sample
+
+
+class AxisControlLoop:
+    def __init__(
+        self,
+        law: AxisController,
+        sample_period: float,
+        following_error_limit: float,
+        command_delay: int = 0,
+        blend_time: float = 0.0,
+    ) -> None:
+        self.switch = BumplessSwitch(law, sample_period, blend_time)
+        self.trip = FollowingErrorTrip(following_error_limit)
+        self.lead_ns = command_delay * period_ns(sample_period)
+
+    @property
+    def law(self) -> AxisController:
+        return self.switch.law
+
+    def aim(self, ns: int) -> int:
+        """The stamp of the reference the command for state ns needs."""
+        return ns + self.lead_ns
+
+    def step(
+        self,
+        ns: int,
+        position: float,
+        estimate: Estimate,
+        references: References,
+        model: FopdtEstimate | None = None,
+    ) -> Command:
+        """The command answering the state of stamp ns; references must know aim(ns)."""
+        aimed = references.at(ns + self.lead_ns)
+        if aimed is None:
+            raise ValueError(f'no reference for {seconds(ns + self.lead_ns):.6f} s')
+        t, y = seconds(ns), position
+        if self.lead_ns:  # the command acts N samples on: aim at the state there
+            t, y = seconds(ns + self.lead_ns), estimate.position
+        problem = ''
+        try:
+            effort = self.switch.compute(ControlInputs(t, y, aimed, estimate, model))
+        except ValueError as exc:
+            effort, problem = BRAKE, str(exc)
+        if not math.isfinite(effort):
+            effort, problem = BRAKE, problem or f'the law gave {effort}'
+        here = references.at(ns) if self.lead_ns else aimed
+        error = position - (aimed if here is None else here).position
+        was = self.trip.tripped
+        effort = self.trip.command(seconds(ns), error, effort)
+        return Command(effort, problem, self.trip.tripped and not was)
