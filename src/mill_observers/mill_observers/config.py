@@ -8,6 +8,7 @@ from mill_common.parameters import ParamSpec, algorithm_values, axis_node_specs,
 from mill_models.axis_data import nominal_input_gain
 
 from mill_observers.base import Observer
+from mill_observers.observer_loop import ObserverLoop
 from mill_observers.registry import OBSERVERS
 
 
@@ -48,3 +49,13 @@ def build_observer(values: dict[str, Any]) -> Observer:
     own = algorithm_values(cls, values)
     gain = values['input_gain'] or nominal_input_gain(values['axis'])
     return cls.from_parameters(gain, values['sample_period'], own)
+
+
+def build_observer_loop(values: dict[str, Any]) -> ObserverLoop:
+    """The observer's per-sample step, as the node and the offline simulator run it."""
+    return ObserverLoop(
+        build_observer(values),
+        values['command_delay'],
+        values['sample_period'],
+        values['blend_time'],
+    )

@@ -1,24 +1,19 @@
-"""Observer node: estimates velocity and lumped disturbance of one axis.
+"""Observer node: velocity and lumped disturbance of one axis; take → check → step → publish.
 
-Sample k: the command that acts over the period before it is fed to the observer (in
-lockstep the command stamped k − 1, the controller's answer to y(k − 1); in real time the
-newest command received, which the drive holds), then the measured position y(k) corrects
-the estimate, which is published on mill/<axis>/estimate stamped like the state. Lockstep
-takes messages in stamp order, so a state that overtakes the previous command waits for it;
-real time never waits: a state always gets its estimate at once.
+Inputs: the measured position on mill/<axis>/state (from plant_node) and the controller's
+command on mill/<axis>/joint_command (from controller_node). Every message is checked
+(sender, joint, finite values, stamp: mill_common.checks); a bad one is dropped, counted
+and reported on /diagnostics (mill_common.input_guard). A non-finite effort from the
+controller is its brake request: the drive brakes, the observer takes it as no input.
 
-With command_delay N > 0 (real time: 1) the observer runs in the loop's delay
-(mill_observers.delay): it predicts with the command that really acts, u(k − N), and
-publishes the estimate of sample k + N, the period its controller's command will act in.
-
-Every message is checked before use: sender (plant_node for states, controller_node for
-commands), joint, finite values, stamp (mill_common.checks; lockstep: on the grid, not older
-than the newest of its input, not later than the plant can be); a bad one is dropped,
-counted and reported on /diagnostics. In lockstep a repeated stamp is the same sample offered
-again: the first message counts. A non-finite effort of the axis's joint from the
-controller is its brake request: the drive brakes the axis, the observer takes it as no
-input. Silence on an input is
-reported and, in lockstep, ends the node after input_timeout (mill_common.input_guard).
+Each state goes to the ROS-free ObserverLoop (mill_observers.observer_loop) with the command
+that acted over the period before it, the object the offline simulator steps too, and the
+estimate goes out on mill/<axis>/estimate stamped like the state (with command_delay N, the
+estimate of the period the next command acts in). The `timing` strategy
+(mill_common.timing) says which command that is: lockstep takes messages in stamp order
+(y(k) waits for u(k − 1); a state offered again is answered with the same estimate); real
+time never waits: the newest state gets its estimate at once, with the newest command
+received (the one the drive holds) and the periods between two states run through.
 """
 
 from __future__ import annotations
@@ -27,7 +22,7 @@ import time
 from functools import partial
 from typing import Any
 
-from mill_common.checks import Rejected, StampCheck, ahead, joint_values, owner_check
+from mill_common.checks import Rejected, joint_values, owner_check
 from mill_common.codec import decode_joint_state
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -40,16 +35,16 @@ from mill_common.ros import (
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
-from mill_common.timebase import period_ns, seconds
+from mill_common.timebase import period_ns
+from mill_common.timing import timing
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from mill_observers.config import build_observer, parameter_specs
-from mill_observers.delay import DelayCompensation
+from mill_observers.config import build_observer_loop, parameter_specs
+from mill_observers.observer_loop import ObserverLoop
 from mill_observers.registry import OBSERVERS
-from mill_observers.switching import EstimateBlend
 
 MAX_COAST = 100  # periods the model runs on without a state before it just resumes
 
@@ -58,51 +53,40 @@ class ObserverNode(Node):
     def __init__(self, **options: Any) -> None:
         super().__init__('observer', **options)
         self._name = self.get_name()  # the sender of every message; asked once
-        self._comp: DelayCompensation | None = None
-        self._blend: EstimateBlend | None = None
-        self._last_ns: int | None = None
-        self._commands: dict[int, float] = {}
-        self._newest_command: float | None = None  # real time: the newest command received
+        self._loop: ObserverLoop | None = None
+        self._last_ns: int | None = None  # the last state stepped
+        self._states: dict[int, float] = {}
+        self._commands: dict[int, float] = {}  # lockstep: by stamp
+        self._newest_command: float | None = None  # real time: the newest received
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         axis = self.axis = v['axis']
-        self.realtime = v['timing'] == 'realtime'
+        self.timing = timing(v['timing'], period_ns(v['sample_period']))
         self._owners = {
             'state': v['plant_node'],
             'command': v['controller_node'] or f'{axis}_controller',
         }
         self._topics = {'state': topics.state(axis), 'command': topics.joint_command(axis)}
-        self._dt_ns = period_ns(v['sample_period'])
-        self._coasted = 0  # real time: periods run on without their state
-        grid = None if self.realtime else self._dt_ns
-        self._stamps = {'state': StampCheck(grid), 'command': StampCheck(grid)}
-        self._states: dict[int, float] = {}
+        self._fields = {'state': 'position', 'command': 'effort'}
+        self._stamps = {slot: self.timing.stamps() for slot in self._topics}
         self._last_estimate: bytes | None = None
         self._stalled_since: float | None = None
-        self._braked_commands = 0
         self._pub = data_publisher(self, JointState, topics.estimate(axis), DATA_QOS)
         self._state_pub = data_publisher(self, JointState, topics.observer_state(axis), DATA_QOS)
         self.guard = InputGuard(
             self,
             lambda: self.params.values['input_warn_time'],
             lambda: self.params.values['input_timeout'],
-            exit_on_silence=not self.realtime,
+            exit_on_silence=self.timing.EXIT_ON_SILENCE,
             stamp_ns=lambda: self._last_ns or 0,
         )
-        for slot, topic in self._topics.items():
-            self.guard.watch(topic, self._owners[slot])
-        qos = 1 if self.realtime else DATA_QOS
+        depth = self.timing.depth()
         for slot, callback in (('state', self._on_state), ('command', self._on_command)):
             topic = self._topics[slot]
-            take_serialized(
-                self,
-                JointState,
-                topic,
-                decode_joint_state,
-                callback,
-                qos,
-                partial(self.guard.drop, topic),
-            )
+            self.guard.watch(topic, self._owners[slot])
+            on_bad = partial(self.guard.drop, topic)
+            qos = DATA_QOS if depth is None else depth
+            take_serialized(self, JointState, topic, decode_joint_state, callback, qos, on_bad)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'axis {axis}: observer {v["observer"]}, timing {v["timing"]}, command_delay '
@@ -110,11 +94,7 @@ class ObserverNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
-        if self._comp is not None and values['axis'] != self.axis:
-            raise ValueError('axis is fixed for the life of the node')
-        # A rebuilt observer restarts from the next measurement; its estimate continues the
-        # old one's and fades into its own over blend_time (mill_observers.switching).
-        if self._comp is not None:
+        if self._loop is not None:
             old = self.params.values['observer']
             units = [OBSERVERS.get(n).DISTURBANCE_UNIT for n in (old, values['observer'])]
             if units[0] != units[1]:
@@ -122,58 +102,51 @@ class ObserverNode(Node):
                     f'{values["observer"]} estimates the disturbance in {units[1]} but the running '
                     f'{old} in {units[0]}: the controller cannot use both'
                 )
-        self._comp = DelayCompensation(
-            build_observer(values), values['command_delay'], values['sample_period']
-        )
-        blend = EstimateBlend(values['sample_period'], values['blend_time'])
-        if self._last_ns is not None and self._blend is not None:
-            blend.resumed(self._blend).switch()  # a switch while running: continue the estimate
-        self._blend = blend
-        if self._last_ns is not None:
-            self._last_ns = None
-            self._commands.clear()
+        loop = build_observer_loop(values)
+        # A rebuilt observer starts from the next measurement, its estimate continuing.
+        self._loop = loop if self._loop is None else self._loop.replace(loop)
+        self._commands.clear()
 
-    def _accept(self, slot: str, msg: JointState, field: str) -> tuple[int, float] | None:
+    # -- take and check ------------------------------------------------------------------
+    def _accept(self, slot: str, msg: JointState) -> tuple[int, float] | None:
         """(stamp, value) of a message whose sender, stamp and value are fine, else None."""
         ns = from_stamp(msg.header.stamp)
-        topic = self._topics[slot]
-        stamps = self._stamps[slot]
-        problem = owner_check(msg.header.frame_id, self._owners[slot]) or stamps.check(ns)
-        if problem is None and not self.realtime:
-            problem = ahead(ns, self._stamps['state'].newest, self._dt_ns)
+        topic, sender, stamps = self._topics[slot], msg.header.frame_id, self._stamps[slot]
+        newest_state = self._stamps['state'].newest
+        problem = owner_check(sender, self._owners[slot]) or self.timing.problem(
+            stamps, ns, newest_state, self.timing.period_ns
+        )
         if problem is not None:
             if problem.reason.startswith('stamp') and ns == stamps.newest:
                 return None
             if not (slot == 'state' and self._last_ns is not None and ns <= self._last_ns):
-                self.guard.drop(topic, problem, msg.header.frame_id)
+                self.guard.drop(topic, problem, sender)
             return None
+        field = self._fields[slot]
         value = joint_values(msg.name, {field: getattr(msg, field)}, self.axis, (field,))
-        if isinstance(value, Rejected) and not (slot == 'command' and value.non_finite):
-            self.guard.drop(topic, value, msg.header.frame_id)
+        brake = isinstance(value, Rejected) and slot == 'command' and value.non_finite
+        if isinstance(value, Rejected) and not brake:
+            self.guard.drop(topic, value, sender)
             return None
-        if not self.realtime and stamps.is_repeat(ns):
-            return None  # lockstep: the same sample again (a re-offered step); the first counts
-        if isinstance(value, Rejected):
-            # The controller's brake request: the drive brakes, no input acts.
-            self._braked_commands += 1
-            return ns, float('nan')
-        return ns, value[0]
+        if self.timing.is_offered_again(stamps, ns):
+            return None  # the same sample again (a re-offered step); the first counts
+        self.guard.heard(topic)
+        return ns, float('nan') if isinstance(value, Rejected) else value[0]
 
     def _on_state(self, msg: JointState) -> None:
         ns = from_stamp(msg.header.stamp)
         if self._last_ns is not None and ns <= self._last_ns:
-            if self.realtime:
+            if not self.timing.WAITS_FOR_INPUTS:
                 self.guard.drop(self._topics['state'], Rejected('stamp repeated or in the past'))
             elif ns == self._last_ns and self._last_estimate is not None:
                 if msg.header.frame_id == self._owners['state']:
                     self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 self._pub.publish(self._last_estimate)  # the plant offered this step again
             return
-        got = self._accept('state', msg, 'position')
+        got = self._accept('state', msg)
         if got is None:
             return
-        self.guard.heard(self._topics['state'])
-        if not self.realtime and not readers_ready(
+        if self.timing.WAITS_FOR_READERS and not readers_ready(
             self, self._pub, self.params.values['min_subscribers']
         ):
             return  # the plant offers the step again
@@ -182,43 +155,27 @@ class ObserverNode(Node):
         self._advance()
 
     def _on_command(self, msg: JointState) -> None:
-        got = self._accept('command', msg, 'effort')
+        got = self._accept('command', msg)
         if got is None:
             return
         ns, u = got
-        self.guard.heard(self._topics['command'])
         self._stamps['command'].accept(ns)
-        if self.realtime:
-            self._newest_command = u
-        elif self._last_ns is None or ns >= self._last_ns:
+        self._newest_command = u
+        if self.timing.WAITS_FOR_INPUTS and (self._last_ns is None or ns >= self._last_ns):
             self._commands[ns] = u
             self._advance()
 
+    # -- step and publish ----------------------------------------------------------------
     def _advance(self) -> None:
-        comp, blend = self._comp, self._blend
-        assert comp is not None and blend is not None, 'configured in NodeParameters'
-        while self._states:
-            ns = min(self._states)
-            if self.realtime:
-                ns = max(self._states)  # nothing stale: the newest state only
-                self._states = {ns: self._states[ns]}
-                if self._last_ns is not None:
-                    held = 0.0 if self._newest_command is None else self._newest_command
-                    # Periods whose state never reached us: the model runs on without one.
-                    missed = min(round((ns - self._last_ns) / self._dt_ns) - 1, MAX_COAST)
-                    for _ in range(max(missed, 0)):
-                        comp.coast(held)
-                    self._coasted += max(missed, 0)
-                    comp.command(held)
-            elif self._last_ns is not None:
-                u = self._commands.pop(self._last_ns, None)
-                if u is None:
-                    self._stalled_since = self._stalled_since or time.monotonic()
-                    return  # y(k) arrived before u(k-1): wait for it
-                comp.command(u)
-            est = blend(comp.correct(self._states.pop(ns)))
-            self._last_ns = ns
-            self._stalled_since = None
+        loop = self._loop
+        assert loop is not None, 'configured in NodeParameters'
+        for ns in self.timing.due(self._states):
+            acted, missed = self._acted(ns)
+            if self.timing.WAITS_FOR_INPUTS and loop.started and acted is None:
+                self._stalled_since = self._stalled_since or time.monotonic()
+                return  # y(k) arrived before u(k − 1): wait for it
+            est = loop.step(self._states.pop(ns), acted, missed)
+            self._last_ns, self._stalled_since = ns, None
             self._last_estimate = joint_state_bytes(
                 ns,
                 (self.axis,),
@@ -228,12 +185,23 @@ class ObserverNode(Node):
                 sender=self._name,
             )
             self._pub.publish(self._last_estimate)
-            status = comp.observer.status()
+            status = loop.status()
             if status:
                 values = tuple(float(v) for v in status.values())
                 self._state_pub.publish(
                     joint_state_bytes(ns, tuple(status), values, sender=self._name)
                 )
+
+    def _acted(self, ns: int) -> tuple[float | None, int]:
+        """The command that acted before the state ns, and the periods missed since the
+        last state: lockstep the command stamped like that state, real time the newest."""
+        if self._last_ns is None:
+            return None, 0
+        if self.timing.WAITS_FOR_INPUTS:
+            return self._commands.pop(self._last_ns, None), 0
+        missed = round((ns - self._last_ns) / self.timing.period_ns) - 1
+        held = 0.0 if self._newest_command is None else self._newest_command
+        return held, min(max(missed, 0), MAX_COAST)
 
     def _report_waiting(self) -> None:
         if self._last_ns is None or self._stalled_since is None:
@@ -241,7 +209,7 @@ class ObserverNode(Node):
         if time.monotonic() - self._stalled_since > 2.0:
             topic = topics.joint_command(self.axis)
             self.get_logger().warning(
-                f'waiting for the command of t = {seconds(self._last_ns):.4f} s on {topic} '
+                f'waiting for the command of {self.timing.when(self._last_ns)} on {topic} '
                 f'({self.count_publishers(topic)} publishers)'
             )
 
