@@ -5,6 +5,7 @@ The offline simulator builds the same core from the same scenario file through h
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -20,9 +21,22 @@ from mill_common.parameters import (
     positive,
 )
 from mill_common.signals import AXES
+from mill_common.timebase import period_ns, seconds
 
 from mill_trajectory.base import Trajectory
+from mill_trajectory.feed_override import (
+    FeedOverride,
+    JobEnd,
+    PeriodicOverridePath,
+    TimeScaledPath,
+)
 from mill_trajectory.registry import TRAJECTORIES
+from mill_trajectory.schedule import (
+    ClockedReference,
+    JobProgress,
+    OverrideReference,
+    WallClockReference,
+)
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -197,3 +211,39 @@ def build_job(values: dict[str, Any]) -> Job:
     if values['duration'] > 0:
         end = min(end, values['duration'])
     return Job(path, end)
+
+
+def preview_samples(values: dict[str, Any], dt_ns: int) -> int:
+    """Samples of reference sent per /clock tick (lockstep), at least one."""
+    return max(1, math.ceil(values['preview_time'] * 1e9 / dt_ns))
+
+
+Schedule = ClockedReference | OverrideReference | WallClockReference
+
+
+def build_schedule(values: dict[str, Any], override: FeedOverride) -> tuple[Schedule, JobProgress]:
+    """What paces the node and which points it sends, with its end rule."""
+    job = build_job(values)
+    path, T = job.trajectory, values['sample_period']
+    enabled, paced = values['feed_override.enabled'], values['feed_override.lockstep']
+    if paced and not enabled:
+        raise ValueError('feed_override.lockstep needs feed_override.enabled')
+    if enabled and values['timing'] == 'realtime':
+        raise ValueError('feed_override is not available with timing realtime')
+    if paced and not values['feed_override.period'] > 0:
+        # The force job: samples are stamped by the override's sender (T need not be whole ns).
+        scaled = TimeScaledPath(path, T)
+        return OverrideReference(scaled, override, T), JobProgress(job.end_time)
+    dt_ns = period_ns(T)
+    end = JobEnd.of(path.end_time, values['settle_time'], values['duration'], dt_ns)
+    if paced:
+        periodic = PeriodicOverridePath(path, dt_ns, values['feed_override.period'], override, end)
+        reference = OverrideReference(periodic.scaled, override, T, periodic)
+        return reference, JobProgress(job.end_time, periodic.scaled, dt_ns)
+    preview = preview_samples(values, dt_ns)
+    if values['timing'] == 'realtime':
+        count = preview + math.ceil(values['publish_period'] * 1e9 / dt_ns) + 2
+        return WallClockReference(path, dt_ns, count), JobProgress(job.end_time)
+    timed = TimeScaledPath(path, seconds(dt_ns), end) if enabled else None
+    clocked = ClockedReference(path, dt_ns, preview, timed, override)
+    return clocked, JobProgress(job.end_time, timed, dt_ns)
