@@ -1,0 +1,337 @@
+"""When the drive steps: its `timing`, one strategy chosen at start.
+
+The drive front end (mill_plant.drive_node) checks and holds the commands, publishes and
+reports; its cycle says when a period runs and what counts as late:
+
+- `LockstepCycle` (simulation only): the plant is the clock. It publishes /clock and the
+  states of step k (stamp kT), waits for the command stamped k of every active axis, then
+  integrates to k + 1 with each command N steps late (`command_delay`, as the offline
+  simulator). A step that stays unanswered is offered again every second (a restarted
+  node rejoins); a missing command is reported after `command_report_time`, naming the
+  axis, the topic and the node that should send it, and when commands return, with the
+  length of the silence; after `lockstep_timeout` the node ends with that message.
+- `RealtimeCycle`: every sample period of wall time it reads the positions, publishes them
+  stamped with the acquisition time on the system clock, and applies the newest command of
+  each axis (zero-order hold). A command must answer a state this drive published. A
+  period without a fresh command counts as late; after `brake_after` late periods in a row
+  the axis is braked until fresh commands return. Ticks more than half a period late (the
+  machine does not hold the rate) are counted and reported.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from abc import ABC, abstractmethod
+from collections import deque
+from collections.abc import Collection
+from typing import Any, ClassVar, Protocol
+
+from diagnostic_msgs.msg import DiagnosticStatus
+from mill_common.checks import Rejected
+from mill_common.codec import encode_clock
+from mill_common.lockstep import Action, LockstepWatchdog
+from mill_common.ros import DATA_QOS
+from mill_common.timebase import seconds
+from rclpy.clock import Clock, ClockType
+from rosgraph_msgs.msg import Clock as ClockMsg
+
+from mill_common import topics
+from mill_plant.command_delay import CommandDelay
+from mill_plant.command_table import CommandTable
+
+RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
+
+
+class Drive(Protocol):
+    """What a cycle uses of the drive front end (mill_plant.drive_node.DriveNode)."""
+
+    params: Any  # NodeParameters: .values
+    backend: Any  # DriveBackend | None
+    table: CommandTable
+    axes: list[str]
+    dt: float
+    dt_ns: int
+    active: bool
+    next_status: float
+
+    def publish_states(self, ns: int) -> None: ...
+    def apply(self, ns: int, efforts: list[float], held: Collection[str] = ()) -> None: ...
+    def report_axis(self, axis: str, level: bytes, message: str) -> None: ...
+    def publish_status(
+        self, force: bool = False, message: str | None = None, level: bytes | None = None
+    ) -> None: ...
+    def owner_of(self, axis: str) -> str: ...
+    def missing_peers(self) -> list[str]: ...
+    def end(self, code: int, message: str) -> None: ...
+    def add_timer(self, timer: Any) -> None: ...
+    def get_logger(self) -> Any: ...
+    def trigger_activate(self) -> Any: ...
+    def create_publisher(self, *args: Any, **kwargs: Any) -> Any: ...
+    def create_timer(self, *args: Any, **kwargs: Any) -> Any: ...
+    def get_publishers_info_by_topic(self, topic: str) -> Any: ...
+
+
+class DriveCycle(ABC):
+    STATUS: ClassVar[str]  # the name of the drive's status on /diagnostics
+    GRID: ClassVar[bool]  # command stamps lie on the sample grid
+
+    def __init__(self, drive: Drive) -> None:
+        self.drive = drive
+        self.k = 0  # steps (lockstep) or ticks (realtime) so far
+
+    @abstractmethod
+    def configure(self) -> None:
+        """Build what the cycle needs once the backend and the topics exist."""
+
+    def activate(self) -> None:  # noqa: B027 (nothing to do by default)
+        """The lifecycle transition activate."""
+
+    def deactivate(self) -> None:  # noqa: B027 (nothing to do by default)
+        """The lifecycle transition deactivate (the drive has braked every axis)."""
+
+    @abstractmethod
+    def expected(self, ns: int) -> Rejected | None:
+        """Whether a command stamped ns answers a state of this drive (None: it does)."""
+
+    def arrival_ns(self) -> int | None:
+        """When a command arrived, if the cycle keeps its latency."""
+        return None
+
+    def command_taken(self) -> None:  # noqa: B027 (nothing to do by default)
+        """A command was accepted into the drive's table."""
+
+    @abstractmethod
+    def watch(self, now: float) -> None:
+        """From the drive's watchdog timer (steady time now)."""
+
+    @abstractmethod
+    def stamp_now(self) -> int:
+        """The stamp of a status published now."""
+
+    @abstractmethod
+    def status_values(self) -> dict[str, object]:
+        """The cycle's figures for the drive's status."""
+
+
+class LockstepCycle(DriveCycle):
+    STATUS = 'mill_plant: lockstep'
+    GRID = True
+
+    def configure(self) -> None:
+        d = self.drive
+        v = d.params.values
+        self._delay = CommandDelay(v['command_delay'], len(d.axes))
+        self._clock_pub = d.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
+        self._clock_every = max(1, round(v['clock_period'] * 1e9 / d.dt_ns))
+        self._watchdog = LockstepWatchdog(
+            time.monotonic(),
+            lambda: d.params.values['startup_timeout'],
+            lambda: d.params.values['lockstep_timeout'],
+        )
+        self.allowed = False  # activated (by autostart or the lifecycle)
+        self._wait_sum = self._wait_max = 0.0
+        self._last_publish = time.monotonic()
+        self._missing: set[str] = set()  # axes reported missing
+
+    def activate(self) -> None:
+        self.allowed = True  # stepping starts once the peers are matched (see watch)
+
+    def deactivate(self) -> None:
+        self.allowed = False
+
+    @property
+    def stamp(self) -> int:
+        return self.k * self.drive.dt_ns
+
+    def expected(self, ns: int) -> Rejected | None:
+        if ns != self.stamp:
+            return Rejected(
+                f'stamp {ns / 1e9:.6f} s is not the current step {self.stamp / 1e9:.6f} s'
+            )
+        return None
+
+    def command_taken(self) -> None:
+        if self.drive.table.complete(self.stamp):
+            self._advance()
+
+    def _publish_step(self, again: bool = False) -> None:
+        if again or self.k % self._clock_every == 0:
+            self._clock_pub.publish(encode_clock(self.stamp))
+        self.drive.publish_states(self.stamp)
+        if not again:
+            self._last_publish = time.monotonic()
+
+    def _advance(self) -> None:
+        d = self.drive
+        now = time.monotonic()
+        wait = now - self._last_publish
+        self._wait_sum += wait
+        self._wait_max = max(self._wait_max, wait)
+        d.apply(self.stamp, self._delay(d.table.values()))
+        self.k += 1
+        if self._missing:  # the step waited this long: the outage's length
+            waited = self._watchdog.waited(now)
+            for axis in self._missing:
+                d.report_axis(
+                    axis,
+                    DiagnosticStatus.OK,
+                    f'commands arriving again after {waited:.2f} s of silence',
+                )
+            self._missing.clear()
+        self._watchdog.progressed(now)
+        if self.k % max(1, round(1.0 / d.dt)) == 0:
+            d.publish_status(force=True)
+        self._publish_step()
+
+    def watch(self, now: float) -> None:
+        d = self.drive
+        if not self.allowed and not d.params.values['autostart']:
+            return  # waiting for the lifecycle transition activate
+        action = self._watchdog.tick(now, d.missing_peers)
+        if action is Action.START:
+            if not self.allowed:
+                d.trigger_activate()  # autostart
+            d.active = True
+            d.get_logger().info('all peers matched: starting lockstep')
+            self._publish_step()
+        elif action is Action.OFFER_AGAIN:
+            self._publish_step(again=True)
+        elif action is Action.PEERS_MISSING:
+            d.end(3, 'peers never appeared: ' + '; '.join(d.missing_peers()))
+        elif action is Action.STALLED:
+            d.end(3, self._timeout_message())
+        report_time = d.params.values['command_report_time']
+        if self._watchdog.started and self._watchdog.waited(now) >= report_time:
+            for axis in d.table.missing(self.stamp):
+                if axis not in self._missing:
+                    self._missing.add(axis)
+                    waited = self._watchdog.waited(now)
+                    message = (
+                        f'no command for step {self.k} on {topics.joint_command(axis)} from '
+                        f'{d.owner_of(axis)} for {waited:.1f} s'
+                    )
+                    d.report_axis(axis, DiagnosticStatus.WARN, message)
+
+    def _timeout_message(self) -> str:
+        d = self.drive
+        parts = []
+        for axis in d.table.missing(self.stamp):
+            topic = topics.joint_command(axis)
+            nodes = sorted({i.node_name for i in d.get_publishers_info_by_topic(topic)})
+            who = f'from {", ".join(nodes)}' if nodes else 'and no node publishes it'
+            parts.append(f'{topic} ({who})')
+        return (
+            f'lockstep timeout: no command for t = {seconds(self.stamp):.3f} s (step {self.k}) '
+            f'after {d.params.values["lockstep_timeout"]:g} s on ' + ', '.join(parts)
+        )
+
+    def stamp_now(self) -> int:
+        return self.stamp
+
+    def status_values(self) -> dict[str, object]:
+        steps = max(self.k, 1)
+        return {
+            'mean_wait_ms': 1e3 * self._wait_sum / steps,
+            'max_wait_ms': 1e3 * self._wait_max,
+        }
+
+
+class RealtimeCycle(DriveCycle):
+    STATUS = 'mill_plant: realtime'
+    GRID = False
+
+    def configure(self) -> None:
+        d = self.drive
+        self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
+        # Ticks that came more than half a period late (the machine does not hold the
+        # sample rate), in all and since the last report; ticks while active, their basis.
+        self.overruns = self._overruns_reported = self.active_ticks = 0
+        self._missing: set[str] = set()
+        wall = Clock(clock_type=ClockType.STEADY_TIME)
+        d.add_timer(d.create_timer(d.dt, self._tick, clock=wall))
+
+    def activate(self) -> None:
+        self.drive.active = True
+        self.drive.get_logger().info('active: applying commands')
+
+    def expected(self, ns: int) -> Rejected | None:
+        if ns not in self._recent:
+            return Rejected(f'stamp {ns / 1e9:.6f} s answers no state this drive published')
+        return None
+
+    def arrival_ns(self) -> int | None:
+        return time.time_ns()
+
+    def _tick(self) -> None:
+        d = self.drive
+        if d.backend is None:
+            return
+        ns = time.time_ns()  # acquisition time on the system clock
+        if d.active:
+            self.active_ticks += 1
+            if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
+                self.overruns += 1
+        d.publish_states(ns)
+        self._recent.append(ns)
+        held: Collection[str] = d.axes  # inactive: every axis held braked, as expected
+        if d.active:
+            tick = d.table.take()
+            efforts = tick.efforts
+            held = [a for a, c in d.table.by_axis.items() if c.stamp < 0]  # none came yet
+            for axis in tick.newly_braked:
+                d.report_axis(
+                    axis,
+                    DiagnosticStatus.ERROR,
+                    f'braked: no fresh command for {d.params.values["brake_after"]} periods '
+                    f'on {topics.joint_command(axis)} (from {d.owner_of(axis)})',
+                )
+            for axis in tick.resumed:
+                d.report_axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
+        else:
+            efforts = [math.nan] * len(d.axes)
+        d.apply(ns, efforts, held)
+        self.k += 1
+
+    def watch(self, now: float) -> None:
+        d = self.drive
+        if not d.active:
+            return
+        if self.overruns > self._overruns_reported and now >= d.next_status:
+            late = self.overruns - self._overruns_reported
+            self._overruns_reported = self.overruns
+            text = (
+                f'sample rate not held: {late} ticks came more than half a period '
+                f'({0.5e-6 * d.dt_ns:g} ms) late in the last second; lower the rate or '
+                'compose the nodes (run_scenario --layout single)'
+            )
+            d.get_logger().warning(text)
+            d.publish_status(force=True, message=text, level=DiagnosticStatus.WARN)
+        now_ns = time.time_ns()
+        report_time = d.params.values['command_report_time']
+        for axis, c in d.table.by_axis.items():
+            quiet = (now_ns - c.stamp) * 1e-9 if c.stamp >= 0 else math.inf
+            if quiet >= report_time and axis not in self._missing:
+                self._missing.add(axis)
+                message = (
+                    f'no fresh command on {topics.joint_command(axis)} from {d.owner_of(axis)}'
+                )
+                d.report_axis(axis, DiagnosticStatus.WARN, message)
+            elif quiet < report_time and axis in self._missing:
+                self._missing.discard(axis)
+
+    def stamp_now(self) -> int:
+        return time.time_ns()
+
+    def status_values(self) -> dict[str, object]:
+        table = self.drive.table
+        values: dict[str, object] = {'overruns': self.overruns, 'active_ticks': self.active_ticks}
+        for axis in self.drive.axes:
+            values[f'{axis}.late_fraction'] = table.late_fraction(axis)
+            values[f'{axis}.longest_late_run'] = table.longest_late_run(axis)
+            for key, v in table.latency_stats(axis).items():
+                values[f'{axis}.latency_{key}_ms'] = 1e3 * v
+        return values
+
+
+CYCLES: dict[str, type[DriveCycle]] = {'lockstep': LockstepCycle, 'realtime': RealtimeCycle}
