@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.jobs.axis import build_axis_cores
+from mill_bringup.jobs.axis import build_axis_loops
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
@@ -15,10 +15,10 @@ from mill_bringup import scenario
 
 def test_a_model_hungry_controller_without_the_rls_observer_is_refused() -> None:
     scen = scenario.load('hatwesh').variant('adaptive_pi_rls')
-    build_axis_cores(scen)  # rls observer: fits
+    build_axis_loops(scen)  # rls observer: fits
     scen.add_override('x_observer.observer=dfo')
     with pytest.raises(scenario.ScenarioError, match=r'x_observer \(observer dfo\).*rls'):
-        build_axis_cores(scen)
+        build_axis_loops(scen)
 
 
 def test_the_rls_observer_model_gives_the_same_run_as_the_own_estimator() -> None:

@@ -21,26 +21,25 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections import deque
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from mill_bag.types import decode
-from mill_common.signals import AXES, ControlInputs, axis_index
+from mill_common.reference_buffer import ReferenceBuffer
+from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
-from mill_controllers.base import AxisController
-from mill_controllers.config import build_controller
+from mill_controllers.config import build_loop
+from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.force_control import ForceFeedLoop, ForceSampler, tool_depth
-from mill_controllers.trip import FollowingErrorTrip
-from mill_observers.base import Observer
-from mill_observers.config import build_observer
-from mill_observers.delay import DelayCompensation
+from mill_observers.config import build_observer_loop
+from mill_observers.observer_loop import ObserverLoop
+from mill_plant.command_delay import CommandDelay
 from mill_plant.simulated_machine import SimulatedMachine
-from mill_trajectory.base import TrajectorySample
-from mill_trajectory.config import build_job
-from mill_trajectory.feed_override import FeedOverride, JobEnd, PeriodicOverridePath
+from mill_trajectory.config import build_job, build_schedule
+from mill_trajectory.feed_override import FeedOverride, JobEnd
+from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
@@ -78,38 +77,28 @@ def axis_delays(scen: Scenario) -> dict[int, int]:
     return delays
 
 
-def following_error_trips(scen: Scenario) -> dict[int, FollowingErrorTrip]:
-    """The following-error trip of each axis controller, by axis index."""
-    trips = {}
-    for node in scen.nodes:
-        if (node.package, node.executable) == ('mill_controllers', 'axis_controller'):
-            values = scen.parameters(node.name)
-            trips[axis_index(values['axis'])] = FollowingErrorTrip(values['following_error_limit'])
-    return trips
-
-
-def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[int, Observer]]:
-    """Controller and observer cores by axis index, checked to fit together.
+def build_axis_loops(scen: Scenario) -> tuple[dict[int, AxisControlLoop], dict[int, ObserverLoop]]:
+    """The controller's and the observer's per-sample step of each axis, by axis index,
+    built from the scenario as their nodes build them, and checked to fit together.
 
     ScenarioError if an active axis lacks one, or if a controller designs with the
     observer's model estimate and the observer of its axis estimates none.
     """
     pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
-    controllers: dict[int, AxisController] = {}
-    observers: dict[int, Observer] = {}
+    controllers: dict[int, AxisControlLoop] = {}
+    observers: dict[int, ObserverLoop] = {}
     names: dict[int, str] = {}
-    for node in scen.nodes_of('mill_controllers'):
-        if node.executable != 'axis_controller':
+    for node in scen.nodes:
+        key = (node.package, node.executable)
+        if key not in AXIS_NODES:
             continue  # a force controller, say: not an axis core
         values = scen.parameters(node.name)
-        controllers[axis_index(values['axis'])] = build_controller(values)
-    for node in scen.nodes_of('mill_observers'):
-        if node.executable != 'observer_node':
-            continue
-        values = scen.parameters(node.name)
         i = axis_index(values['axis'])
-        observers[i] = build_observer(values)
-        names[i] = f'{node.name} (observer {values["observer"]})'
+        if node.package == 'mill_controllers':
+            controllers[i] = build_loop(values)
+        else:
+            observers[i] = build_observer_loop(values)
+            names[i] = f'{node.name} (observer {values["observer"]})'
     active = [i for i, a in enumerate(AXES) if a in pv['axes']]
     missing = [AXES[i] for i in active if i not in controllers or i not in observers]
     if missing:
@@ -117,7 +106,7 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[in
             f'scenario {scen.name}: axes {missing} lack a controller or an observer'
         )
     for i in active:
-        if controllers[i].needs_model and not observers[i].PROVIDES_MODEL:
+        if controllers[i].law.needs_model and not observers[i].observer.PROVIDES_MODEL:
             raise ScenarioError(
                 f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
                 f'model estimate, but {names[i]} estimates none (use observer rls)'
@@ -126,142 +115,136 @@ def build_axis_cores(scen: Scenario) -> tuple[dict[int, AxisController], dict[in
 
 
 class AdaptiveFeed:
-    """The force controller and the lockstep override of an axis job, as the graph runs them."""
+    """The force controller of an axis job and the trajectory's answer to its override."""
 
-    def __init__(self, job: AxisJob) -> None:
-        scen = job.scenario
-        cv = scen.parameters(job.force_controller)
-        tv = scen.parameters(job.trajectory)
+    def __init__(self, job: AxisJob, schedule: OverrideReference) -> None:
+        cv = job.scenario.parameters(job.force_controller)
         self.loop = ForceFeedLoop.from_parameters(cv)
         self.sampler = ForceSampler(self.loop.T, cv['force_component'], cv['force_measure'])
         self.reference = cv['reference_force']
         self.top = cv['workpiece_top'] if cv['depth_source'] == 'position' else None
-        override = FeedOverride(tv['feed_override.min'], tv['feed_override.max'])
-        self.path = PeriodicOverridePath(
-            build_job(tv).trajectory, job.dt_ns, tv['feed_override.period'], override, job.end
-        )
-        self.refs: dict[int, TrajectorySample] = {}
+        self.schedule = schedule
         self.rows: list[tuple[float, ...]] = []
 
-    def reference_of(
-        self, k: int, ns: int, force: tuple[float, float, float], z: float
-    ) -> TrajectorySample:
-        """The reference of sample k; at a control instant the override is computed first."""
+    def offer(self, ns: int, force: tuple[float, float, float], z: float) -> Points | None:
+        """At a control instant, the override and the reference points it sets."""
         hit = self.sampler.offer(ns, force)
-        if hit is not None:
-            j, measured = hit
-            depth = None
-            if self.top is not None:
-                depth = tool_depth(self.top, z) if math.isfinite(z) else 0.0
-            cmd = self.loop.step(j * self.loop.T, self.reference, measured, depth)
-            answer = self.path.answer(k, cmd.override, cmd.slope)
-            for i, sample in enumerate(answer.samples):
-                self.refs[answer.first + i] = sample
-            self.rows.append(
-                (
-                    seconds(ns),
-                    cmd.force,
-                    self.reference,
-                    cmd.feed_command,
-                    cmd.override,
-                    cmd.beta,
-                    cmd.depth,
-                )
+        if hit is None:
+            return None
+        j, measured = hit
+        depth = None
+        if self.top is not None:
+            depth = tool_depth(self.top, z) if math.isfinite(z) else 0.0
+        cmd = self.loop.step(j * self.loop.T, self.reference, measured, depth)
+        self.rows.append(
+            (
+                seconds(ns),
+                cmd.force,
+                self.reference,
+                cmd.feed_command,
+                cmd.override,
+                cmd.beta,
+                cmd.depth,
             )
-        return self.refs.pop(k)
+        )
+        return self.schedule.answer(ns, cmd.override, cmd.slope)
 
     @property
     def last_sample(self) -> int | None:
-        return self.path.scaled.last_sample
+        return self.schedule.scaled.last_sample
 
 
 class AxisSimulation:
-    """Sample by sample, the calls the graph makes (plant -> observer -> controller -> plant)."""
+    """Sample by sample, the steps the graph makes (plant -> observer -> controller -> plant):
+    the same ROS-free objects the nodes step, fed as the messages feed them."""
 
     def __init__(self, job: AxisJob, times: CoreTimer | None) -> None:
         scen = job.scenario
         pv = scen.parameters(job.plant)
         # The machine behind the plant node's front end: the same backend, the same calls.
         self.machine = SimulatedMachine(pv)
-        self.path = build_job(scen.parameters(job.trajectory)).trajectory
-        controllers, observers = build_axis_cores(scen)
         self.active = [AXES.index(a) for a in self.machine.axes]
         self.dt_ns = job.dt_ns
         self.dt = seconds(job.dt_ns)
-        delays = axis_delays(scen)
-        self.controllers = controllers
-        self.lead = {i: delays[i] for i in self.active}  # the controllers' aim ahead
-        self.trips = following_error_trips(scen)
-        self.observers = {
-            i: DelayCompensation(observers[i], delays[i], self.dt) for i in self.active
-        }
-        # Commands the plant applies N steps after the step they answer (zero before).
-        self.in_flight: deque[list[float]] = deque([[0.0] * len(self.active)] * pv['command_delay'])
+        controllers, observers = build_axis_loops(scen)
+        self.controllers = {i: controllers[i] for i in self.active}
+        self.observers = {i: observers[i] for i in self.active}
+        self.acted: dict[int, float | None] = dict.fromkeys(self.active)
+        # The reference points each controller holds, from the trajectory's schedule.
+        tv = scen.parameters(job.trajectory)
+        override = FeedOverride(tv['feed_override.min'], tv['feed_override.max'])
+        self.schedule, _ = build_schedule(tv, override)
+        self.clock_every = max(1, round(pv['clock_period'] * 1e9 / self.dt_ns))
+        self.buffers = {i: ReferenceBuffer() for i in self.active}
+        self.delay = CommandDelay(pv['command_delay'], len(self.active))
         self.job = job
         self.feed: AdaptiveFeed | None = None
         if job.force_controller:
-            if not job.lockstep:
+            if not isinstance(self.schedule, OverrideReference):
                 raise ScenarioError(
                     f'scenario {scen.name}: the feed override reaches the trajectory '
                     "asynchronously, so the job has no offline twin (set the trajectory's "
                     'feed_override.lockstep and feed_override.period)'
                 )
-            self.feed = AdaptiveFeed(job)
+            self.feed = AdaptiveFeed(job, self.schedule)
         self.rec = RunRecord.empty(min(job.samples, job.max_samples), self.dt)
         self.k = -1
         self.clock = times or NoTimer()
+
+    def _reference_points(
+        self, k: int, ns: int, force: tuple[float, float, float], measured: list[float]
+    ) -> None:
+        """The points the trajectory sends at this sample, into each controller's buffer."""
+        points: Points | None = None
+        if self.feed is not None:
+            z = measured[self.active.index(2)] if 2 in self.active else math.nan
+            points = self.feed.offer(ns, force, z)
+        elif isinstance(self.schedule, ClockedReference) and k % self.clock_every == 0:
+            points = self.schedule.answer(ns)  # the plant's /clock tick
+        if points is None:
+            return
+        for at, sample in zip(points.stamps(), points.samples, strict=True):
+            for i in self.active:
+                self.buffers[i].add(at, sample.axis(i))
 
     def step(self, k: int) -> None:
         if k >= len(self.rec.t):
             self.rec = self.rec.grown(2 * len(self.rec.t), self.dt)
         s = self.rec.signals
-        t = seconds(k * self.dt_ns)
+        ns = k * self.dt_ns
         clock, machine = self.clock, self.machine
         clock.start()
         measured = machine.read()
         force = machine.cutting_force()  # of this sample's state, sent with the states
-        if self.feed is None:
-            ref = self.path.sample(t)
-        else:
-            z = measured[self.active.index(2)] if 2 in self.active else math.nan
-            ref = self.feed.reference_of(k, k * self.dt_ns, force, z)
+        self._reference_points(k, ns, force, measured)
         clock.lap('trajectory')
         efforts = []
         for i, y in zip(self.active, measured, strict=True):
             clock.start()
             observer = self.observers[i]
-            est = observer.correct(y)
-            model = observer.observer.model_estimate()
+            est = observer.step(y, self.acted[i])
+            model = observer.model_estimate()
             clock.lap('observer')
-            lead = self.lead[i]
-            if lead:  # the command acts N samples on: aim at the state and reference there
-                t_c = seconds((k + lead) * self.dt_ns)
-                inputs = ControlInputs(t_c, est.position, self.path.sample(t_c).axis(i), est, model)
-            else:
-                inputs = ControlInputs(t, y, ref.axis(i), est, model)
-            u = self.controllers[i].compute(inputs)
+            loop = self.controllers[i]
+            u = loop.step(ns, y, est, self.buffers[i], model).effort
             clock.lap('controller')
-            u = self.trips[i].command(t, y - ref.position[i], u)
+            self.acted[i] = u
             efforts.append(u)
+            ref = self.buffers[i].at(ns)
+            assert ref is not None, 'the controller stepped on it'
             s['position'][k, i] = y
-            s['reference'][k, i] = ref.position[i]
-            s['reference_velocity'][k, i] = ref.velocity[i]
+            s['reference'][k, i] = ref.position
+            s['reference_velocity'][k, i] = ref.velocity
             s['estimate_velocity'][k, i] = est.velocity
             s['estimate_disturbance'][k, i] = est.disturbance
             s['torque'][k, i] = u
-        applied = efforts
-        if self.in_flight:
-            self.in_flight.append(efforts)
-            applied = self.in_flight.popleft()
-        machine.write(applied)
+            self.buffers[i].forget_before(ns)
+        machine.write(self.delay(efforts))
         _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
         s['force'][k] = force
         clock.start()
         machine.advance(self.dt)
         clock.lap('plant')
-        for i, u in zip(self.active, efforts, strict=True):
-            self.observers[i].command(u)
-            clock.lap('observer', call=False)  # the second half of the correct call's sample
         self.k = k
 
     def finished(self) -> bool:
@@ -277,10 +260,10 @@ class AxisSimulation:
             rows = np.array(self.feed.rows, dtype=float)
             self.rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
         self.rec.events = [
-            f'{AXES[i]} axis: following-error trip at t = {trip.trip.time:.4f} s, '
-            f'|e| = {1e3 * abs(trip.trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
-            for i, trip in sorted(self.trips.items())
-            if trip.trip is not None
+            f'{AXES[i]} axis: following-error trip at t = {trip.time:.4f} s, '
+            f'|e| = {1e3 * abs(trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
+            for i, loop in sorted(self.controllers.items())
+            if (trip := loop.trip.trip) is not None
         ]
         return self.rec
 
@@ -305,7 +288,7 @@ class AxisJob(Job[RunRecord]):
                 f'scenario {scen.name}: an axis job has one plant and one trajectory'
             )
         self.plant, self.trajectory = plants[0].name, trajectories[0].name
-        build_axis_cores(scen)  # the axes' cores fit together
+        build_axis_loops(scen)  # the axes' cores fit together
         pv = scen.parameters(self.plant)
         tv = scen.parameters(self.trajectory)
         self.dt_ns = period_ns(pv['sample_period'])
