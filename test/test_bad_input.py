@@ -22,7 +22,7 @@ from mill_common import topics
 from test.conftest import ParameterClient, ros_node, wait_until
 
 PLANT = ('mill_plant.plant_node', 'plant_node', 'plant')
-CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller', 'x_controller')
+CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller_node', 'x_controller')
 OBSERVER = ('mill_observers.observer_node', 'observer_node', 'x_observer')
 
 # (node, -p argument, parameter the error must name)
@@ -145,7 +145,7 @@ BAD_INPUT = [
         CONTROLLER,
         ['-p', 'pd.omega_c:=abc'],
         None,
-        "axis_controller: error: invalid parameter pd.omega_c='abc': "
+        "axis_controller_node: error: invalid parameter pd.omega_c='abc': "
         'must be of type double (a floating-point number), got string',
     ),
     (
@@ -159,7 +159,7 @@ BAD_INPUT = [
         CONTROLLER,
         ['-p', 'pd.omega:=20.0'],
         None,
-        'axis_controller: error: unknown parameter pd.omega=20.0 (did you mean pd.omega_c?): '
+        'axis_controller_node: error: unknown parameter pd.omega=20.0 (did you mean pd.omega_c?): '
         '/x_controller has no such parameter',
     ),
     (
@@ -173,23 +173,23 @@ BAD_INPUT = [
         CONTROLLER,
         ['--params-file', '/nonexistent/params.yaml'],
         None,
-        'axis_controller: error: --params-file /nonexistent/params.yaml: no such file',
+        'axis_controller_node: error: --params-file /nonexistent/params.yaml: no such file',
     ),
     (
         CONTROLLER,
         ['--params-file', 'FILE'],
         'x_controller:\n  ros__parameters:\n    pd.omega_c: [1.0, 2.0\n',
-        "axis_controller: error: --params-file FILE: not valid YAML (expected ',' or ']', "
+        "axis_controller_node: error: --params-file FILE: not valid YAML (expected ',' or ']', "
         "but got '<stream end>' at line 4, column 1)",
     ),
     (
         CONTROLLER,
         ['--params-file', 'FILE'],
         MIXED_LIST,
-        'axis_controller: error: --params-file FILE: sequence should be of same type. '
+        'axis_controller_node: error: --params-file FILE: sequence should be of same type. '
         "Value type 'double' do not belong at line_num 3",
     ),
-    (CONTROLLER, ['-p', 'omega'], None, 'axis_controller: error: -p omega: not NAME:=VALUE'),
+    (CONTROLLER, ['-p', 'omega'], None, 'axis_controller_node: error: -p omega: not NAME:=VALUE'),
 ]
 
 

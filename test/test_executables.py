@@ -31,7 +31,7 @@ NODES = [
     ),
     (
         'mill_controllers.axis_controller_node',
-        'axis_controller',
+        'axis_controller_node',
         controller_specs,
         ['controller', 'pd.omega_c', 'axis'],
     ),

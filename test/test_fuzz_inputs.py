@@ -277,7 +277,7 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
             if s.name.endswith(': inputs') and s.level != DiagnosticStatus.OK:
                 seen = inputs.setdefault(s.name, {})
                 for kv in s.values:  # the plant's: drops per topic; the others': TOPIC.dropped
-                    if kv.key.endswith('.dropped') or s.name == 'mill_plant: inputs':
+                    if kv.key.endswith('.dropped') or s.name == 'plant: inputs':
                         seen[kv.key] = max(seen.get(kv.key, 0), int(kv.value))
 
     try:
@@ -325,7 +325,7 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     assert code == 1, text[-3000:]
     assert 'foreign messages were seen' in text, text[-3000:]
     assert summary['missing_samples'] == {}
-    assert any(p.startswith('mill_plant: ownership') for p in summary['problems'])
+    assert any(p.startswith('plant: ownership') for p in summary['problems'])
     assert set(summary['foreign']) == {
         *(topics.state(a) for a in AXES),
         *(topics.estimate(a) for a in AXES),
@@ -343,4 +343,4 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
         observer = inputs.get(f'{a}_observer: inputs', {})
         for t in (topics.state(a), topics.joint_command(a)):
             assert observer.get(f'{t}.dropped', 0) > 0, (a, t, observer)
-        assert inputs.get('mill_plant: inputs', {}).get(topics.joint_command(a), 0) > 0, inputs
+        assert inputs.get('plant: inputs', {}).get(topics.joint_command(a), 0) > 0, inputs

@@ -6,6 +6,7 @@ Nodes: `--ros-args --log-level L -r __node:=NAME -r __ns:=NS --params-file FILE`
 
 from __future__ import annotations
 
+import importlib.metadata
 import subprocess
 import sys
 import time
@@ -13,17 +14,24 @@ from pathlib import Path
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from mill_bringup.graph import module_of
 
 from mill_bringup import launch_plan
 from mill_common import topics
 from test.conftest import ros_node, wait_until
 
 
+def module_of(package: str, executable: str) -> str:
+    """The Python module behind a package's console script (what `ros2 run` starts)."""
+    for ep in importlib.metadata.entry_points(group='console_scripts'):
+        if ep.name == executable and ep.value.startswith(package + '.'):
+            return ep.value.split(':')[0]
+    raise AssertionError(f'{package} has no executable {executable!r}')
+
+
 def _status(machine: str, state: str) -> DiagnosticArray:
     values = [KeyValue(key='state', value=state), KeyValue(key='time', value='1.0')]
     status = DiagnosticStatus(
-        name='mill_trajectory: job', message=f'job {state}', hardware_id=machine, values=values
+        name='trajectory: job', message=f'job {state}', hardware_id=machine, values=values
     )
     return DiagnosticArray(status=[status])
 

@@ -57,7 +57,6 @@ LAUNCH_SIGTERM_TIMEOUT = 5.0
 
 @pytest.mark.system
 def test_ctrl_c_ends_a_running_graph_before_launch_escalates(start_node) -> None:
-    from mill_bringup.graph import module_of
     from mill_common.ros import DATA_QOS
     from sensor_msgs.msg import JointState
 
@@ -65,7 +64,7 @@ def test_ctrl_c_ends_a_running_graph_before_launch_escalates(start_node) -> None
     from mill_common import topics
 
     scen = scenario.load('slotting')
-    nodes = {n.name: start_node(module_of(n.package, n.executable), n.name) for n in scen.nodes}
+    nodes = {n.name: start_node(n.kind.module, n.name) for n in scen.nodes}
     with ros_node('ctrl_c_probe') as (probe, executor):
         states: list[JointState] = []
         probe.create_subscription(JointState, topics.state('x'), states.append, DATA_QOS)

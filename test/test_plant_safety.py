@@ -161,7 +161,7 @@ def test_non_finite_command_brakes_the_axis(start_node) -> None:
     assert truth[NAN_STEPS.start].velocity[0] > 0.0
 
     # Reported on /diagnostics.
-    assert any(s.name == 'mill_plant: lockstep' and s.message == 'axis x braked' for s in errors), (
+    assert any(s.name == 'plant: lockstep' and s.message == 'axis x braked' for s in errors), (
         errors
     )
 

@@ -20,7 +20,7 @@ from trajectory_msgs.msg import JointTrajectory
 from mill_common import topics
 from test.conftest import ros_node
 
-JOB = 'mill_trajectory: job'
+JOB = 'trajectory: job'
 STATE = topics.state('x')
 COMMAND = topics.joint_command('x')
 T_NS = 1_000_000  # sample_period of the scenario file

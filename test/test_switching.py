@@ -47,7 +47,7 @@ class RunningJob:
             record = {kv.key: kv.value for kv in status.values}
             # One switch is one (law, time, outputs): seen twice, it is one status delivered
             # twice (seen once in a full run), not a second switch.
-            if status.name == 'mill_controllers: x switch' and record not in self.switches:
+            if status.name == 'x_controller: switch' and record not in self.switches:
                 self.switches.append(record)
 
     def _law_state(self, msg: JointState) -> None:

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from mill_common import topics
+
 
 def status_values(status: Any) -> dict[str, str]:
     return {kv.key: kv.value for kv in status.values}
@@ -17,7 +19,7 @@ def job_end(statuses: list[Any]) -> tuple[float | None, str]:
     found = None
     for array in statuses:
         for status in array.status:
-            if status.name == 'mill_trajectory: job':
+            if topics.part_of(status.name) == topics.JOB_STATUS:
                 values = status_values(status)
                 if 'end_time' not in values:
                     continue
@@ -31,7 +33,7 @@ def job_end(statuses: list[Any]) -> tuple[float | None, str]:
 def plant_status(statuses: list[Any]) -> dict[str, str]:
     for array in reversed(statuses):
         for status in array.status:
-            if status.name in ('mill_plant: lockstep', 'mill_plant: realtime'):
+            if topics.part_of(status.name) in topics.DRIVE_STATUSES:
                 return status_values(status) | {'message': status.message}
     return {}
 
@@ -40,7 +42,7 @@ def job_start(statuses: list[Any]) -> int | None:
     """The start stamp of a realtime job, from the trajectory's status (None: lockstep)."""
     for array in reversed(statuses):
         for status in array.status:
-            if status.name == 'mill_trajectory: job':
+            if topics.part_of(status.name) == topics.JOB_STATUS:
                 values = status_values(status)
                 if 'start_stamp_ns' in values:
                     return int(values['start_stamp_ns'])

@@ -55,6 +55,7 @@ from mill_common.node_main import EXECUTORS
 
 from mill_bringup import floor, realtime_sweep
 from mill_bringup import scenario as scenario_mod
+from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
 from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
@@ -159,7 +160,7 @@ def time_cores(name: str, duration: float) -> int:
     """Print the µs per call of each role's core over `duration` s of the scenario."""
     try:
         scen = scenario_mod.load(name)
-        for node in scen.nodes_of('mill_trajectory'):
+        for node in scen.nodes_of(TRAJECTORY):
             scen.add_override(f'{node.name}.duration={duration!r}')
         times = CoreTimes()
         t0 = time.perf_counter()
@@ -169,11 +170,9 @@ def time_cores(name: str, duration: float) -> int:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
     algorithms = {
-        'observer': sorted(
-            {scen.parameters(n.name)['observer'] for n in scen.nodes_of('mill_observers')}
-        ),
+        'observer': sorted({scen.parameters(n.name)['observer'] for n in scen.nodes_of(OBSERVER)}),
         'controller': sorted(
-            {scen.parameters(n.name)['controller'] for n in scen.nodes_of('mill_controllers')}
+            {scen.parameters(n.name)['controller'] for n in scen.nodes_of(CONTROLLER)}
         ),
     }
     print(
@@ -380,7 +379,7 @@ def main(argv: list[str] | None = None) -> int:
     except (scenario_mod.ScenarioError, RunError, RuntimeError, TimeoutError, ValueError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
-    rate = 1.0 / scen.parameters(scen.nodes_of('mill_plant')[0].name)['sample_period']
+    rate = 1.0 / scen.parameters(scen.nodes_of(PLANT)[0].name)['sample_period']
     figures = {
         'executor': executor,
         'sample_rate_hz': rate,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from mill_bringup.catalogue import CONTROLLER, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, load
 
 
@@ -51,9 +52,7 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
     for text in args.param:
         scen.add_override(text)
     if args.controller:
-        axis_controllers = [
-            n for n in scen.nodes_of('mill_controllers') if n.executable == 'axis_controller'
-        ]
+        axis_controllers = scen.nodes_of(CONTROLLER)
         if not axis_controllers:
             raise ScenarioError(f'--controller: scenario {scen.name} has no axis controller')
         for node in axis_controllers:
@@ -76,7 +75,7 @@ def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> 
         if delay < 0:
             raise ScenarioError(f'--delay must be a whole number >= 0, got {delay}')
         for node in scen.nodes:
-            if node.package in ('mill_plant', 'mill_controllers', 'mill_observers'):
+            if node.kind.declares('command_delay'):
                 scen.add_override(f'{node.name}.command_delay={delay}')
 
 
@@ -84,7 +83,7 @@ def set_duration(scen: Scenario, duration: float) -> None:
     """--duration: the machine time the trajectory runs."""
     if not duration > 0:
         raise ScenarioError(f'--duration must be > 0, got {duration}')
-    for node in scen.nodes_of('mill_trajectory'):
+    for node in scen.nodes_of(TRAJECTORY):
         scen.add_override(f'{node.name}.duration={duration!r}')
 
 

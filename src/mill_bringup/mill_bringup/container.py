@@ -9,8 +9,8 @@ As a ROS 2 component container composes nodes: each node is created with its own
 the parameter files (`/**/NAME`), its topics and its services. The `--ros-args` of the
 container (namespace, remappings, parameter files, `-p`, log level) apply to every node in
 it, as they would to each node started alone. Which class each NAME is comes from the
-`mill_scenario: launch:` entry (`NAME PACKAGE EXECUTABLE`) of the parameter files given;
-NODE_FACTORIES maps the executable to the node's factory.
+`mill_scenario: launch:` entry (`NAME PACKAGE EXECUTABLE`) of the parameter files given,
+and the node catalogue (mill_bringup.catalogue) says how to build it.
 
 A node that ends by itself (a lockstep timeout, a configuration error) ends the container
 with its exit code, its message prefixed by the node's name; Ctrl-C or SIGTERM end them all.
@@ -18,15 +18,14 @@ with its exit code, its message prefixed by the node's name; Ctrl-C or SIGTERM e
 
 from __future__ import annotations
 
-import importlib
 import sys
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import yaml
 
+from mill_bringup.catalogue import KINDS, UnknownNodeKind, kind_of
 from mill_bringup.scenario import SCENARIO_KEY
 
 if TYPE_CHECKING:
@@ -34,34 +33,6 @@ if TYPE_CHECKING:
 
 PROG = 'mill_container'
 
-
-@dataclass(frozen=True)
-class NodeKind:
-    """How a container builds a node an executable would start alone."""
-
-    factory: str  # 'module:callable', called with rclpy Node options (cli_args)
-    lifecycle: bool  # a managed node: it can wait for `configure`/`activate`
-
-
-# (package, executable) of the scenario's launch entries -> the node it starts.
-NODE_FACTORIES: dict[tuple[str, str], NodeKind] = {
-    ('mill_plant', 'plant_node'): NodeKind('mill_plant.plant_node:make_node', True),
-    ('mill_plant', 'force_process_node'): NodeKind(
-        'mill_plant.force_process_node:ForceProcessNode', False
-    ),
-    ('mill_trajectory', 'trajectory_node'): NodeKind(
-        'mill_trajectory.trajectory_node:TrajectoryNode', False
-    ),
-    ('mill_observers', 'observer_node'): NodeKind(
-        'mill_observers.observer_node:ObserverNode', False
-    ),
-    ('mill_controllers', 'axis_controller'): NodeKind(
-        'mill_controllers.axis_controller_node:AxisControllerNode', False
-    ),
-    ('mill_controllers', 'force_controller_node'): NodeKind(
-        'mill_controllers.force_controller_node:ForceControllerNode', False
-    ),
-}
 
 USAGE = f"""usage: {PROG} NODE [NODE ...] --ros-args --params-file SCENARIO [ROS ARGUMENTS]
 
@@ -75,30 +46,11 @@ Messages between the nodes of the container are handed over in the process (they
 to DDS for every other reader); MILL_INTRA_PROCESS=0 sends them through DDS only.
 
 executables that can run in a container:
-""" + '\n'.join(f'  {package} {executable}' for package, executable in NODE_FACTORIES)
+""" + '\n'.join(f'  {k.package} {k.executable}' for k in KINDS)
 
 
 class ContainerError(ValueError):
     """A container that cannot start; str() says why in one line."""
-
-
-def node_kind(package: str, executable: str) -> NodeKind:
-    kind = NODE_FACTORIES.get((package, executable))
-    if kind is None:
-        known = ', '.join(e for _p, e in NODE_FACTORIES)
-        raise ContainerError(f'{package} {executable} cannot run in a container (can: {known})')
-    return kind
-
-
-def is_lifecycle(package: str, executable: str) -> bool:
-    """Whether a container builds this executable's node as a managed (lifecycle) node."""
-    kind = NODE_FACTORIES.get((package, executable))
-    return kind is not None and kind.lifecycle
-
-
-def factory(kind: NodeKind) -> Callable[..., Node]:
-    module, _sep, name = kind.factory.partition(':')
-    return getattr(importlib.import_module(module), name)
 
 
 def scenario_launch(files: Sequence[str]) -> dict[str, tuple[str, str]]:
@@ -139,7 +91,11 @@ def makers(names: Sequence[str], files: Sequence[str]) -> list[tuple[str, Callab
     for name in names:
         if name not in launch:
             raise ContainerError(f'the scenario has no node {name!r} (has: {", ".join(launch)})')
-        out.append((name, _maker(factory(node_kind(*launch[name])), name)))
+        try:
+            kind = kind_of(*launch[name])
+        except UnknownNodeKind as exc:
+            raise ContainerError(str(exc)) from None
+        out.append((name, _maker(kind.build(), name)))
     return out
 
 

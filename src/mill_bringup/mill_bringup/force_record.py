@@ -238,7 +238,7 @@ def read_force_run(path: str | Path, namespace: str | None = None) -> ForceBagRu
             values = {kv.key: kv.value for kv in status.values}
             if (
                 end_time is None
-                and status.name == 'mill_trajectory: job'
+                and topics.part_of(status.name) == topics.JOB_STATUS
                 and 'end_time' in values
                 and topics.from_machine(status.hardware_id, ns)
             ):

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import ctypes
 import functools
-import importlib.metadata
 import os
 import signal
 import subprocess
@@ -28,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from mill_bringup.layout import Process
-from mill_bringup.scenario import Scenario, ScenarioError, dump_parameters
+from mill_bringup.scenario import Scenario, dump_parameters
 
 PR_SET_PDEATHSIG = 1
 
@@ -38,14 +37,6 @@ CONTAINER_MODULE = 'mill_bringup.container'
 
 class GraphError(RuntimeError):
     """A node of the graph ended or never appeared; str() says which and why."""
-
-
-def module_of(package: str, executable: str) -> str:
-    """The Python module behind a package's console script (what `ros2 run` would start)."""
-    for ep in importlib.metadata.entry_points(group='console_scripts'):
-        if ep.name == executable and ep.value.startswith(package + '.'):
-            return ep.value.split(':')[0]
-    raise ScenarioError(f'{package} has no executable {executable!r}')
 
 
 def cpu_seconds(pid: int) -> float:
@@ -129,7 +120,7 @@ class Graph:
         else:
             (node,) = process.nodes
             start = [
-                module_of(node.package, node.executable),
+                node.kind.module,
                 '--ros-args',
                 '-r',
                 f'__node:={node.name}',

@@ -4,7 +4,7 @@
 
 The launch file starts it beside a scenario's nodes and ends the launch when it exits, so
 that `ros2 launch` ends by itself with the job (run_scenario follows the job itself). It
-listens to /diagnostics for the status `mill_trajectory: job` whose hardware_id is its own
+listens to /diagnostics for the status `<trajectory>: job` whose hardware_id is its own
 namespace (mill_common.topics.from_machine) and exits with code 0 once that status says
 `done`.
 """
@@ -18,8 +18,6 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 from mill_common import topics
-
-JOB_STATUS = 'mill_trajectory: job'  # the trajectory node's job status (trajectory_node.py)
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -37,7 +35,7 @@ class JobWatch(Node):
 
     def _on_status(self, msg: DiagnosticArray) -> None:
         for status in msg.status:
-            if status.name != JOB_STATUS:
+            if topics.part_of(status.name) != topics.JOB_STATUS:
                 continue
             if not topics.from_machine(status.hardware_id, self.get_namespace()):
                 continue

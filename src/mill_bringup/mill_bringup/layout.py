@@ -16,14 +16,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from mill_bringup.container import ContainerError, node_kind
 from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario, ScenarioError, check_layout
 
 __all__ = ['LAYOUTS', 'Process', 'check_layout', 'processes']
 
 CONTAINER = 'container'  # the process of layout single
-# Executables that per_axis groups by their `axis` parameter.
-AXIS_NODES = {('mill_observers', 'observer_node'), ('mill_controllers', 'axis_controller')}
 
 
 @dataclass(frozen=True)
@@ -61,7 +58,7 @@ def processes(
         if node.name not in apart:
             if layout == 'single':
                 key = CONTAINER
-            elif layout == 'per_axis' and (node.package, node.executable) in AXIS_NODES:
+            elif layout == 'per_axis' and node.kind.per_axis:
                 key = f'{scen.parameters(node.name)["axis"]}_axis'
         groups.setdefault(key, []).append(node)
     names = {n.name for n in scen.nodes}
@@ -74,11 +71,5 @@ def processes(
     for key, members in groups.items():
         # A group of one is that node's own process, named after it.
         name = key if len(members) > 1 else members[0].name
-        if len(members) > 1:
-            for node in members:
-                try:
-                    node_kind(node.package, node.executable)
-                except ContainerError as exc:
-                    raise ScenarioError(f'layout {layout}: node {node.name}: {exc}') from None
         out.append(Process(name, tuple(members)))
     return out

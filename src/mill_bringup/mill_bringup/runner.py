@@ -36,7 +36,6 @@ from mill_common.env import ros_environment
 
 from mill_bringup import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
-from mill_bringup.container import is_lifecycle
 from mill_bringup.graph import Graph, GraphError, Progress
 from mill_bringup.jobs.base import Job, simulate
 from mill_bringup.jobs.realtime import RealtimeAxisJob
@@ -129,7 +128,7 @@ def run(
     layout = check_layout(scen.layout if layout is None else layout)
     job.prepare_graph(monitored=True)
     clock_names = {n.name for n in job.clock_nodes}
-    managed = {n.name for n in job.clock_nodes if is_lifecycle(n.package, n.executable)}
+    managed = {n.name for n in job.clock_nodes if n.kind.lifecycle}
     plan = processes(scen, layout, external, alone=clock_names - managed)
     # A clock node in a container waits for `activate`, sent once the upstream is heard.
     held = [n for p in plan if p.container for n in p.nodes if n.name in clock_names]
@@ -142,7 +141,7 @@ def run(
         # its commands, nor its peers on its messages, before it can be back.
         for node in scen.nodes:
             name = 'lockstep_timeout' if node.name in clock_names else None
-            if node.package in ('mill_controllers', 'mill_observers'):
+            if node.kind.per_axis:
                 name = 'input_timeout'
             if name is not None:
                 scen.overrides.setdefault(node.name, {}).setdefault(name, startup_timeout)

@@ -14,7 +14,6 @@ the runner and the launch file apply them in any namespace.
 from __future__ import annotations
 
 import fnmatch
-import importlib
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +29,7 @@ from mill_common.parameters import (
     validate,
 )
 
+from mill_bringup.catalogue import NodeKind, UnknownNodeKind, kind_of
 from mill_common import topics
 
 SCENARIO_KEY = 'mill_scenario'
@@ -78,29 +78,9 @@ def dump_parameters(data: dict[str, Any]) -> str:
     return yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True)
 
 
-# Which module holds a package's parameter specs and builders.
-CONFIG_MODULES = {
-    'mill_plant': 'mill_plant.config',
-    'mill_trajectory': 'mill_trajectory.config',
-    'mill_controllers': 'mill_controllers.config',
-    'mill_observers': 'mill_observers.config',
-}
-# Executables whose parameters are not their package's main node's: module, function.
-EXECUTABLE_SPECS = {
-    ('mill_plant', 'force_process_node'): ('mill_plant.config', 'force_process_specs'),
-    ('mill_controllers', 'force_controller_node'): (
-        'mill_controllers.force_control',
-        'parameter_specs',
-    ),
-}
-
-
 def parameter_specs_of(launch: NodeLaunch) -> list[tuple[str, ParamSpec]]:
     """The parameter specs of the node this launch entry starts."""
-    module_name, function = EXECUTABLE_SPECS.get(
-        (launch.package, launch.executable), (CONFIG_MODULES[launch.package], 'parameter_specs')
-    )
-    return getattr(importlib.import_module(module_name), function)()
+    return launch.kind.parameter_specs()
 
 
 class ScenarioError(ValueError):
@@ -112,6 +92,11 @@ class NodeLaunch:
     name: str
     package: str
     executable: str
+
+    @property
+    def kind(self) -> NodeKind:
+        """What this node is (mill_bringup.catalogue); checked when the scenario loads."""
+        return kind_of(self.package, self.executable)
 
 
 @dataclass
@@ -138,8 +123,9 @@ class Scenario:
                 return n
         raise ScenarioError(f'scenario {self.name} has no node {name!r}')
 
-    def nodes_of(self, package: str) -> list[NodeLaunch]:
-        return [n for n in self.nodes if n.package == package]
+    def nodes_of(self, role: str) -> list[NodeLaunch]:
+        """The nodes of one role (mill_bringup.catalogue: PLANT, CONTROLLER, ...)."""
+        return [n for n in self.nodes if n.kind.role == role]
 
     def _entry(self, key: str) -> dict[str, Any]:
         entry = self.raw.get(key)
@@ -321,8 +307,10 @@ def load(name_or_path: str) -> Scenario:
         parts = str(line).split()
         if len(parts) != 3:
             raise ScenarioError(f'{path}: launch entry {line!r} is not "name package executable"')
-        if parts[1] not in CONFIG_MODULES:
-            raise ScenarioError(f'{path}: unknown package {parts[1]!r} in {line!r}')
+        try:
+            kind_of(parts[1], parts[2])
+        except UnknownNodeKind as exc:
+            raise ScenarioError(f'{path}: launch entry {line!r}: {exc}') from None
         nodes.append(NodeLaunch(*parts))
     scen = Scenario(path, str(entry.get('description', path.stem)), nodes, raw)
     scen.paper = str(entry.get('paper', ''))

@@ -111,7 +111,7 @@ def write_foreign_bag(
         def job_status(end_time: float, machine: str) -> Any:
             return status(
                 level=0,
-                name='mill_trajectory: job',
+                name='trajectory: job',
                 message='job running',
                 hardware_id=machine,
                 values=[kv(key='state', value='running'), kv(key='end_time', value=repr(end_time))],

@@ -2,18 +2,15 @@
 
 from __future__ import annotations
 
-import importlib
 from pathlib import Path
 
 import pytest
+from mill_bringup.catalogue import KINDS, kind_of
 from mill_bringup.container import (
-    NODE_FACTORIES,
     USAGE,
     ContainerError,
-    factory,
     main,
     makers,
-    node_kind,
     scenario_launch,
 )
 
@@ -25,23 +22,21 @@ RUBIO = str(ROOT / 'config' / 'rubio.yaml')
 def test_every_executable_of_every_scenario_has_a_factory() -> None:
     for path in sorted((ROOT / 'config').glob('*.yaml')):
         for package, executable in scenario_launch([str(path)]).values():
-            kind = node_kind(package, executable)
-            assert callable(factory(kind)), kind.factory
+            kind = kind_of(package, executable)
+            assert callable(kind.build()), kind.factory
 
 
 def test_factories_take_node_options() -> None:
     # Every factory passes rclpy Node options on (the container's cli_args).
     import inspect
 
-    for kind in NODE_FACTORIES.values():
-        module, _sep, name = kind.factory.partition(':')
-        target = getattr(importlib.import_module(module), name)
-        params = inspect.signature(target).parameters.values()
+    for kind in KINDS:
+        params = inspect.signature(kind.build()).parameters.values()
         assert any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params), kind.factory
 
 
 def test_only_the_drive_is_a_lifecycle_node() -> None:
-    managed = [key for key, kind in NODE_FACTORIES.items() if kind.lifecycle]
+    managed = [(k.package, k.executable) for k in KINDS if k.lifecycle]
     assert managed == [('mill_plant', 'plant_node')]
 
 
@@ -81,7 +76,7 @@ def test_unknown_executable_is_refused(tmp_path: Path) -> None:
     scen.write_text(
         'mill_scenario:\n  ros__parameters:\n    launch: ["spindle mill_plant spindle_node"]\n'
     )
-    with pytest.raises(ContainerError, match='mill_plant spindle_node cannot run in a container'):
+    with pytest.raises(ContainerError, match=r'no node kind mill_plant spindle_node \(known: '):
         makers(['spindle'], [str(scen)])
 
 

@@ -18,8 +18,8 @@ mill_scenario:
       - plant mill_plant plant_node
       - trajectory mill_trajectory trajectory_node
       - x_observer mill_observers observer_node
-      - x_controller mill_controllers axis_controller
-      - y_controller mill_controllers axis_controller
+      - x_controller mill_controllers axis_controller_node
+      - y_controller mill_controllers axis_controller_node
 """
 
 

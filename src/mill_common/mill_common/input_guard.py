@@ -12,7 +12,8 @@ Every node that subscribes keeps an `InputGuard`. Its callbacks check each messa
   nobody hangs silently; in real time the node keeps running and keeps reporting;
 - dropped messages are counted per topic and reported at most once a second each.
 
-The status goes to /diagnostics as `<node>: inputs` every second and at once on a change.
+The status goes to /diagnostics as `<node>: inputs` every second and at once on a change
+(mill_common.diagnostics: the node's one publisher there).
 """
 
 from __future__ import annotations
@@ -20,14 +21,13 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 
-from mill_common import topics
 from mill_common.checks import DropCounter, Rejected
+from mill_common.diagnostics import Diagnostics
 from mill_common.node_main import request_exit
-from mill_common.ros import diagnostic_status, diagnostics_of
 from mill_common.watch import InputWatch, Level
 
 LEVELS = {
@@ -45,22 +45,21 @@ class InputGuard:
         error_after: Callable[[], float],
         exit_on_silence: bool,
         stamp_ns: Callable[[], int],
-        extra: Callable[[], tuple[bytes, str, dict[str, object]]] | None = None,
+        extra: Callable[[], tuple[bytes, str, str, dict[str, object]]] | None = None,
     ) -> None:
         self.node = node
         self._warn_after = warn_after
         self._error_after = error_after
         self.exit_on_silence = exit_on_silence
         self._stamp_ns = stamp_ns
-        self._extra = extra  # the node's own state for the status: (level, message, values)
+        # The node's own state, sent with the inputs' status: (level, part, message, values).
+        self._extra = extra
         self.watches: dict[str, InputWatch] = {}
         self.drops = DropCounter()
         self._levels: dict[str, Level] = {}
         self._next_status = 0.0
         # The node's one publisher on /diagnostics: its other statuses go out here too.
-        self.diagnostics = self._pub = node.create_publisher(
-            DiagnosticArray, topics.DIAGNOSTICS, 10
-        )
+        self.diagnostics = Diagnostics(node)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         node.create_timer(0.25, self.tick, clock=steady)
 
@@ -142,12 +141,8 @@ class InputGuard:
             last = '; '.join(f'{t}: {r}' for t, r in self.drops.last_reason.items())
             message += f'; dropped {self.drops.total} bad messages (last: {last})'
             level = max(level, DiagnosticStatus.WARN)
-        name = self.node.get_name()
-        machine = topics.machine_id(self.node.get_namespace())
-        statuses = [diagnostic_status(level, f'{name}: inputs', message, machine, values)]
+        d = self.diagnostics
+        statuses = [d.status(level, 'inputs', message, values)]
         if self._extra is not None:
-            extra_level, extra_message, extra_values = self._extra()
-            statuses.append(
-                diagnostic_status(extra_level, name, extra_message, machine, extra_values)
-            )
-        self._pub.publish(diagnostics_of(self._stamp_ns(), statuses))
+            statuses.append(d.status(*self._extra()))
+        d.publish(self._stamp_ns(), statuses)

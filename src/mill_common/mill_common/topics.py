@@ -6,7 +6,9 @@ namespace, so the default namespace gives `/mill/x/state` and a machine started 
 absolute and stay global, as ROS tools expect them.
 
 A node's diagnostic statuses carry its namespace as `hardware_id` (`machine_id`), so that
-the statuses of several machines on the shared `/diagnostics` can be told apart.
+the statuses of several machines on the shared `/diagnostics` can be told apart, and are
+named `<node>: <part>` (`status_name`): a reader finds one by its part (`part_of`), whatever
+the node is called.
 """
 
 from __future__ import annotations
@@ -26,7 +28,20 @@ CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'
 
 ROOT = '/'
+
+# Parts of the statuses readers look for: the trajectory's job, the drive's cycle.
+JOB_STATUS = 'job'
+DRIVE_STATUSES = ('lockstep', 'realtime')
 _TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
+
+
+def status_name(node: str, part: str) -> str:
+    return f'{node}: {part}'
+
+
+def part_of(name: str) -> str:
+    """The part a status is about (what follows the node's name)."""
+    return name.partition(': ')[2]
 
 
 def state(axis: str) -> str:

@@ -30,18 +30,15 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, owner_check
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
-from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.ros import (
     DATA_QOS,
     data_publisher,
-    diagnostic_array,
     from_stamp,
     joint_state_bytes,
     readers_ready,
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
-from mill_common.stamp_join import StampJoin
 from mill_common.timebase import period_ns
 from mill_common.timing import timing
 from rclpy.clock import Clock, ClockType
@@ -54,8 +51,11 @@ from mill_controllers.base import BASE_INPUTS, AxisController
 from mill_controllers.config import build_controller, build_loop, parameter_specs
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.controller_inputs import CLOCK_INPUT, INPUTS, REFERENCE_INPUT, owners
-from mill_controllers.registry import CONTROLLERS
-from mill_controllers.switching import SwitchRecord, check_replacement
+from mill_controllers.sample_join import SampleJoin
+from mill_controllers.switching import SwitchRecord
+from mill_controllers.trip import Trip
+
+TRIP_PART = 'following error'  # the status `<node>: following error`
 
 
 def joined(law: AxisController) -> tuple[str, ...]:
@@ -73,15 +73,11 @@ class AxisControllerNode(Node):
         axis = self.axis = v['axis']
         self.timing = timing(v['timing'], period_ns(v['sample_period']))
         self._owners = owners(v)
-        self._join = StampJoin(joined(self.loop.law))
-        self._ready: dict[int, dict[str, Any]] = {}  # joined samples waiting for a reference
-        self._reference = ReferenceBuffer()
+        self._join = SampleJoin(self.timing, joined(self.loop.law), self.loop.lead_ns)
         self._stamps = {slot: self.timing.stamps() for slot in INPUTS}
         self._seen: set[str] = set()  # inputs of which a sample has arrived
-        self._last_ns = -1
         self._last_command: bytes | None = None
         self._waiting_since: float | None = None
-        self._late_references = 0
         self._reported_switch: SwitchRecord | None = None
         self._pub = data_publisher(self, JointState, topics.joint_command(axis), DATA_QOS)
         self._state_pub = data_publisher(self, JointState, topics.controller_state(axis), DATA_QOS)
@@ -90,7 +86,7 @@ class AxisControllerNode(Node):
             lambda: self.params.values['input_warn_time'],
             lambda: self.params.values['input_timeout'],
             exit_on_silence=self.timing.EXIT_ON_SILENCE,
-            stamp_ns=lambda: max(self._last_ns, 0),
+            stamp_ns=lambda: max(self._join.last_ns, 0),
             extra=self._trip_status,
         )
         self._topics = {slot: source.topic(axis) for slot, source in INPUTS.items()}
@@ -122,12 +118,6 @@ class AxisControllerNode(Node):
             self._loop = build_loop(values)
             return
         law = build_controller(values)  # raises, with the reason, before anything changes
-        old = self.params.values
-        reason = check_replacement(
-            CONTROLLERS.get(old['controller']), CONTROLLERS.get(values['controller'])
-        )
-        if reason:
-            raise ValueError(reason)
         for slot in law.required_inputs():
             if slot not in BASE_INPUTS and slot not in self._seen:
                 source = INPUTS[slot]
@@ -135,19 +125,17 @@ class AxisControllerNode(Node):
                     f'{values["controller"]} needs the {slot} input each sample, and none '
                     f'has arrived on {source.topic(self.axis)} ({source.hint})'
                 )
-        loop = self.loop
+        loop, old = self.loop, self.params.values
+        law_values = ('blend_time', 'following_error_limit', 'input_warn_time', 'input_timeout')
+        if any(values[k] != old[k] for k in values if k not in law_values):
+            loop.replace(law)
+            self._law_name = values['controller']  # params.values changes after we return
+            self._join.require(joined(law))
         loop.switch.set_blend_time(values['sample_period'], values['blend_time'])
         if 'following_error_limit' in self.params.setting:  # the one way but the service
             cleared = loop.trip.set_limit(values['following_error_limit'])
             self._log_reset(cleared, 'setting following_error_limit')
-        law_values = ('blend_time', 'following_error_limit', 'input_warn_time', 'input_timeout')
-        if any(values[k] != old[k] for k in values if k not in law_values):
-            loop.switch.replace(law)
-            self._law_name = values['controller']  # params.values changes after we return
-            ready = self._join.require(joined(law))
-            if ready is not None:  # a sample that waited only for the old law's extra input
-                self._ready[ready[0]] = ready[1]
-                self._try_pending()
+        self._step_due()
 
     # -- take and check ------------------------------------------------------------------
     def _on_input(self, slot: str, msg: Any) -> None:
@@ -162,7 +150,7 @@ class AxisControllerNode(Node):
         newest_state = self._stamps[CLOCK_INPUT].newest
         problem = self.timing.problem(stamps, ns, newest_state, lead, history)
         if problem is not None:
-            if not (slot == CLOCK_INPUT and ns == self._last_ns):  # not a re-offered step
+            if not (slot == CLOCK_INPUT and ns == self._join.last_ns):  # not a re-offered step
                 self.guard.drop(topic, problem, sender)
             return
         samples = INPUTS[slot].read(msg, self.axis)
@@ -183,50 +171,30 @@ class AxisControllerNode(Node):
         self._seen.add(slot)
         again = self.timing.is_offered_again(stamps, ns)
         stamps.accept(ns)
-        if slot == CLOCK_INPUT and ns == self._last_ns and self._last_command is not None:
+        if slot == CLOCK_INPUT and ns == self._join.last_ns and self._last_command is not None:
             self._pub.publish(self._last_command)  # the plant offered this step again
             return
         if again:
             return  # the same sample offered again: the first one counts
-        if not history:
-            for at, value in samples:
-                if at > self._last_ns:
-                    self._offer(slot, at, value)
-            return
-        for at, ref in samples:
-            self._reference.add(at, ref)
-        self._try_pending()
+        for at, value in samples:
+            if history:
+                self._join.add_reference(at, value)
+            else:
+                self._join.offer(slot, at, value)
+        self._step_due()
 
-    def _offer(self, slot: str, ns: int, value: Any) -> None:
-        inputs = self._join.put(slot, ns, value)
-        if inputs is None:
-            self._waiting_since = self._waiting_since or time.monotonic()
-            return
-        self._ready[ns] = inputs
-        self._try_pending()
-
-    def _try_pending(self) -> None:
-        """Step on joined samples whose reference is there, as the timing says."""
-        for ns in self.timing.due(self._ready):
-            if ns <= self._last_ns:
-                del self._ready[ns]
-                continue
-            if self._reference.at(self.loop.aim(ns)) is None:
-                if self.timing.WAITS_FOR_INPUTS or self._reference.newest is None:
-                    return  # the trajectory's next message brings it
-                self._late_references += 1  # the reference does not reach this far yet
-                del self._ready[ns]
-                continue
-            self._step(ns, self._ready.pop(ns))
-        self._reference.forget_before(self._last_ns + self.loop.lead_ns)
+    def _step_due(self) -> None:
+        for ns, inputs in self._join.due():
+            self._step(ns, inputs)
+        if self._waiting_since is None and self._join.waiting_for() is not None:
+            self._waiting_since = time.monotonic()  # the first input of a sample still open
 
     # -- step and publish ----------------------------------------------------------------
     def _step(self, ns: int, inputs: dict[str, Any]) -> None:
         loop = self.loop
         self._waiting_since = None
         y, est = inputs['position'], inputs['estimate']
-        cmd = loop.step(ns, y, est, self._reference, inputs.get('model'))
-        self._last_ns = ns
+        cmd = loop.step(ns, y, est, self._join.references, inputs.get('model'))
         self._last_command = joint_state_bytes(
             ns, (self.axis,), effort=(cmd.effort,), sender=self._name
         )
@@ -248,31 +216,21 @@ class AxisControllerNode(Node):
             self._report_switch(ns, record)
 
     # -- trip, switch, waiting: the log and /diagnostics ---------------------------------
-    def _trip_status(self) -> tuple[bytes, str, dict[str, object]]:
+    def _trip_status(self) -> tuple[bytes, str, str, dict[str, object]]:
+        """The axis's following-error status (`<node>: following error`)."""
         trip = self.loop.trip
         values: dict[str, object] = {
             'following_error_limit_m': trip.limit,
-            'late_references': self._late_references,
+            'late_references': self._join.late_references,
         }
         if trip.trip is None:
-            return DiagnosticStatus.OK, f'axis {self.axis}: running', values
+            return DiagnosticStatus.OK, TRIP_PART, f'axis {self.axis}: running', values
         values.update({'trip_time_s': trip.trip.time, 'trip_error_m': trip.trip.error})
-        return DiagnosticStatus.ERROR, self._trip_text(), values
-
-    def _trip_text(self) -> str:
-        trip = self.loop.trip.trip
-        assert trip is not None
-        return trip.describe(self.axis, self.timing.when(round(trip.time * 1e9)))
-
-    def _publish(self, ns: int, level: bytes, part: str, message: str, values: dict) -> None:
-        machine = topics.machine_id(self.get_namespace())
-        name = f'mill_controllers: {self.axis} {part}'
-        self.guard.diagnostics.publish(diagnostic_array(ns, level, name, message, machine, values))
+        when = self.timing.when(round(trip.trip.time * 1e9))
+        return DiagnosticStatus.ERROR, TRIP_PART, trip.trip.describe(self.axis, when), values
 
     def _report_trip(self, ns: int) -> None:
-        self.get_logger().error(self._trip_text())
-        level, message, values = self._trip_status()
-        self._publish(ns, level, 'trip', message, values)
+        self.guard.diagnostics.report(ns, *self._trip_status())
 
     def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
         cleared = self.loop.trip.reset()
@@ -281,18 +239,23 @@ class AxisControllerNode(Node):
         response.message = 'trip cleared' if cleared else 'no trip to clear'
         return response
 
-    def _log_reset(self, cleared: Any, how: str) -> None:
+    def _log_reset(self, cleared: Trip | None, how: str) -> None:
         if cleared is not None:
             when = self.timing.when(round(cleared.time * 1e9))
-            self.get_logger().warning(
-                f'axis {self.axis}: following-error trip {when} cleared by {how}'
+            message = f'axis {self.axis}: following-error trip {when} cleared by {how}'
+            self.guard.diagnostics.report(
+                self._join.last_ns,
+                DiagnosticStatus.WARN,
+                TRIP_PART,
+                message,
+                self._trip_status()[3],
             )
 
     def _report_switch(self, ns: int, record: SwitchRecord) -> None:
         name = self._law_name
-        self.get_logger().info(
-            f'switched to {name} {self.timing.when(ns)}: output {record.old_output:.6g} '
-            f'(new law alone {record.new_output:.6g}), offset fades over '
+        message = (
+            f'switched to {name} {self.timing.when(ns)}: output {record.old_output:.6g} (new '
+            f'law alone {record.new_output:.6g}), offset fades over '
             f'{self.params.values["blend_time"]:g} s'
         )
         values = {
@@ -301,27 +264,23 @@ class AxisControllerNode(Node):
             'old_output': repr(record.old_output),
             'new_output': repr(record.new_output),
         }
-        self._publish(ns, DiagnosticStatus.OK, 'switch', f'switched to {name}', values)
+        self.guard.diagnostics.report(ns, DiagnosticStatus.OK, 'switch', message, values)
 
     def _report_waiting(self) -> None:
-        if self._waiting_since is None or time.monotonic() - self._waiting_since < 2.0:
+        waiting = self._join.waiting_for()
+        if waiting is None or self._waiting_since is None:
             return
-        pending = self._join.oldest_incomplete()
-        if pending is not None:
-            ns, missing = pending
+        if time.monotonic() - self._waiting_since >= 2.0:
+            ns, missing = waiting
             names = [self._topics[m] for m in missing]
-        elif self._ready:
-            ns, names = min(self._ready), [self._topics['reference']]
-        else:
-            return
-        detail = ', '.join(f'{n} ({self.count_publishers(n)} publishers)' for n in names)
-        self.get_logger().warning(f'waiting for {self.timing.when(ns)} on {detail}')
+            detail = ', '.join(f'{n} ({self.count_publishers(n)} publishers)' for n in names)
+            self.get_logger().warning(f'waiting for {self.timing.when(ns)} on {detail}')
 
 
 def main(argv: list[str] | None = None) -> int:
     return run_node(
         AxisControllerNode,
-        'axis_controller',
+        'axis_controller_node',
         'Motion controller of one axis: measured position + estimate + reference -> torque.',
         parameter_specs(),
         argv,

@@ -24,7 +24,7 @@ from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEst
 from mill_common.timebase import period_ns, seconds
 
 from mill_controllers.base import AxisController
-from mill_controllers.switching import BumplessSwitch
+from mill_controllers.switching import BumplessSwitch, check_replacement
 from mill_controllers.trip import BRAKE, FollowingErrorTrip
 
 
@@ -57,6 +57,14 @@ class AxisControlLoop:
     @property
     def law(self) -> AxisController:
         return self.switch.law
+
+    def replace(self, law: AxisController) -> None:
+        """Use `law` from the next sample on, without a bump; ValueError (before anything
+        changes) if it cannot replace the running one on a running plant."""
+        reason = check_replacement(type(self.switch.law), type(law))
+        if reason:
+            raise ValueError(reason)
+        self.switch.replace(law)
 
     def aim(self, ns: int) -> int:
         """The stamp of the reference the command for state ns needs."""

@@ -31,7 +31,7 @@ import math
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import Rejected, StampCheck
 from mill_common.codec import decode_joint_state, decode_wrench_stamped
@@ -40,7 +40,6 @@ from mill_common.node_main import run_node
 from mill_common.ros import (
     DATA_QOS,
     data_publisher,
-    diagnostic_array,
     from_stamp,
     joint_state,
     take_serialized,
@@ -59,7 +58,7 @@ from mill_controllers.force_control import (
     tool_depth,
 )
 
-STATUS_NAME = 'mill_controllers: force'
+STATUS_PART = 'force control'  # the status `<node>: force control`
 # the law's force, reference, feed command, override, active β and depth at the instant, then
 # its reference model eq. (7) (ξ, ω_n): what J_c of eq. (14) compares the force with
 STATE_NAMES = (
@@ -90,7 +89,6 @@ class ForceControllerNode(Node):
         self._waiting: tuple[int, int, float] | None = None  # (stamp, j, force)
         self._override_pub = data_publisher(self, JointState, topics.FEED_OVERRIDE, DATA_QOS)
         self._state_pub = data_publisher(self, JointState, topics.FORCE_CONTROL_STATE, DATA_QOS)
-        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
         self._stamps = StampCheck(None)  # the force samples' stamps (the sender's grid)
         self.guard = InputGuard(
             self,
@@ -219,8 +217,8 @@ class ForceControllerNode(Node):
             'held_samples': self._loop.held_samples,
             'clamped_samples': self._clamped,
         }
-        machine = topics.machine_id(self.get_namespace())
-        self._diag_pub.publish(diagnostic_array(ns, level, STATUS_NAME, message, machine, values))
+        status = self.guard.diagnostics.status(level, STATUS_PART, message, values)
+        self.guard.diagnostics.publish(ns, [status])
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -73,7 +73,7 @@ class Drive(Protocol):
 
 
 class DriveCycle(ABC):
-    STATUS: ClassVar[str]  # the name of the drive's status on /diagnostics
+    STATUS: ClassVar[str]  # the part of the drive's status `<node>: <part>` on /diagnostics
     GRID: ClassVar[bool]  # command stamps lie on the sample grid
 
     def __init__(self, drive: Drive) -> None:
@@ -115,7 +115,7 @@ class DriveCycle(ABC):
 
 
 class LockstepCycle(DriveCycle):
-    STATUS = 'mill_plant: lockstep'
+    STATUS = topics.DRIVE_STATUSES[0]
     GRID = True
 
     def configure(self) -> None:
@@ -238,7 +238,7 @@ class LockstepCycle(DriveCycle):
 
 
 class RealtimeCycle(DriveCycle):
-    STATUS = 'mill_plant: realtime'
+    STATUS = topics.DRIVE_STATUSES[1]
     GRID = False
 
     def configure(self) -> None:

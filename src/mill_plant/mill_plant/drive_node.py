@@ -11,7 +11,7 @@ topics, `activate` starts applying commands, `deactivate` brakes every axis; wit
 Every command must come from the axis's owner (header.frame_id, `command_owners`) and answer
 a state of this drive; anything else — another sender, a stamp that answers no state, an
 unknown joint, no effort for the joint — is dropped, counted and reported (a rate-limited
-WARN `mill_plant: inputs` on /diagnostics naming the topic and the sender). A non-finite
+WARN `<node>: inputs` on /diagnostics naming the topic and the sender). A non-finite
 effort of the axis's joint from the owner brakes the axis for that period and is reported:
 it is the controller saying it has no valid command.
 """
@@ -24,17 +24,16 @@ from collections.abc import Callable, Collection, Sequence
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected, StampCheck, joint_values, owner_check
 from mill_common.codec import decode_joint_state, encode_wrench_stamped
+from mill_common.diagnostics import Diagnostics
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
 from mill_common.ros import (
     DATA_QOS,
     data_publisher,
-    diagnostic_status,
-    diagnostics_of,
     from_stamp,
     joint_state_bytes,
     take_serialized,
@@ -52,8 +51,6 @@ from mill_plant.command_table import CommandTable
 from mill_plant.drive_cycle import CYCLES, DriveCycle
 from mill_plant.ownership import Ownership
 
-INPUTS_STATUS = 'mill_plant: inputs'
-AXIS_STATUS = 'mill_plant: {} axis'
 MACHINE_AXES = ('x', 'y', 'z')
 
 
@@ -117,7 +114,7 @@ class DriveNode(LifecycleNode):
         self._state_pubs = {
             a: data_publisher(self, JointState, topics.state(a), DATA_QOS) for a in self.axes
         }
-        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self.diagnostics = Diagnostics(self)
         self._truth_pub = self._force_pub = None
         if backend.SIMULATED:
             self._truth_pub = data_publisher(self, JointState, topics.GROUND_TRUTH, DATA_QOS)
@@ -233,10 +230,9 @@ class DriveNode(LifecycleNode):
                 f'{problem.reason} ({self._drops.counts[topic]} so far)'
             )
             self.get_logger().warning(text)
-            status = diagnostic_status(
-                DiagnosticStatus.WARN, INPUTS_STATUS, text, 'mill_plant', dict(self._drops.counts)
-            )
-            self._diag_pub.publish(diagnostics_of(self.cycle.stamp_now(), [status]))
+            counts = dict(self._drops.counts)
+            status = self.diagnostics.status(DiagnosticStatus.WARN, 'inputs', text, counts)
+            self.diagnostics.publish(self.cycle.stamp_now(), [status])
 
     def _foreign_named(self, topic: str, who: str) -> None:
         self.get_logger().error(f'foreign publisher {who} on {topic}: its messages are ignored')
@@ -312,21 +308,10 @@ class DriveNode(LifecycleNode):
             self.publish_status()
 
     def report_axis(self, axis: str, level: bytes, message: str) -> None:
-        # rclpy wants one severity per call site: one call each.
-        if level == DiagnosticStatus.OK:
-            self.get_logger().info(f'axis {axis}: {message}')
-        elif level == DiagnosticStatus.WARN:
-            self.get_logger().warning(f'axis {axis}: {message}')
-        else:
-            self.get_logger().error(f'axis {axis}: {message}')
-        status = diagnostic_status(
-            level, AXIS_STATUS.format(axis), message, self._machine(), {'step': self.cycle.k}
-        )
-        self._diag_pub.publish(diagnostics_of(self.cycle.stamp_now(), [status]))
-
-    def _machine(self) -> str:
-        """hardware_id of our statuses: the machine's namespace."""
-        return topics.machine_id(self.get_namespace())
+        """The status `<node>: <axis> axis`, and the log."""
+        values = {'step': self.cycle.k}
+        stamp = self.cycle.stamp_now()
+        self.diagnostics.report(stamp, level, f'{axis} axis', f'axis {axis}: {message}', values)
 
     def publish_status(
         self, force: bool = False, message: str | None = None, level: bytes | None = None
@@ -358,8 +343,8 @@ class DriveNode(LifecycleNode):
         if message is not None:
             level = given if given is not None else DiagnosticStatus.ERROR
         text = message or ('running' if self.active else 'waiting')
-        statuses = [diagnostic_status(level, self.cycle.STATUS, text, self._machine(), values)]
-        foreign = self.ownership.status(self._machine()) if self.ownership is not None else None
+        statuses = [self.diagnostics.status(level, self.cycle.STATUS, text, values)]
+        foreign = self.ownership.status(self.diagnostics) if self.ownership is not None else None
         if foreign is not None:
             statuses.append(foreign)
-        self._diag_pub.publish(diagnostics_of(self.cycle.stamp_now(), statuses))
+        self.diagnostics.publish(self.cycle.stamp_now(), statuses)

@@ -28,14 +28,15 @@ import time
 from typing import Any
 
 from builtin_interfaces.msg import Duration
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected
 from mill_common.codec import encode_clock
+from mill_common.diagnostics import Diagnostics
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
-from mill_common.ros import DATA_QOS, data_publisher, diagnostic_array, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, data_publisher, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import sample_stamp_ns
@@ -49,7 +50,7 @@ from mill_common import topics
 from mill_plant.config import force_process_specs
 from mill_plant.force_drive import DrivenForceProcess
 
-STATUS_NAME = 'mill_plant: force process'
+STATUS_PART = 'force process'  # the status `<node>: force process`
 MM_PER_M = 1000.0
 
 
@@ -77,7 +78,7 @@ class ForceProcessNode(Node):
         self._trace_pub = data_publisher(
             self, JointTrajectory, topics.CUTTING_FORCE_TRACE, DATA_QOS
         )
-        self._diag_pub = self.create_publisher(DiagnosticArray, topics.DIAGNOSTICS, 10)
+        self._diagnostics = Diagnostics(self)
         self._ref_sub = self.create_subscription(
             JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS
         )
@@ -221,10 +222,8 @@ class ForceProcessNode(Node):
             'dropped': self._drops.total,
             'wall_s': time.monotonic() - self._wall_start,
         }
-        machine = topics.machine_id(self.get_namespace())
-        self._diag_pub.publish(
-            diagnostic_array(self._stamp_ns(), level, STATUS_NAME, message, machine, values)
-        )
+        status = self._diagnostics.status(level, STATUS_PART, message, values)
+        self._diagnostics.publish(self._stamp_ns(), [status])
 
 
 def main(argv: list[str] | None = None) -> int:

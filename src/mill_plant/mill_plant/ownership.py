@@ -10,12 +10,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mill_common.ros import diagnostic_status
+from mill_common.diagnostics import Diagnostics
 from rclpy.node import Node
 
 from mill_common import topics
 
-OWNERSHIP_STATUS = 'mill_plant: ownership'
+OWNERSHIP_PART = 'ownership'  # the drive's status `<node>: ownership`
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 
 
@@ -50,16 +50,15 @@ class Ownership:
                     new.append((topic, name))
         return new
 
-    def status(self, machine: str) -> DiagnosticStatus | None:
+    def status(self, diagnostics: Diagnostics) -> DiagnosticStatus | None:
         """ERROR naming every foreign publisher seen, or None while there is none."""
         if not self.foreign:
             return None
         seen = '; '.join(f'{t}: {", ".join(sorted(w))}' for t, w in self.foreign.items())
-        return diagnostic_status(
+        return diagnostics.status(
             DiagnosticStatus.ERROR,
-            OWNERSHIP_STATUS,
+            OWNERSHIP_PART,
             f'foreign publishers ignored: {seen}',
-            machine,
             {'foreign_messages': self.foreign_messages},
         )
 

@@ -45,7 +45,6 @@ from mill_common.ros import (
     DataInput,
     data_publisher,
     data_unsubscribe,
-    diagnostic_array,
     from_stamp,
     take_serialized,
 )
@@ -69,8 +68,6 @@ from mill_trajectory.schedule import (
     Points,
     WallClockReference,
 )
-
-JOB_STATUS_NAME = 'mill_trajectory: job'
 
 
 class TrajectoryNode(Node):
@@ -215,15 +212,9 @@ class TrajectoryNode(Node):
             values['start_stamp_ns'] = schedule.t0
         if level is None:
             level = DiagnosticStatus.WARN if problem else DiagnosticStatus.OK
-        self.guard.diagnostics.publish(
-            diagnostic_array(
-                self.get_clock().now().nanoseconds,
-                level,
-                JOB_STATUS_NAME,
-                problem or f'job {state}',
-                topics.machine_id(self.get_namespace()),
-                values,
-            )
+        message = problem or f'job {state}'
+        self.guard.diagnostics.report(
+            self.get_clock().now().nanoseconds, level, topics.JOB_STATUS, message, values, log=False
         )
 
 

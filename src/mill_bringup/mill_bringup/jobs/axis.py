@@ -41,6 +41,7 @@ from mill_trajectory.config import build_job, build_schedule
 from mill_trajectory.feed_override import FeedOverride, JobEnd
 from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
+from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
 from mill_bringup.run_record import record_from_raw
@@ -49,11 +50,8 @@ from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
-AXIS_NODES = {('mill_controllers', 'axis_controller'), ('mill_observers', 'observer_node')}
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
-FORCE_CONTROLLER = ('mill_controllers', 'force_controller_node')
-JOB_STATUS = 'mill_trajectory: job'
 
 
 def timing_of(scen: Scenario, node: str) -> str:
@@ -65,7 +63,7 @@ def axis_delays(scen: Scenario) -> dict[int, int]:
     """command_delay of each axis's controller and observer, which must agree."""
     delays: dict[int, int] = {}
     for node in scen.nodes:
-        if (node.package, node.executable) not in AXIS_NODES:
+        if not node.kind.per_axis:
             continue
         values = scen.parameters(node.name)
         i = axis_index(values['axis'])
@@ -84,17 +82,16 @@ def build_axis_loops(scen: Scenario) -> tuple[dict[int, AxisControlLoop], dict[i
     ScenarioError if an active axis lacks one, or if a controller designs with the
     observer's model estimate and the observer of its axis estimates none.
     """
-    pv = scen.parameters(scen.nodes_of('mill_plant')[0].name)
+    pv = scen.parameters(scen.nodes_of(PLANT)[0].name)
     controllers: dict[int, AxisControlLoop] = {}
     observers: dict[int, ObserverLoop] = {}
     names: dict[int, str] = {}
     for node in scen.nodes:
-        key = (node.package, node.executable)
-        if key not in AXIS_NODES:
+        if not node.kind.per_axis:
             continue  # a force controller, say: not an axis core
         values = scen.parameters(node.name)
         i = axis_index(values['axis'])
-        if node.package == 'mill_controllers':
+        if node.kind.role == CONTROLLER:
             controllers[i] = build_loop(values)
         else:
             observers[i] = build_observer_loop(values)
@@ -270,19 +267,19 @@ class AxisSimulation:
 
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
-    CLOCK = ('mill_plant', 'plant_node')
+    CLOCK = PLANT
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
 
     @classmethod
     def runs(cls, scen: Scenario) -> bool:
-        plants = [n for n in scen.nodes if (n.package, n.executable) == cls.CLOCK]
+        plants = scen.nodes_of(cls.CLOCK)
         return bool(plants) and timing_of(scen, plants[0].name) == 'lockstep'
 
     def __init__(self, scen: Scenario) -> None:
         super().__init__(scen)
         for node in scen.nodes:
             scen.parameters(node.name)  # every node's parameters are valid
-        plants, trajectories = scen.nodes_of('mill_plant'), scen.nodes_of('mill_trajectory')
+        plants, trajectories = scen.nodes_of(PLANT), scen.nodes_of(TRAJECTORY)
         if len(plants) != 1 or len(trajectories) != 1:
             raise ScenarioError(
                 f'scenario {scen.name}: an axis job has one plant and one trajectory'
@@ -296,11 +293,11 @@ class AxisJob(Job[RunRecord]):
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
         # Who publishes the states: the plant, or the driver the controllers are told of.
-        controllers = [n for n in scen.nodes if (n.package, n.executable) in AXIS_NODES]
+        controllers = [n for n in scen.nodes if n.kind.per_axis]
         self.state_owner = (
             scen.parameters(controllers[0].name)['plant_node'] if controllers else self.plant
         )
-        forces = [n.name for n in scen.nodes if (n.package, n.executable) == FORCE_CONTROLLER]
+        forces = [n.name for n in scen.nodes_of(FORCE_CONTROLLER)]
         if len(forces) > 1:
             raise ScenarioError(f'scenario {scen.name}: more than one force controller')
         self.force_controller = forces[0] if forces else ''
@@ -389,11 +386,10 @@ class AxisJob(Job[RunRecord]):
             # A node started again mid-job (--respawn) answers only once the monitor hears it
             # too: the estimate goes to the controller and the monitor, the command to the
             # plant and the observer.
-            readers = {'observer_node': 2, 'axis_controller': 2}
             for node in self.scenario.nodes:
-                if (node.package, node.executable) in AXIS_NODES:
+                if node.kind.per_axis:
                     wanted = self.scenario.overrides.setdefault(node.name, {})
-                    wanted.setdefault('min_subscribers', readers[node.executable])
+                    wanted.setdefault('min_subscribers', 2)
 
     def upstream_topics(self) -> list[str]:
         # The monitor cannot see from the plant whether an observer's estimates reach it:
@@ -427,7 +423,7 @@ class AxisJob(Job[RunRecord]):
     def complete(self, source: MessageSource) -> bool:
         if self.override and self._found is None:
             # The trajectory says where the job ends, once its path has ended.
-            status = source.status(JOB_STATUS)
+            status = source.status(topics.status_name(self.trajectory, topics.JOB_STATUS))
             if status is None or status.get('state') != 'done':
                 return False
             self._found = job_steps(float(status['end_time']), self.dt_ns)
@@ -451,11 +447,10 @@ class AxisJob(Job[RunRecord]):
         """The node each per-axis topic must come from (header.frame_id)."""
         out = {}
         for node in self.scenario.nodes:
-            key = (node.package, node.executable)
-            if key not in AXIS_NODES:
+            if not node.kind.per_axis:
                 continue
             axis = self.scenario.parameters(node.name)['axis']
-            topic = topics.joint_command(axis) if key[0] == 'mill_controllers' else None
+            topic = topics.joint_command(axis) if node.kind.role == CONTROLLER else None
             out[topic or topics.estimate(axis)] = node.name
         for axis in self.axes:
             out[topics.state(axis)] = self.state_owner

@@ -50,7 +50,7 @@ class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
 
     KIND: ClassVar[str]
-    CLOCK: ClassVar[tuple[str, str]]  # (package, executable) of the node that clocks the job
+    CLOCK: ClassVar[str]  # the role of the node that clocks the job (mill_bringup.catalogue)
     # How long to wait, after the job is complete, for its last messages [s].
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
     # Whether the offline simulator reproduces a distributed run of this kind exactly.
@@ -64,7 +64,7 @@ class Job(ABC, Generic[R]):
     @classmethod
     def runs(cls, scen: Scenario) -> bool:
         """Whether the scenario is a job of this kind (its clock node is in the launch list)."""
-        return any((n.package, n.executable) == cls.CLOCK for n in scen.nodes)
+        return any(n.kind.role == cls.CLOCK for n in scen.nodes)
 
     # -- what it is ------------------------------------------------------------------------
     @property
@@ -85,7 +85,7 @@ class Job(ABC, Generic[R]):
 
     @property
     def clock_nodes(self) -> list[NodeLaunch]:
-        return [n for n in self.scenario.nodes if (n.package, n.executable) == self.CLOCK]
+        return self.scenario.nodes_of(self.CLOCK)
 
     # -- the distributed run ---------------------------------------------------------------
     @abstractmethod

@@ -22,6 +22,7 @@ from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
 from mill_models.force_process import ForceProcessModel
 
+from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
 from mill_bringup.force_record import record_from_messages as force_record_from_messages
@@ -30,31 +31,31 @@ from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
-CONTROLLER = ('mill_controllers', 'force_controller_node')
 COMPARED = ('force', 'override', 'slope', 'beta', 'feed_command')
 
 
-def _only(scen: Scenario, key: tuple[str, str]) -> str:
-    names = [n.name for n in scen.nodes if (n.package, n.executable) == key]
+def _only(scen: Scenario, role: str) -> str:
+    names = [n.name for n in scen.nodes_of(role)]
     if len(names) != 1:
+        kind = of_role(role)[0]
         raise ScenarioError(
-            f'a force job needs exactly one {key[0]} {key[1]} node, scenario {scen.name} has '
-            f'{len(names)}'
+            f'a force job needs exactly one {kind.package} {kind.executable} node, scenario '
+            f'{scen.name} has {len(names)}'
         )
     return names[0]
 
 
 class ForceJob(Job[ForceRecord]):
     KIND = 'force'
-    CLOCK = ('mill_plant', 'force_process_node')
+    CLOCK = FORCE_PROCESS
 
     def __init__(self, scen: Scenario) -> None:
         super().__init__(scen)
         for node in scen.nodes:
             scen.parameters(node.name)
         self.plant = _only(scen, self.CLOCK)
-        self.controller = _only(scen, CONTROLLER)
-        trajectories = scen.nodes_of('mill_trajectory')
+        self.controller = _only(scen, FORCE_CONTROLLER)
+        trajectories = scen.nodes_of(TRAJECTORY)
         if len(trajectories) != 1:
             raise ScenarioError('a force job needs exactly one trajectory node')
         self.trajectory = trajectories[0].name

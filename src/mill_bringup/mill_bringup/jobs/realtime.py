@@ -25,8 +25,6 @@ from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
-JOB_STATUS = 'mill_trajectory: job'
-DRIVE_STATUS = 'mill_plant: realtime'
 DRIVE_FIGURES = (
     'late_fraction',
     'longest_late_run',
@@ -43,7 +41,7 @@ class RealtimeAxisJob(AxisJob):
 
     @classmethod
     def runs(cls, scen: Scenario) -> bool:
-        plants = [n for n in scen.nodes if (n.package, n.executable) == cls.CLOCK]
+        plants = scen.nodes_of(cls.CLOCK)
         return bool(plants) and timing_of(scen, plants[0].name) == 'realtime'
 
     def __init__(self, scen: Scenario) -> None:
@@ -101,7 +99,7 @@ class RealtimeAxisJob(AxisJob):
         return {topics.joint_command(a) for a in self.axes}
 
     def _job(self, source: MessageSource) -> dict[str, str] | None:
-        status = source.status(JOB_STATUS)
+        status = source.status(topics.status_name(self.trajectory, topics.JOB_STATUS))
         if status is not None and 'start_stamp_ns' in status:
             self.start_ns = int(status['start_stamp_ns'])
             self.end_time = float(status['end_time'])
@@ -119,7 +117,7 @@ class RealtimeAxisJob(AxisJob):
             return False
         if status.get('state') == 'refused':
             raise ScenarioError(f'the trajectory refused the job: {status["message"]}')
-        drive = source.status(DRIVE_STATUS)
+        drive = source.status(topics.status_name(self.state_owner, topics.DRIVE_STATUSES[1]))
         if drive is not None:
             self.drive = drive
         self._source = source

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from mill_bringup.catalogue import of_role
 from mill_bringup.jobs.axis import AxisJob
 from mill_bringup.jobs.base import Job
 from mill_bringup.jobs.force import ForceJob
@@ -15,7 +16,9 @@ def job_for(scen: Scenario) -> Job:
     """The scenario's job, checked; ScenarioError names what does not fit."""
     kinds = [kind for kind in JOB_KINDS if kind.runs(scen)]
     if len(kinds) != 1:
-        clocks = ', '.join(sorted({' '.join(kind.CLOCK) for kind in JOB_KINDS}))
+        clocks = ', '.join(
+            sorted({f'{k.package} {k.executable}' for j in JOB_KINDS for k in of_role(j.CLOCK)})
+        )
         raise ScenarioError(
             f'scenario {scen.name} must launch exactly one clock node ({clocks}); '
             f'it launches {len(kinds) or "none"}'

@@ -1,0 +1,99 @@
+"""The controller's sample step (AxisControlLoop) and its input join (SampleJoin)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from mill_common.reference_buffer import ReferenceBuffer
+from mill_common.signals import AxisReference, Estimate
+from mill_common.timing import Lockstep, Realtime
+from mill_controllers.control_loop import AxisControlLoop
+from mill_controllers.registry import make_controller
+from mill_controllers.sample_join import SampleJoin
+
+B, T, DT = 20.96, 1e-3, 1_000_000
+SLOTS = ('position', 'estimate')
+
+
+def refs(*points: tuple[int, float]) -> ReferenceBuffer:
+    buf = ReferenceBuffer()
+    for ns, x in points:
+        buf.add(ns, AxisReference(x, 0.0, 0.0))
+    return buf
+
+
+def loop(delay: int = 0, limit: float = 1e-3) -> AxisControlLoop:
+    return AxisControlLoop(make_controller('pd', B, T, {}), T, limit, delay)
+
+
+def test_the_step_is_the_law_on_the_inputs_of_the_sample() -> None:
+    law = make_controller('pd', B, T, {})
+    est = Estimate(0.0, 0.0, 0.0)
+    cmd = loop().step(5 * DT, 0.0, est, refs((5 * DT, 1e-4)))
+    from mill_common.signals import ControlInputs
+
+    assert cmd.effort == law.compute(ControlInputs(0.005, 0.0, AxisReference(1e-4, 0, 0), est))
+    assert not cmd.problem and not cmd.tripped
+
+
+def test_with_delay_the_law_aims_at_the_predicted_state_and_the_reference_there() -> None:
+    law = make_controller('pd', B, T, {})
+    est = Estimate(2e-5, 0.0, 0.0)  # the observer's prediction for the period it acts in
+    buf = refs((5 * DT, 0.0), (6 * DT, 1e-4))
+    from mill_common.signals import ControlInputs
+
+    cmd = loop(delay=1).step(5 * DT, 0.0, est, buf)
+    aimed = ControlInputs(0.006, 2e-5, AxisReference(1e-4, 0.0, 0.0), est)
+    assert cmd.effort == law.compute(aimed)
+
+
+def test_the_trip_uses_the_error_at_the_states_own_stamp_and_latches() -> None:
+    lp = loop(delay=1, limit=1e-3)
+    est = Estimate(0.0, 0.0, 0.0)
+    # 2 mm ahead at the aimed stamp but 0.5 mm at its own: no trip
+    ok = lp.step(5 * DT, 0.0, est, refs((5 * DT, 5e-4), (6 * DT, 2e-3)))
+    assert math.isfinite(ok.effort) and not ok.tripped
+    bad = lp.step(6 * DT, 0.0, est, refs((6 * DT, 2e-3), (7 * DT, 2e-3)))
+    assert bad.tripped and math.isnan(bad.effort)
+    again = lp.step(7 * DT, 2e-3, est, refs((7 * DT, 2e-3), (8 * DT, 2e-3)))
+    assert math.isnan(again.effort) and not again.tripped  # latched, reported once
+    assert lp.trip.set_limit(5e-3) is not None and not lp.trip.tripped
+
+
+def test_a_law_that_cannot_compute_asks_for_the_brake_with_the_reason() -> None:
+    lp = loop()
+    cmd = lp.step(0, 0.0, Estimate(0.0, math.nan, 0.0), refs((0, 0.0)))
+    assert math.isnan(cmd.effort) and cmd.problem
+
+
+def test_a_law_of_another_output_unit_cannot_replace_the_running_one() -> None:
+    lp = loop()
+    with pytest.raises(ValueError, match='cascade_pi commands V'):
+        lp.replace(make_controller('cascade_pi', B, T, {}))
+    lp.replace(make_controller('gpi', B, T, {}))
+    assert type(lp.law).PREFIX == 'gpi'
+
+
+def test_lockstep_join_waits_for_every_input_and_the_reference_in_order() -> None:
+    join = SampleJoin(Lockstep(DT), SLOTS, 0)
+    join.offer('position', 0, 1.0)
+    join.offer('position', DT, 2.0)
+    join.offer('estimate', DT, 'e1')
+    assert list(join.due()) == []  # sample 1 waits for the reference (and 0 was dropped)
+    join.add_reference(DT, AxisReference(0, 0, 0))
+    assert [ns for ns, _ in join.due()] == [DT]
+    assert join.last_ns == DT
+
+
+def test_realtime_join_steps_the_newest_and_drops_a_sample_beyond_the_reference() -> None:
+    join = SampleJoin(Realtime(DT), SLOTS, DT)
+    join.add_reference(0, AxisReference(0, 0, 0))
+    join.add_reference(2 * DT, AxisReference(0, 0, 0))
+    for ns in (0, DT):
+        join.offer('position', ns, 0.0)
+        join.offer('estimate', ns, 'e')
+    assert [ns for ns, _ in join.due()] == [DT]  # the newest; it aims at 2 ms: there
+    join.offer('position', 5 * DT, 0.0)
+    join.offer('estimate', 5 * DT, 'e')
+    assert list(join.due()) == [] and join.late_references == 1

@@ -1,0 +1,52 @@
+"""The observer's sample step (ObserverLoop): the calls it makes on the observer core."""
+
+from __future__ import annotations
+
+from mill_common.signals import Estimate
+from mill_observers.base import Observer
+from mill_observers.observer_loop import ObserverLoop
+
+
+class Calls(Observer):
+    PREFIX = 'calls'
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, float]] = []
+
+    @classmethod
+    def from_parameters(cls, input_gain, sample_period, values):  # type: ignore[no-untyped-def]
+        return cls()
+
+    def correct(self, y: float) -> Estimate:
+        self.calls.append(('correct', y))
+        return Estimate(y, 0.0, 0.0)
+
+    def predict(self, u: float) -> None:
+        self.calls.append(('predict', u))
+
+
+def test_the_first_sample_only_corrects_the_next_predict_with_the_command_before() -> None:
+    core = Calls()
+    loop = ObserverLoop(core, 0, 1e-3, 0.0)
+    loop.step(1.0, 5.0)  # a command before the first state is not the loop's
+    loop.step(2.0, 0.5)
+    assert core.calls == [('correct', 1.0), ('predict', 0.5), ('correct', 2.0)]
+
+
+def test_lost_periods_run_through_with_the_command_that_acted() -> None:
+    core = Calls()
+    loop = ObserverLoop(core, 1, 1e-3, 0.0)
+    loop.step(0.0, None)
+    core.calls.clear()
+    loop.step(1.0, 0.25, missed=2)
+    predicts = [u for name, u in core.calls if name == 'predict']
+    assert len(predicts) == 3  # two lost periods and the one before this state
+
+
+def test_a_replacement_starts_anew_and_continues_the_estimate() -> None:
+    loop = ObserverLoop(Calls(), 0, 1e-3, 0.05)
+    loop.step(1.0, None)
+    new_core = Calls()
+    loop = loop.replace(ObserverLoop(new_core, 0, 1e-3, 0.05))
+    loop.step(2.0, 0.3)  # the new observer's first sample: no command before it
+    assert new_core.calls == [('correct', 2.0)]
