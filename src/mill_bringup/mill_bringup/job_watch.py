@@ -41,7 +41,8 @@ class JobWatch(Node):
                 continue
             values = {kv.key: kv.value for kv in status.values}
             if values.get('state') == 'done':
-                request_exit(self, 0, f'job done at t = {values.get("time", "?")} s')
+                end = values.get('end_time', values.get('time', '?'))
+                request_exit(self, 0, f'job done at t = {end} s')
 
 
 def main(argv: list[str] | None = None) -> int:
