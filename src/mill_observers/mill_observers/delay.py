@@ -61,15 +61,16 @@ class DelayCompensation:
         return Estimate(est.position + lead * est.velocity, est.velocity, est.disturbance)
 
     def coast(self, u: float) -> None:
-        """A period without a measurement (a state lost on the way): the model runs on with
-        the command that acted over it; `u` is the command sent in that period."""
+        """A period whose measurement never came (a state lost on the way): the model runs
+        on over it. `u` is the command the drive held then (real time: the newest sent),
+        which is also the one that acts over the lost period: it enters the queue first."""
         u = u if math.isfinite(u) else 0.0
         if self.delay == 0:
             self.observer.predict(u)
             return
-        self.observer.predict(self.pending[0])
         self.pending.popleft()
         self.pending.append(u)
+        self.observer.predict(self.pending[0])
 
     def command(self, u: float) -> None:
         """The command computed at sample k (acts from k + N; a braked axis gets no input)."""

@@ -91,3 +91,37 @@ def test_non_finite_commands_count_as_no_input_and_bad_delays_are_refused() -> N
     assert list(comp.pending) == [0.0]
     with pytest.raises(ValueError, match='delay'):
         DelayCompensation(GpiObserver(B, T), -1, T)
+
+
+def test_a_lost_period_runs_on_with_the_command_that_acted_over_it() -> None:
+    # One sample of delay, constant motion: after the state of k, u(k) was sent and acts
+    # over [k+1, k+2); the state of k+1 is lost. The observer must run that period with
+    # u(k) (the held command), not with u(k-1), which acted the period before.
+    def observer_after(coast_with: float | None) -> GpiObserver:
+        comp = DelayCompensation(GpiObserver(B, T), 1, T)
+        x = v = 0.0
+        us = [0.0] * 300 + [0.2]  # u(k-1) = 0, then u(k) = 0.2 N·m, held
+        applied = 0.0
+        for u in us:
+            comp.correct(x)
+            comp.command(u)
+            a = B * applied
+            x, v = x + v * T + 0.5 * a * T * T, v + a * T
+            applied = u  # one sample of delay
+        if coast_with is not None:
+            comp.coast(coast_with)
+        return comp.observer
+
+    lost = observer_after(0.2)
+    # The truth: the same run with the lost period's state measured (predict with u(k)).
+    ref = DelayCompensation(GpiObserver(B, T), 1, T)
+    x = v = 0.0
+    applied = 0.0
+    for u in [0.0] * 300 + [0.2]:
+        ref.correct(x)
+        ref.command(u)
+        a = B * applied
+        x, v = x + v * T + 0.5 * a * T * T, v + a * T
+        applied = u
+    ref.observer.predict(0.2)  # the period [k+1, k+2) with the command that acted
+    assert lost.state[1] == pytest.approx(ref.observer.state[1], rel=1e-12)
