@@ -12,6 +12,7 @@ from mill_common.registry import Registry
 from mill_plant.cutting import CuttingForceModel, NoCutting, StepForce
 from mill_plant.harmonic_force import HarmonicForce
 from mill_plant.kline_force import KlineCuttingForce
+from mill_plant.load_force import LoadForce
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
@@ -34,6 +35,7 @@ CUTTING_MODELS: Registry[CuttingForceModel] = Registry(
         'kline': KlineCuttingForce,  # Beltrán 2013 eq. (4)
         'step': StepForce,  # a constant force from a start time on
         'harmonic': HarmonicForce,  # Maharof 2018 §3, eq. (5)
+        'load': LoadForce,  # a machine's process load: constant + harmonic, while moving
         'none': NoCutting,  # air cutting
     },
 )
