@@ -39,28 +39,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from mill_models.axis_data import RigidAxisParams
 
+from mill_plant.axis_plant import Bool3, StepReport
 from mill_plant.cutting import CuttingForceModel, Force3
 
-Bool3 = tuple[bool, bool, bool]
 _INF3 = (math.inf, math.inf, math.inf)
-
-
-@dataclass(frozen=True)
-class StepReport:
-    """What happened to the torque command in one step.
-
-    saturated: the torque was clipped to +-max_torque; faulted: the torque was
-    not finite and the axis was braked; applied_torque: the torque the axis
-    actually received [N·m] (0.0 for a faulted axis).
-    """
-
-    saturated: Bool3
-    faulted: Bool3
-    applied_torque: Force3 = (0.0, 0.0, 0.0)
 
 
 class ThreeAxisPlant:

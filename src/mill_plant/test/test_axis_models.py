@@ -10,21 +10,21 @@ import scipy.linalg
 import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
+from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
-from mill_plant.multi_axis import MultiAxisPlant
 
 MODELS = (RigidAxisModel, FlexibleAxisModel, TransferFunctionAxisModel, VelocityDriveAxisModel)
 
 
-def _single(model: AxisModel, cutting=None, **kw) -> MultiAxisPlant:
+def _single(model: AxisModel, cutting=None, **kw) -> AxisPlant:
     """Model on x; y, z rigid and idle."""
     rest = [RigidAxisModel.from_parameters(i, {}) for i in (1, 2)]
-    return MultiAxisPlant([model, *rest], cutting or NoCutting(), **kw)
+    return AxisPlant([model, *rest], cutting or NoCutting(), **kw)
 
 
 # ---- interface -------------------------------------------------------------------
@@ -325,7 +325,7 @@ def test_velocity_drive_steady_speed_and_force(axis) -> None:
         models.insert(axis, model)
         fc = [0.0, 0.0, 0.0]
         fc[axis] = force
-        plant = MultiAxisPlant(models, StepForce(fc))
+        plant = AxisPlant(models, StepForce(fc))
         cmd = [0.0, 0.0, 0.0]
         cmd[axis] = u
         for _ in range(1000):

@@ -9,9 +9,10 @@ import random
 import numpy as np
 import pytest
 from mill_models.axis_data import BELTRAN_TABLE1
+from mill_plant.axis_plant import StepReport
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.kline_force import KlineCuttingForce
-from mill_plant.three_axis import StepReport, ThreeAxisPlant
+from mill_plant.three_axis import ThreeAxisPlant
 from scipy.integrate import solve_ivp
 
 AXES = [BELTRAN_TABLE1[a] for a in 'xyz']

@@ -1,4 +1,4 @@
-"""Interface of one machine-axis model, as integrated by mill_plant.multi_axis (ROS-free).
+"""Interface of one machine-axis model, as integrated by mill_plant.axis_plant (ROS-free).
 
 State layout (every model is mechanical): a flat list of floats
 ``[q_0, ..., q_{N-1}, q'_0, ..., q'_{N-1}]`` with N = N_DOF generalised coordinates

@@ -33,17 +33,32 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 from mill_plant.cutting import CuttingForceModel, Force3
 from mill_plant.models.base import AxisModel, State
-from mill_plant.three_axis import Bool3, StepReport
 
+Bool3 = tuple[bool, bool, bool]
 Float3 = tuple[float, float, float]
 _INF3 = (math.inf, math.inf, math.inf)
 _SPLIT_TOL = 1e-9  # switch instants this close (in substeps) to a boundary snap to it
 
 
-class MultiAxisPlant:
+@dataclass(frozen=True)
+class StepReport:
+    """What happened to the input command in one step.
+
+    saturated: the input was clipped to +-max_input; faulted: the input was not finite
+    and the axis was braked; applied_torque: the input the axis actually received, in its
+    model's unit (N·m or V; 0.0 for a faulted axis).
+    """
+
+    saturated: Bool3
+    faulted: Bool3
+    applied_torque: Force3 = (0.0, 0.0, 0.0)
+
+
+class AxisPlant:
     """Axes x, y, z with per-axis models, integrated by fixed-step RK4."""
 
     def __init__(

@@ -1,4 +1,4 @@
-"""MultiAxisPlant: cross-validation with ThreeAxisPlant, load change, faults, mixed models."""
+"""AxisPlant: cross-validation with ThreeAxisPlant, load change, faults, mixed models."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import math
 
 import pytest
 from mill_models.axis_data import BELTRAN_TABLE1
+from mill_plant.axis_plant import AxisPlant, StepReport
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.kline_force import KlineCuttingForce
 from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
-from mill_plant.multi_axis import MultiAxisPlant
-from mill_plant.three_axis import StepReport, ThreeAxisPlant
+from mill_plant.three_axis import ThreeAxisPlant
 
 AXES = [BELTRAN_TABLE1[a] for a in 'xyz']
 DT = 1e-3
@@ -42,7 +42,7 @@ def test_three_rigid_models_reproduce_three_axis_plant(cutting: str) -> None:
         return StepForce((40.0, -25.0, 10.0), start_time=0.5)
 
     old = ThreeAxisPlant(AXES, force(), start, max_torque=(0.5, 0.5, 0.5))
-    new = MultiAxisPlant(_rigid(), force(), start, max_input=(0.5, 0.5, 0.5))
+    new = AxisPlant(_rigid(), force(), start, max_input=(0.5, 0.5, 0.5))
     sliding = stuck = 0
     for k in range(2000):  # 2 s: a 3 mm/s cut in x, then hold (stick-slip at the stop)
         t = k * DT
@@ -65,16 +65,16 @@ def test_three_rigid_models_reproduce_three_axis_plant(cutting: str) -> None:
     assert new.time == old.time
 
 
-def _mixed(**kw) -> MultiAxisPlant:
+def _mixed(**kw) -> AxisPlant:
     models = [
         TransferFunctionAxisModel.from_parameters(0, {}),
         VelocityDriveAxisModel.from_parameters(1, {}),
         RigidAxisModel.from_parameters(2, {}, gravity=True),
     ]
-    return MultiAxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05), **kw)
+    return AxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05), **kw)
 
 
-def _drive(plant: MultiAxisPlant, steps: int, dt: float = DT) -> list[tuple[float, ...]]:
+def _drive(plant: AxisPlant, steps: int, dt: float = DT) -> list[tuple[float, ...]]:
     out = []
     for k in range(steps):
         t = plant.time
@@ -95,7 +95,7 @@ def test_mixed_models_run_deterministically_and_each_axis_matches_its_own_plant(
         _rigid(gravity_z=True),
     ]
     for i, models in enumerate(solo):
-        plant = MultiAxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05))
+        plant = AxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05))
         ref = _drive(plant, 500)
         for a, b in zip(first, ref, strict=True):
             assert abs(a[1 + i] - b[1 + i]) <= 1e-12
@@ -107,10 +107,10 @@ def test_load_change_happens_at_the_first_step_at_or_after_its_time() -> None:
     dt = 2.0**-10
     mass = (3.0, 5.0, 7.0)
     for change_time, first_step in ((8 * dt, 8), (7.5 * dt, 8), (0.0, 0)):
-        sched = MultiAxisPlant(
+        sched = AxisPlant(
             _rigid(), NoCutting(), load_change_time=change_time, load_change_mass=mass
         )
-        manual = MultiAxisPlant(_rigid(), NoCutting())
+        manual = AxisPlant(_rigid(), NoCutting())
         gains = [m.input_gain() for m in sched.models]
         for k in range(12):
             if k == first_step:
@@ -131,15 +131,15 @@ def test_load_change_happens_at_the_first_step_at_or_after_its_time() -> None:
             )
     # The plant works on copies: the caller's models are not loaded.
     mine = _rigid()
-    plant = MultiAxisPlant(mine, NoCutting(), load_change_time=0.0, load_change_mass=mass)
+    plant = AxisPlant(mine, NoCutting(), load_change_time=0.0, load_change_mass=mass)
     plant.step((0.0, 0.0, 0.0), dt)
     assert mine[0].input_gain() == AXES[0].input_gain
 
 
 def test_non_finite_input_brakes_only_that_axis_of_any_model() -> None:
     models = [TransferFunctionAxisModel(), FlexibleAxisModel(), VelocityDriveAxisModel()]
-    faulty = MultiAxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
-    clean = MultiAxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
+    faulty = AxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
+    clean = AxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
     u = (0.2, 0.5, 0.1)
     for _ in range(30):
         faulty.step(u, DT)
@@ -172,8 +172,8 @@ def test_input_is_clipped_and_reported_in_the_model_unit() -> None:
         VelocityDriveAxisModel(),
         RigidAxisModel.from_parameters(2, {}),
     ]
-    limited = MultiAxisPlant(models, NoCutting(), max_input=(10.0, 10.0, 0.5))
-    reference = MultiAxisPlant(models, NoCutting())
+    limited = AxisPlant(models, NoCutting(), max_input=(10.0, 10.0, 0.5))
+    reference = AxisPlant(models, NoCutting())
     report = limited.step((12.0, -3.0, -0.7), DT)
     reference.step((10.0, -3.0, -0.5), DT)
     assert report == StepReport((True, False, True), (False, False, False), (10.0, -3.0, -0.5))
@@ -183,7 +183,7 @@ def test_input_is_clipped_and_reported_in_the_model_unit() -> None:
 
 def test_gravity_sags_a_rigid_z_axis_and_the_holding_torque_holds_it() -> None:
     z = AXES[2]
-    plant = MultiAxisPlant(_rigid(gravity_z=True), NoCutting(), (0.0, 0.0, 0.1))
+    plant = AxisPlant(_rigid(gravity_z=True), NoCutting(), (0.0, 0.0, 0.1))
     for _ in range(200):
         plant.step((0.0, 0.0, 0.0), DT)
     # Chávez-Conde eq. (3): m_e z'' + c_e z' = -m g + mu (sliding down), from rest
@@ -199,7 +199,7 @@ def test_gravity_sags_a_rigid_z_axis_and_the_holding_torque_holds_it() -> None:
 
     hold = z.mass * 9.80665 * z.lead  # tau = m g a
     for extra in (0.0, 0.9 * z.coulomb_friction * z.lead, -0.9 * z.coulomb_friction * z.lead):
-        held = MultiAxisPlant(_rigid(gravity_z=True), NoCutting(), (0.0, 0.0, 0.1))
+        held = AxisPlant(_rigid(gravity_z=True), NoCutting(), (0.0, 0.0, 0.1))
         for _ in range(200):
             held.step((0.0, 0.0, hold + extra), DT)
         assert held.position[2] == 0.1 and held.velocity[2] == 0.0
@@ -207,7 +207,7 @@ def test_gravity_sags_a_rigid_z_axis_and_the_holding_torque_holds_it() -> None:
 
 def test_disturbance_of_internal_state_models() -> None:
     tf = TransferFunctionAxisModel()
-    plant = MultiAxisPlant(
+    plant = AxisPlant(
         [tf, VelocityDriveAxisModel(), FlexibleAxisModel(coulomb_friction=0.0)],
         StepForce((50.0, 20.0, 5.0)),
     )
@@ -230,27 +230,27 @@ def test_disturbance_of_internal_state_models() -> None:
 
 def test_constructor_and_step_refuse_bad_input() -> None:
     with pytest.raises(ValueError, match='models'):
-        MultiAxisPlant(_rigid()[:2], NoCutting())
+        AxisPlant(_rigid()[:2], NoCutting())
     with pytest.raises(ValueError, match='models'):
-        MultiAxisPlant([*_rigid()[:2], AXES[2]], NoCutting())
+        AxisPlant([*_rigid()[:2], AXES[2]], NoCutting())
     with pytest.raises(ValueError, match='substeps'):
-        MultiAxisPlant(_rigid(), NoCutting(), substeps=0)
+        AxisPlant(_rigid(), NoCutting(), substeps=0)
     with pytest.raises(ValueError, match='max_input'):
-        MultiAxisPlant(_rigid(), NoCutting(), max_input=(1.0, 0.0, 1.0))
+        AxisPlant(_rigid(), NoCutting(), max_input=(1.0, 0.0, 1.0))
     with pytest.raises(ValueError, match='initial_position'):
-        MultiAxisPlant(_rigid(), NoCutting(), initial_position=(0.0, math.nan, 0.0))
+        AxisPlant(_rigid(), NoCutting(), initial_position=(0.0, math.nan, 0.0))
     with pytest.raises(ValueError, match='load_change_time'):
-        MultiAxisPlant(_rigid(), NoCutting(), load_change_time=math.nan)
+        AxisPlant(_rigid(), NoCutting(), load_change_time=math.nan)
     with pytest.raises(ValueError, match='load_change_mass'):
-        MultiAxisPlant(_rigid(), NoCutting(), load_change_mass=(0.0, math.inf, 0.0))
-    plant = MultiAxisPlant(
+        AxisPlant(_rigid(), NoCutting(), load_change_mass=(0.0, math.inf, 0.0))
+    plant = AxisPlant(
         _rigid(), NoCutting(), load_change_time=0.0, load_change_mass=(5.0, -30.0, 0.0)
     )
     with pytest.raises(ValueError, match='mass'):
         plant.step((0.0, 0.0, 0.0), DT)  # y: 23.896 kg - 30 kg
     assert plant.models[0].input_gain() == AXES[0].input_gain  # all or nothing
     assert not plant.load_changed
-    plant = MultiAxisPlant(_rigid(), NoCutting())
+    plant = AxisPlant(_rigid(), NoCutting())
     with pytest.raises(ValueError, match='dt'):
         plant.step((0.0, 0.0, 0.0), 0.0)
     with pytest.raises(ValueError, match='input'):
