@@ -355,8 +355,9 @@ class AxisPlant:
         """Lumped disturbance xi_i = x_i'' - b_i u_i [m/s²] now, with this input applied.
 
         x_i'' is the actual carriage acceleration (with the input acting now: for a
-        dead-time axis the delayed one), b_i = input_gain() and u_i the clipped input. A
-        stuck carriage has x'' = 0. An axis with a non-finite input (braked): NaN.
+        dead-time axis the delayed one), b_i = input_gain() and u_i the clipped input; each
+        model computes it (AxisModel.disturbance). A stuck carriage has x'' = 0. An axis
+        with a non-finite input (braked): NaN.
         """
         uc, _, faulted = self._condition(u)
         fc = self.cutting_force()
@@ -368,8 +369,7 @@ class AxisPlant:
             y = self._state[i]
             ui = self._delayed(i, self._t) if self._delay[i] > 0.0 else uc[i]
             mode = self._mode(i, y, ui, fc[i])
-            acc = model.velocity(model.derivative(y, ui, fc[i], mode))
-            out[i] = acc - model.input_gain() * uc[i]
+            out[i] = model.disturbance(y, ui, fc[i], mode, uc[i])
         return (out[0], out[1], out[2])
 
 

@@ -108,6 +108,20 @@ def test_rigid_gravity_weight_is_the_carriage_weight_and_grows_with_the_load() -
     assert RigidAxisModel.from_parameters(2, {}).weight == 0.0
 
 
+@pytest.mark.parametrize('gravity', [False, True])
+def test_rigid_closed_form_disturbance_is_acceleration_less_b_u(gravity: bool) -> None:
+    model = RigidAxisModel.from_parameters(2, {}, gravity=gravity)
+    model.add_load(3.0)
+    for state, u, force, mode in (
+        ([0.01, 0.002], 0.3, 40.0, 1.0),
+        ([0.01, -0.002], -0.2, -15.0, -1.0),
+        ([0.01, 0.0], 0.5, 10.0, 1.0),  # breaking away
+        ([0.01, 0.0], 0.0, 0.1, 0.0),  # stuck: x'' = 0
+    ):
+        generic = AxisModel.disturbance(model, state, u, force, mode, u)  # x'' - b u
+        assert model.disturbance(state, u, force, mode, u) == pytest.approx(generic, rel=1e-9)
+
+
 # ---- flexible --------------------------------------------------------------------
 
 

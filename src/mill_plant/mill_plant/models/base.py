@@ -20,6 +20,9 @@ What the plant calls:
   stuck if |net| <= mu, else sliding along net. FRICTION_DOF = None: no Coulomb
   friction, mode is always 1.0 and ignored.
 - ``dead_time`` [s]: input dead time; 0.0 for all but the transfer-function model.
+- ``disturbance(state, u, force, mode, command)``: the lumped disturbance ξ = x'' - b·command
+  [m/s²] that the plant reports (analysis only); by default from ``derivative``, a model
+  may give it in closed form.
 """
 
 from __future__ import annotations
@@ -94,6 +97,16 @@ class AxisModel(ABC):
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         """Net non-friction force [N] on FRICTION_DOF when its velocity is zero."""
         return 0.0
+
+    def disturbance(
+        self, state: Sequence[float], u: float, force: float, mode: float, command: float
+    ) -> float:
+        """Lumped disturbance ξ = x'' - b·command [m/s²].
+
+        x'' is the carriage acceleration with the input u acting (for a dead-time model the
+        delayed input), b = input_gain() and command the input given now.
+        """
+        return self.velocity(self.derivative(state, u, force, mode)) - self.input_gain() * command
 
 
 def check_axis(axis: int) -> int:

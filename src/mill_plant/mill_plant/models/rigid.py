@@ -128,3 +128,13 @@ class RigidAxisModel(AxisModel):
 
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         return u * self._inv_lead - self._weight - force
+
+    def disturbance(
+        self, state: Sequence[float], u: float, force: float, mode: float, command: float
+    ) -> float:
+        """Closed form, free of the cancellation in x'' - b·u when b·u is much larger than ξ."""
+        if mode == 0.0:
+            return -self.input_gain() * command  # stuck: x'' = 0
+        # Beltrán 2013 eqs. (6)-(8): ξ = -(c_e x' + mu sign(x') + F_c) / m_e (and -m g / m_e)
+        xi = -(self._ce * state[1] + self._mu * mode + force) * self._inv_me
+        return xi - self._weight * self._inv_me
