@@ -60,6 +60,53 @@ def test_three_rigid_models_reproduce_three_axis_plant(cutting: str) -> None:
     assert new.time == old.time
 
 
+class _RigidViaModelCalls(RigidAxisModel):
+    """The rigid model as any other model: a subclass takes the plant's general path."""
+
+
+def test_rigid_scalar_path_equals_the_general_path_bit_for_bit() -> None:
+    start = (-0.075, -0.105, -0.005)
+
+    def plant(cls: type[RigidAxisModel]) -> AxisPlant:
+        models = [cls.from_parameters(i, {}, gravity=(i == 2)) for i in range(3)]
+        # chip and depth from the tool's path: the model learns every accepted state
+        kline = KlineCuttingForce(specific_energy=1e8)
+        return AxisPlant(
+            models,
+            kline,
+            start,
+            max_input=(0.5, 0.5, 0.12),  # z: too weak to hold the load added at 0.8 s
+            load_change_time=0.8,
+            load_change_mass=(4.0, 0.0, 2.5),
+        )
+
+    fast, general = plant(RigidAxisModel), plant(_RigidViaModelCalls)
+    assert fast._rigid and not general._rigid
+    hold_z = AXES[2].mass * 9.80665 * AXES[2].lead
+    stuck = [0, 0, 0]
+    braked = 0
+    saturated = [0, 0, 0]
+    for k in range(1500):
+        t = k * DT
+        ref = (start[0] + 0.003 * min(t, 1.2), start[1] + 0.002 * min(t, 0.6), start[2])
+        u = list(_pd(fast, ref))
+        u[2] += hold_z
+        if k % 250 < 10:
+            u[k % 3] = math.nan
+        # repr: exact for floats, and NaN (a braked axis) equals NaN
+        assert repr(fast.disturbance(u)) == repr(general.disturbance(u))
+        report = fast.step(u, DT)
+        assert report == general.step(u, DT)
+        assert fast.states == general.states
+        assert fast.cutting_force() == general.cutting_force()
+        stuck = [n + (v == 0.0) for n, v in zip(stuck, fast.velocity, strict=True)]
+        braked += any(report.faulted)
+        saturated = [n + c for n, c in zip(saturated, report.saturated, strict=True)]
+    assert fast.load_changed and general.load_changed
+    # every path was taken: stuck and sliding axes, braked ones, a clipped one
+    assert min(stuck) > 10 and braked == 60 and saturated[2] > 100
+
+
 def _mixed(**kw) -> AxisPlant:
     models = [
         TransferFunctionAxisModel.from_parameters(0, {}),

@@ -120,11 +120,17 @@ class RigidAxisModel(AxisModel):
         if mode == 0.0:
             return [0.0, 0.0]  # stuck: static friction balances the net force
         v = state[1]
+        return [v, self.acceleration(v, self.drive_force(u, mode), force)]
+
+    # The two halves of x'' for a plant that integrates rigid axes on scalars (AxisPlant).
+    def drive_force(self, u: float, mode: float) -> float:
+        """tau/a - m g - mu·mode [N]: what drives a sliding carriage, constant in a substep."""
+        return u * self._inv_lead - self._weight - self._mu * mode
+
+    def acceleration(self, v: float, drive: float, force: float) -> float:
+        """x'' [m/s²] of a sliding carriage at velocity v, given drive_force() and F_c."""
         # Chávez-Conde eq. (1)-(3): x'' = (tau/a - m g - mu sign(x') - F_c - c_e x') / m_e
-        acc = self._inv_me * (
-            u * self._inv_lead - self._weight - self._mu * mode - force - self._ce * v
-        )
-        return [v, acc]
+        return self._inv_me * (drive - force - self._ce * v)
 
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         return u * self._inv_lead - self._weight - force
