@@ -1,5 +1,5 @@
-"""Three axes, each with its own dynamic model (mill_plant.models), coupled only through
-the cutting force. Drop-in for ThreeAxisPlant (same public API, input in each model's unit).
+"""The plant: three axes, each with its own dynamic model (mill_plant.models), coupled only
+through the cutting force. Input per axis in its model's unit (N·m, or V).
 
 Integration: fixed-step classical RK4 with `substeps` substeps per step; the cutting force
 of all three axes is evaluated in every RK4 stage from the stage positions/velocities. The
@@ -10,10 +10,18 @@ instant is split there (pieces of one substep integrated by one RK4 step each), 
 time is exact also when T_d is not a multiple of the step. Instants within 1e-9 substep of
 a substep boundary are taken at the boundary. The input before the start was 0.
 
-Coulomb friction (stick-slip), the same scheme as ThreeAxisPlant, on the coordinate
-FRICTION_DOF of a model (mill_plant.models.base): a mode frozen per substep piece (sliding
-±1, or stuck if at zero velocity the net force is within ±mu); after the piece a sliding
-coordinate whose velocity crossed zero is stopped at the linearly interpolated crossing.
+Coulomb friction (stick-slip), simple and chatter-free, on the coordinate FRICTION_DOF of
+a model (mill_plant.models.base):
+
+- At the start of every substep piece each axis gets a mode that is frozen for the piece,
+  so RK4 always integrates a smooth right-hand side: sliding ±1 (friction -mu·mode) when
+  the coordinate moves; at rest (velocity exactly 0.0) stuck if the net non-friction force
+  is within ±mu (zero derivative: it stays exactly put), else sliding along that force.
+- After the piece, a sliding coordinate whose velocity changed sign is stopped: velocity
+  0.0 at the crossing x_old + v_old θ h / 2, θ = v_old / (v_old - v_new) (linear in v,
+  exact for constant deceleration). Stiction is re-evaluated at the next piece, so the
+  velocity reverses only once the net force exceeds breakaway the other way: no sign
+  chatter at rest, for a dwell of at most one substep at a reversal.
 
 Load change: at the first step whose start time is >= load_change_time, every axis gets
 add_load(load_change_mass[i]) before the step is integrated (once; all axes or none: the
@@ -29,7 +37,6 @@ state lists and per-stage model calls (about 3x faster; same bits, which a test 
 
 The plant integrates deep copies of the given models; the caller's models never change.
 Plain float arithmetic in a fixed order: same inputs, bit-identical outputs.
-With three rigid models it reproduces ThreeAxisPlant.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ What the plant calls:
 - ``position(state)``, ``velocity(state)``: carriage/table position [m] and velocity
   [m/s]. Both must be LINEAR in the state: the plant gets the carriage acceleration as
   ``velocity(derivative(...))``.
-- Coulomb stick-slip (same scheme as ThreeAxisPlant): a model with FRICTION_DOF = j has a
+- Coulomb stick-slip (the scheme of mill_plant.axis_plant): a model with FRICTION_DOF = j has a
   Coulomb force ``coulomb_friction`` [N] on coordinate j (the carriage). Per substep the
   plant freezes a mode: +1.0 / -1.0 = sliding in that direction (friction -mu·mode), 0.0 =
   stuck (coordinate j has zero velocity and zero acceleration). At rest (q'_j == 0.0) the
