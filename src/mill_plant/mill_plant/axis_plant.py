@@ -246,6 +246,10 @@ class AxisPlant:
             return -1.0
         return 0.0
 
+    def _rest_mode(self, i: int, x: float, u: float, f: float) -> float:
+        """_mode of rigid axis i at rest at x."""
+        return self._mode(i, [x, 0.0], u, f)
+
     # ---- dynamics ------------------------------------------------------------
 
     def step(self, u: Sequence[float], dt: float) -> StepReport:
@@ -380,6 +384,7 @@ class AxisPlant:
         commit = self._commit
         d0, d1, d2 = self._drive_fn
         c0, c1, c2 = self._acc_fn
+        mode = self._rest_mode
         (x0, v0), (x1, v1), (x2, v2) = self._state
         u0, u1, u2 = uc
         n = self._substeps
@@ -389,10 +394,20 @@ class AxisPlant:
         for k in range(n):
             t = t0 + k * h
             f1 = force(t, (x0, x1, x2), (v0, v1, v2))
-            # Friction mode, frozen for the substep; a braked axis is held (mode 0).
-            s0 = 0.0 if faulted[0] else self._mode(0, [x0, v0], u0, f1[0])
-            s1 = 0.0 if faulted[1] else self._mode(1, [x1, v1], u1, f1[1])
-            s2 = 0.0 if faulted[2] else self._mode(2, [x2, v2], u2, f1[2])
+            # Friction mode, frozen for the substep: _mode, asked only at rest (a braked axis
+            # is at rest and held: mode 0).
+            if v0:
+                s0 = 1.0 if v0 > 0.0 else -1.0
+            else:
+                s0 = 0.0 if faulted[0] else mode(0, x0, u0, f1[0])
+            if v1:
+                s1 = 1.0 if v1 > 0.0 else -1.0
+            else:
+                s1 = 0.0 if faulted[1] else mode(1, x1, u1, f1[1])
+            if v2:
+                s2 = 1.0 if v2 > 0.0 else -1.0
+            else:
+                s2 = 0.0 if faulted[2] else mode(2, x2, u2, f1[2])
             # A stuck or braked axis has v = 0 and x'' = 0: it stays exactly put.
             a0 = c0 if s0 else _still
             a1 = c1 if s1 else _still
