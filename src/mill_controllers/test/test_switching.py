@@ -14,8 +14,9 @@ from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.switching import BumplessSwitch, check_replacement
 from mill_models.axis_data import BELTRAN_TABLE1, nominal_input_gain
 from mill_observers.gpi import GpiObserver
+from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import StepForce
-from mill_plant.three_axis import ThreeAxisPlant
+from mill_plant.models.rigid import RigidAxisModel
 from mill_trajectory.bezier import BezierRestToRest
 
 T = 1e-3
@@ -30,7 +31,8 @@ def run(new_law, switch_at: float, blend_time: float = 0.05, duration: float = 4
 
     Returns (commands, old-law outputs at each sample, errors, index of the switch).
     """
-    plant = ThreeAxisPlant(list(BELTRAN_TABLE1.values()), StepForce((20.0, 0.0, 0.0), 0.5))
+    axes = [RigidAxisModel(p) for p in BELTRAN_TABLE1.values()]
+    plant = AxisPlant(axes, StepForce((20.0, 0.0, 0.0), 0.5))
     path = BezierRestToRest((0.0, 0.0, 0.0), (0.01, 0.0, 0.0), 0.0, 3.0)
     observer = GpiObserver.from_parameters(B, T, {})
     switch = BumplessSwitch(AdrcController.from_parameters(B, T, {}), T, blend_time)

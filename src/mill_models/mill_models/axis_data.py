@@ -1,6 +1,6 @@
 """Nominal data of the rigid ball-screw axis, Beltrán 2013 eq. (1)-(3) and (5), Table 1.
 
-The plant integrates this axis (mill_plant.models.rigid, mill_plant.three_axis); the
+The plant integrates this axis (mill_plant.models.rigid, mill_plant.axis_plant); the
 controllers and observers take their nominal input gain b from it (nominal_input_gain),
 so it lives in the model layer that every role package imports.
 

@@ -22,7 +22,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from typing import ClassVar
 
-from mill_plant.three_axis import StepReport
+from mill_plant.axis_plant import StepReport
 
 Vector3 = tuple[float, float, float]
 

@@ -23,15 +23,13 @@ from mill_common.parameters import (
     positive_or_inf,
 )
 from mill_common.signals import AXES
-from mill_models.axis_data import RigidAxisParams
 
+from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import CuttingForceModel
 from mill_plant.drive_config import DRIVE_PARAMETERS
 from mill_plant.models.base import AxisModel
 from mill_plant.models.rigid import RigidAxisModel
-from mill_plant.multi_axis import MultiAxisPlant
 from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
-from mill_plant.three_axis import ThreeAxisPlant
 
 # The rigid model's parameters keep their plain names (mass, pitch, ...): Beltrán 2013
 # Table 1 by default; the other models' parameters live under their prefix.
@@ -173,22 +171,9 @@ def build_axis_model(values: dict[str, Any], axis: int) -> AxisModel:
     return cls.from_parameters(axis, own, gravity)
 
 
-Plant = ThreeAxisPlant | MultiAxisPlant  # what build_plant gives
-
-
-def build_plant(values: dict[str, Any]) -> Plant:
-    """Three rigid axes: the Beltrán plant (fast, unrolled); any other mix: MultiAxisPlant."""
-    rigid_only = all(m == 'rigid' for m in values['axis_model'])
-    if rigid_only and not values['gravity'] and not _load_changes(values):
-        axes = [RigidAxisParams(**{n: values[n][i] for n in _RIGID}) for i in range(len(AXES))]
-        return ThreeAxisPlant(
-            axes,
-            build_cutting(values),
-            initial_position=tuple(values['initial_position']),
-            max_torque=tuple(values['max_torque']),
-            substeps=values['substeps'],
-        )
-    return MultiAxisPlant(
+def build_plant(values: dict[str, Any]) -> AxisPlant:
+    """The plant: every axis its model (axis_model), all coupled through the cutting force."""
+    return AxisPlant(
         [build_axis_model(values, i) for i in range(len(AXES))],
         build_cutting(values),
         initial_position=tuple(values['initial_position']),

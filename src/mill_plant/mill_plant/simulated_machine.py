@@ -1,6 +1,6 @@
 """The simulated three-axis machine as a drive backend (mill_plant.backend). ROS-free.
 
-The plant models (three_axis / multi_axis, built by mill_plant.config.build_plant) with
+The plant (mill_plant.axis_plant, built by mill_plant.config.build_plant) with
 the encoder model (sensor.quantize). Efforts are held between `advance` calls; a NaN
 effort brakes its axis (the plant's safety path), as does an axis that is not under
 control. For analysis it also offers what only a simulation knows: the true velocities,

@@ -10,21 +10,21 @@ import scipy.linalg
 import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
+from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
-from mill_plant.multi_axis import MultiAxisPlant
 
 MODELS = (RigidAxisModel, FlexibleAxisModel, TransferFunctionAxisModel, VelocityDriveAxisModel)
 
 
-def _single(model: AxisModel, cutting=None, **kw) -> MultiAxisPlant:
+def _single(model: AxisModel, cutting=None, **kw) -> AxisPlant:
     """Model on x; y, z rigid and idle."""
     rest = [RigidAxisModel.from_parameters(i, {}) for i in (1, 2)]
-    return MultiAxisPlant([model, *rest], cutting or NoCutting(), **kw)
+    return AxisPlant([model, *rest], cutting or NoCutting(), **kw)
 
 
 # ---- interface -------------------------------------------------------------------
@@ -106,6 +106,20 @@ def test_rigid_gravity_weight_is_the_carriage_weight_and_grows_with_the_load() -
     z.add_load(2.0)
     assert z.weight == pytest.approx(24.505 * 9.81)
     assert RigidAxisModel.from_parameters(2, {}).weight == 0.0
+
+
+@pytest.mark.parametrize('gravity', [False, True])
+def test_rigid_closed_form_disturbance_is_acceleration_less_b_u(gravity: bool) -> None:
+    model = RigidAxisModel.from_parameters(2, {}, gravity=gravity)
+    model.add_load(3.0)
+    for state, u, force, mode in (
+        ([0.01, 0.002], 0.3, 40.0, 1.0),
+        ([0.01, -0.002], -0.2, -15.0, -1.0),
+        ([0.01, 0.0], 0.5, 10.0, 1.0),  # breaking away
+        ([0.01, 0.0], 0.0, 0.1, 0.0),  # stuck: x'' = 0
+    ):
+        generic = AxisModel.disturbance(model, state, u, force, mode, u)  # x'' - b u
+        assert model.disturbance(state, u, force, mode, u) == pytest.approx(generic, rel=1e-9)
 
 
 # ---- flexible --------------------------------------------------------------------
@@ -325,7 +339,7 @@ def test_velocity_drive_steady_speed_and_force(axis) -> None:
         models.insert(axis, model)
         fc = [0.0, 0.0, 0.0]
         fc[axis] = force
-        plant = MultiAxisPlant(models, StepForce(fc))
+        plant = AxisPlant(models, StepForce(fc))
         cmd = [0.0, 0.0, 0.0]
         cmd[axis] = u
         for _ in range(1000):

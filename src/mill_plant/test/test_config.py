@@ -6,11 +6,11 @@ import math
 
 import pytest
 from mill_common.parameters import ParameterError
+from mill_plant.axis_plant import AxisPlant
 from mill_plant.config import build_cutting, build_plant, force_process_specs, parameter_specs
 from mill_plant.cutting import CuttingForceModel, NoCutting, StepForce
 from mill_plant.harmonic_force import HarmonicForce
 from mill_plant.kline_force import KlineCuttingForce
-from mill_plant.multi_axis import MultiAxisPlant
 from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
 
 DEFAULTS = {name: spec.default for name, spec in parameter_specs()}
@@ -84,7 +84,7 @@ def test_a_bad_cutting_value_names_its_full_parameter() -> None:
 def test_axis_models_come_from_their_registry() -> None:
     values = {**DEFAULTS, 'axis_model': ['rigid', 'flexible', 'velocity_drive']}
     plant = build_plant(values)
-    assert isinstance(plant, MultiAxisPlant)
+    assert isinstance(plant, AxisPlant)
     assert [type(m) for m in plant.models] == [AXIS_MODELS.get(n) for n in values['axis_model']]
 
 

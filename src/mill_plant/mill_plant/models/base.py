@@ -1,4 +1,4 @@
-"""Interface of one machine-axis model, as integrated by mill_plant.multi_axis (ROS-free).
+"""Interface of one machine-axis model, as integrated by mill_plant.axis_plant (ROS-free).
 
 State layout (every model is mechanical): a flat list of floats
 ``[q_0, ..., q_{N-1}, q'_0, ..., q'_{N-1}]`` with N = N_DOF generalised coordinates
@@ -12,7 +12,7 @@ What the plant calls:
 - ``position(state)``, ``velocity(state)``: carriage/table position [m] and velocity
   [m/s]. Both must be LINEAR in the state: the plant gets the carriage acceleration as
   ``velocity(derivative(...))``.
-- Coulomb stick-slip (same scheme as ThreeAxisPlant): a model with FRICTION_DOF = j has a
+- Coulomb stick-slip (the scheme of mill_plant.axis_plant): a model with FRICTION_DOF = j has a
   Coulomb force ``coulomb_friction`` [N] on coordinate j (the carriage). Per substep the
   plant freezes a mode: +1.0 / -1.0 = sliding in that direction (friction -mu·mode), 0.0 =
   stuck (coordinate j has zero velocity and zero acceleration). At rest (q'_j == 0.0) the
@@ -20,6 +20,9 @@ What the plant calls:
   stuck if |net| <= mu, else sliding along net. FRICTION_DOF = None: no Coulomb
   friction, mode is always 1.0 and ignored.
 - ``dead_time`` [s]: input dead time; 0.0 for all but the transfer-function model.
+- ``disturbance(state, u, force, mode, command)``: the lumped disturbance ξ = x'' - b·command
+  [m/s²] that the plant reports (analysis only); by default from ``derivative``, a model
+  may give it in closed form.
 """
 
 from __future__ import annotations
@@ -94,6 +97,16 @@ class AxisModel(ABC):
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         """Net non-friction force [N] on FRICTION_DOF when its velocity is zero."""
         return 0.0
+
+    def disturbance(
+        self, state: Sequence[float], u: float, force: float, mode: float, command: float
+    ) -> float:
+        """Lumped disturbance ξ = x'' - b·command [m/s²].
+
+        x'' is the carriage acceleration with the input u acting (for a dead-time model the
+        delayed input), b = input_gain() and command the input given now.
+        """
+        return self.velocity(self.derivative(state, u, force, mode)) - self.input_gain() * command
 
 
 def check_axis(axis: int) -> int:

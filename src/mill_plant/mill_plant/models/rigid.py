@@ -120,11 +120,27 @@ class RigidAxisModel(AxisModel):
         if mode == 0.0:
             return [0.0, 0.0]  # stuck: static friction balances the net force
         v = state[1]
+        return [v, self.acceleration(v, self.drive_force(u, mode), force)]
+
+    # The two halves of x'' for a plant that integrates rigid axes on scalars (AxisPlant).
+    def drive_force(self, u: float, mode: float) -> float:
+        """tau/a - m g - mu·mode [N]: what drives a sliding carriage, constant in a substep."""
+        return u * self._inv_lead - self._weight - self._mu * mode
+
+    def acceleration(self, v: float, drive: float, force: float) -> float:
+        """x'' [m/s²] of a sliding carriage at velocity v, given drive_force() and F_c."""
         # Chávez-Conde eq. (1)-(3): x'' = (tau/a - m g - mu sign(x') - F_c - c_e x') / m_e
-        acc = self._inv_me * (
-            u * self._inv_lead - self._weight - self._mu * mode - force - self._ce * v
-        )
-        return [v, acc]
+        return self._inv_me * (drive - force - self._ce * v)
 
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         return u * self._inv_lead - self._weight - force
+
+    def disturbance(
+        self, state: Sequence[float], u: float, force: float, mode: float, command: float
+    ) -> float:
+        """Closed form, free of the cancellation in x'' - b·u when b·u is much larger than ξ."""
+        if mode == 0.0:
+            return -self.input_gain() * command  # stuck: x'' = 0
+        # Beltrán 2013 eqs. (6)-(8): ξ = -(c_e x' + mu sign(x') + F_c) / m_e (and -m g / m_e)
+        xi = -(self._ce * state[1] + self._mu * mode + force) * self._inv_me
+        return xi - self._weight * self._inv_me

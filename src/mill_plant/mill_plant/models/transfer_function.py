@@ -6,7 +6,7 @@
 Units: A is a parameter in the paper's mm/(V·s²) and is converted to m/(V·s²) inside
 (×1e-3); B [1/s], C [1/s²], T_d [s]; input u in volts. The dead time is exact: the plant
 holds each step's voltage and, where the delayed voltage changes inside a step, splits the
-integration at that instant (mill_plant.multi_axis). Before the plant's start the voltage
+integration at that instant (mill_plant.axis_plant). Before the plant's start the voltage
 was 0.
 
 Readings (not in the paper):
