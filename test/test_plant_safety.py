@@ -161,9 +161,7 @@ def test_non_finite_command_brakes_the_axis(start_node) -> None:
     assert truth[NAN_STEPS.start].velocity[0] > 0.0
 
     # Reported on /diagnostics.
-    assert any(s.name == 'plant: lockstep' and s.message == 'axis x braked' for s in errors), (
-        errors
-    )
+    assert any(s.name == 'plant: lockstep' and s.message == 'axis x braked' for s in errors), errors
 
 
 @pytest.mark.system

@@ -28,7 +28,11 @@ from test.conftest import ros_node, wait_until
 WARN_TIME = 0.5  # [s] input_warn_time of the watching nodes
 TIMEOUT = 3.0  # [s] input_timeout of the watching nodes
 WATCHERS = {  # node -> (module, executable, the input the plant fed it)
-    'x_controller': ('mill_controllers.axis_controller_node', 'axis_controller', topics.state('x')),
+    'x_controller': (
+        'mill_controllers.axis_controller_node',
+        'axis_controller_node',
+        topics.state('x'),
+    ),
     'x_observer': ('mill_observers.observer_node', 'observer_node', topics.state('x')),
     'trajectory': ('mill_trajectory.trajectory_node', 'trajectory_node', topics.CLOCK),
 }

@@ -15,11 +15,21 @@ from collections.abc import Iterator
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from mill_common.ros import DATA_QOS, from_stamp
+from mill_common.ros import from_stamp
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
 from test.conftest import ParameterClient, ros_node, wait_until
+
+# Every sample of a run: a job of 1 s at 4 kHz runs faster than real time, and this node
+# must not lose a command it has not taken yet while the machine is busy.
+ALL_SAMPLES = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=20000,
+    durability=DurabilityPolicy.VOLATILE,
+)
 
 
 class RunningJob:
@@ -31,10 +41,10 @@ class RunningJob:
         self.commands: dict[int, float] = {}
         self.switches: list[dict[str, str]] = []
         self.law_state: dict[str, float] = {}
-        node.create_subscription(JointState, topics.joint_command('x'), self._command, DATA_QOS)
+        node.create_subscription(JointState, topics.joint_command('x'), self._command, ALL_SAMPLES)
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._diagnostics, 100)
         node.create_subscription(
-            JointState, topics.controller_state('x'), self._law_state, DATA_QOS
+            JointState, topics.controller_state('x'), self._law_state, ALL_SAMPLES
         )
         self.controller = ParameterClient(node, executor, 'x_controller')
         self.node = node

@@ -69,7 +69,7 @@ def test_cutting_values_reach_the_model_in_its_units() -> None:
 
 def test_an_unknown_cutting_model_is_refused_by_name() -> None:
     spec = dict(parameter_specs())['cutting_model']
-    assert spec.check('chatter') == 'must be one of: kline, step, harmonic, none'
+    assert spec.check('chatter') == 'must be one of: kline, step, harmonic, load, none'
     with pytest.raises(ParameterError) as info:
         build_cutting({**DEFAULTS, 'cutting_model': 'chatter'})
     assert info.value.name == 'cutting_model'
