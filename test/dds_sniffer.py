@@ -1,10 +1,11 @@
-"""Counts DDS packets (UDP, RTPS ports) leaving or entering through any interface but lo.
+"""Counts DDS packets (UDP datagrams carrying RTPS) on any interface but lo.
 
 A packet socket (AF_PACKET, root only) sees every frame of every interface; a thread reads
-them while a test runs. RTPS uses UDP ports 7400 + 250·domain + offsets (domain ≤ 232), so
-a UDP datagram with a port in [7400, 7400 + 250·233) on a non-loopback interface is DDS
-traffic that left the machine's loopback. Other traffic of the host (package downloads,
-name lookups) is not counted.
+them while a test runs. Every RTPS message starts with the protocol id b'RTPS' (DDSI-RTPS
+§9.4.1), so a UDP datagram whose payload starts with it on a non-loopback interface is DDS
+traffic that left the machine's loopback. The ports alone cannot tell: RTPS uses 7400 +
+250·domain + offsets, a range that holds most ephemeral ports too, and other traffic of
+the host (package downloads, name lookups from source port 46935) is not DDS.
 """
 
 from __future__ import annotations
@@ -14,10 +15,11 @@ import struct
 import threading
 
 ETH_P_ALL = 0x0003
-DDS_PORTS = range(7400, 7400 + 250 * 233)
+RTPS = b'RTPS'
 
 
 def _udp_ports(frame: bytes) -> tuple[int, int] | None:
+    """The UDP ports of an RTPS datagram, None for any other frame."""
     if len(frame) < 14:
         return None
     ethertype = struct.unpack_from('!H', frame, 12)[0]
@@ -32,7 +34,7 @@ def _udp_ports(frame: bytes) -> tuple[int, int] | None:
         off = 54
     else:
         return None
-    if len(frame) < off + 4:
+    if frame[off + 8 : off + 12] != RTPS:  # after the 8-byte UDP header
         return None
     return struct.unpack_from('!HH', frame, off)
 
@@ -63,7 +65,7 @@ class DdsSniffer:
             if address[0] == 'lo':
                 continue
             ports = _udp_ports(frame)
-            if ports and (ports[0] in DDS_PORTS or ports[1] in DDS_PORTS):
+            if ports:
                 self.count += 1
                 if len(self.examples) < 5:
                     self.examples.append(f'{address[0]}: udp {ports[0]} -> {ports[1]}')
