@@ -28,7 +28,6 @@ OBSERVER = ('mill_observers.observer_node', 'observer_node', 'x_observer')
 # (node, -p argument, parameter the error must name)
 BAD_STARTUP = [
     (CONTROLLER, 'controller:=bogus', 'controller'),
-    (CONTROLLER, 'pd.omega_c:=0.0', 'pd.omega_c'),
     (CONTROLLER, 'pd.omega_c:=-5.0', 'pd.omega_c'),
     (CONTROLLER, 'pd.zeta_c:=0.0', 'pd.zeta_c'),
     (CONTROLLER, 'pd.zeta_c:=-0.7', 'pd.zeta_c'),

@@ -410,6 +410,18 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
             ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
         ),
         (
+            'design_period',
+            ParamSpec(
+                'design_period',
+                0.0,
+                'the sample period the gains were designed for [s]: at another sample_period '
+                'the node refuses to start rather than run them (0: gains for any period, as '
+                'the tuning rule gives)',
+                non_negative,
+                True,
+            ),
+        ),
+        (
             'timing',
             ParamSpec(
                 'timing',
@@ -458,6 +470,17 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
     ]
+
+
+def check_design_period(values: Mapping[str, Any]) -> None:
+    """ValueError (one line) when gains designed for one sample period would run at another."""
+    designed, period = values['design_period'], values['sample_period']
+    if designed and abs(designed - period) > 1e-12 * designed:
+        raise ValueError(
+            f'the gains were designed for T = {1e3 * designed:g} ms (design_period) and the '
+            f'node runs at T = {1e3 * period:g} ms: give gains for this rate, or the tuning '
+            'rule (observer eso with eso.omega_o 0, pd.omega_c 0) and design_period 0'
+        )
 
 
 def algorithm_specs(classes: Iterable[type[Plugin]]) -> list[tuple[str, ParamSpec]]:

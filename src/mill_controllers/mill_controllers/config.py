@@ -8,11 +8,13 @@ from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
     axis_node_specs,
+    check_design_period,
     non_negative,
     positive_or_inf,
     text,
 )
 from mill_models.axis_data import nominal_input_gain
+from mill_models.loop_tuning import loop_tuning
 
 from mill_controllers.base import AxisController
 from mill_controllers.control_loop import AxisControlLoop
@@ -90,7 +92,10 @@ def input_gain(values: dict[str, Any]) -> float:
 
 def build_controller(values: dict[str, Any]) -> AxisController:
     cls = CONTROLLERS.get(values['controller'])
+    check_design_period(values)
     own = algorithm_values(cls, values)
+    if own.get('omega_c') == 0.0:  # the tuning rule's bandwidth for this rate and delay
+        own['omega_c'] = loop_tuning(values['sample_period'], values['command_delay']).omega_c
     return cls.from_parameters(input_gain(values), values['sample_period'], own)
 
 

@@ -19,6 +19,7 @@ from typing import Any, ClassVar
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
+    non_negative,
     positive,
     positive_or_inf,
     validate_all,
@@ -42,8 +43,9 @@ class _PdLaw(AxisController):
         ParamSpec(
             'omega_c',
             12.0,
-            'natural frequency ω_c of the tracking-error dynamics, eq. (12) [rad/s]',
-            positive,
+            'natural frequency ω_c of the tracking-error dynamics, eq. (12) [rad/s]; 0 = the '
+            'tuning rule for the sample period and command delay (mill_models.loop_tuning)',
+            non_negative,
         ),
         ParamSpec(
             'zeta_c',
@@ -79,6 +81,8 @@ class _PdLaw(AxisController):
             {'omega_c': omega_c, 'zeta_c': zeta_c, 'torque_limit': torque_limit},
             prefix=self.PREFIX + '.',
         )
+        if values['omega_c'] == 0.0:
+            raise ParameterError('pd.omega_c', 0.0, 'the tuning rule is resolved by the node')
         self._b = b
         self._T = float(sample_period)  # unused by the continuous law; kept for the node
         self._omega_c: float = values['omega_c']

@@ -60,6 +60,11 @@ class DelayCompensation:
         lead = self.delay * self.T
         return Estimate(est.position + lead * est.velocity, est.velocity, est.disturbance)
 
+    def restart(self) -> None:
+        """Forget the state and the commands in flight (after a brake: none acted)."""
+        self.observer.reset()
+        self.pending = deque([0.0] * self.delay)
+
     def coast(self, u: float) -> None:
         """A period whose measurement never came (a state lost on the way): the model runs
         on over it. `u` is the command the drive held then (real time: the newest sent),

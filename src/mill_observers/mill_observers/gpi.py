@@ -3,13 +3,8 @@
 The paper's observer eq. (15) is continuous with β0 ≈ 8·10¹⁹; sampling it directly at
 1 kHz is unstable (papers README, "Numerical notes"). Instead the extended model eq. (14)
 is sampled exactly (zero-order hold on τ) and a discrete gain places the error poles at
-z_i = exp(s_i·T), with s_i the roots of eq. (18). Between samples the error then decays
-exactly as the paper's continuous design would.
-
-Conditioning: the 7-state chain spans T⁰..T⁶ in raw units. Design and run-time both use
-the scaled state z_j = T^j·x_j, in which the sampled model is the Pascal-like matrix
-exp(N) (N the unit shift); the gain is placed on W = exp(N) − I (a delta-operator form)
-with roots w_i = expm1(s_i·T), so nothing cancels even when T is small.
+z_i = exp(s_i·T), with s_i the roots of eq. (18) (mill_observers.chain_design). Between
+samples the error then decays exactly as the paper's continuous design would.
 """
 
 from __future__ import annotations
@@ -20,48 +15,14 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from mill_common.parameters import ParameterError, ParamSpec, positive, validate_all
+from mill_common.parameters import ParamSpec, positive, validate_all
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
 from mill_observers.base import Observer
+from mill_observers.chain_design import ChainDesign, check_gain_and_period
 
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
-
-
-def _check_gain_and_period(input_gain: float, sample_period: float) -> tuple[float, float]:
-    b = float(input_gain)
-    if not math.isfinite(b) or b == 0.0:
-        raise ParameterError('input_gain', input_gain, 'must be finite and non-zero')
-    reason = positive(sample_period)
-    if reason:
-        raise ParameterError('sample_period', sample_period, reason)
-    return b, float(sample_period)
-
-
-def _expm1_complex(s: complex) -> complex:
-    """exp(s) − 1 without cancellation when |s| is small."""
-    re, im = s.real, s.imag
-    # exp(a+jb) − 1 = expm1(a)·cos b + (cos b − 1) + j·exp(a)·sin b, cos b − 1 = −2 sin²(b/2)
-    return complex(
-        math.expm1(re) * math.cos(im) - 2.0 * math.sin(0.5 * im) ** 2,
-        math.exp(re) * math.sin(im),
-    )
-
-
-def _exp_nilpotent(m: np.ndarray) -> np.ndarray:
-    """exp(M) of a nilpotent M (Mⁿ = 0 for n × n): the series stops, Σ_{k<n} Mᵏ/k!, exact.
-
-    The GPI model is a chain of integrators, so its ZOH sampling needs no general matrix
-    exponential (and the observer process no scipy.linalg, about 20 MB)."""
-    n = m.shape[0]
-    out, term = np.eye(n), np.eye(n)
-    for k in range(1, n):
-        term = term @ m / k
-        out = out + term
-    if np.any(term @ m):
-        raise ValueError('the matrix is not nilpotent')
-    return out
 
 
 class GpiObserver(Observer):
@@ -101,7 +62,7 @@ class GpiObserver(Observer):
         zeta_o: float = 0.7071,
         pole_o: float = 700.0,
     ) -> None:
-        self._b, self._T = _check_gain_and_period(input_gain, sample_period)
+        self._b, self._T = check_gain_and_period(input_gain, sample_period)
         values = validate_all(
             self.PARAMETERS,
             {'omega_o': omega_o, 'zeta_o': zeta_o, 'pole_o': pole_o},
@@ -111,48 +72,10 @@ class GpiObserver(Observer):
         self._zeta_o: float = values['zeta_o']
         self._pole_o: float = values['pole_o']
 
-        T = self._T
-        n = _N_STATES
-        # Scaling z = S·x, S = diag(T^j): raw ↔ scaled for vectors and matrices.
-        self._scale = T ** np.arange(n, dtype=float)
-
-        # Beltrán 2013 eq. (14) in scaled form: ż = (N/T)·z + b·T·e₁·τ, y = z₀.
-        shift = np.eye(n, k=1)
-        augmented = np.zeros((n + 1, n + 1))
-        augmented[:n, :n] = shift
-        augmented[1, n] = 1.0
-        # Exact ZOH sampling over one period (dimensionless: N/T·T = N).
-        phi = _exp_nilpotent(augmented)
-        self._ad_s = phi[:n, :n]  # exp(N): entries 1/(j−i)!
-        self._bd_s = (self._b * T * T) * phi[:n, n]  # b·T²·[1/2, 1, 0, …]
-        # W = exp(N) − I summed directly (strictly upper triangular, no subtraction of 1).
-        w_mat = np.triu(self._ad_s, k=1)
-
-        # Designed discrete poles, kept as w_i = z_i − 1 for accuracy.
-        s_roots = self.continuous_poles()
-        w_roots = np.array([_expm1_complex(complex(s) * T) for s in s_roots])
-        psi = npoly.polyfromroots(w_roots)  # ψ(w) = Π (w − w_i), low → high
-        psi = psi.real  # conjugate pairs: the imaginary parts are rounding only
-
-        # Ackermann for the observer pair (W, e₀ᵀ): L = ψ(W)·O⁻¹·e_{n−1}.
-        # Eig(Ad − L C) = 1 + eig(W − L C), so placing W's poles at w_i places Ad's at z_i.
-        psi_w = np.zeros((n, n))
-        for c in psi[::-1]:  # Horner; W⁷ = 0 so the leading term vanishes exactly
-            psi_w = psi_w @ w_mat + c * np.eye(n)
-        obs = np.empty((n, n))
-        row = np.zeros(n)
-        row[0] = 1.0
-        for k in range(n):
-            obs[k] = row
-            row = row @ w_mat
-        # O(W, e₀ᵀ) is unit upper triangular: triangular solve, perfectly conditioned.
-        last = np.zeros(n)
-        last[-1] = 1.0
-        self._l_s = psi_w @ np.linalg.solve(obs, last)
-        # Current-estimator gain M = Ad⁻¹·L; exp(N)⁻¹ = exp(−N) exactly.
-        ad_inv = _exp_nilpotent(-shift)
-        self._m_s = ad_inv @ self._l_s
-        self._w_roots = w_roots
+        design = ChainDesign(_N_STATES, self._b, self._T, self.continuous_poles())
+        self._scale, self._ad_s, self._bd_s = design.scale, design.ad_s, design.bd_s
+        self._l_s, self._m_s, self._w_roots = design.l_s, design.m_s, design.w_roots
+        T, n = self._T, _N_STATES
 
         # Plain floats for the 1 kHz loop: faster than numpy for 7 states.
         self._m = [float(v) for v in self._m_s]
@@ -231,6 +154,17 @@ class GpiObserver(Observer):
         z = self._z
         self._z = saved
         return Estimate(z[0], z[1] * self._inv_T, z[2] * self._inv_T2)
+
+    def holding_input(self, est: Estimate) -> float:
+        # ẍ = b·u + ξ = 0 at rest: u = −ξ/b
+        return -est.disturbance / self._b
+
+    def preload(self, hold_input: float) -> float | None:
+        if not (self._initialised and math.isfinite(hold_input)):
+            return None
+        disturbance = -self._b * hold_input  # at rest: 0 = b·u + ξ
+        self._z[2] = disturbance * self._T * self._T  # scaled: z₂ = T²·ξ
+        return disturbance
 
     def reset(self) -> None:
         """Forget the state; the next correct() initialises from its measurement."""

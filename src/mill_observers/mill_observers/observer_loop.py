@@ -6,12 +6,19 @@ so a distributed run equals the offline one by construction. At the sample of y(
 1. the time update with the command that acted over the period before (the controller's
    answer to y(k − 1); None at the first sample after a start or a switch): in the loop's
    delay (mill_observers.delay) the model is fed u(k − 1 − N), and periods whose state
-   never arrived (`missed`, real time) are run through with the command held then;
+   never arrived (`missed`, real time) are run through with the command held then. A
+   brake request (NaN) holds the axis and tells nothing of its dynamics: the observer
+   stands still, and when commands return it restarts at rest where the axis is, with the
+   disturbance it had estimated, so a vertical axis's weight is known when the brake lets
+   go;
 2. the measurement update with y(k): the estimate for the period the next command acts in;
+   the first one starts from `hold_torque`, the input known to hold the axis (its weight);
 3. after a run-time switch the estimate continues the old observer's (EstimateBlend).
 """
 
 from __future__ import annotations
+
+import math
 
 from mill_common.signals import Estimate, FopdtEstimate
 
@@ -22,11 +29,19 @@ from mill_observers.switching import EstimateBlend
 
 class ObserverLoop:
     def __init__(
-        self, observer: Observer, command_delay: int, sample_period: float, blend_time: float
+        self,
+        observer: Observer,
+        command_delay: int,
+        sample_period: float,
+        blend_time: float,
+        hold_torque: float = 0.0,
     ) -> None:
         self._comp = DelayCompensation(observer, command_delay, sample_period)
         self._blend = EstimateBlend(sample_period, blend_time)
         self.started = False  # a sample has been stepped (the next one has a command before)
+        self._hold_torque = hold_torque
+        self._last: Estimate | None = None
+        self._braked = False
 
     @property
     def observer(self) -> Observer:
@@ -42,12 +57,28 @@ class ObserverLoop:
     def step(self, y: float, acted: float | None, missed: int = 0) -> Estimate:
         """The estimate at the sample of y; `acted` is the command of the sample before
         (None at the first), `missed` the periods since then whose state was lost."""
+        last = self._last
+        if acted is not None and not math.isfinite(acted) and last is not None:
+            self._braked = True  # held by the brake: at rest, the disturbance as it was
+            self._last = Estimate(y, 0.0, last.disturbance)
+            return self._last
+        hold = self._hold_torque if not self.started else None
+        if self._braked and last is not None:  # released: start again at rest, here
+            hold = self.observer.holding_input(last)
+            self._comp.restart()
+            self._braked, self.started = False, False
         if acted is not None and self.started:
             for _ in range(missed):
                 self._comp.coast(acted)
             self._comp.command(acted)
         self.started = True
-        return self._blend(self._comp.correct(y))
+        est = self._comp.correct(y)
+        if hold:
+            xi = self.observer.preload(hold)
+            if xi is not None:
+                est = Estimate(est.position, est.velocity, xi)
+        self._last = est = self._blend(est)
+        return est
 
     def model_estimate(self) -> FopdtEstimate | None:
         return self._comp.observer.model_estimate()

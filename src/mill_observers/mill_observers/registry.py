@@ -9,6 +9,7 @@ from mill_common.registry import Registry
 
 from mill_observers.base import Observer
 from mill_observers.dfo import Dfo
+from mill_observers.eso import ExtendedStateObserver
 from mill_observers.gpi import GpiObserver
 from mill_observers.imbdo import Imbdo
 from mill_observers.imbdo_dfo import ImbdoDfo
@@ -18,6 +19,7 @@ OBSERVERS: Registry[Observer] = Registry(
     'observer',
     {
         'gpi': GpiObserver,  # Beltrán 2013 eq. (13)-(18)
+        'eso': ExtendedStateObserver,  # one bandwidth (Gao 2003), the tuning rule's
         'imbdo': Imbdo,  # Maharof 2018, inverse model + Q filter, estimate in V
         'dfo': Dfo,  # Maharof 2018 eq. (10)-(11), estimate in V
         'imbdo_dfo': ImbdoDfo,  # both, as in the paper

@@ -246,7 +246,7 @@ def test_the_sampling_series_is_the_matrix_exponential() -> None:
     import numpy as np
     import pytest
     import scipy.linalg
-    from mill_observers.gpi import _exp_nilpotent
+    from mill_observers.chain_design import _exp_nilpotent
 
     n = 7
     shift = np.eye(n, k=1)

@@ -50,3 +50,15 @@ def test_a_replacement_starts_anew_and_continues_the_estimate() -> None:
     loop = loop.replace(ObserverLoop(new_core, 0, 1e-3, 0.05))
     loop.step(2.0, 0.3)  # the new observer's first sample: no command before it
     assert new_core.calls == [('correct', 2.0)]
+
+
+def test_a_braked_axis_keeps_its_disturbance_estimate() -> None:
+    from mill_observers.eso import ExtendedStateObserver
+
+    B, T = 20.0, 1e-3
+    loop = ObserverLoop(ExtendedStateObserver(B, T, 200.0), 1, T, 0.0, hold_torque=0.05)
+    est = loop.step(0.0, None)
+    assert est.disturbance == -B * 0.05  # the weight the hold torque balances
+    for _ in range(500):  # the axis held by its brake: the commands are brake requests
+        est = loop.step(0.0, float('nan'))
+    assert abs(est.disturbance + B * 0.05) < 1e-9 * B

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 from mill_common.parameters import ParameterError
 from mill_observers.dfo import Dfo
+from mill_observers.eso import ExtendedStateObserver
 from mill_observers.gpi import GpiObserver
 from mill_observers.imbdo import Imbdo
 from mill_observers.imbdo_dfo import ImbdoDfo
@@ -17,6 +18,7 @@ B = 20.96
 def test_registered_names() -> None:
     want = {
         'gpi': GpiObserver,
+        'eso': ExtendedStateObserver,
         'imbdo': Imbdo,
         'dfo': Dfo,
         'imbdo_dfo': ImbdoDfo,
@@ -38,7 +40,7 @@ def test_unknown_observer(name: object) -> None:
     with pytest.raises(ParameterError) as info:
         make_observer(name, B, 1e-3, {})  # type: ignore[arg-type]
     assert info.value.name == 'observer'
-    assert 'must be one of: gpi, imbdo, dfo, imbdo_dfo' in str(info.value)
+    assert 'must be one of: gpi, eso, imbdo, dfo, imbdo_dfo' in str(info.value)
 
 
 @pytest.mark.parametrize('param', ['omega_o', 'zeta_o', 'pole_o'])

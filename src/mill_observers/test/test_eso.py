@@ -1,0 +1,68 @@
+"""The bandwidth-tuned extended-state observer (ESO)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from mill_common.parameters import ParameterError
+from mill_models.loop_tuning import loop_tuning
+from mill_observers.eso import ExtendedStateObserver
+from mill_observers.registry import make_observer
+
+B, T = 20.96, 1e-3
+
+
+def simulate(obs: ExtendedStateObserver, xi: float, steps: int, u: float = 0.01) -> list:
+    """x'' = b u + xi from rest; the estimates after each measurement."""
+    x = v = 0.0
+    out = []
+    for _ in range(steps):
+        out.append(obs.correct(x))
+        obs.predict(u)
+        a = B * u + xi
+        x, v = x + v * T + 0.5 * a * T * T, v + a * T
+    return out
+
+
+@pytest.mark.parametrize('degree', [0, 1, 2, 4])
+def test_a_constant_disturbance_is_estimated_at_the_bandwidth(degree: int) -> None:
+    obs = ExtendedStateObserver(B, T, 200.0, degree)
+    est = simulate(obs, 3.0, 400)
+    assert est[-1].disturbance == pytest.approx(3.0, rel=1e-6)
+    # one bandwidth: after about 10 / omega_o the error has mostly gone
+    assert abs(est[60].disturbance - 3.0) < 0.5 * 3.0
+
+
+def test_the_error_poles_all_sit_at_the_bandwidth() -> None:
+    obs = ExtendedStateObserver(B, T, 300.0, 1)
+    # the error of x decays as exp(-300 t) times a polynomial: after 0.1 s, nothing left
+    est = simulate(obs, -2.0, 150)
+    assert abs(est[-1].disturbance + 2.0) < 1e-4
+
+
+def test_holding_input_and_preload_describe_an_axis_at_rest() -> None:
+    obs = ExtendedStateObserver(B, T, 200.0)
+    obs.correct(0.1)
+    assert obs.preload(0.5) == pytest.approx(-B * 0.5)
+    est = obs.predicted([])
+    assert obs.holding_input(est) == pytest.approx(0.5)
+
+
+def test_a_fraction_of_a_period_runs_the_model_on_by_that_time() -> None:
+    a, b = ExtendedStateObserver(B, T, 200.0), ExtendedStateObserver(B, T, 200.0)
+    for obs in (a, b):
+        obs.correct(0.0)
+        obs.predict(0.2)
+    a.elapse(0.2, 0.5)
+    a.elapse(0.2, 0.5)
+    b.predict(0.2)
+    assert np.allclose(a.predicted([]).position, b.predicted([]).position, rtol=1e-12)
+
+
+def test_the_default_bandwidth_is_the_rule_and_bad_values_name_the_parameter() -> None:
+    obs = make_observer('eso', B, T, {})
+    assert obs.omega_o == pytest.approx(loop_tuning(T, 0).omega_o)  # the rule, no delay
+    with pytest.raises(ParameterError, match=r'eso\.degree'):
+        make_observer('eso', B, T, {'degree': 5})
+    with pytest.raises(ParameterError, match=r'eso\.omega_o'):
+        make_observer('eso', B, T, {'omega_o': -1.0})
