@@ -100,3 +100,19 @@ class ChainDesign:
         ad_inv = _exp_nilpotent(-shift)
         self.m_s = ad_inv @ self.l_s
         self.w_roots = w_roots
+
+
+def advance(z: list[float], g0: float, g1: float, u: float, periods: float) -> list[float]:
+    """The scaled chain state `periods` sample periods on (any real number) with u held:
+    z⁺_i = Σ_{j≥i} z_j·r^(j−i)/(j−i)! plus b·T²·[r²/2, r] on the first two (r = periods)."""
+    n = len(z)
+    powers = [periods**k for k in range(n)]
+    out = []
+    for i in range(n):
+        acc = z[i]
+        for j in range(i + 1, n):
+            acc += z[j] * powers[j - i] / math.factorial(j - i)
+        out.append(acc)
+    out[0] += g0 * u * powers[2] if n > 2 else 0.0
+    out[1] += g1 * u * periods
+    return out

@@ -28,6 +28,16 @@ from mill_common.signals import Estimate
 
 from mill_observers.base import Observer
 
+# Tick jitter below this fraction of a period is not worth a model step.
+LATE_RESOLUTION = 1e-3
+
+
+@runtime_checkable
+class IntervalModel(Protocol):
+    def elapse(self, u: float, periods: float) -> None:
+        """Run the model on for `periods` (a fraction: a tick early or late) with u held."""
+        ...
+
 
 @runtime_checkable
 class ModelPredictor(Protocol):
@@ -48,6 +58,7 @@ class DelayCompensation:
         self.pending: deque[float] = deque([0.0] * delay)
         # asked once: a runtime Protocol check costs about 10 µs, a sample's whole work here
         self._predictor = observer if isinstance(observer, ModelPredictor) else None
+        self._interval = observer if isinstance(observer, IntervalModel) else None
 
     def correct(self, y: float) -> Estimate:
         """Measurement update with y(k); the estimate for period k + N."""
@@ -77,11 +88,20 @@ class DelayCompensation:
         self.pending.append(u)
         self.observer.predict(self.pending[0])
 
-    def command(self, u: float) -> None:
-        """The command computed at sample k (acts from k + N; a braked axis gets no input)."""
+    def command(self, u: float, late: float = 0.0) -> None:
+        """The command computed at sample k (acts from k + N; a braked axis gets no input).
+
+        late: how much more than a whole number of periods passed since the last state, as
+        a fraction of a period (negative: early), from the drive's stamps; the model runs
+        on that much longer with the command that acted then (observers that can)."""
         u = u if math.isfinite(u) else 0.0
+        interval = self._interval if abs(late) > LATE_RESOLUTION else None
         if self.delay == 0:
             self.observer.predict(u)
+            if interval is not None:
+                interval.elapse(u, late)
             return
+        if interval is not None:
+            interval.elapse(self.pending[0], late)
         self.pending.popleft()
         self.pending.append(u)

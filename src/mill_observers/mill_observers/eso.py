@@ -25,7 +25,7 @@ from mill_common.signals import Estimate
 from mill_models.loop_tuning import loop_tuning
 
 from mill_observers.base import Observer
-from mill_observers.chain_design import ChainDesign, check_gain_and_period
+from mill_observers.chain_design import ChainDesign, advance, check_gain_and_period
 
 
 def _degree(value: Any) -> str | None:
@@ -71,8 +71,7 @@ class ExtendedStateObserver(Observer):
         design = ChainDesign(n, self._b, self._T, [complex(-self.omega_o, 0.0)] * n)
         self._scale = design.scale
         self._m = [float(v) for v in design.m_s]
-        # Pascal rows of exp(N): z⁺_i = Σ_{j≥i} z_j/(j−i)!, and the input column b·T²·[½, 1]
-        self._fact = [float(math.factorial(j)) for j in range(n)]
+        # the input column of the sampled model: b·T²·[½, 1, 0, …]
         self._g0, self._g1 = float(design.bd_s[0]), float(design.bd_s[1])
         self._z = [0.0] * n
         self._initialised = False
@@ -104,19 +103,8 @@ class ExtendedStateObserver(Observer):
         T = self._T
         return Estimate(z[0], z[1] / T, z[2] / (T * T))
 
-    def _advanced(self, z: Sequence[float], u: float, periods: float = 1.0) -> list[float]:
-        """The state `periods` sample periods on (any real number) with u held."""
-        n, fact = self._n, self._fact
-        powers = [periods**k for k in range(n)]
-        out = []
-        for i in range(n):
-            acc = z[i]
-            for j in range(i + 1, n):
-                acc += z[j] * powers[j - i] / fact[j - i]
-            out.append(acc)
-        out[0] += self._g0 * u * powers[2] if n > 2 else 0.0
-        out[1] += self._g1 * u * periods
-        return out
+    def _advanced(self, z: list[float], u: float, periods: float = 1.0) -> list[float]:
+        return advance(z, self._g0, self._g1, u, periods)
 
     def predict(self, u: float) -> None:
         if not self._initialised:
@@ -131,7 +119,7 @@ class ExtendedStateObserver(Observer):
             self._z = self._advanced(self._z, u, periods)
 
     def predicted(self, inputs: Sequence[float]) -> Estimate:
-        z: Sequence[float] = self._z
+        z = self._z
         for u in inputs:
             z = self._advanced(z, u)
         return self._estimate(z)

@@ -20,7 +20,7 @@ from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
 from mill_observers.base import Observer
-from mill_observers.chain_design import ChainDesign, check_gain_and_period
+from mill_observers.chain_design import ChainDesign, advance, check_gain_and_period
 
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
 
@@ -141,6 +141,11 @@ class GpiObserver(Observer):
             z5 + z6,
             z6,
         ]
+
+    def elapse(self, u: float, periods: float) -> None:
+        """Run the model on for a fraction of a period (a tick early or late) with u held."""
+        if self._initialised and math.isfinite(u):
+            self._z = advance(self._z, self._g0, self._g1, u, periods)
 
     def predicted(self, inputs: Sequence[float]) -> Estimate:
         """The estimate after further time updates with these commands; the state is kept.

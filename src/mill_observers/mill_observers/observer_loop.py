@@ -54,9 +54,10 @@ class ObserverLoop:
             loop._blend.resumed(self._blend).switch()
         return loop
 
-    def step(self, y: float, acted: float | None, missed: int = 0) -> Estimate:
+    def step(self, y: float, acted: float | None, missed: int = 0, late: float = 0.0) -> Estimate:
         """The estimate at the sample of y; `acted` is the command of the sample before
-        (None at the first), `missed` the periods since then whose state was lost."""
+        (None at the first), `missed` the periods since then whose state was lost, `late`
+        the time beyond whole periods since then, in periods (real time: tick jitter)."""
         last = self._last
         if acted is not None and not math.isfinite(acted) and last is not None:
             self._braked = True  # held by the brake: at rest, the disturbance as it was
@@ -70,7 +71,7 @@ class ObserverLoop:
         if acted is not None and self.started:
             for _ in range(missed):
                 self._comp.coast(acted)
-            self._comp.command(acted)
+            self._comp.command(acted, late)
         self.started = True
         est = self._comp.correct(y)
         if hold:

@@ -170,11 +170,11 @@ class ObserverNode(Node):
         loop = self._loop
         assert loop is not None, 'configured in NodeParameters'
         for ns in self.timing.due(self._states):
-            acted, missed = self._acted(ns)
+            acted, missed, late = self._acted(ns)
             if self.timing.WAITS_FOR_INPUTS and loop.started and acted is None:
                 self._stalled_since = self._stalled_since or time.monotonic()
                 return  # y(k) arrived before u(k − 1): wait for it
-            est = loop.step(self._states.pop(ns), acted, missed)
+            est = loop.step(self._states.pop(ns), acted, missed, late)
             self._last_ns, self._stalled_since = ns, None
             self._last_estimate = joint_state_bytes(
                 ns,
@@ -192,16 +192,18 @@ class ObserverNode(Node):
                     joint_state_bytes(ns, tuple(status), values, sender=self._name)
                 )
 
-    def _acted(self, ns: int) -> tuple[float | None, int]:
-        """The command that acted before the state ns, and the periods missed since the
-        last state: lockstep the command stamped like that state, real time the newest."""
+    def _acted(self, ns: int) -> tuple[float | None, int, float]:
+        """The command that acted before the state ns, the periods missed since the last
+        state and the time beyond whole periods (in periods): lockstep the command stamped
+        like that state, on the grid; real time the newest, and the drive's stamps."""
         if self._last_ns is None:
-            return None, 0
+            return None, 0, 0.0
         if self.timing.WAITS_FOR_INPUTS:
-            return self._commands.pop(self._last_ns, None), 0
-        missed = round((ns - self._last_ns) / self.timing.period_ns) - 1
+            return self._commands.pop(self._last_ns, None), 0, 0.0
+        periods = (ns - self._last_ns) / self.timing.period_ns
+        whole = max(round(periods), 1)
         held = 0.0 if self._newest_command is None else self._newest_command
-        return held, min(max(missed, 0), MAX_COAST)
+        return held, min(whole - 1, MAX_COAST), periods - whole
 
     def _report_waiting(self) -> None:
         if self._last_ns is None or self._stalled_since is None:
