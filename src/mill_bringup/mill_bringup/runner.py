@@ -33,10 +33,11 @@ from typing import Any
 
 from mill_bag.errors import BagError
 from mill_common.env import ros_environment
+from mill_common.progress import Progress
 
 from mill_bringup import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
-from mill_bringup.graph import Graph, GraphError, Progress
+from mill_bringup.graph import Graph, GraphError
 from mill_bringup.jobs.base import Job, simulate
 from mill_bringup.jobs.realtime import RealtimeAxisJob
 from mill_bringup.jobs.registry import job_for

@@ -8,7 +8,7 @@ topics, a file that is not MCAP, broken metadata) ends with one line
 `report: error: ...` and exit code 1; bad options with one line and exit code 2.
 
 While a bag is read and decoded, progress goes to stderr as the runner shows it
-(mill_bringup.graph.Progress): a live bar on a terminal, a plain line every 5 s otherwise,
+(mill_common.progress.Progress): a live bar on a terminal, a plain line every 5 s otherwise,
 from 2 s into each phase.
 """
 
@@ -24,9 +24,9 @@ from typing import NoReturn
 
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
+from mill_common.progress import Progress
 
 from mill_bringup.force_record import is_force_bag, read_force_run
-from mill_bringup.graph import Progress
 from mill_bringup.report.analysis import analyse
 from mill_bringup.report.force import force_figure, force_markdown, force_table
 from mill_bringup.report.plots import plot_all

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from mill_bringup.graph import Progress
+from mill_common.progress import Progress
 
 
 def test_plain_lines_with_label_share_and_whole_counts(capsys: pytest.CaptureFixture) -> None:
