@@ -55,6 +55,7 @@ def test_every_package_builds_and_installs_its_executables(install_space):
         'mill_trajectory',
         'mill_controllers',
         'mill_observers',
+        'mill_analysis',
         'mill_bringup',
     }
     for package in PACKAGES:

@@ -125,7 +125,7 @@ def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
     cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.monotonic()
     proc = subprocess.run(
-        [sys.executable, '-m', 'mill_bringup.report', str(bag), '--out', str(tmp / 'report')],
+        [sys.executable, '-m', 'mill_analysis.report', str(bag), '--out', str(tmp / 'report')],
         capture_output=True,
         text=True,
         timeout=600,

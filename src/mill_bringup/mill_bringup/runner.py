@@ -35,7 +35,7 @@ from mill_bag.errors import BagError
 from mill_common.env import ros_environment
 from mill_common.progress import Progress
 
-from mill_bringup import papers
+from mill_analysis import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.graph import Graph, GraphError
 from mill_bringup.jobs.base import Job, simulate

@@ -15,12 +15,12 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from mill_analysis.metrics import RunRecord, format_summary, summarize
+from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
 
 from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
-from mill_bringup.metrics import RunRecord, format_summary, summarize
-from mill_bringup.realtime_record import command_timing, realtime_record
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics

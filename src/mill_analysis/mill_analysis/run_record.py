@@ -39,9 +39,9 @@ from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps
 
-from mill_bringup.bag_status import job_end, job_start, plant_status
-from mill_bringup.metrics import RunRecord
-from mill_bringup.realtime_record import command_timing, realtime_record
+from mill_analysis.bag_status import job_end, job_start, plant_status
+from mill_analysis.metrics import RunRecord
+from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common import topics as topic_names
 
 # progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)

@@ -1,7 +1,7 @@
 """The numbers of a report: per run and axis metrics, error spectra, windowed RMS, loop timing.
 
-Pure numpy on a BagRun (mill_bringup.run_record): max |e|, RMS e and the RMS of
-xi_hat - xi and of xi come from `mill_bringup.metrics.summarize`, the code the
+Pure numpy on a BagRun (mill_analysis.run_record): max |e|, RMS e and the RMS of
+xi_hat - xi and of xi come from `mill_analysis.metrics.summarize`, the code the
 runner prints its summary with; the rest is computed here over t >= skip.
 """
 
@@ -15,10 +15,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from mill_common.signals import AXES
 
-from mill_bringup.metrics import AxisMetrics, summarize
+from mill_analysis.metrics import AxisMetrics, summarize
 
 if TYPE_CHECKING:
-    from mill_bringup.run_record import BagRun
+    from mill_analysis.run_record import BagRun
 
 
 def max_window_rms(x: np.ndarray, width: int) -> float:

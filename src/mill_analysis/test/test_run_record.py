@@ -1,5 +1,5 @@
-"""Bags of another writer (rosbags, MCAP and sqlite3) give the RunRecord of the offline
-simulator; the record built in two processes is the one built in one."""
+"""Bags of another writer (rosbags, MCAP and sqlite3) give the RunRecord they were written
+from; the record built in two processes is the one built in one."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
+from mill_analysis.metrics import SIGNALS, summarize
+from mill_analysis.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
-from mill_bringup.metrics import SIGNALS, summarize
-from mill_bringup.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_common.signals import AXES
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
@@ -20,7 +20,7 @@ from mill_common import topics
 
 
 @pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
-def test_a_bag_of_another_writer_gives_the_offline_record(foreign_bag, storage) -> None:
+def test_a_bag_of_another_writer_gives_the_record_it_holds(foreign_bag, storage) -> None:
     path, rec = foreign_bag(storage)
     run = read_run(path)
     assert (run.n, run.dt_ns, run.axes) == (rec.t.size, 1_000_000, ['x', 'y', 'z'])
@@ -116,7 +116,7 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
 
 
 def test_a_repeated_answer_to_a_reoffered_sample_is_one_override() -> None:
-    from mill_bringup.run_record import _feed_values
+    from mill_analysis.run_record import _feed_values
     from rclpy.serialization import serialize_message
 
     def override(stamp_ns: int, value: float) -> bytes:

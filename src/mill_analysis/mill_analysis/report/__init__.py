@@ -18,11 +18,11 @@ Per run and axis, over t >= --skip (the start transient excluded):
   the plant's lockstep wait for commands from its /diagnostics status.
 
 max |e|, RMS e and the RMS of xi_hat - xi and of xi come from
-`mill_bringup.metrics.summarize` on a RunRecord built by
-`mill_bringup.run_record.build_record`: the code the runner uses for the summary it
+`mill_analysis.metrics.summarize` on a RunRecord built by
+`mill_analysis.run_record.build_record`: the code the runner uses for the summary it
 prints, so both agree on the same run.
 
-The bag is read by topic names and types only (see mill_bringup.run_record), so a
+The bag is read by topic names and types only (see mill_analysis.run_record), so a
 bag from `ros2 bag record` with these topics works too.
 
 Modules:
@@ -31,6 +31,6 @@ Modules:
                (numpy; no text, no plots)
     text       the table printed on stdout and report.md
     plots      one function per figure; rendered in two forked processes for long runs
-    cli        `report` (console script) and `python -m mill_bringup.report`: options,
+    cli        `report` (console script) and `python -m mill_analysis.report`: options,
                one-line errors (exit 1, 2 for options), what goes where
 """

@@ -3,11 +3,19 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from mill_bringup.metrics import RunRecord
-from mill_bringup.papers import amplitude, maharof, maharof_metrics, move_metrics, report
+from mill_analysis.metrics import RunRecord
+from mill_analysis.papers import (
+    amplitude,
+    maharof,
+    maharof_metrics,
+    move_metrics,
+    report,
+    rubio_claims,
+)
 
 
 def record(t: np.ndarray, position: np.ndarray, reference: np.ndarray) -> RunRecord:
@@ -48,3 +56,17 @@ def test_move_metrics_overshoot_settling_and_iae() -> None:
     # |e| = 1 mm e^{-s/0.05} falls below 1 µm at s = 0.05 ln 1000 = 0.345 s
     assert m.settling_time == pytest.approx(0.05 * math.log(1000), abs=2e-3)
     assert m.iae == pytest.approx(1.0 * 0.05 * (1 - math.exp(-10)), rel=0.02)
+
+
+def test_rubio_claims_are_judged_from_the_figures() -> None:
+    cases = {
+        'ZOH (β = 0)': SimpleNamespace(j_c=100.0),
+        'scheme 1': SimpleNamespace(j_c=101.0),
+        'scheme 2': SimpleNamespace(j_c=100.0),
+    }
+    text = rubio_claims({-0.5: 99.0, -0.2: 99.5, 0.0: 100.0, 0.5: 102.0}, cases).splitlines()
+    assert 'agrees' in text[0] and 'β = -0.50: -1.00 %' in text[0]
+    assert 'disagrees (+1.00 %)' in text[1]
+    assert text[2].endswith('agrees (+0.00 %)')
+    text = rubio_claims({-0.5: 101.0, 0.0: 100.0}, cases).splitlines()
+    assert 'disagrees' in text[0]

@@ -1,7 +1,7 @@
 """The report of a force job's bag (Rubio 2013): J_c of eq. (14), the override, the force.
 
 A force job has no axis states: its bag holds the force samples, the force stream between
-them, the overrides and the force controller's state (mill_bringup.force_record reads
+them, the overrides and the force controller's state (mill_analysis.force_record reads
 them). Several bags go side by side as one row each.
 """
 
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 from mill_models.reference_model import ContinuousReference
 
-from mill_bringup.force_record import ForceBagRun
+from mill_analysis.force_record import ForceBagRun
 
 
 def _row(label: str, run: ForceBagRun) -> str:

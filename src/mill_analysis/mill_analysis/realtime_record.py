@@ -23,7 +23,7 @@ from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, AxisReference
 
-from mill_bringup.metrics import SIGNALS, RunRecord
+from mill_analysis.metrics import SIGNALS, RunRecord
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'

@@ -7,8 +7,8 @@ import math
 
 import numpy as np
 
-from mill_bringup.metrics import format_summary
-from mill_bringup.report.analysis import RunReport
+from mill_analysis.metrics import format_summary
+from mill_analysis.report.analysis import RunReport
 
 
 def _um(x: float) -> str:

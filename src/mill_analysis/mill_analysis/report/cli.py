@@ -1,7 +1,7 @@
 """`report BAG [BAG ...]`: options, reading the bags, writing DIR/report.md and the plots.
 
 A force job's bags (Rubio 2013: force samples, force stream, overrides) get the force report
-(mill_bringup.report.force): J_c of eq. (14) computed from the recorded stream.
+(mill_analysis.report.force): J_c of eq. (14) computed from the recorded stream.
 
 Bad input (a path that does not exist, an empty bag, a bag without the mill
 topics, a file that is not MCAP, broken metadata) ends with one line
@@ -26,12 +26,12 @@ from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_common.progress import Progress
 
-from mill_bringup.force_record import is_force_bag, read_force_run
-from mill_bringup.report.analysis import analyse
-from mill_bringup.report.force import force_figure, force_markdown, force_table
-from mill_bringup.report.plots import plot_all
-from mill_bringup.report.text import markdown, text_table
-from mill_bringup.run_record import read_run
+from mill_analysis.force_record import is_force_bag, read_force_run
+from mill_analysis.report.analysis import analyse
+from mill_analysis.report.force import force_figure, force_markdown, force_table
+from mill_analysis.report.plots import plot_all
+from mill_analysis.report.text import markdown, text_table
+from mill_analysis.run_record import read_run
 
 
 class _BagProgress:

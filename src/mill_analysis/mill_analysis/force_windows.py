@@ -1,6 +1,6 @@
 """Mean force and feed override of a recorded force-controlled run, per time window.
 
-    python -m mill_bringup.force_windows RUN/bag 1 3 6 8 11 14.4
+    python -m mill_analysis.force_windows RUN/bag 1 3 6 8 11 14.4
 
 Reads /mill/force_control/state (the force controller's force, reference, feed command,
 override, active β and depth of every control period) from a bag.
@@ -61,7 +61,7 @@ def state_windows(
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog='python -m mill_bringup.force_windows',
+        prog='python -m mill_analysis.force_windows',
         description='Mean force and feed override of a recorded force-controlled run, per '
         'time window (from /mill/force_control/state).',
     )

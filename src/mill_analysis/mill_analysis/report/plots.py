@@ -24,8 +24,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from mill_common.signals import AXES
 
-from mill_bringup.report.analysis import RunReport, amplitude_spectrum, finite_segment
-from mill_bringup.report.text import hz
+from mill_analysis.report.analysis import RunReport, amplitude_spectrum, finite_segment
+from mill_analysis.report.text import hz
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

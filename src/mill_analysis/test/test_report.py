@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mill_analysis.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
+from mill_analysis.report.text import feed_text
+from mill_analysis.run_record import read_run, record_topics
 from mill_bag.types import STRING, typestore
 from mill_bag.writer import BagWriter
-from mill_bringup.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
-from mill_bringup.report.text import feed_text
-from mill_bringup.run_record import read_run, record_topics
 
 from mill_common import topics
 
@@ -41,7 +41,7 @@ def test_report_command_writes_markdown_and_plots(foreign_bag, tmp_path) -> None
         [
             sys.executable,
             '-m',
-            'mill_bringup.report',
+            'mill_analysis.report',
             str(path),
             '--out',
             str(out),
@@ -161,7 +161,7 @@ BAD = [
 def test_bad_input_gives_one_line_error(tmp_path, case) -> None:
     args, reason = bad_inputs(tmp_path)[case]
     proc = subprocess.run(
-        [sys.executable, '-m', 'mill_bringup.report', *args, '--out', str(tmp_path / 'out')],
+        [sys.executable, '-m', 'mill_analysis.report', *args, '--out', str(tmp_path / 'out')],
         capture_output=True,
         text=True,
         timeout=120,

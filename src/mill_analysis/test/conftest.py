@@ -1,4 +1,6 @@
-"""Bags of a mill run as another writer (rosbags) writes them, for run_record and report tests."""
+"""Bags of a mill run as another writer (rosbags) writes them, for run_record and report tests.
+
+The run is made up (`a_run`): every signal known at every sample, no simulation needed."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from mill_analysis.metrics import RunRecord
 from mill_bag.types import (
     DIAGNOSTIC_ARRAY,
     FLOAT64,
@@ -18,12 +21,7 @@ from mill_bag.types import (
     WRENCH_STAMPED,
     typestore,
 )
-from mill_bringup.jobs.base import simulate
-from mill_bringup.jobs.registry import job_for
-from mill_bringup.metrics import RunRecord
-from mill_trajectory.config import build_job
 
-from mill_bringup import scenario
 from mill_common import topics
 
 TS = typestore()
@@ -31,6 +29,29 @@ T = TS.types
 WALL0 = 1_700_000_000_000_000_000
 
 ForeignBag = Callable[..., tuple[Path, RunRecord]]
+END_TIME = 0.4  # [s]: samples 0 .. 400 at 1 kHz
+DT_NS = 1_000_000
+
+
+def a_run(n: int = 401, dt_ns: int = DT_NS) -> RunRecord:
+    """n samples of a three-axis run, every signal finite: each axis follows a ramp with a
+    60 Hz error of a few µm under a 60 Hz cutting disturbance, as a slotting cut does."""
+    rec = RunRecord.empty(n, dt_ns / 1e9)
+    t = rec.t[:, None]
+    i = np.arange(3)[None, :]
+    tone = np.sin(2 * np.pi * 60.0 * t + i)
+    speed = np.array([[0.0, 3e-3, -1e-3]])  # [m/s]
+    s = rec.signals
+    s['reference'][:] = 0.01 * i + speed * t
+    s['reference_velocity'][:] = speed + 0.0 * t
+    s['position'][:] = s['reference'] + 5e-6 * tone
+    s['true_velocity'][:] = speed + 2e-3 * np.cos(2 * np.pi * 60.0 * t + i)
+    s['estimate_velocity'][:] = s['true_velocity'] + 1e-5 * tone
+    s['true_disturbance'][:] = 1.0 + i + 2.0 * tone
+    s['estimate_disturbance'][:] = s['true_disturbance'] + 0.2 * np.cos(2 * np.pi * 60.0 * t)
+    s['torque'][:] = 0.05 * (i + 1) + 0.1 * tone
+    s['force'][:] = 50.0 * (i + 1) + 100.0 * tone
+    return rec
 
 
 def stamp(ns: int) -> Any:
@@ -78,8 +99,8 @@ def write_foreign_bag(
     namespaces: Sequence[str] = ('/',),
     foreign_status: bool = False,
 ) -> tuple[Path, RunRecord]:
-    """The offline simulation of 0.4 s of the job, written by rosbags' Writer as a recorder
-    on wall time would (log time = receive time), with the contract's topics and types.
+    """`a_run()`, written by rosbags' Writer as a recorder on wall time would (log time =
+    receive time), with the contract's topics and types.
 
     With several namespaces each machine publishes the same run under its own; the job
     status carries the machine's namespace as hardware_id (the root's the old 'mill').
@@ -87,12 +108,9 @@ def write_foreign_bag(
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
 
-    scen = scenario.load('slotting')
-    scen.add_override('trajectory.duration=0.4')
-    rec = simulate(job_for(scen))
-    job = build_job(scen.parameters('trajectory'))
+    rec = a_run()
     n = rec.t.size
-    dt_ns = 1_000_000
+    dt_ns = DT_NS
     s = rec.signals
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     path = directory / f'foreign_{storage}'
@@ -180,7 +198,7 @@ def write_foreign_bag(
             if k % 100 == 0:
                 machines = [s if s != '/' else 'mill' for s in namespaces]
                 diag = T[DIAGNOSTIC_ARRAY](
-                    header=header(ns), status=[job_status(job.end_time, m) for m in machines]
+                    header=header(ns), status=[job_status(END_TIME, m) for m in machines]
                 )
                 put(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, k, diag)
                 if feed:  # a feed override (issue 4) as std_msgs/Float64, 1.0 -> 0.8
@@ -196,7 +214,7 @@ def write_foreign_bag(
 
 @pytest.fixture
 def foreign_bag(tmp_path: Path) -> ForeignBag:
-    """foreign_bag(storage, feed=False) -> (bag path, the offline RunRecord it holds)."""
+    """foreign_bag(storage, feed=False) -> (bag path, the RunRecord it holds)."""
 
     def make(storage: str, feed: bool = False, **kwargs: Any) -> tuple[Path, RunRecord]:
         return write_foreign_bag(tmp_path, storage, feed, **kwargs)
