@@ -85,6 +85,7 @@ def test_all_packages_found() -> None:
     expected = {
         'mill_analysis',
         'mill_bag',
+        'mill_bench',
         'mill_bringup',
         'mill_common',
         'mill_controllers',

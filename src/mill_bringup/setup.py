@@ -24,7 +24,6 @@ setup(
         'console_scripts': [
             'run_scenario = mill_bringup.runner:main',
             'offline_sim = mill_bringup.offline:main',
-            'benchmark = mill_bringup.benchmark:main',
             'job_watch = mill_bringup.job_watch:main',
             'mill_container = mill_bringup.container:main',
         ],

@@ -30,7 +30,7 @@ simulated second and the time `report` takes on the last bag.
 With --realtime RATES, the job also runs on the wall clock (`--timing realtime`) at each
 rate in each layout, slowest first, and the benchmark prints the late periods, the state ->
 command latency and the highest rate each layout holds with < 1 % of periods without a
-fresh command (mill_bringup.realtime_sweep).
+fresh command (mill_bench.realtime_sweep).
 
 With --cores, no ROS: the scenario runs in the offline simulator and the time spent in
 each role's core (trajectory, observer, controller, plant) is printed per call: the
@@ -50,29 +50,29 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from mill_common.env import ros_environment
-from mill_common.node_main import EXECUTORS
-
-from mill_bringup import floor, realtime_sweep
-from mill_bringup import scenario as scenario_mod
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
 from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
 from mill_bringup.runner import RunError, RunResult, run
+from mill_common.env import ros_environment
+from mill_common.node_main import EXECUTORS
+
+from mill_bench import floor, realtime_sweep
+from mill_bringup import scenario as scenario_mod
 
 
 def measure_pingpong(count: int, env: dict[str, str]) -> dict:
     pong = subprocess.Popen(
-        [sys.executable, '-m', 'mill_bringup.pingpong', 'pong'],
+        [sys.executable, '-m', 'mill_bench.pingpong', 'pong'],
         env=env,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
     )
     try:
         out = subprocess.run(
-            [sys.executable, '-m', 'mill_bringup.pingpong', 'ping', str(count)],
+            [sys.executable, '-m', 'mill_bench.pingpong', 'ping', str(count)],
             env=env,
             capture_output=True,
             text=True,
@@ -226,7 +226,7 @@ def layout_figures(result: RunResult) -> dict:
 
 
 def measure_floor(steps: int, env: dict[str, str]) -> tuple[float, float]:
-    """Steps/s of the empty-callback graph (mill_bringup.floor), without and with a ninth
+    """Steps/s of the empty-callback graph (mill_bench.floor), without and with a ninth
     process that reads what the runner reads."""
     print(f'empty-callback floor: {steps} steps in eight processes ...', file=sys.stderr)
     alone = floor.measure(steps, env)['steps_per_second']
@@ -272,7 +272,7 @@ def main(argv: list[str] | None = None) -> int:
         '--floor-steps',
         type=int,
         default=3000,
-        help='steps of the same graph with empty callbacks (mill_bringup.floor), the floor '
+        help='steps of the same graph with empty callbacks (mill_bench.floor), the floor '
         'the eight-process layout is compared with, run before each run of that layout, '
         'alone and with a ninth process reading what the runner reads; 0: not run',
     )

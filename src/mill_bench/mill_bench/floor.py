@@ -1,8 +1,8 @@
 """The lockstep job's graph with empty callbacks: the floor that transport and executor set.
 
-    python -m mill_bringup.floor 3000          # start the eight processes, print JSON
-    python -m mill_bringup.floor 3000 listener # and a ninth that reads as the runner does
-    python -m mill_bringup.floor node x_observer 3000   # one process of it
+    python -m mill_bench.floor 3000          # start the eight processes, print JSON
+    python -m mill_bench.floor 3000 listener # and a ninth that reads as the runner does
+    python -m mill_bench.floor node x_observer 3000   # one process of it
 
 The slotting job's topology in eight processes — a plant, a trajectory, three observers,
 three controllers — with its hot-path messages at their sizes as CDR bytes (serialized
@@ -33,7 +33,7 @@ from mill_common.codec import encode_clock, encode_joint_state, encode_joint_tra
 from mill_common.env import apply_to_current_process
 from mill_common.ros import DATA_QOS
 
-from mill_bringup.pingpong import serve
+from mill_bench.pingpong import serve
 
 AXES = ('x', 'y', 'z')
 ROOT = '/mill_floor'
@@ -215,7 +215,7 @@ def measure(
         for role in roles:
             procs.append(
                 subprocess.Popen(
-                    [sys.executable, '-m', 'mill_bringup.floor', 'node', role, str(steps), *extra],
+                    [sys.executable, '-m', 'mill_bench.floor', 'node', role, str(steps), *extra],
                     env=env,
                     stdout=subprocess.PIPE,
                     text=True,

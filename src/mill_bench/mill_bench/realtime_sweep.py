@@ -22,10 +22,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from mill_bringup import scenario as scenario_mod
 from mill_bringup.cli import set_duration, set_timing
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.runner import run
+
+from mill_bringup import scenario as scenario_mod
 
 HOLDS_BELOW = 0.01  # of periods without a fresh command (worst axis), and of late ticks
 

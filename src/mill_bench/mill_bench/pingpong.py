@@ -1,7 +1,7 @@
 """Plain rclpy ping-pong between two processes: the transport's limit for lockstep.
 
-    python -m mill_bringup.pingpong pong &      # echoes /mill_bench/ping to /mill_bench/pong
-    python -m mill_bringup.pingpong ping 5000   # prints round-trip statistics as JSON
+    python -m mill_bench.pingpong pong &      # echoes /mill_bench/ping to /mill_bench/pong
+    python -m mill_bench.pingpong ping 5000   # prints round-trip statistics as JSON
 
 Same message type (JointState), QoS and executor as the lockstep nodes.
 """

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import pytest
-from mill_bringup.realtime_sweep import RatePoint, format_sweep, highest_held, parse_rates
+from mill_bench.realtime_sweep import RatePoint, format_sweep, highest_held, parse_rates
 
 
 def point(layout: str, rate: float, late: float, overruns: int = 0) -> RatePoint:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 import pytest
-from mill_bringup.benchmark import layouts_of, main
+from mill_bench.benchmark import layouts_of, main
 from mill_bringup.scenario import ScenarioError, load
 
 
@@ -50,7 +50,7 @@ def test_main_refuses_a_bad_layout_in_one_line(capsys: pytest.CaptureFixture[str
 
 
 def test_repeated_layouts_run_in_turn() -> None:
-    from mill_bringup.benchmark import schedule
+    from mill_bench.benchmark import schedule
 
     assert schedule(['single', 'processes'], 3) == [
         (0, 'single'),
@@ -70,7 +70,7 @@ def test_repeated_layouts_run_in_turn() -> None:
 def test_the_median_run_stands_for_its_layout(rates: list[float], median: float) -> None:
     from types import SimpleNamespace
 
-    from mill_bringup.benchmark import median_run
+    from mill_bench.benchmark import median_run
 
     runs = [SimpleNamespace(steps_per_second=r) for r in rates]
     assert median_run(runs).steps_per_second == median  # type: ignore[arg-type]
