@@ -22,7 +22,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'run_scenario = mill_bringup.runner:main',
+            'run_scenario = mill_bringup.runner.cli:main',
             'offline_sim = mill_bringup.offline:main',
             'job_watch = mill_bringup.job_watch:main',
             'mill_container = mill_bringup.container:main',

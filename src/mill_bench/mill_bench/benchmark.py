@@ -55,7 +55,9 @@ from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes
-from mill_bringup.runner import RunError, RunResult, run
+from mill_bringup.runner.options import RunError, RunOptions
+from mill_bringup.runner.result import RunResult
+from mill_bringup.runner.run import run
 from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
@@ -108,13 +110,12 @@ def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
                 f'  run {i + 1}/{repeat} {"with" if record else "without"} recording ...',
                 file=sys.stderr,
             )
-            r = run(
-                job,
-                run_dir,
+            options = RunOptions(
                 quiet=True,
                 domain_id=env['ROS_DOMAIN_ID'],
                 record_bag=run_dir / 'bag' if record else None,
             )
+            r = run(job, run_dir, options)
             (recorded if record else plain).append(r.steps_per_second)
             (recorded_cpu if record else plain_cpu).append(r.cpu_ms_per_step)
             if record:
@@ -364,7 +365,8 @@ def main(argv: list[str] | None = None) -> int:
                     result, recording = measure_recording(scen, run_dir, env, repeat)
                 else:
                     job = job_for(scen)
-                    result = run(job, run_dir, quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+                    options = RunOptions(quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+                    result = run(job, run_dir, options)
                 runs[layout].append(result)
         results = {name: median_run(r) for name, r in runs.items()}
         result = results[layouts[0]]

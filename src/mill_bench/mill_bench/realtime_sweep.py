@@ -24,7 +24,8 @@ from pathlib import Path
 
 from mill_bringup.cli import set_duration, set_timing
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.runner import run
+from mill_bringup.runner.options import RunOptions
+from mill_bringup.runner.run import run
 
 from mill_bringup import scenario as scenario_mod
 
@@ -73,7 +74,7 @@ def measure(
     set_timing(scen, 'realtime')
     set_duration(scen, duration)
     scen.add_override(f'*.sample_period={1.0 / rate!r}')
-    result = run(job_for(scen), run_dir, quiet=True, domain_id=domain_id)
+    result = run(job_for(scen), run_dir, RunOptions(quiet=True, domain_id=domain_id))
     drive = result.summary['drive'].values()
     return RatePoint(
         layout=layout,

@@ -57,6 +57,8 @@ class Job(ABC, Generic[R]):
     HAS_OFFLINE_TWIN: ClassVar[bool] = True
     # Whether the runner deactivates the clock node (lifecycle: brake) when the job is done.
     BRAKE_AT_END: ClassVar[bool] = False
+    # What to say before the paper's verdicts on a run of this kind ('': nothing to add).
+    PAPER_NOTE: ClassVar[str] = ''
 
     def __init__(self, scen: Scenario) -> None:
         self.scenario = scen

@@ -38,6 +38,11 @@ class RealtimeAxisJob(AxisJob):
     KIND = 'axis-realtime'
     HAS_OFFLINE_TWIN = False
     BRAKE_AT_END = True  # the drive keeps running on its own clock: brake it first
+    PAPER_NOTE = (
+        "note: a realtime run: the paper's experiment is the lockstep run at its own sample "
+        "rate; these figures also depend on how this machine kept the wall clock's rate, and "
+        'the verdicts below are not a reproduction (run without --timing realtime for that)'
+    )
 
     @classmethod
     def runs(cls, scen: Scenario) -> bool:
