@@ -47,10 +47,9 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
 from pathlib import Path
 
-from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
+from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
 from mill_bringup.cli import set_duration
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
@@ -62,6 +61,7 @@ from mill_common.env import ros_environment
 from mill_common.node_main import EXECUTORS
 
 from mill_bench import floor, realtime_sweep
+from mill_bench.results import Measured, figures_of, text_of
 from mill_bringup import scenario as scenario_mod
 
 
@@ -86,10 +86,6 @@ def measure_pingpong(count: int, env: dict[str, str]) -> dict:
     finally:
         pong.kill()
         pong.wait()
-
-
-def _rates(values: list[float], fmt: str = '.0f') -> str:
-    return ' '.join(format(v, fmt) for v in values)
 
 
 def measure_recording(scen, tmp: Path, env: dict[str, str], repeat: int):
@@ -206,26 +202,6 @@ def schedule(layouts: list[str], repeat: int) -> list[tuple[int, str]]:
     return [(i, name) for i in range(repeat) for name in layouts]
 
 
-def median_run(runs: list[RunResult]) -> RunResult:
-    """The run of the median steps per second (the lower middle one of an even count)."""
-    ordered = sorted(runs, key=lambda r: r.steps_per_second)
-    return ordered[(len(ordered) - 1) // 2]
-
-
-def layout_figures(result: RunResult) -> dict:
-    return {
-        'processes': len(result.peak_rss_mb) - 1,  # the runner is not one of the graph
-        'steps_per_second': result.steps_per_second,
-        'real_time_factor': result.real_time_factor,
-        'wall_time_s': result.wall_time,
-        'cpu_ms_per_step': result.cpu_ms_per_step,
-        'cpu_ms_per_step_by_process': result.cpu_ms_per_step_by_process,
-        'peak_rss_mb': result.peak_rss_mb,
-        'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
-        'peak_pss_total_mb': result.peak_pss_mb,
-    }
-
-
 def measure_floor(steps: int, env: dict[str, str]) -> tuple[float, float]:
     """Steps/s of the empty-callback graph (mill_bench.floor), without and with a ninth
     process that reads what the runner reads."""
@@ -235,32 +211,7 @@ def measure_floor(steps: int, env: dict[str, str]) -> tuple[float, float]:
     return alone, floor.measure(steps, env, listener=True)['steps_per_second']
 
 
-def floor_lines(floors: Sequence[tuple[float, float]], runs: Sequence[RunResult]) -> list[str]:
-    """The floor's figures; with runs of the processes layout (one after each floor), the
-    layout's share of it, run by run (median and range)."""
-
-    def figure(values: Sequence[float], unit: str) -> str:
-        spread = f' [{min(values):.0f}-{max(values):.0f}]' if len(values) > 1 else ''
-        return f'{statistics.median(values):8.0f}{spread} {unit}'
-
-    alone = [f for f, _ in floors]
-    watched = [w for _, w in floors]
-    out = ['empty-callback floor, the same graph in eight processes (serialized, no runner):']
-    out.append(f'  {figure(alone, "steps/s")}')
-    out.append(f'  {figure(watched, "steps/s")} with a ninth process reading what the runner reads')
-    if runs:
-        ours = [r.steps_per_second for r in runs]
-        share = [100 * o / f for o, f in zip(ours, alone, strict=True)]
-        share_watched = [100 * o / w for o, w in zip(ours, watched, strict=True)]
-        out.append(
-            f'  layout processes at {figure(share, "%").strip()} of the floor, '
-            f'{figure(share_watched, "%").strip()} of the floor with the listener '
-            '(each run against the floor measured just before it)'
-        )
-    return out
-
-
-def main(argv: list[str] | None = None) -> int:
+def parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog='benchmark',
         description=__doc__.split('\n\n')[0],
@@ -319,160 +270,79 @@ def main(argv: list[str] | None = None) -> int:
         action='store_true',
         help='time the algorithm cores alone (offline, no ROS) and print µs per call',
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def measure(args: argparse.Namespace, repeat: int, env: dict[str, str]) -> Measured:
+    """Ping-pong, the layouts' runs (with the floor or the recording cost), the realtime sweep."""
+    scen = scenario_mod.load(args.scenario)
+    layouts = layouts_of(args, scen)  # checked before anything runs
+    rates = realtime_sweep.parse_rates(args.realtime) if args.realtime else []
+    m = Measured(scen, layouts, repeat, {name: [] for name in layouts})
+    if args.round_trips > 0:
+        print(
+            f'ping-pong: {args.round_trips} round trips between two processes ...', file=sys.stderr
+        )
+        m.pingpong = measure_pingpong(args.round_trips, env)
+    # The floor is measured right before each run of the processes layout (the machine's
+    # speed drifts by tens of per cent in minutes): the share is taken run by run.
+    m.paired = args.floor_steps > 0 and 'processes' in layouts and not args.record
+    if args.floor_steps > 0 and not m.paired:
+        m.floors.append(measure_floor(args.floor_steps, env))
+    set_duration(scen, args.duration)
+    run_layouts(args, m, env)
+    m.sweep = realtime_sweep.sweep(
+        args.scenario,
+        layouts,
+        rates,
+        args.realtime_duration,
+        env['ROS_DOMAIN_ID'],
+        progress=lambda text: print(text, file=sys.stderr),
+    )
+    return m
+
+
+def run_layouts(args: argparse.Namespace, m: Measured, env: dict[str, str]) -> None:
+    """The job in each layout, the layouts in turn; --record repeats inside its one layout."""
+    scen = m.scen
+    with tempfile.TemporaryDirectory() as tmp:
+        for i, layout in schedule(m.layouts, 1 if args.record else m.repeat):
+            scen.layout = layout
+            which = f', run {i + 1}/{m.repeat}' if m.repeat > 1 and not args.record else ''
+            print(
+                f'{scen.name}: {args.duration:g} s of machine time, layout {layout}{which} ...',
+                file=sys.stderr,
+            )
+            run_dir = Path(tmp) / f'{layout}-{i}'
+            if m.paired and layout == 'processes':
+                m.floors.append(measure_floor(args.floor_steps, env))
+            if args.record:
+                result, m.recording = measure_recording(scen, run_dir, env, m.repeat)
+            else:
+                options = RunOptions(quiet=True, domain_id=env['ROS_DOMAIN_ID'])
+                result = run(job_for(scen), run_dir, options)
+            m.runs[layout].append(result)
+
+
+def main(argv: list[str] | None = None) -> int:
+    cli = parser()
+    args = cli.parse_args(argv)
     repeat = args.repeat if args.repeat is not None else (3 if args.record else 1)
     if repeat < 1:
-        parser.error(f'--repeat must be at least 1, got {repeat}')
+        cli.error(f'--repeat must be at least 1, got {repeat}')
     if args.cores:
         return time_cores(args.scenario, args.duration)
     if args.executor:
         os.environ['MILL_EXECUTOR'] = args.executor
     executor = os.environ.get('MILL_EXECUTOR', 'events')
     env = ros_environment()
-    recording = None
     try:
-        scen = scenario_mod.load(args.scenario)
-        layouts = layouts_of(args, scen)  # checked before anything runs
-        rates = realtime_sweep.parse_rates(args.realtime) if args.realtime else []
-        pp = None
-        if args.round_trips > 0:
-            print(
-                f'ping-pong: {args.round_trips} round trips between two processes ...',
-                file=sys.stderr,
-            )
-            pp = measure_pingpong(args.round_trips, env)
-        # The floor is measured right before each run of the processes layout (the machine's
-        # speed drifts by tens of per cent in minutes): the share is taken run by run.
-        floors: list[tuple[float, float]] = []  # (floor, floor with listener) steps/s
-        paired = args.floor_steps > 0 and 'processes' in layouts and not args.record
-        if args.floor_steps > 0 and not paired:
-            floors.append(measure_floor(args.floor_steps, env))
-        set_duration(scen, args.duration)
-        runs: dict[str, list[RunResult]] = {name: [] for name in layouts}
-        with tempfile.TemporaryDirectory() as tmp:
-            # --record repeats inside its one layout (measure_recording)
-            for i, layout in schedule(layouts, 1 if args.record else repeat):
-                scen.layout = layout
-                which = f', run {i + 1}/{repeat}' if repeat > 1 and not args.record else ''
-                print(
-                    f'{scen.name}: {args.duration:g} s of machine time, layout {layout}{which} ...',
-                    file=sys.stderr,
-                )
-                run_dir = Path(tmp) / f'{layout}-{i}'
-                if paired and layout == 'processes':
-                    floors.append(measure_floor(args.floor_steps, env))
-                if args.record:
-                    result, recording = measure_recording(scen, run_dir, env, repeat)
-                else:
-                    job = job_for(scen)
-                    options = RunOptions(quiet=True, domain_id=env['ROS_DOMAIN_ID'])
-                    result = run(job, run_dir, options)
-                runs[layout].append(result)
-        results = {name: median_run(r) for name, r in runs.items()}
-        result = results[layouts[0]]
-        sweep = realtime_sweep.sweep(
-            args.scenario,
-            layouts,
-            rates,
-            args.realtime_duration,
-            env['ROS_DOMAIN_ID'],
-            progress=lambda text: print(text, file=sys.stderr),
-        )
+        measured = measure(args, repeat, env)
     except (scenario_mod.ScenarioError, RunError, RuntimeError, TimeoutError, ValueError) as exc:
         print(f'benchmark: error: {exc}', file=sys.stderr)
         return 1
-    rate = 1.0 / scen.parameters(scen.nodes_of(PLANT)[0].name)['sample_period']
-    figures = {
-        'executor': executor,
-        'sample_rate_hz': rate,
-        'machine_time_s': result.sim_time,
-        'wall_time_s': result.wall_time,
-        'steps_per_second': result.steps_per_second,
-        'real_time_factor': result.real_time_factor,
-        'cpu_ms_per_step': result.cpu_ms_per_step,
-        'peak_rss_mb': result.peak_rss_mb,
-        'peak_rss_total_mb': sum(result.peak_rss_mb.values()),
-        'cpu_count': os.cpu_count(),
-        'load_average_1min': os.getloadavg()[0],
-        'layout': layouts[0],
-        'layouts': {
-            name: {
-                **layout_figures(r),
-                'steps_per_second_runs': [x.steps_per_second for x in runs[name]],
-            }
-            for name, r in results.items()
-        },
-    }
-    if pp is not None:
-        figures.update(
-            {
-                'pingpong_round_trips_per_second': pp['round_trips_per_second'],
-                'pingpong_median_ms': pp['median_ms'],
-                'pingpong_p99_ms': pp['p99_ms'],
-                'pingpong_cpu_us_per_round_trip': pp['ping_cpu_us_per_round_trip'],
-            }
-        )
-    if floors:
-        figures['floor_steps_per_second_runs'] = [f for f, _ in floors]
-        figures['floor_watched_steps_per_second_runs'] = [w for _, w in floors]
-    if recording is not None:
-        figures['recording'] = recording
-    if sweep:
-        figures['realtime'] = [vars(p) for p in sweep]
-        figures['realtime_highest_held_hz'] = {
-            name: realtime_sweep.highest_held(sweep, name) for name in layouts
-        }
-    lines = [f'lockstep job ({rate:g} Hz, executor {executor}, {os.cpu_count()} cores):']
-    if repeat > 1 and not args.record:
-        lines.append(f'  (median of {repeat} runs of each layout, taken in turn; range in [])')
-    for name, r in results.items():
-        f = layout_figures(r)
-        rates = [x.steps_per_second for x in runs[name]]
-        spread = f' [{min(rates):.0f}-{max(rates):.0f}]' if len(rates) > 1 else ''
-        lines.append(
-            f'  layout {name:<9} {f["processes"]:2d} process{"es" if f["processes"] > 1 else "  "}'
-            f'  {r.steps_per_second:6.0f}{spread} '
-            f'steps/s  real-time factor {r.real_time_factor:.2f}  {r.cpu_ms_per_step:.2f} ms '
-            f'CPU per step  peak RSS {f["peak_rss_total_mb"]:.0f} MB, PSS '
-            f'{f["peak_pss_total_mb"]:.0f} MB  ({r.sim_time:g} s '
-            f'machine time in {r.wall_time:.1f} s)'
-        )
-    if pp is not None:
-        lines += [
-            'transport limit, rclpy ping-pong between two processes:',
-            f'  {pp["round_trips_per_second"]:8.0f} round trips/s   median '
-            f'{pp["median_ms"]:.3f} ms   p99 {pp["p99_ms"]:.3f} ms   '
-            f'{pp["ping_cpu_us_per_round_trip"]:.0f} us CPU per round trip',
-        ]
-    if floors:
-        lines += floor_lines(floors, runs.get('processes', []) if paired else [])
-    for name, r in results.items():
-        rss = ', '.join(f'{k} {v:.0f}' for k, v in sorted(r.peak_rss_mb.items()))
-        lines.append(f'peak RSS, layout {name}: {rss} MB')
-    for name, r in results.items():  # where the time goes: one busy process bounds the rate
-        cpu = ', '.join(f'{k} {v:.2f}' for k, v in sorted(r.cpu_ms_per_step_by_process.items()))
-        lines.append(f'CPU per step, layout {name}: {cpu} ms')
-    if recording is not None:
-        rec = recording
-        lines += [
-            f'recording every topic ({rec["repeat"]} runs each, alternating):',
-            f'  without {_rates(rec["plain_steps_per_second"])} steps/s, median '
-            f'{rec["plain_median"]:.0f}',
-            f'  with    {_rates(rec["recorded_steps_per_second"])} steps/s, median '
-            f'{rec["recorded_median"]:.0f}',
-            f'  slowdown {rec["slowdown_percent"]:.1f} % (of the median steps/s)',
-            f'  CPU per step without {_rates(rec["plain_cpu_ms_per_step"], ".2f")} ms, with '
-            f'{_rates(rec["recorded_cpu_ms_per_step"], ".2f")} ms: '
-            f'+{rec["cpu_increase_percent"]:.1f} % (medians; graph + runner while stepping)',
-            f'  bag: {rec["bag_messages"]} messages, {rec["bag_bytes"] / 1e6:.1f} MB, '
-            f'{rec["bag_bytes_per_sim_second"] / 1e6:.3f} MB per simulated second',
-            f'  report on the bag ({result.sim_time:g} s job): {rec["report_seconds"]:.1f} s '
-            f'wall, {rec["report_cpu_seconds"]:.1f} s CPU (exit code {rec["report_exit_code"]})',
-        ]
-    if sweep:
-        lines += realtime_sweep.format_sweep(sweep, layouts)
-    lines.append(f'load average (1 min) at the end: {figures["load_average_1min"]:.2f}')
-    print('\n'.join(lines))
+    figures = figures_of(measured, executor)
+    print(text_of(measured, executor, args.record, figures['load_average_1min']))
     if args.json:
         args.json.write_text(json.dumps(figures, indent=2))
     return 0

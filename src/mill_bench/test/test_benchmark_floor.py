@@ -5,7 +5,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 from typing import Any
 
-from mill_bench.benchmark import floor_lines
+from mill_bench.results import floor_lines
 
 
 def run(steps_per_second: float) -> Any:

@@ -70,7 +70,7 @@ def test_repeated_layouts_run_in_turn() -> None:
 def test_the_median_run_stands_for_its_layout(rates: list[float], median: float) -> None:
     from types import SimpleNamespace
 
-    from mill_bench.benchmark import median_run
+    from mill_bench.results import median_run
 
     runs = [SimpleNamespace(steps_per_second=r) for r in rates]
     assert median_run(runs).steps_per_second == median  # type: ignore[arg-type]
