@@ -20,6 +20,7 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_analysis.force_record import read_force_run
+from mill_analysis.report.kinds import ForceRecords, kind_of
 from mill_analysis.run_record import read_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
@@ -129,6 +130,7 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
     )
     assert report.returncode == 0, report.stderr[-3000:]
     assert 'J_c [N² s]' in report.stdout and (out / 'force.png').is_file()
+    assert isinstance(kind_of(bag / 'scheme1'), ForceRecords)  # as the runner named it
     run = read_force_run(bag / 'scheme1')
     assert run.samples == summary['samples'] and not run.missing and not run.notes
     # The same stream, the same reference model (ξ, ω_n from the controller's state), the

@@ -34,6 +34,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
+from mill_analysis import records
 from mill_common import topics
 from test.conftest import wait_until
 
@@ -189,6 +190,7 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
 def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())
     run = read_run(recorded_run['dir'] / 'bag')
+    assert records.named(run.bag.custom_data) == records.AXIS  # what the runner recorded
     assert run.n == summary['samples'] == 2001
     assert run.missing == {} and summary['missing_samples'] == {}
     from_bag = summarize(run.record, 1.0)

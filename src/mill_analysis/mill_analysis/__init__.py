@@ -11,5 +11,6 @@ any role package.
     force_record     ForceRecord of a cutting-force job (Rubio 2013), J_c of eq. (14)
     force_windows    mean force and override of a recorded run per time window
     papers           each paper's metrics and verdicts from the records of its variants
+    records          the kinds of record by name, as a bag of run_scenario --record says
     report/          `report BAG ...`
 """

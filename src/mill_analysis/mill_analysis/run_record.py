@@ -358,6 +358,7 @@ def read_run(
     path: str | Path,
     namespace: str | None = None,
     progress: ProgressCallback | None = None,
+    realtime: bool | None = None,
 ) -> BagRun:
     """Read a bag of a mill run into a RunRecord, by topic names and types only.
 
@@ -367,7 +368,9 @@ def read_run(
     every state topic has. The run may be in any namespace; `namespace` chooses the
     machine in a bag of several. `progress(phase, done, total)` is called now and then, while
     the bag is read ('reading', messages; total from metadata.yaml, None if it has none)
-    and while its messages are decoded ('decoding').
+    and while its messages are decoded ('decoding'). realtime: whether the bag holds a
+    realtime run, as it says (mill_analysis.records); None for a bag that does not say: a
+    realtime job's status on /diagnostics tells its start stamp, a lockstep one's does not.
     """
     bag = open_bag(path)
     wanted_types = record_topics(AXES)
@@ -432,7 +435,14 @@ def read_run(
     first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
     stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
     start_ns = job_start(statuses)
-    if start_ns is not None:  # the drive's own clock: no sample grid
+    if realtime is None:
+        realtime = start_ns is not None
+    if realtime:  # the drive's own clock: no sample grid
+        if start_ns is None:
+            raise BagError(
+                f'{bag.path}: a realtime run without its start (no start_stamp_ns in the '
+                'job status on /diagnostics)'
+            )
         return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
     diffs = np.diff(stamps)
     dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0

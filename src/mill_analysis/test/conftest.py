@@ -4,7 +4,7 @@ The run is made up (`a_run`): every signal known at every sample, no simulation 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +98,8 @@ def write_foreign_bag(
     feed: bool = False,
     namespaces: Sequence[str] = ('/',),
     foreign_status: bool = False,
+    start_ns: int | None = None,
+    notes: Mapping[str, str] | None = None,
 ) -> tuple[Path, RunRecord]:
     """`a_run()`, written by rosbags' Writer as a recorder on wall time would (log time =
     receive time), with the contract's topics and types.
@@ -105,6 +107,8 @@ def write_foreign_bag(
     With several namespaces each machine publishes the same run under its own; the job
     status carries the machine's namespace as hardware_id (the root's the old 'mill').
     foreign_status: first a job status of another machine ('/other') with a wrong end_time.
+    start_ns: the job status says the job started then (as a realtime job's does).
+    notes: the bag's custom_data (what run_scenario --record says of its bag).
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
 
@@ -115,6 +119,8 @@ def write_foreign_bag(
     plugin = StoragePlugin.MCAP if storage == 'mcap' else StoragePlugin.SQLITE3
     path = directory / f'foreign_{storage}'
     with Writer(path, version=9, storage_plugin=plugin) as w:
+        for key, value in (notes or {}).items():
+            w.set_custom_data(key, value)
         conns = {}
 
         def put(topic: str, msgtype: str, k: int, msg: Any) -> None:
@@ -127,12 +133,15 @@ def write_foreign_bag(
                     break  # global: once
 
         def job_status(end_time: float, machine: str) -> Any:
+            values = [kv(key='state', value='running'), kv(key='end_time', value=repr(end_time))]
+            if start_ns is not None:
+                values.append(kv(key='start_stamp_ns', value=str(start_ns)))
             return status(
                 level=0,
                 name='trajectory: job',
                 message='job running',
                 hardware_id=machine,
-                values=[kv(key='state', value='running'), kv(key='end_time', value=repr(end_time))],
+                values=values,
             )
 
         status = T['diagnostic_msgs/msg/DiagnosticStatus']

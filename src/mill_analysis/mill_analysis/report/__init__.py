@@ -23,7 +23,9 @@ max |e|, RMS e and the RMS of xi_hat - xi and of xi come from
 prints, so both agree on the same run.
 
 The bag is read by topic names and types only (see mill_analysis.run_record), so a
-bag from `ros2 bag record` with these topics works too.
+bag from `ros2 bag record` with these topics works too. What kind of run a bag holds (an
+axis job in lockstep or in real time, a force job) the bag of `run_scenario --record`
+says; another bag's topics and job status tell (kinds).
 
 Modules:
 
@@ -31,6 +33,9 @@ Modules:
                (numpy; no text, no plots)
     text       the table printed on stdout and report.md
     plots      one function per figure; rendered in two forked processes for long runs
+    force      the force job's table, report.md and figure
+    kinds      one RecordKind per kind of record: how its bags are read, summarised and
+               plotted; which kind a bag holds
     cli        `report` (console script) and `python -m mill_analysis.report`: options,
                one-line errors (exit 1, 2 for options), what goes where
 """

@@ -1,7 +1,10 @@
 """`report BAG [BAG ...]`: options, reading the bags, writing DIR/report.md and the plots.
 
-A force job's bags (Rubio 2013: force samples, force stream, overrides) get the force report
-(mill_analysis.report.force): J_c of eq. (14) computed from the recorded stream.
+Each bag is read, summarised and plotted through its kind of record (mill_analysis.report.kinds):
+the one the bag names (run_scenario --record writes its job kind's), else the one its topics
+tell. An axis job's bags get tracking and estimation errors, spectra and loop timing; a force
+job's (Rubio 2013: force samples, force stream, overrides) J_c of eq. (14) computed from the
+recorded stream (mill_analysis.report.force). Both kinds cannot share one report.
 
 Bad input (a path that does not exist, an empty bag, a bag without the mill
 topics, a file that is not MCAP, broken metadata) ends with one line
@@ -16,52 +19,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
 import sys
 import time
 from pathlib import Path
 from typing import NoReturn
 
 from mill_bag.errors import BagError
-from mill_bag.reader import open_bag
-from mill_common.progress import Progress
 
-from mill_analysis.force_record import is_force_bag, read_force_run
-from mill_analysis.report.analysis import analyse
-from mill_analysis.report.force import force_figure, force_markdown, force_table
-from mill_analysis.report.plots import plot_all
-from mill_analysis.report.text import markdown, text_table
-from mill_analysis.run_record import read_run
-
-
-class _BagProgress:
-    """read_run's progress callback: one Progress per phase (reading, decoding) of a bag."""
-
-    def __init__(self, label: str, quiet: bool) -> None:
-        self.label = label
-        self.quiet = quiet
-        self.phase = ''
-        self.bar: Progress | None = None
-
-    def __call__(self, phase: str, done: int, total: int | None) -> None:
-        if phase != self.phase:
-            self.close()
-            self.phase = phase
-            self.bar = Progress(
-                total,
-                unit='messages',
-                quiet=self.quiet,
-                label=f'{self.label}: {phase}',
-                decimals=0,
-                delay=2.0,  # a short bag shows none (nor before a one-line error)
-            )
-        if self.bar is not None:
-            self.bar.update(done)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-            self.bar = None
+from mill_analysis.report.kinds import ReportOptions, kind_of
 
 
 class _Parser(argparse.ArgumentParser):
@@ -151,72 +116,53 @@ def main(argv: list[str] | None = None) -> int:
     if args.label and len(args.label) != len(args.bags):
         parser.error(f'{len(args.label)} --label for {len(args.bags)} bags')
     labels = args.label or labels_for(args.bags)
+    options = ReportOptions(args.skip, args.window, args.freqs, args.namespace, args.quiet)
+    return write_report(args.bags, labels, options, args.out, args.no_plots, argv)
+
+
+def write_report(
+    bags: list[Path],
+    labels: list[str],
+    options: ReportOptions,
+    out: Path | None,
+    no_plots: bool,
+    argv: list[str],
+) -> int:
+    """Read each bag through its kind of record, then write the report of them all."""
     kinds = []
-    for bag in args.bags:
+    for bag in bags:
         try:
-            kinds.append(is_force_bag(bag_topics(bag)))
-        except (BagError, OSError):
-            kinds.append(False)  # read_run below says what is wrong with it
-    if any(kinds):
-        if not all(kinds):
-            print(
-                'report: error: force-job bags and axis-job bags cannot share one report',
-                file=sys.stderr,
-            )
-            return 1
-        return force_report(args, labels, argv)
-    reports = []
-    t_start = time.monotonic()
-    for bag, label in zip(args.bags, labels, strict=True):
-        t0 = time.monotonic()
-        progress = _BagProgress(label, args.quiet)
-        try:
-            run = read_run(bag, args.namespace, progress)
+            kinds.append(kind_of(bag))
         except Exception as exc:
             print(f'report: error: {unreadable(bag, exc)}', file=sys.stderr)
             return 1
-        finally:
-            progress.close()
-        if run.n <= 1 or not (run.record.t >= args.skip).any():
-            print(
-                f'report: error: {bag}: no samples at t >= {args.skip:g} s '
-                f'(the run lasts {run.record.t[-1]:g} s)',
-                file=sys.stderr,
-            )
+    shared = sorted({kind.REPORT for kind in kinds}, reverse=True)
+    if len(shared) > 1:
+        mixed = ' bags and '.join(shared)
+        print(f'report: error: {mixed} bags cannot share one report', file=sys.stderr)
+        return 1
+    t_start = time.monotonic()
+    runs = []
+    for bag, label, kind in zip(bags, labels, kinds, strict=True):
+        try:
+            runs.append(kind.read(bag, label, options))
+        except Exception as exc:
+            print(f'report: error: {unreadable(bag, exc)}', file=sys.stderr)
             return 1
-        report = analyse(run, label, args.skip, args.window, args.freqs)
-        report.read_seconds = time.monotonic() - t0
-        reports.append(report)
-    out = args.out or (args.bags[0].resolve().parent / 'report')
+    out = out or (bags[0].resolve().parent / 'report')
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         print(f'report: error: cannot create {out}: {exc.strerror}', file=sys.stderr)
         return 1
-    big = sum(r.run.n for r in reports) > 20_000
-    workers = min(2, os.cpu_count() or 1) if big else 1
-    figures = [] if args.no_plots else plot_all(reports, out, workers)
-    (out / 'report.md').write_text(markdown(reports, figures, argv) + '\n')
-    print(text_table(reports))
+    shown = kinds[0]  # every kind of one REPORT shows the others' runs
+    figures = [] if no_plots else shown.plot(runs, out)
+    (out / 'report.md').write_text(shown.markdown(runs, figures, argv) + '\n')
+    print(shown.table(runs))
     print(
         f'report {out / "report.md"} with {len(figures)} plots ({time.monotonic() - t_start:.1f} s)'
     )
     return 0
-
-
-def bag_topics(path: Path) -> dict[str, int]:
-    """The topics of a bag (from its metadata.yaml, else by reading it)."""
-    bag = open_bag(path)
-    try:
-        info = bag.metadata['rosbag2_bagfile_information']  # type: ignore[index]
-        return {
-            t['topic_metadata']['name']: int(t.get('message_count', 0))
-            for t in info['topics_with_message_count']
-        }
-    except (KeyError, TypeError):
-        for _ in bag.read(topics=()):
-            pass
-        return dict(bag.counts)
 
 
 def unreadable(bag: Path, exc: Exception) -> str:
@@ -227,31 +173,6 @@ def unreadable(bag: Path, exc: Exception) -> str:
         return f'{bag}: {exc.strerror or exc}'
     # A damaged message in an otherwise readable bag.
     return f'{bag}: cannot read ({type(exc).__name__}: {exc})'
-
-
-def force_report(args: argparse.Namespace, labels: list[str], argv: list[str]) -> int:
-    """A force job's bags (Rubio 2013): J_c of eq. (14) and the override, side by side."""
-    t_start = time.monotonic()
-    runs = []
-    for bag, label in zip(args.bags, labels, strict=True):
-        try:
-            runs.append((label, read_force_run(bag, args.namespace)))
-        except Exception as exc:
-            print(f'report: error: {unreadable(bag, exc)}', file=sys.stderr)
-            return 1
-    out = args.out or (args.bags[0].resolve().parent / 'report')
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        print(f'report: error: cannot create {out}: {exc.strerror}', file=sys.stderr)
-        return 1
-    figures = [] if args.no_plots else force_figure(runs, out)
-    (out / 'report.md').write_text(force_markdown(runs, figures, argv) + '\n')
-    print(force_table(runs))
-    print(
-        f'report {out / "report.md"} with {len(figures)} plots ({time.monotonic() - t_start:.1f} s)'
-    )
-    return 0
 
 
 if __name__ == '__main__':

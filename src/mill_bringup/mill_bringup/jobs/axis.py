@@ -43,6 +43,7 @@ from mill_trajectory.config import build_job, build_schedule
 from mill_trajectory.feed_override import FeedOverride, JobEnd
 from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
+from mill_analysis import records
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.scenario import Scenario, ScenarioError
@@ -267,6 +268,7 @@ class AxisSimulation:
 
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
+    RECORD = records.AXIS
     CLOCK = PLANT
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
 

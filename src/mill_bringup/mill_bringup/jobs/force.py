@@ -24,6 +24,7 @@ from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
 from mill_models.force_process import ForceProcessModel
 
+from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.jobs.base import Job, MessageSource
@@ -47,6 +48,7 @@ def _only(scen: Scenario, role: str) -> str:
 
 class ForceJob(Job[ForceRecord]):
     KIND = 'force'
+    RECORD = records.FORCE
     CLOCK = FORCE_PROCESS
 
     def __init__(self, scen: Scenario) -> None:

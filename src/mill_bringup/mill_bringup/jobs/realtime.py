@@ -19,6 +19,7 @@ from mill_analysis.metrics import RunRecord, format_summary, summarize
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
 
+from mill_analysis import records
 from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.scenario import Scenario, ScenarioError
@@ -36,6 +37,7 @@ DRIVE_FIGURES = (
 
 class RealtimeAxisJob(AxisJob):
     KIND = 'axis-realtime'
+    RECORD = records.AXIS_REALTIME
     HAS_OFFLINE_TWIN = False
     BRAKE_AT_END = True  # the drive keeps running on its own clock: brake it first
     PAPER_NOTE = (

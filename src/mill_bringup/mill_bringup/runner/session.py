@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from mill_common.env import ros_environment
 from mill_common.progress import Progress
 
+from mill_analysis import records
 from mill_bringup.graph import Graph
 from mill_bringup.jobs.base import Job
 from mill_bringup.runner.options import RunError, RunOptions
@@ -80,7 +81,11 @@ class Session:
         job, options = self.job, self.options
         record = None
         if options.record_bag is not None:
-            record = RecordOptions(Path(options.record_bag), sim_time=job.sim_time_stamps())
+            record = RecordOptions(
+                Path(options.record_bag),
+                sim_time=job.sim_time_stamps(),
+                notes=records.bag_notes(job.RECORD),  # what `report` reads it as
+            )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
         self._stop = install_stop_handlers()
         rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
