@@ -88,8 +88,8 @@ class Session:
             )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
         self._stop = install_stop_handlers()
-        rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
         try:
+            rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
             self._monitor = Monitor(
                 job.monitor_topics(),
                 record,
