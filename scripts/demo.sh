@@ -12,4 +12,4 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
 cd "$root"
 run_dir=runs/slotting-$(date +%Y%m%d-%H%M%S)
 "$root/.venv/bin/python" -m mill_bringup.runner slotting --output "$run_dir" --record "$run_dir/bag" "$@"
-exec "$root/.venv/bin/python" -m mill_bringup.report "$run_dir/bag" --out "$run_dir/report"
+exec "$root/.venv/bin/python" -m mill_analysis.report "$run_dir/bag" --out "$run_dir/report"

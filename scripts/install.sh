@@ -9,7 +9,7 @@ set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 venv=${MILL_VENV:-$root/.venv}
-packages=(mill_common mill_models mill_bag mill_plant mill_trajectory mill_controllers mill_observers mill_bringup)
+packages=(mill_common mill_models mill_bag mill_plant mill_trajectory mill_controllers mill_observers mill_analysis mill_bringup mill_bench)
 
 log() { printf '[install] %s\n' "$*" >&2; }
 

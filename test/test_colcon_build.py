@@ -55,7 +55,9 @@ def test_every_package_builds_and_installs_its_executables(install_space):
         'mill_trajectory',
         'mill_controllers',
         'mill_observers',
+        'mill_analysis',
         'mill_bringup',
+        'mill_bench',
     }
     for package in PACKAGES:
         prefix = install_space / package

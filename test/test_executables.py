@@ -83,7 +83,9 @@ def test_tool_help(ros_env, module) -> None:
 def test_all_packages_found() -> None:
     names = {p.name for p in PACKAGES}
     expected = {
+        'mill_analysis',
         'mill_bag',
+        'mill_bench',
         'mill_bringup',
         'mill_common',
         'mill_controllers',

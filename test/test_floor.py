@@ -1,4 +1,4 @@
-"""The empty-callback floor of the benchmark (mill_bringup.floor) runs and leaves nothing.
+"""The empty-callback floor of the benchmark (mill_bench.floor) runs and leaves nothing.
 
 Its figure is a speed and is measured by `benchmark`, not here; this test checks that the
 eight processes step together for the number of steps asked, report, and all end.
@@ -11,7 +11,7 @@ import subprocess
 
 import pytest
 
-from mill_bringup import floor
+from mill_bench import floor
 
 
 @pytest.mark.system
@@ -21,7 +21,7 @@ def test_the_empty_graph_steps_and_every_process_ends(ros_env, listener: bool) -
     assert result['steps_per_second'] > 0 and math.isfinite(result['steps_per_second'])
     assert result['plant_cpu_ms'] > 0
     left = subprocess.run(
-        ['pgrep', '-f', 'mill_bringup.floor node .* 500( listener)?$'],
+        ['pgrep', '-f', 'mill_bench.floor node .* 500( listener)?$'],
         capture_output=True,
         text=True,
     ).stdout.split()

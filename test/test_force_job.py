@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
-from mill_bringup.force_record import read_force_run
+from mill_analysis.force_record import read_force_run
+from mill_analysis.report.kinds import ForceRecords, kind_of
+from mill_analysis.run_record import read_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.run_record import read_run
 from mill_common.ros import DATA_QOS, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs
@@ -121,7 +122,7 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
     report = subprocess.run(
-        [sys.executable, '-m', 'mill_bringup.report', str(bag / 'scheme1'), '--out', str(out)],
+        [sys.executable, '-m', 'mill_analysis.report', str(bag / 'scheme1'), '--out', str(out)],
         env=ros_env,
         capture_output=True,
         text=True,
@@ -129,6 +130,7 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
     )
     assert report.returncode == 0, report.stderr[-3000:]
     assert 'J_c [N² s]' in report.stdout and (out / 'force.png').is_file()
+    assert isinstance(kind_of(bag / 'scheme1'), ForceRecords)  # as the runner named it
     run = read_force_run(bag / 'scheme1')
     assert run.samples == summary['samples'] and not run.missing and not run.notes
     # The same stream, the same reference model (ξ, ω_n from the controller's state), the

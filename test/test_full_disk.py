@@ -20,12 +20,12 @@ from pathlib import Path
 
 import pytest
 import yaml
+from mill_analysis.run_record import read_run
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover
 from mill_bag.types import JOINT_STATE
 from mill_bag.writer import RESERVE_NAME, BagCutShort, BagWriter
-from mill_bringup.run_record import read_run
 
 from mill_common import topics
 from test.test_recording import FakePlant, both_readers, ros_node

@@ -2,7 +2,7 @@
 
 Every Python file under src/<package>/ except tests and setup.py is parsed, and every
 ``import`` / ``from ... import`` in it is collected, at module level or inside functions,
-absolute or relative. Three rules:
+absolute or relative. The rules:
 
 1. The role packages (mill_plant, mill_controllers, mill_observers, mill_trajectory) never
    import one another: what more than one of them needs lives in mill_models.
@@ -10,6 +10,10 @@ absolute or relative. Three rules:
    the standard library, numpy and scipy, and of the mill packages only mill_models and
    mill_common's ROS-free modules (signals, parameters, timebase).
 3. No package has an import cycle among its own modules.
+4. mill_analysis (records, reports, the papers' verdicts) reads messages and bags only: it
+   imports neither mill_bringup, mill_bench nor any role package.
+5. mill_bringup does not import mill_bench; no package does (the benchmark is a leaf).
+6. No import cycle between packages.
 
 Dynamic imports (importlib.import_module) are not seen.
 """
@@ -29,6 +33,7 @@ ROLE_PACKAGES = ('mill_plant', 'mill_controllers', 'mill_observers', 'mill_traje
 MODELS = 'mill_models'
 ROS_FREE_COMMON = ('mill_common.signals', 'mill_common.parameters', 'mill_common.timebase')
 MODELS_MAY_USE = ('numpy', 'scipy')
+ANALYSIS, BRINGUP, BENCH = 'mill_analysis', 'mill_bringup', 'mill_bench'
 
 
 @dataclass(frozen=True)
@@ -142,13 +147,37 @@ def package_graph(package: str, found: Iterable[Import], known: set[str]) -> dic
     return edges
 
 
+def package_edges(
+    files: dict[Path, tuple[str, str | None]], found: Iterable[Import]
+) -> dict[str, set[str]]:
+    """{package: packages of the workspace it imports} (itself left out)."""
+    packages = {package for package, _ in files.values()}
+    edges: dict[str, set[str]] = {p: set() for p in packages}
+    for imp in found:
+        source, target = files[imp.path][0], top(imp.target)
+        if target in packages and target != source:
+            edges[source].add(target)
+    return edges
+
+
+def imports_of_package(package: str, banned: Iterable[str]) -> list[str]:
+    """Where `package` imports one of the `banned` packages."""
+    return sorted(
+        {
+            f'{imp.where()}: {imp.source} imports {imp.target}'
+            for imp in IMPORTS
+            if FILES[imp.path][0] == package and top(imp.target) in set(banned)
+        }
+    )
+
+
 FILES, IMPORTS = collect()
 KNOWN = {m for _, m in FILES.values() if m}
 PACKAGES = sorted({package for package, _ in FILES.values()})
 
 
 def test_the_source_tree_was_found() -> None:
-    assert set(ROLE_PACKAGES) | {MODELS, 'mill_common'} <= set(PACKAGES)
+    assert set(ROLE_PACKAGES) | {MODELS, 'mill_common', ANALYSIS, BRINGUP, BENCH} <= set(PACKAGES)
     assert 'mill_models.holds' in KNOWN and 'mill_plant.plant_node' in KNOWN
 
 
@@ -195,6 +224,26 @@ def test_models_are_ros_free() -> None:
     )
 
 
+def test_analysis_imports_no_runner_benchmark_or_role_package() -> None:
+    bad = imports_of_package(ANALYSIS, (BRINGUP, BENCH, *ROLE_PACKAGES))
+    assert not bad, f'{ANALYSIS} reads records and bags only:\n' + '\n'.join(bad)
+
+
+def test_bringup_does_not_import_the_benchmark() -> None:
+    bad = imports_of_package(BRINGUP, (BENCH,))
+    assert not bad, '\n'.join(bad)
+
+
+def test_no_package_imports_the_benchmark() -> None:
+    bad = [line for p in PACKAGES if p != BENCH for line in imports_of_package(p, (BENCH,))]
+    assert not bad, f'{BENCH} is a leaf: nothing imports it\n' + '\n'.join(bad)
+
+
+def test_no_import_cycle_between_packages() -> None:
+    cycle = find_cycle(package_edges(FILES, IMPORTS))
+    assert cycle is None, 'import cycle between packages: ' + ' -> '.join(cycle)
+
+
 @pytest.mark.parametrize(
     'package',
     PACKAGES,
@@ -224,3 +273,16 @@ def test_the_checker_sees_relative_and_function_level_imports(tmp_path: Path) ->
     }
     known = {m for _, m in files.values() if m}
     assert find_cycle(package_graph('pkg_x', found, known)) == ['pkg_x.a', 'pkg_x.sub.b', 'pkg_x.a']
+
+
+def test_the_checker_sees_a_cycle_between_packages(tmp_path: Path) -> None:
+    """Made-up packages: pkg_a imports pkg_b inside a function, pkg_b imports pkg_a."""
+    for name in ('pkg_a', 'pkg_b'):
+        (tmp_path / name / name).mkdir(parents=True)
+        (tmp_path / name / 'package.xml').write_text('<package/>')
+        (tmp_path / name / name / '__init__.py').write_text('')
+    (tmp_path / 'pkg_a' / 'pkg_a' / 'm.py').write_text('def f():\n    import pkg_b.n\n')
+    (tmp_path / 'pkg_b' / 'pkg_b' / 'n.py').write_text('from pkg_a import m\n')
+    files, found = collect(tmp_path)
+    assert package_edges(files, found) == {'pkg_a': {'pkg_b'}, 'pkg_b': {'pkg_a'}}
+    assert find_cycle(package_edges(files, found)) == ['pkg_a', 'pkg_b', 'pkg_a']

@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 import pytest
+from mill_analysis.run_record import read_run
 from mill_bag.reader import open_bag
-from mill_bringup.run_record import read_run
 
 from mill_common import topics
 

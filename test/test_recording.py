@@ -23,17 +23,18 @@ import pytest
 import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
+from mill_analysis.metrics import summarize
+from mill_analysis.run_record import read_run
 from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover
-from mill_bringup.metrics import summarize
-from mill_bringup.run_record import read_run
 from mill_common.ros import DATA_QOS, joint_state, to_stamp
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
+from mill_analysis import records
 from mill_common import topics
 from test.conftest import wait_until
 
@@ -189,6 +190,7 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
 def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())
     run = read_run(recorded_run['dir'] / 'bag')
+    assert records.named(run.bag.custom_data) == records.AXIS  # what the runner recorded
     assert run.n == summary['samples'] == 2001
     assert run.missing == {} and summary['missing_samples'] == {}
     from_bag = summarize(run.record, 1.0)
@@ -204,7 +206,7 @@ def test_report_on_the_recorded_run(recorded_run, tmp_path):
     out = tmp_path / 'report'
     proc = subprocess.run(
         [
-            *(sys.executable, '-m', 'mill_bringup.report', str(recorded_run['dir'] / 'bag')),
+            *(sys.executable, '-m', 'mill_analysis.report', str(recorded_run['dir'] / 'bag')),
             *('--out', str(out), '--freqs', '60,120'),
         ],
         capture_output=True,
@@ -438,7 +440,7 @@ def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
 def test_recorder_and_report_help(ros_env):
     for module, expected in (
         ('mill_bag.recorder', ['output', 'topics', 'regex', 'compression', 'flush_period']),
-        ('mill_bringup.report', ['--out', '--skip', '--freqs', '--window']),
+        ('mill_analysis.report', ['--out', '--skip', '--freqs', '--window']),
     ):
         done = subprocess.run(
             [sys.executable, '-m', module, '--help'],

@@ -18,14 +18,12 @@ setup(
     zip_safe=True,
     maintainer='mill developers',
     maintainer_email='mill@example.com',
-    description='Scenario runner, offline simulator, metrics, bag reports, benchmark and launch files for mill.',
+    description='Scenario runner, launch file and offline simulator of mill.',
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'run_scenario = mill_bringup.runner:main',
+            'run_scenario = mill_bringup.runner.cli:main',
             'offline_sim = mill_bringup.offline:main',
-            'benchmark = mill_bringup.benchmark:main',
-            'report = mill_bringup.report.cli:main',
             'job_watch = mill_bringup.job_watch:main',
             'mill_container = mill_bringup.container:main',
         ],

@@ -50,13 +50,18 @@ class Bag:
         return self.path.name
 
     @property
+    def custom_data(self) -> dict[str, str]:
+        """What the writer noted of the bag in metadata.yaml (`custom_data`); {} if nothing
+        (a bare .mcap file, a bag without the field)."""
+        info = (self.metadata or {}).get('rosbag2_bagfile_information') or {}
+        custom = info.get('custom_data') if isinstance(info, dict) else None
+        return {str(k): str(v) for k, v in custom.items()} if isinstance(custom, dict) else {}
+
+    @property
     def cut_short(self) -> str | None:
         """Why the recording ended before it was closed (a full disk), as the writer noted
         it in metadata.yaml (`custom_data: cut_short`); None if it did not say so."""
-        info = (self.metadata or {}).get('rosbag2_bagfile_information') or {}
-        custom = info.get('custom_data') if isinstance(info, dict) else None
-        reason = custom.get(CUT_SHORT) if isinstance(custom, dict) else None
-        return str(reason) if reason else None
+        return self.custom_data.get(CUT_SHORT) or None
 
     def read(self, topics: Collection[str] | None = None) -> Iterator[Row]:
         self.counts.clear()

@@ -42,7 +42,7 @@ import importlib
 import re
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -130,7 +130,8 @@ class TopicRecorder:
     node has already, `subscribe(topic, type, qos)` subscribes before the topic
     is discovered (so the first message is not missed). Relative names are resolved
     as the node resolves them (its namespace and remappings), as `ros2 bag record`
-    does; the bag holds absolute names.
+    does; the bag holds absolute names. custom_data: notes for the bag's readers
+    (metadata.yaml), e.g. what kind of run it holds.
     """
 
     def __init__(
@@ -145,6 +146,7 @@ class TopicRecorder:
         flush_period: float = 0.5,
         discovery_period: float = 0.5,
         discover: bool = True,
+        custom_data: Mapping[str, str] | None = None,
     ) -> None:
         self.node = node
         self.sim_time = sim_time
@@ -153,7 +155,7 @@ class TopicRecorder:
             self.regex = re.compile(regex) if regex else None
         except re.error as exc:
             raise BagError(f'regex {regex!r} is not a valid regular expression: {exc}') from None
-        self.writer = BagWriter(output, compression)
+        self.writer = BagWriter(output, compression, custom_data=custom_data)
         self._buf: list[tuple[_Topic, int, bytes]] = []
         self._topics: dict[str, _Topic] = {}
         self._subs: list[Any] = []

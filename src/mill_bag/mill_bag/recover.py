@@ -22,7 +22,6 @@ from mill_bag.errors import BagError
 from mill_bag.reader import Bag, open_bag
 from mill_bag.types import message_definition
 from mill_bag.writer import (
-    CUT_SHORT,
     RESERVE_NAME,
     TopicInfo,
     bag_metadata,
@@ -57,9 +56,10 @@ def recover(path: str | Path) -> tuple[int, int]:
             topics = [info for d in done for info in d.topics]
             start = min((d.start for d in done if d.start is not None), default=0)
             end = max((d.end for d in done if d.end is not None), default=0)
-            meta = bag_metadata([d.src.name for d in done], topics, start, end - start)
-            if bag.cut_short:
-                meta['rosbag2_bagfile_information']['custom_data'] = {CUT_SHORT: bag.cut_short}
+            # The writer's notes (a cut-short reason, what the bag holds) stay.
+            meta = bag_metadata(
+                [d.src.name for d in done], topics, start, end - start, bag.custom_data
+            )
             metadata.write_text(dump_yaml(meta) + '\n')
     except OSError as exc:
         for begun in written:

@@ -18,7 +18,9 @@ complete flush, and metadata.yaml describes what is in it and says why it ends t
 (`custom_data: cut_short: <reason>`, a field rosbag2 keeps for such notes). Writing
 that last metadata.yaml needs room on a disk that has none: the writer holds
 RESERVE_NAME, a file of twice the size of metadata.yaml (at least 64 KiB), allocated
-while there is room and deleted when the bag is closed or cut short.
+while there is room and deleted when the bag is closed or cut short. The same field
+carries the writer's own notes for the bag's readers (`BagWriter(custom_data=...)`, e.g.
+what kind of run a bag holds); `Bag.custom_data` reads them back, `recover` keeps them.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, cast
@@ -111,7 +113,13 @@ class BagWriter:
     says why); nothing is written after that.
     """
 
-    def __init__(self, path: Path, compression: str = 'zstd', chunk_size: int = 1 << 20) -> None:
+    def __init__(
+        self,
+        path: Path,
+        compression: str = 'zstd',
+        chunk_size: int = 1 << 20,
+        custom_data: Mapping[str, str] | None = None,
+    ) -> None:
         from mcap.writer import CompressionType, Writer
 
         if compression not in COMPRESSIONS:
@@ -131,6 +139,9 @@ class BagWriter:
         self.end_ns: int | None = None
         self.closed = False
         self.cut_short: str | None = None  # why writing stopped before close(), if it did
+        # What the bag's writer says of it, for its readers: metadata.yaml's custom_data, the
+        # place rosbag2 keeps such notes (`ros2 bag record --custom-data`).
+        self.custom_data = {str(k): str(v) for k, v in (custom_data or {}).items()}
         self._reserved = 0
         try:
             self._file = _FlushedFile(self.path / self.file_name)
@@ -210,6 +221,7 @@ class BagWriter:
             list(self.topics.values()),
             self.start_ns or 0,
             (self.end_ns or 0) - (self.start_ns or 0),
+            self.custom_data,
         )
 
     def write_metadata(self) -> None:
@@ -242,7 +254,7 @@ class BagWriter:
         (self.path / RESERVE_NAME).unlink(missing_ok=True)
         self._reserved = 0
         info = self._flushed['rosbag2_bagfile_information']
-        info['custom_data'] = {CUT_SHORT: self.cut_short}
+        info['custom_data'] = {**self.custom_data, CUT_SHORT: self.cut_short}
         # If even this fails, the metadata of the last flush stays: the file still reads.
         with contextlib.suppress(OSError):
             write_metadata_file(self.path, self._flushed)
@@ -299,7 +311,11 @@ def dump_yaml(value: Any) -> str:
 
 
 def bag_metadata(
-    files: Sequence[str], topics: Sequence[TopicInfo], start_ns: int, duration_ns: int
+    files: Sequence[str],
+    topics: Sequence[TopicInfo],
+    start_ns: int,
+    duration_ns: int,
+    custom_data: Mapping[str, str] | None = None,
 ) -> dict:
     """metadata.yaml of a rosbag2 bag (version 9, as Jazzy writes it)."""
     count = sum(t.count for t in topics)
@@ -335,7 +351,7 @@ def bag_metadata(
                 }
                 for f in files
             ],
-            'custom_data': {},
+            'custom_data': dict(custom_data or {}),
             'ros_distro': 'jazzy',
         }
     }

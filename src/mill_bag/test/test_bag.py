@@ -318,3 +318,24 @@ def test_recover_command_errors_are_one_line(
     assert proc.returncode == code
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith('mill_bag: error: ') and reason in lines[0], lines[0]
+
+
+def test_custom_data_is_in_every_metadata_and_survives_a_kill_and_recover(tmp_path: Path) -> None:
+    notes = {'mill_record': 'axis', 'other': 'note'}
+    path = tmp_path / 'live'
+    w = BagWriter(path, custom_data=notes)
+    state = w.add_topic(STATE, JOINT_STATE, QOS)
+    w.write(state, 0, WALL0, ser(joint_state(0, 'x', [0.0])))
+    w.flush()  # what a kill leaves: the metadata of the last flush
+    killed = tmp_path / 'killed'
+    killed.mkdir()
+    (killed / 'metadata.yaml').write_text((path / 'metadata.yaml').read_text())
+    (killed / w.file_name).write_bytes((path / w.file_name).read_bytes())
+    w.close()
+    meta = yaml.safe_load((path / 'metadata.yaml').read_text())['rosbag2_bagfile_information']
+    assert meta['custom_data'] == notes
+    assert open_bag(path).custom_data == notes and open_bag(path).cut_short is None
+    assert open_bag(killed).custom_data == notes
+    assert recover(killed) == (1, 1)
+    assert open_bag(killed).custom_data == notes
+    assert open_bag(path / w.file_name).custom_data == {}  # a bare file has no metadata.yaml

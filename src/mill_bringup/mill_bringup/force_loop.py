@@ -33,6 +33,8 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NoReturn
 
 import numpy as np
+from mill_analysis.force_record import ForceRecord
+from mill_analysis.papers import rubio_claims
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
@@ -40,7 +42,6 @@ from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 from mill_plant.force_drive import DrivenForceProcess
 
-from mill_bringup.force_record import ForceRecord
 from mill_bringup.simulation import run_samples
 
 
@@ -288,27 +289,6 @@ def plot_cost_vs_beta(
     plt.close(fig)
 
 
-def claims(costs: Mapping[float, float], cases: Mapping[str, ForceRecord]) -> str:
-    """Rubio 2013's three claims, each with the figures and a computed verdict."""
-    zoh = cases['ZOH (β = 0)'].j_c
-    negative = {b: c for b, c in costs.items() if b < 0}
-    best_b = min(negative, key=lambda b: negative[b])
-    s1, s2 = cases['scheme 1'].j_c, cases['scheme 2'].j_c
-    rows = [
-        (
-            'negative β gives lower J_c than ZOH',
-            all(c < zoh for c in negative.values()),
-            f'{sum(c < zoh for c in negative.values())} of {len(negative)} runs with β < 0 '
-            f'below ZOH; best β = {best_b:+.2f}: {100 * (negative[best_b] / zoh - 1):+.2f} %',
-        ),
-        ('scheme 1 is no worse than ZOH', s1 <= zoh, f'{100 * (s1 / zoh - 1):+.2f} %'),
-        ('scheme 2 is not better than ZOH', s2 >= zoh, f'{100 * (s2 / zoh - 1):+.2f} %'),
-    ]
-    return '\n'.join(
-        f'claim: {text}: {"agrees" if ok else "disagrees"} ({detail})' for text, ok, detail in rows
-    )
-
-
 def _table(rows: Sequence[tuple[str, str]]) -> str:
     w = max(len(a) for a, _ in rows)
     return '\n'.join(f'{a:<{w}}  {b}' for a, b in rows)
@@ -358,7 +338,7 @@ def main(argv: Sequence[str] | None = None, out: Callable[[str], None] = print) 
     out('')
     out(_table([(name, f'J_c = {rec.j_c:.6g}') for name, rec in cases.items()]))
     out('')
-    out(claims(dict(zip(betas.tolist(), costs.tolist(), strict=True)), cases))
+    out(rubio_claims(dict(zip(betas.tolist(), costs.tolist(), strict=True)), cases))
     if args.plot:
         marks = {name: cases[name].j_c for name in ('ZOH (β = 0)', 'scheme 1', 'scheme 2')}
         plot_cost_vs_beta(betas, costs, args.plot, marks)

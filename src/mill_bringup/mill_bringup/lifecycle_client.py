@@ -7,7 +7,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from mill_bringup.graph import Progress
+from mill_common.progress import Progress
 
 
 def activate(

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
@@ -38,6 +38,7 @@ class RecordOptions:
     path: Path
     sim_time: bool = True
     compression: str = 'zstd'
+    notes: Mapping[str, str] = field(default_factory=dict)  # the bag's custom_data
 
 
 def _own_topics(namespace: str) -> str:
@@ -76,6 +77,7 @@ class Monitor(Node):
                 regex=_own_topics(self.get_namespace()),
                 sim_time=record.sim_time,
                 compression=record.compression,
+                custom_data=record.notes,
             )
         for topic, msgtype in kept.items():
             self._keep(topic, msgtype)

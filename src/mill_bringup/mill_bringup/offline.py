@@ -17,7 +17,7 @@ import sys
 import time
 from typing import Any
 
-from mill_bringup import papers
+from mill_analysis import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for

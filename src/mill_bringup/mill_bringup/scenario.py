@@ -108,7 +108,7 @@ class Scenario:
     overrides: dict[str, dict[str, Any]] = field(default_factory=dict)
     # Configurations compared by one run: name -> overrides (`variants:` in the file).
     variants: dict[str, list[str]] = field(default_factory=dict)
-    paper: str = ''  # which paper's metrics the run prints (mill_bringup.papers)
+    paper: str = ''  # which paper's metrics the run prints (mill_analysis.papers)
     namespace: str = topics.ROOT  # the machine namespace every node of the graph runs in
     private_clock: bool = False  # remap the simulation's /clock to NAMESPACE/clock
     layout: str = LAYOUTS[0]  # which nodes share a process (mill_bringup.layout)

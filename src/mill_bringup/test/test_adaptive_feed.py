@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 import pytest
+from mill_analysis.metrics import FORCE_CONTROL, RunRecord
 from mill_bringup.jobs.axis import AxisJob, depth_stretches
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.metrics import FORCE_CONTROL, RunRecord
 from mill_common.timebase import control_instant
 from mill_trajectory.config import build_job
 

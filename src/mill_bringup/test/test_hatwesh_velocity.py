@@ -14,10 +14,8 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
-from mill_bringup.jobs.base import simulate
-from mill_bringup.jobs.registry import job_for
-from mill_bringup.metrics import RunRecord
-from mill_bringup.papers import (
+from mill_analysis.metrics import RunRecord
+from mill_analysis.papers import (
     HV_BAND,
     HV_INERTIA_CHANGE,
     HV_LOAD,
@@ -26,6 +24,8 @@ from mill_bringup.papers import (
     phase_metrics,
     velocity_steps,
 )
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 
 from mill_bringup import scenario
 

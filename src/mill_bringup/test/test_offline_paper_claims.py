@@ -63,7 +63,7 @@ def test_every_scenario_and_variant_loads() -> None:
 
 
 def test_maharof_plain_cascade_and_dfo() -> None:
-    from mill_bringup.papers import maharof_metrics
+    from mill_analysis.papers import maharof_metrics
 
     rmse, mte, amps = maharof_metrics(variant_record('maharof', 'pi'))
     # Table 1, plain cascade: RMSE 0.1016 mm, MTE 0.1477 mm (the lag error dominates both;
@@ -75,7 +75,7 @@ def test_maharof_plain_cascade_and_dfo() -> None:
 
 
 def test_hatwesh_adaptive_pi_loses_less_than_the_machine_pi_after_the_inertia_step() -> None:
-    from mill_bringup.papers import HATWESH_BAND, HATWESH_MOVES, move_metrics
+    from mill_analysis.papers import HATWESH_BAND, HATWESH_MOVES, move_metrics
 
     ratio = {}
     for variant in ('machine_pi', 'adaptive_pi'):

@@ -14,16 +14,16 @@ import math
 
 import numpy as np
 import pytest
-from mill_bringup.jobs.base import simulate
-from mill_bringup.jobs.registry import job_for
-from mill_bringup.metrics import summarize
-from mill_bringup.papers import (
+from mill_analysis.metrics import summarize
+from mill_analysis.papers import (
     BELTRAN_FIRST_CUT,
     BELTRAN_K,
     BELTRAN_MEAN_FORCE,
     beltran,
     estimation_errors,
 )
+from mill_bringup.jobs.base import simulate
+from mill_bringup.jobs.registry import job_for
 from mill_models.axis_data import BELTRAN_TABLE1
 
 from mill_bringup import scenario

@@ -10,9 +10,9 @@ import functools
 
 import numpy as np
 import pytest
+from mill_analysis.papers import chavez_conde, tracking_metrics
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
-from mill_bringup.papers import chavez_conde, tracking_metrics
 
 from mill_bringup import scenario
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from mill_bringup.runner import main as run_scenario_main
+from mill_bringup.runner.cli import main as run_scenario_main
 from mill_bringup.scenario import ScenarioError
 
 from mill_bringup import scenario

@@ -26,6 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from mill_analysis.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
+from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, axis_index
@@ -41,10 +43,9 @@ from mill_trajectory.config import build_job, build_schedule
 from mill_trajectory.feed_override import FeedOverride, JobEnd
 from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
+from mill_analysis import records
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import Job, MessageSource
-from mill_bringup.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
-from mill_bringup.run_record import record_from_raw
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
@@ -267,6 +268,7 @@ class AxisSimulation:
 
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
+    RECORD = records.AXIS
     CLOCK = PLANT
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
 

@@ -2,16 +2,19 @@
 
 A scenario runs one kind of job: the three-axis motion job (`axis`: plant, trajectory,
 observers, controllers) or the cutting-force job of Rubio 2013 (`force`: force process,
-force controller, trajectory). The runner, the offline simulator, `--record` and `report`
-are written once against this interface; everything that differs between the kinds sits
-in one class per kind (mill_bringup.jobs.axis, mill_bringup.jobs.force):
+force controller, trajectory). The runner, the offline simulator and `--record` are written
+once against this interface (and `report` against the kind of record a job names); what
+differs between the kinds sits in one class per kind (mill_bringup.jobs.axis, .realtime,
+.force):
 
 - which node clocks the job (it starts last, once the others are heard), which topics
   must have a publisher before it starts, and which topics the monitor keeps;
 - when the job is complete and when its last messages have arrived;
 - the record: from the messages of a run (or a bag), or from the offline simulation,
   sample by sample (`Simulation.step`), by the one loop in `simulate`;
-- the summary of a record, and the differences of two records of the same job.
+- the summary of a record, and the differences of two records of the same job;
+- the kind of record a run gives (RECORD, mill_analysis.records: named in its bag, `report`
+  reads the bag through it), and what to note before the paper's verdicts (PAPER_NOTE).
 """
 
 from __future__ import annotations
@@ -50,6 +53,8 @@ class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
 
     KIND: ClassVar[str]
+    # The kind of record a run gives (mill_analysis.records): named in its bag, for `report`.
+    RECORD: ClassVar[str]
     CLOCK: ClassVar[str]  # the role of the node that clocks the job (mill_bringup.catalogue)
     # How long to wait, after the job is complete, for its last messages [s].
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
@@ -57,6 +62,8 @@ class Job(ABC, Generic[R]):
     HAS_OFFLINE_TWIN: ClassVar[bool] = True
     # Whether the runner deactivates the clock node (lifecycle: brake) when the job is done.
     BRAKE_AT_END: ClassVar[bool] = False
+    # What to say before the paper's verdicts on a run of this kind ('': nothing to add).
+    PAPER_NOTE: ClassVar[str] = ''
 
     def __init__(self, scen: Scenario) -> None:
         self.scenario = scen

@@ -6,7 +6,7 @@ the force sample F_p(t_k); the force controller answers with the override o_k an
 sample k, whose velocity and acceleration are the feed command and its ramp; the force
 process integrates the revolution and publishes the force over it
 (/mill/cutting_force/trace). The job is ⌈duration/T⌉ samples; J_c of eq. (14) comes from
-the recorded force stream (mill_bringup.force_record).
+the recorded force stream (mill_analysis.force_record).
 """
 
 from __future__ import annotations
@@ -16,16 +16,17 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+from mill_analysis.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
+from mill_analysis.force_record import record_from_messages as force_record_from_messages
 from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
 from mill_models.force_process import ForceProcessModel
 
+from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
-from mill_bringup.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
-from mill_bringup.force_record import record_from_messages as force_record_from_messages
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
@@ -47,6 +48,7 @@ def _only(scen: Scenario, role: str) -> str:
 
 class ForceJob(Job[ForceRecord]):
     KIND = 'force'
+    RECORD = records.FORCE
     CLOCK = FORCE_PROCESS
 
     def __init__(self, scen: Scenario) -> None:

@@ -1,0 +1,207 @@
+"""How `report` reads, summarises and plots a bag: one RecordKind per kind of record.
+
+A bag of `run_scenario --record` names its kind of record (mill_analysis.records: the job
+kind's); `kind_of` picks the RecordKind by that name. A bag that names none (the `recorder`
+node's, `ros2 bag record`'s) is told by its topics: the force stream and the force
+controller's state make a force job's bag; any other is an axis job's, lockstep or realtime
+as its job status says.
+
+Bags of kinds that share a REPORT go side by side in one report (lockstep and realtime axis
+runs do); the presentation (table, report.md, plots) is that of the first bag's kind.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar, Generic, TypeVar
+
+from mill_bag.errors import BagError
+from mill_bag.reader import Bag, open_bag
+from mill_common.progress import Progress
+
+from mill_analysis import records
+from mill_analysis.force_record import ForceBagRun, is_force_bag, read_force_run
+from mill_analysis.report.analysis import RunReport, analyse
+from mill_analysis.report.force import force_figure, force_markdown, force_table
+from mill_analysis.report.plots import plot_all
+from mill_analysis.report.text import markdown, text_table
+from mill_analysis.run_record import read_run
+
+R = TypeVar('R')
+Figures = list[tuple[str, str]]  # (file name, title) of each plot written
+
+
+@dataclass(frozen=True)
+class ReportOptions:
+    """What `report`'s options ask of every bag."""
+
+    skip: float  # metrics over t >= skip [s]
+    window: float  # of the largest windowed RMS tracking error [s]
+    freqs: list[float]  # of the error amplitudes [Hz]
+    namespace: str | None  # the machine, in a bag of several
+    quiet: bool  # no progress display
+
+
+class RecordKind(ABC, Generic[R]):
+    """How a bag of one kind of record is read and summarised (`read`, one bag) and shown
+    (`table`, `markdown`, `plot`, every bag of the report)."""
+
+    NAME: ClassVar[str]  # mill_analysis.records
+    REPORT: ClassVar[str]  # kinds with the same REPORT share one (e.g. 'axis-job')
+
+    @abstractmethod
+    def read(self, bag: Path, label: str, options: ReportOptions) -> R:
+        """The bag's run, summarised; BagError (one line) when it cannot be."""
+
+    @abstractmethod
+    def table(self, runs: Sequence[R]) -> str:
+        """What `report` prints."""
+
+    @abstractmethod
+    def markdown(self, runs: Sequence[R], figures: Figures, argv: list[str]) -> str:
+        """report.md."""
+
+    @abstractmethod
+    def plot(self, runs: Sequence[R], out: Path) -> Figures:
+        """The plots, written to `out`."""
+
+
+class BagProgress:
+    """read_run's progress callback: one Progress per phase (reading, decoding) of a bag."""
+
+    def __init__(self, label: str, quiet: bool) -> None:
+        self.label = label
+        self.quiet = quiet
+        self.phase = ''
+        self.bar: Progress | None = None
+
+    def __call__(self, phase: str, done: int, total: int | None) -> None:
+        if phase != self.phase:
+            self.close()
+            self.phase = phase
+            self.bar = Progress(
+                total,
+                unit='messages',
+                quiet=self.quiet,
+                label=f'{self.label}: {phase}',
+                decimals=0,
+                delay=2.0,  # a short bag shows none (nor before a one-line error)
+            )
+        if self.bar is not None:
+            self.bar.update(done)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+class AxisRecords(RecordKind[RunReport]):
+    """The three-axis job's bags: per axis tracking and estimation errors, spectra, loop
+    timing. This class reads a bag that does not say whether its run was lockstep or realtime
+    (the job status tells); the two kinds below read a bag that says."""
+
+    NAME = 'axis, lockstep or realtime'  # no bag names it: what a bag without a name is
+    REPORT = 'axis-job'
+    REALTIME: ClassVar[bool | None] = None  # None: told by the bag's job status
+
+    def read(self, bag: Path, label: str, options: ReportOptions) -> RunReport:
+        t0 = time.monotonic()
+        progress = BagProgress(label, options.quiet)
+        try:
+            run = read_run(bag, options.namespace, progress, realtime=self.REALTIME)
+        finally:
+            progress.close()
+        if run.n <= 1 or not (run.record.t >= options.skip).any():
+            raise BagError(
+                f'{bag}: no samples at t >= {options.skip:g} s '
+                f'(the run lasts {run.record.t[-1]:g} s)'
+            )
+        report = analyse(run, label, options.skip, options.window, options.freqs)
+        report.read_seconds = time.monotonic() - t0
+        return report
+
+    def table(self, runs: Sequence[RunReport]) -> str:
+        return text_table(list(runs))
+
+    def markdown(self, runs: Sequence[RunReport], figures: Figures, argv: list[str]) -> str:
+        return markdown(list(runs), figures, argv)
+
+    def plot(self, runs: Sequence[RunReport], out: Path) -> Figures:
+        big = sum(r.run.n for r in runs) > 20_000
+        workers = min(2, os.cpu_count() or 1) if big else 1  # long runs: two forked renderers
+        return plot_all(list(runs), out, workers)
+
+
+class LockstepAxisRecords(AxisRecords):
+    """A lockstep run: samples on the grid t = k T."""
+
+    NAME = records.AXIS
+    REALTIME = False
+
+
+class RealtimeAxisRecords(AxisRecords):
+    """A realtime run: samples at the drive's stamps, with the commands' timing."""
+
+    NAME = records.AXIS_REALTIME
+    REALTIME = True
+
+
+ForceRun = tuple[str, ForceBagRun]  # (label, run)
+
+
+class ForceRecords(RecordKind[ForceRun]):
+    """The cutting-force job's bags (Rubio 2013): J_c of eq. (14) and the override."""
+
+    NAME = records.FORCE
+    REPORT = 'force-job'
+
+    def read(self, bag: Path, label: str, options: ReportOptions) -> ForceRun:
+        return label, read_force_run(bag, options.namespace)
+
+    def table(self, runs: Sequence[ForceRun]) -> str:
+        return force_table(list(runs))
+
+    def markdown(self, runs: Sequence[ForceRun], figures: Figures, argv: list[str]) -> str:
+        return force_markdown(list(runs), figures, argv)
+
+    def plot(self, runs: Sequence[ForceRun], out: Path) -> Figures:
+        return force_figure(list(runs), out)
+
+
+KINDS: dict[str, RecordKind[Any]] = {
+    kind.NAME: kind for kind in (LockstepAxisRecords(), RealtimeAxisRecords(), ForceRecords())
+}
+
+
+def kind_of(path: Path) -> RecordKind[Any]:
+    """The kind of record a bag holds: the one it names, else told by its topics."""
+    bag = open_bag(path)
+    name = records.named(bag.custom_data)
+    if name is not None:
+        if name not in KINDS:
+            raise BagError(
+                f'{path} holds a record of kind {name!r}, which this report does not know '
+                f'({", ".join(KINDS)})'
+            )
+        return KINDS[name]
+    return ForceRecords() if is_force_bag(bag_topics(bag)) else AxisRecords()
+
+
+def bag_topics(bag: Bag) -> dict[str, int]:
+    """The topics of a bag (from its metadata.yaml, else by reading it)."""
+    try:
+        info = bag.metadata['rosbag2_bagfile_information']  # type: ignore[index]
+        return {
+            t['topic_metadata']['name']: int(t.get('message_count', 0))
+            for t in info['topics_with_message_count']
+        }
+    except (KeyError, TypeError):
+        for _ in bag.read(topics=()):
+            pass
+        return dict(bag.counts)

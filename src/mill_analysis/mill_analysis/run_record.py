@@ -1,0 +1,566 @@
+"""What a bag of a mill run means: its messages -> RunRecord, and the run's job and plant status.
+
+The mill knowledge about bags lives here; the bag format itself is mill_bag (which
+knows no mill topic). `build_record` is the one place where messages become
+signals: the runner's monitor (live, `record_from_raw` on the serialized messages it
+kept) and `read_run` (a bag, for `report`) both call it, with the same `summarize`
+after it, so the runner's summary and the report of its bag agree exactly.
+
+`read_run` reads a bag by topic names and types only (the contract of
+mill_common.topics): the sample period is the greatest common divisor of the state
+stamps and the job length comes from the trajectory's job status on /diagnostics,
+so a bag from `ros2 bag record` with these topics works as well as ours. The run may be
+under a machine namespace (`/machine2/mill/x/state`): `read_run` finds it from the topic
+names, or is told which one when a bag holds several machines; of the shared /diagnostics it
+reads only that machine's statuses.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.errors import BagError
+from mill_bag.reader import Bag, open_bag
+from mill_bag.types import (
+    DIAGNOSTIC_ARRAY,
+    JOINT_STATE,
+    JOINT_TRAJECTORY,
+    WRENCH_STAMPED,
+    decode,
+)
+from mill_common.checks import Rejected, joint_values, point_values
+from mill_common.signals import AXES
+from mill_common.timebase import job_steps
+
+from mill_analysis.bag_status import job_end, job_start, plant_status
+from mill_analysis.metrics import RunRecord
+from mill_analysis.realtime_record import command_timing, realtime_record
+from mill_common import topics as topic_names
+
+# progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
+ProgressCallback = Callable[[str, int, int | None], None]
+
+
+def record_topics(axes: Sequence[str]) -> dict[str, str]:
+    """Topics (and types) a RunRecord is built from."""
+    out = {}
+    for axis in axes:
+        out[topic_names.state(axis)] = JOINT_STATE
+        out[topic_names.estimate(axis)] = JOINT_STATE
+        out[topic_names.joint_command(axis)] = JOINT_STATE
+    out[topic_names.REFERENCE] = JOINT_TRAJECTORY
+    out[topic_names.GROUND_TRUTH] = JOINT_STATE
+    out[topic_names.CUTTING_FORCE] = WRENCH_STAMPED
+    return out
+
+
+def _ns(time_msg: Any) -> int:
+    return time_msg.sec * 1_000_000_000 + time_msg.nanosec
+
+
+def build_record(
+    messages: Iterable[tuple[str, Any]],
+    axes: Sequence[str],
+    n: int,
+    dt_ns: int,
+    listened: Iterable[str],
+    owners: Mapping[str, str] | None = None,
+) -> tuple[RunRecord, dict[str, int]]:
+    """Decoded messages (topic, message) -> RunRecord of n samples at t = k T.
+
+    The one place where messages become signals: the runner's monitor and the
+    bag reader both call it. A message belongs to sample k when its header stamp
+    is exactly k T (0 <= k < n); of a repeated stamp the first message counts (the nodes
+    take the first too), and a reference older than the newest one is left out.
+    owners {topic: node}: a message of such a topic whose header.frame_id names another
+    sender is left out, as is a malformed one (what the node reading the topic drops: no
+    joint, too short, not finite, a reference point off the grid; a command's NaN is a brake
+    request and kept); both are counted in the record's `foreign`. Also returns, per listened
+    per-sample topic, how many of the n samples are missing.
+    """
+    owners = owners or {}
+    rec = RunRecord.empty(n, dt_ns / 1e9)
+    s = rec.signals
+    seen: dict[str, set[int]] = {t: set() for t in listened if t != topic_names.REFERENCE}
+    position, torque, force = s['position'], s['torque'], s['force']
+    est_v, est_d = s['estimate_velocity'], s['estimate_disturbance']
+    ref_p, ref_v = s['reference'], s['reference_velocity']
+    true_v, true_d = s['true_velocity'], s['true_disturbance']
+
+    def checked(msg, i, fields):  # what the node of the topic would take, or ValueError
+        got = joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
+        if isinstance(got, Rejected):
+            raise ValueError(got.reason)
+        return got
+
+    def on_state(k, msg, i):
+        (position[k, i],) = checked(msg, i, ('position',))
+
+    def on_estimate(k, msg, i):
+        _, est_v[k, i], est_d[k, i] = checked(msg, i, ('position', 'velocity', 'effort'))
+
+    def on_command(k, msg, i):
+        got = joint_values(msg.name, {'effort': msg.effort}, AXES[i], ('effort',))
+        if isinstance(got, Rejected) and not got.non_finite:
+            raise ValueError(got.reason)
+        torque[k, i] = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
+
+    def on_truth(k, msg, _i):
+        for j, name in enumerate(msg.name):
+            i = AXES.index(name)
+            true_v[k, i] = msg.velocity[j]
+            true_d[k, i] = msg.effort[j]
+
+    def on_force(k, msg, _i):
+        f = msg.wrench.force
+        force[k] = (f.x, f.y, f.z)
+
+    handlers: dict[str, tuple] = {
+        topic_names.GROUND_TRUTH: (on_truth, None),
+        topic_names.CUTTING_FORCE: (on_force, None),
+    }
+    for axis in axes:
+        i = AXES.index(axis)
+        handlers[topic_names.state(axis)] = (on_state, i)
+        handlers[topic_names.estimate(axis)] = (on_estimate, i)
+        handlers[topic_names.joint_command(axis)] = (on_command, i)
+
+    foreign = rec.foreign
+    first: dict[str, set[int]] = {}  # samples of each topic taken already
+    newest_reference = -1
+    for topic, msg in messages:
+        owner = owners.get(topic)
+        if owner is not None and msg.header.frame_id != owner:
+            foreign[topic] = foreign.get(topic, 0) + 1
+            continue
+        k, rem = divmod(_ns(msg.header.stamp), dt_ns)
+        if rem != 0 or not 0 <= k < n:
+            continue
+        taken = first.setdefault(topic, set())
+        if k in taken or (topic == topic_names.REFERENCE and k < newest_reference):
+            continue  # a repeat (the same values) or a message in the past: the first counts
+        try:
+            if topic == topic_names.REFERENCE:
+                if len(msg.points) == 0:
+                    continue  # nothing in it
+                values = []  # all points checked before any is used, as the controllers do
+                for point in msg.points:
+                    offset = _ns(point.time_from_start)
+                    if offset % dt_ns:
+                        raise ValueError('a point off the sample grid')
+                    arrays = {
+                        'positions': point.positions,
+                        'velocities': point.velocities,
+                        'accelerations': point.accelerations,
+                    }
+                    got = point_values(
+                        msg.joint_names,
+                        arrays,
+                        axes,
+                        ['positions'],
+                        ['velocities', 'accelerations'],
+                    )
+                    if isinstance(got, Rejected):
+                        raise ValueError(got.reason)
+                    values.append((k + offset // dt_ns, got['positions'], got['velocities']))
+                for kp, pos, vel in values:
+                    if 0 <= kp < n:
+                        for axis, p_i, v_i in zip(axes, pos, vel, strict=True):
+                            i = AXES.index(axis)
+                            ref_p[kp, i], ref_v[kp, i] = p_i, v_i
+                newest_reference = k
+                taken.add(k)
+                continue
+            handler = handlers.get(topic)
+            if handler is None:
+                continue
+            handler[0](k, msg, handler[1])
+        except (IndexError, ValueError):
+            foreign[topic] = foreign.get(topic, 0) + 1  # malformed: too short, unknown joint
+            continue
+        taken.add(k)
+        if topic in seen:
+            seen[topic].add(k)
+    missing = {t: n - len(ks) for t, ks in seen.items()}
+    return rec, missing
+
+
+def record_from_raw(
+    raw: dict[str, list[bytes]],
+    types: dict[str, str],
+    axes: Sequence[str],
+    n: int,
+    dt_ns: int,
+    workers: int = 1,
+    progress: ProgressCallback | None = None,
+    owners: Mapping[str, str] | None = None,
+) -> tuple[RunRecord, dict[str, int]]:
+    """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
+    reader both call. With workers > 1 the topics are split between forked processes, each
+    running build_record on its share; every (sample, axis) value comes from one topic, so
+    the merged record is the one a single call gives. `progress('decoding', done, total)`
+    is called now and then with the number of messages decoded."""
+    listened = list(raw)
+    total = sum(len(raw[t]) for t in listened)
+    if workers <= 1:
+        messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
+        if progress is not None:
+            messages = _counted(messages, lambda done: progress('decoding', done, total))
+        return build_record(messages, axes, n, dt_ns, listened, owners)
+    import multiprocessing
+
+    global _SHARED  # read by the forked workers, not pickled
+    groups: list[list[str]] = [[] for _ in range(workers)]
+    loads = [0] * workers
+    for topic in sorted(listened, key=lambda t: -len(raw[t])):
+        i = loads.index(min(loads))
+        groups[i].append(topic)
+        loads[i] += len(raw[topic])
+    context = multiprocessing.get_context('fork')
+    decoded = context.Value('q', 0)  # messages decoded by all workers, for progress
+    _SHARED = (raw, types, list(axes), n, dt_ns, decoded, owners)
+    try:
+        with context.Pool(workers) as pool:
+            pending = pool.map_async(_record_part, [g for g in groups if g])
+            while not pending.ready():
+                pending.wait(0.5)
+                if progress is not None:
+                    progress('decoding', decoded.value, total)
+            parts = pending.get()
+    finally:
+        _SHARED = None
+    if progress is not None:
+        progress('decoding', total, total)
+    rec = RunRecord.empty(n, dt_ns / 1e9)
+    missing: dict[str, int] = {}
+    for signals, part_missing, part_foreign in parts:
+        for name, values in signals.items():
+            have = ~np.isnan(values)
+            rec.signals[name][have] = values[have]
+        missing.update(part_missing)
+        rec.foreign.update(part_foreign)
+    return rec, missing
+
+
+_SHARED: tuple | None = None
+
+
+def _counted(items: Iterable[Any], report: Callable[[int], None], every: int = 20_000):
+    """The items, calling report(count so far) every `every` items and at the end."""
+    count = 0
+    for count, item in enumerate(items, 1):
+        if count % every == 0:
+            report(count)
+        yield item
+    report(count)
+
+
+def _record_part(
+    topics_part: list[str],
+) -> tuple[dict[str, np.ndarray], dict[str, int], dict[str, int]]:
+    assert _SHARED is not None, 'set for the worker processes before they start'
+    raw, types, axes, n, dt_ns, decoded, owners = _SHARED
+
+    last = 0
+
+    def add(done: int) -> None:
+        nonlocal last
+        with decoded.get_lock():
+            decoded.value += done - last
+        last = done
+
+    messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
+    messages = _counted(messages, add, every=5_000)
+    rec, missing = build_record(messages, axes, n, dt_ns, topics_part, owners)
+    return rec.signals, missing, rec.foreign
+
+
+# -- the run in a bag ------------------------------------------------------------------------
+
+
+@dataclass
+class BagRun:
+    """What a bag holds of a mill run: its RunRecord and what the report needs besides."""
+
+    bag: Bag
+    axes: list[str]
+    dt_ns: int
+    n: int
+    record: RunRecord
+    missing: dict[str, int]
+    end_time: float | None
+    job_end_source: str
+    state_wall_ns: np.ndarray | None  # wall time each sample of the first state arrived [ns]
+    plant_status: dict[str, str]
+    feed_override: list[tuple[int, float]] | None
+    message_count: int
+    size_bytes: int
+    notes: list[str] = field(default_factory=list)
+    # A realtime run (the drive's own clock): per axis, the state -> command latency of every
+    # command as the recorder received it [ms], the share of states no command answered and
+    # the most of them in a row.
+    realtime: bool = False
+    command_latency_ms: dict[str, np.ndarray] = field(default_factory=dict)
+    unanswered: dict[str, float] = field(default_factory=dict)
+    longest_unanswered: dict[str, int] = field(default_factory=dict)
+
+
+def run_namespace(names: Iterable[str], where: str, namespace: str | None = None) -> str:
+    """The machine namespace of the mill run among a bag's topic names (BagError if there is
+    none, or several and `namespace` does not choose one)."""
+    names = list(names)
+    found = sorted(
+        {ns for a in AXES for ns in topic_names.namespaces_with(names, topic_names.state(a))}
+    )
+    if namespace is not None:
+        try:
+            wanted = topic_names.namespace(namespace)
+        except ValueError as exc:
+            raise BagError(str(exc)) from None
+        if wanted not in found:
+            raise BagError(
+                f'{where} holds no mill run in namespace {wanted} '
+                f'(runs in: {", ".join(found) or "none"})'
+            )
+        return wanted
+    if not found:
+        present = ', '.join(sorted(names)) or 'none'
+        raise BagError(
+            f'{where} holds no mill run: no /mill/<axis>/state topic in any namespace '
+            f'(sensor_msgs/msg/JointState); its topics: {present}'
+        )
+    if len(found) > 1:
+        raise BagError(
+            f'{where} holds runs in several namespaces ({", ".join(found)}); '
+            'choose one with --namespace'
+        )
+    return found[0]
+
+
+@dataclass
+class _Stream:
+    """The messages of one topic of a bag, as read."""
+
+    msgtype: str
+    data: list[bytes] = field(default_factory=list)
+    log_times: list[int] = field(default_factory=list)
+    publish_times: list[int | None] = field(default_factory=list)
+
+
+def read_run(
+    path: str | Path,
+    namespace: str | None = None,
+    progress: ProgressCallback | None = None,
+    realtime: bool | None = None,
+) -> BagRun:
+    """Read a bag of a mill run into a RunRecord, by topic names and types only.
+
+    The sample period is the greatest common divisor of the state stamps; the
+    number of samples comes from the trajectory's job status on /diagnostics
+    (end_time, as the runner computes it), or, without it, from the last sample
+    every state topic has. The run may be in any namespace; `namespace` chooses the
+    machine in a bag of several. `progress(phase, done, total)` is called now and then, while
+    the bag is read ('reading', messages; total from metadata.yaml, None if it has none)
+    and while its messages are decoded ('decoding'). realtime: whether the bag holds a
+    realtime run, as it says (mill_analysis.records); None for a bag that does not say: a
+    realtime job's status on /diagnostics tells its start stamp, a lockstep one's does not.
+    """
+    bag = open_bag(path)
+    wanted_types = record_topics(AXES)
+    contract = [*wanted_types, topic_names.FEED_OVERRIDE]
+    # One pass over the bag: every topic that is a contract topic in some namespace is
+    # kept by its absolute name; the namespace is chosen once every name is known.
+    kept: dict[str, _Stream | None] = {}
+    info = (bag.metadata or {}).get('rosbag2_bagfile_information') or {}
+    expected = info.get('message_count') if isinstance(info, dict) else None
+    all_statuses: list[Any] = []
+    read = 0
+    for name, msgtype, log_time, publish_time, data in bag.read():
+        read += 1
+        if progress is not None and read % 20_000 == 0:
+            progress('reading', read, expected)
+        if name == topic_names.DIAGNOSTICS:
+            if msgtype == DIAGNOSTIC_ARRAY:
+                all_statuses.append(decode(msgtype, data))
+            continue
+        if name not in kept:
+            ours = any(topic_names.namespaces_with([name], t) for t in contract)
+            kept[name] = _Stream(msgtype) if ours else None
+        stream = kept[name]
+        if stream is not None:
+            stream.data.append(data)
+            stream.log_times.append(log_time)
+            stream.publish_times.append(publish_time)
+    if progress is not None:
+        progress('reading', read, expected)
+    total = sum(bag.counts.values())
+    if total == 0:
+        raise BagError(f'{bag.path} holds no messages')
+    ns = run_namespace(bag.counts, str(bag.path), namespace)
+    raw: dict[str, list[bytes]] = {}
+    walls: dict[str, list[int | None]] = {}  # publish times of the state messages
+    for topic, msgtype in wanted_types.items():
+        name = topic_names.qualify(topic, ns)
+        stream = kept.get(name)
+        if stream is None:
+            continue
+        if stream.msgtype != msgtype:
+            raise BagError(
+                f'{bag.path}: topic {name} has type {stream.msgtype}, expected {msgtype}'
+            )
+        raw[topic] = stream.data
+        walls[topic] = stream.publish_times
+    feed_stream = kept.get(topic_names.qualify(topic_names.FEED_OVERRIDE, ns))
+    feed = (
+        []
+        if feed_stream is None
+        else list(zip(feed_stream.log_times, feed_stream.data, strict=True))
+    )
+    feed_type = '' if feed_stream is None else feed_stream.msgtype
+    statuses = []
+    for array in all_statuses:
+        array.status = [s for s in array.status if topic_names.from_machine(s.hardware_id, ns)]
+        statuses.append(array)
+    axes = [a for a in AXES if topic_names.state(a) in raw]
+    if not axes:
+        raise BagError(f'{bag.path}: no message on the state topics of namespace {ns}')
+    first = topic_names.state(axes[0])
+    first_stamps = [cdr_stamp_ns(d) for d in raw[first]]
+    stamps = np.array(sorted({s for s in first_stamps if s is not None}), dtype=np.int64)
+    start_ns = job_start(statuses)
+    if realtime is None:
+        realtime = start_ns is not None
+    if realtime:  # the drive's own clock: no sample grid
+        if start_ns is None:
+            raise BagError(
+                f'{bag.path}: a realtime run without its start (no start_stamp_ns in the '
+                'job status on /diagnostics)'
+            )
+        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
+    diffs = np.diff(stamps)
+    dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
+    if dt_ns <= 0:
+        raise BagError(f'{bag.path}: fewer than two samples on {first}')
+    notes = []
+    end_time, source = job_end(statuses)
+    if end_time is not None:
+        n = job_steps(end_time, dt_ns)
+    else:
+        last = min(max(cdr_stamp_ns(d) or 0 for d in raw[topic_names.state(a)]) for a in axes)
+        n = last // dt_ns + 1
+        source = 'last sample of every state topic (no job status on /diagnostics)'
+        notes.append('no job status on /diagnostics: every sample up to the last state is used')
+    listened = {t: raw[t] for t in record_topics(axes) if t in raw}
+    to_decode = sum(len(v) for v in listened.values())
+    workers = min(2, os.cpu_count() or 1) if to_decode > 100_000 else 1
+    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers, progress)
+    # Wall-clock arrival of each sample of the first axis, where the storage has
+    # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
+    wall = None
+    pairs = [(s, w) for s, w in zip(first_stamps, walls[first], strict=True) if s is not None]
+    if pairs and any(w is not None and w != s for s, w in pairs):
+        by_stamp = {s: w for s, w in pairs if w is not None}
+        wall = np.array([by_stamp.get(k * dt_ns, -1) for k in range(n)], dtype=np.int64)
+    if bag.cut_short:
+        notes.append(
+            f'the recording was cut short ({bag.cut_short}): the bag holds what was written '
+            'up to its last complete flush'
+        )
+    elif bag.truncated:
+        notes.append(
+            'the bag was not closed (recorder killed?): read up to its last complete chunk'
+        )
+    feed_values = _feed_values(feed_type, feed, notes) if feed else None
+    size = sum(f.stat().st_size for f in bag.files)
+    return BagRun(
+        bag=bag,
+        axes=axes,
+        dt_ns=dt_ns,
+        n=n,
+        record=record,
+        missing={t: m for t, m in missing.items() if m},
+        end_time=end_time,
+        job_end_source=source,
+        state_wall_ns=wall,
+        plant_status=plant_status(statuses),
+        feed_override=feed_values,
+        message_count=total,
+        size_bytes=size,
+        notes=notes,
+    )
+
+
+def _realtime_run(
+    bag: Bag,
+    axes: list[str],
+    raw: dict[str, list[bytes]],
+    walls: dict[str, list[int | None]],
+    statuses: list[Any],
+    start_ns: int,
+    stamps: np.ndarray,
+    total: int,
+) -> BagRun:
+    """A realtime run's record at the drive's stamps, and the commands' timing."""
+    end_time, source = job_end(statuses)
+    if end_time is None:
+        end_time = (int(stamps[-1]) - start_ns) * 1e-9
+    record = realtime_record(raw, axes, start_ns, end_time)
+    timing = command_timing(record, raw, walls, axes, start_ns)
+    latency = {axis: t.latency_ms for axis, t in timing.items()}
+    unanswered = {axis: t.unanswered for axis, t in timing.items()}
+    diffs = np.diff(stamps)
+    dt_ns = int(np.median(diffs)) if diffs.size else 0
+    notes = ["realtime run: samples at the drive's stamps, the reference interpolated there"]
+    return BagRun(
+        bag=bag,
+        axes=axes,
+        dt_ns=dt_ns,
+        n=len(record.t),
+        record=record,
+        missing={},
+        end_time=end_time,
+        job_end_source=source,
+        state_wall_ns=None,
+        plant_status=plant_status(statuses),
+        feed_override=None,
+        message_count=total,
+        size_bytes=sum(f.stat().st_size for f in bag.files),
+        notes=notes,
+        realtime=True,
+        command_latency_ms=latency,
+        unanswered=unanswered,
+        longest_unanswered={axis: t.longest_unanswered for axis, t in timing.items()},
+    )
+
+
+def _feed_values(msgtype: str, feed: list, notes: list[str]) -> list[tuple[int, float]]:
+    """(log time, override) of each override sent; a stamped answer repeated for a
+    re-offered sample (the force controller answers step 0 as often as the plant offers
+    it) is one override, not several."""
+    out = []
+    last_stamp: int | None = None
+    for log_time, data in feed:
+        try:
+            msg = decode(msgtype, data)
+        except Exception:
+            notes.append(f'{topic_names.FEED_OVERRIDE}: cannot decode type {msgtype}')
+            return []
+        stamp = cdr_stamp_ns(data) if hasattr(msg, 'header') else None
+        if stamp is not None and stamp == last_stamp:
+            continue
+        last_stamp = stamp
+        value = getattr(msg, 'data', None)
+        if value is None and len(getattr(msg, 'position', ())):
+            value = msg.position[0]  # sensor_msgs/JointState, the contract's type
+        if value is None:
+            notes.append(f'{topic_names.FEED_OVERRIDE}: type {msgtype} has no numeric data')
+            return []
+        out.append((log_time, float(value)))
+    return out

@@ -1,0 +1,87 @@
+"""report reads a bag through the kind of record it names (run_scenario --record writes its job
+kind's), a bag that names none through the kind its topics and job status tell."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from mill_analysis.report.kinds import (
+    AxisRecords,
+    ForceRecords,
+    LockstepAxisRecords,
+    RealtimeAxisRecords,
+    ReportOptions,
+    kind_of,
+)
+from mill_bag.errors import BagError
+
+from mill_analysis import records
+
+OPTIONS = ReportOptions(skip=0.1, window=0.1, freqs=[60.0], namespace=None, quiet=True)
+
+
+def report(*args: str | Path) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, '-m', 'mill_analysis.report', *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+
+
+def test_every_kind_of_record_has_its_reader() -> None:
+    assert sorted(records.NAMES) == sorted(
+        k.NAME for k in (LockstepAxisRecords, RealtimeAxisRecords, ForceRecords)
+    )
+    assert records.bag_notes(records.FORCE) == {records.KEY: 'force'}
+    with pytest.raises(ValueError, match='no kind of record'):
+        records.bag_notes('axis-lockstep')
+
+
+def test_a_bag_that_names_its_kind_is_read_as_that_kind(foreign_bag) -> None:
+    # The job status has a start stamp, as a realtime job's: the bag's own word counts.
+    path, rec = foreign_bag('mcap', start_ns=0, notes=records.bag_notes(records.AXIS))
+    kind = kind_of(path)
+    assert isinstance(kind, LockstepAxisRecords)
+    run = kind.read(path, 'run', OPTIONS).run
+    assert not run.realtime and run.n == rec.t.size
+
+
+def test_a_bag_that_names_no_kind_is_told_by_its_job_status(foreign_bag) -> None:
+    lockstep, _ = foreign_bag('mcap')
+    assert type(kind_of(lockstep)) is AxisRecords
+    assert not kind_of(lockstep).read(lockstep, 'a', OPTIONS).run.realtime
+    path, _ = foreign_bag('sqlite3', start_ns=0)
+    assert type(kind_of(path)) is AxisRecords
+    assert kind_of(path).read(path, 'b', OPTIONS).run.realtime
+
+
+def test_a_realtime_bag_without_its_start_is_refused(foreign_bag) -> None:
+    path, _ = foreign_bag('mcap', notes=records.bag_notes(records.AXIS_REALTIME))
+    assert isinstance(kind_of(path), RealtimeAxisRecords)
+    with pytest.raises(BagError, match='a realtime run without its start'):
+        kind_of(path).read(path, 'run', OPTIONS)
+
+
+def test_a_kind_report_does_not_know_is_one_line(foreign_bag, tmp_path: Path) -> None:
+    path, _ = foreign_bag('mcap', notes={records.KEY: 'spindle'})
+    with pytest.raises(BagError, match="kind 'spindle', which this report does not know"):
+        kind_of(path)
+    proc = report(path, '--out', tmp_path / 'out')
+    assert proc.returncode == 1
+    assert proc.stderr.startswith('report: error: ') and proc.stderr.count('\n') == 1
+
+
+def test_bags_of_the_axis_and_the_force_job_do_not_share_a_report(
+    foreign_bag, tmp_path: Path
+) -> None:
+    axis, _ = foreign_bag('mcap', notes=records.bag_notes(records.AXIS))
+    force, _ = foreign_bag('sqlite3', notes=records.bag_notes(records.FORCE))
+    proc = report(axis, force, '--out', tmp_path / 'out')
+    assert proc.returncode == 1
+    assert proc.stderr == (
+        'report: error: force-job bags and axis-job bags cannot share one report\n'
+    )

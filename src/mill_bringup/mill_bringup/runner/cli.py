@@ -1,0 +1,193 @@
+"""The run_scenario command: every variant of a scenario across processes, its results and the
+paper's verdicts (python -m mill_bringup.runner; see mill_bringup.runner)."""
+
+from __future__ import annotations
+
+import argparse
+import datetime as dt
+import json
+import signal
+import sys
+from pathlib import Path
+from typing import Any
+
+from mill_bag.errors import BagError
+
+from mill_analysis import papers
+from mill_bringup.cli import add_scenario_arguments, load_scenario
+from mill_bringup.jobs.base import Job
+from mill_bringup.jobs.registry import job_for
+from mill_bringup.runner.options import RunError, RunOptions
+from mill_bringup.runner.result import format_result
+from mill_bringup.runner.run import run
+from mill_bringup.scenario import Scenario, ScenarioError, check_layout
+from mill_common import topics
+
+
+def _apply_namespace(
+    scen: Scenario, runs: dict[str, Scenario], namespace: str | None, private_clock: bool
+) -> None:
+    """--namespace and --private-clock on the scenario and each of its variants."""
+    for s in (scen, *runs.values()):
+        if namespace is not None:
+            s.set_namespace(namespace)
+        s.private_clock = s.private_clock or private_clock
+    if scen.private_clock and scen.namespace == topics.ROOT:
+        raise ScenarioError('a private clock needs a namespace (--namespace NAME)')
+
+
+def parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog='run_scenario',
+        description='Start every node of a scenario (each in its own process, or as --layout '
+        'says), run the job in '
+        'lockstep and print its results.',
+    )
+    add_scenario_arguments(parser)
+    parser.add_argument('--output', type=Path, help='run directory (default runs/NAME-TIME)')
+    parser.add_argument('--domain-id', help='ROS_DOMAIN_ID (default: yours, else private)')
+    parser.add_argument(
+        '--stall-timeout',
+        type=float,
+        default=30.0,
+        help='give up when no sample arrives for this long [s]; for a process that '
+        '--respawn just started again, at least as long as a start-up may take',
+    )
+    parser.add_argument(
+        '--compare-offline',
+        action='store_true',
+        help='also run the offline simulator and print the largest differences',
+    )
+    parser.add_argument(
+        '--record',
+        nargs='?',
+        const='',
+        metavar='BAG',
+        help='write every topic to a rosbag2 bag (MCAP) in directory BAG, which must not '
+        'exist (default: RUN_DIR/bag)',
+    )
+    parser.add_argument(
+        '--namespace',
+        metavar='NAME',
+        help="run every node under this machine namespace (default: the scenario's, else /); "
+        '/clock and /diagnostics stay global',
+    )
+    parser.add_argument(
+        '--private-clock',
+        action='store_true',
+        help='remap the simulation clock /clock to NAMESPACE/clock, so that several '
+        'simulated machines can run in one domain at the same time',
+    )
+    parser.add_argument('--quiet', '-q', action='store_true', help='no progress display')
+    parser.add_argument(
+        '--external',
+        action='append',
+        default=[],
+        metavar='NODE',
+        help='a node of the scenario that runs elsewhere, e.g. a hardware driver (repeatable)',
+    )
+    parser.add_argument(
+        '--respawn',
+        action='store_true',
+        help='start a node that dies again (not the plant); it rejoins the running job (the '
+        'plant and the peers then wait for a node as long as a start-up may take)',
+    )
+    parser.add_argument(
+        '--layout',
+        metavar='LAYOUT',
+        help='which nodes share a process: processes (each its own), per_axis (observer and '
+        "controller of an axis together), single (all in one); default: the scenario's "
+        '(mill_scenario: layout:), else processes',
+    )
+    return parser
+
+
+def bag_paths(
+    record: str | None, runs: dict[str, Scenario], run_dir: Path
+) -> dict[str, Path | None]:
+    """Where --record writes each variant's bag (None: not recorded); none may exist yet."""
+    bags: dict[str, Path | None] = {}
+    for name in runs:
+        bags[name] = None
+        if record is not None:
+            bag = Path(record) if record else (run_dir / name) / 'bag'
+            path = bag / name if name and record else bag
+            bags[name] = path
+            if path.exists():
+                raise RunError(f'--record: {path} exists already; a bag is never overwritten')
+    return bags
+
+
+def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
+    return RunOptions(
+        skip=args.skip,
+        stall_timeout=args.stall_timeout,
+        quiet=args.quiet,
+        domain_id=args.domain_id,
+        compare_offline=args.compare_offline,
+        record_bag=bag,
+        respawn=args.respawn,
+        external=frozenset(args.external),
+        layout=args.layout,
+    )
+
+
+def paper_text(paper: str, jobs: dict[str, Job[Any]], records: dict[str, Any]) -> str:
+    """The paper's metrics and verdicts of the variants' records, after what each kind of
+    job says of them (a realtime run is no reproduction)."""
+    text = papers.report(paper, records)
+    notes = dict.fromkeys(job.PAPER_NOTE for job in jobs.values() if job.PAPER_NOTE)
+    if text and notes:
+        text = ''.join(f'{note}\n' for note in notes) + text
+    return text
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    records: dict[str, Any] = {}
+    intact = True
+    try:
+        scen, runs = load_scenario(args)
+        if args.layout is not None:
+            check_layout(args.layout)
+        _apply_namespace(scen, runs, args.namespace, args.private_clock)
+        jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
+        if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
+            raise RunError('--compare-offline: a realtime run has no offline twin')
+        stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
+        run_dir = args.output or Path('runs') / f'{scen.name}-{stamp}'
+        bags = bag_paths(args.record, runs, run_dir)
+        run_dir.mkdir(parents=True, exist_ok=True)
+        print(f'{scen.description}\nrun directory {run_dir}', file=sys.stderr)
+        for name, job in jobs.items():
+            variant_dir = run_dir / name if name else run_dir
+            variant_dir.mkdir(parents=True, exist_ok=True)
+            if name:
+                print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
+            result = run(job, variant_dir, run_options(args, bags[name]))
+            records[name] = result.record
+            intact = intact and result.intact
+            (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
+            if name:
+                print(f'variant {name}:')
+            print(format_result(result))
+    except (ScenarioError, RunError, BagError) as exc:
+        print(f'run_scenario: error: {exc}', file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print('run_scenario: interrupted', file=sys.stderr)
+        return 130
+    text = paper_text(scen.paper, jobs, records)
+    if text:
+        print(text)
+        (run_dir / 'paper.txt').write_text(text + '\n')
+    if not intact:
+        print(
+            'run_scenario: error: the record is incomplete or foreign messages were seen '
+            '(see above)',
+            file=sys.stderr,
+        )
+        return 1
+    return 0

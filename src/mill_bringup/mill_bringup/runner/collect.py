@@ -1,0 +1,103 @@
+"""Collecting a finished run: its last messages, the graph stopped, the bag closed, the record
+built from the monitor's messages, and the RunResult with the job's summary."""
+
+from __future__ import annotations
+
+import resource
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from mill_bringup.jobs.base import Job, simulate
+from mill_bringup.lifecycle_client import deactivate
+from mill_bringup.lost_samples import split_lost
+from mill_bringup.runner.follow import Timing
+from mill_bringup.runner.options import RunOptions
+from mill_bringup.runner.result import RunResult
+from mill_bringup.runner.session import Session
+
+
+@dataclass(frozen=True)
+class Collected:
+    """What a finished run left: its record and what the runner saw of the graph."""
+
+    record: Any
+    missing: dict[str, int]  # samples missing per topic, not counting `lost`
+    lost: dict[str, int]  # samples a killed sender took with it (mill_bringup.lost_samples)
+    problems: list[str]  # the graph's notes, WARN and ERROR statuses heard
+    bag: dict[str, Any] | None  # path, messages and size of the bag, if one was written
+    peak_rss_mb: dict[str, float]  # per process of the graph
+    peak_pss_mb: float  # graph + runner
+
+
+def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
+    """Wait for the job's last messages, brake, stop the graph, close the bag; the record."""
+    monitor, graph = session.monitor, session.graph
+    settle = time.monotonic() + job.SETTLE_TIMEOUT
+    while time.monotonic() < settle and not job.settled(monitor):
+        session.spin('after the job ended')
+    if job.BRAKE_AT_END:
+        for node in job.clock_nodes:
+            deactivate(monitor, session.executor, node.name, session.progress)
+    peak = graph.peak_rss()
+    session.peak_pss_mb = max(session.peak_pss_mb, graph.pss())
+    graph.stop()
+    session.progress.close()
+    bag = _close_bag(session, options)
+    record, gaps = job.record(monitor.raw)
+    missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
+    problems = graph.notes + monitor.problems()
+    return Collected(record, missing, lost, problems, bag, peak, session.peak_pss_mb)
+
+
+def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:
+    """Take what the nodes sent before they stopped, then close the bag; its figures."""
+    recorder = session.monitor.recorder
+    if recorder is None:
+        return None
+    drain = time.monotonic() + 0.3
+    while time.monotonic() < drain:
+        session.executor.spin_once(timeout_sec=0.05)
+    session.monitor.close_recording()
+    return {
+        'path': str(options.record_bag),
+        'messages': recorder.message_count,
+        'size_bytes': recorder.writer.size_bytes,
+    }
+
+
+def result(
+    job: Job[Any], options: RunOptions, domain_id: str, timing: Timing, collected: Collected
+) -> RunResult:
+    """The run's figures and the job's summary of its record (and the offline comparison)."""
+    peak = dict(collected.peak_rss_mb)
+    peak['runner'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    record, wall = collected.record, timing.wall
+    out = RunResult(
+        scenario=job.scenario.name,
+        kind=job.KIND,
+        samples=job.samples,
+        sim_time=job.sim_time,
+        wall_time=wall,
+        real_time_factor=job.sim_time / wall,
+        steps_per_second=job.samples / wall,
+        cpu_ms_per_step=sum(timing.cpu_ms_per_step.values()),
+        cpu_ms_per_step_by_process=timing.cpu_ms_per_step,
+        peak_pss_mb=collected.peak_pss_mb,
+        peak_rss_mb=peak,
+        domain_id=domain_id,
+        missing_samples=collected.missing,
+        summary=job.summary_json(record, options.skip),
+        text=job.summary(record, options.skip),
+        problems=collected.problems,
+        foreign=job.foreign(record),
+        lost_with_restarts=collected.lost,
+        bag=collected.bag,
+        record=record,
+    )
+    if out.bag is not None:
+        sim = job.sim_time
+        out.bag['bytes_per_sim_second'] = out.bag['size_bytes'] / sim if sim > 0 else None
+    if options.compare_offline:
+        out.differences = job.differences(record, simulate(job))
+    return out

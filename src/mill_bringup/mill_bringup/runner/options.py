@@ -1,0 +1,38 @@
+"""How a job runs across processes: what run_scenario's options set. ROS-free."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+class RunError(RuntimeError):
+    """The run could not complete; str() says why."""
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """The options of one run of a job (mill_bringup.runner.run.run).
+
+    respawn: a node other than the clock node that dies is started again (at most 3 times)
+    and rejoins the job, instead of ending the run.
+    external: nodes of the scenario that run elsewhere (a hardware driver, a plant on
+    another host): neither launched nor supervised here; an external clock node with the
+    lifecycle services is activated where it would have been launched.
+    layout: which nodes share a process (mill_bringup.layout; None: the scenario's). A
+    clock node that is a lifecycle node (the drive) can share one: it then waits for the
+    runner to activate it where it would have been launched. Another clock node keeps a
+    process of its own, started last, so that it cannot start before the monitor hears the
+    nodes upstream. Respawn starts a process again whose nodes are none of the clocks.
+    """
+
+    skip: float = 1.0  # the summary's metrics over t >= skip [s]
+    stall_timeout: float = 30.0  # no new sample for this long ends the run [s]
+    startup_timeout: float = 120.0  # until the first sample, or a restarted node is back [s]
+    quiet: bool = False  # no progress display
+    domain_id: str | None = None  # ROS_DOMAIN_ID (None: the caller's, else a private one)
+    compare_offline: bool = False  # also simulate the job and compare the records
+    record_bag: Path | None = None  # write every topic to a rosbag2 bag there
+    respawn: bool = False
+    external: frozenset[str] = frozenset()
+    layout: str | None = None

@@ -1,0 +1,84 @@
+"""What a run gives: RunResult (figures of the run and of its job) and its text."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass
+class RunResult:
+    scenario: str
+    kind: str
+    samples: int
+    sim_time: float
+    wall_time: float
+    real_time_factor: float
+    steps_per_second: float
+    cpu_ms_per_step: float
+    peak_rss_mb: dict[str, float]
+    cpu_ms_per_step_by_process: dict[str, float]
+    peak_pss_mb: float  # graph + runner, sampled once a second (RSS counts libraries per process)
+    domain_id: str
+    missing_samples: dict[str, int]  # per topic, not counting lost_with_restarts
+    summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
+    text: str  # the job's summary as text
+    problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
+    foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
+    # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
+    lost_with_restarts: dict[str, int] = field(default_factory=dict)
+    differences: dict[str, float] | None = None  # against the offline run
+    bag: dict[str, Any] | None = None
+    record: Any = field(default=None, repr=False)
+
+    @property
+    def intact(self) -> bool:
+        """No sample missing, nothing foreign in the record or in the drive's graph."""
+        owned = not any('ownership' in p for p in self.problems)
+        return not self.missing_samples and not self.foreign and owned
+
+    @property
+    def offline_max_difference(self) -> float | None:
+        return None if self.differences is None else max(self.differences.values(), default=0.0)
+
+    def to_json(self) -> dict[str, Any]:
+        d = {k: v for k, v in vars(self).items() if k not in ('record', 'summary', 'text')}
+        d.update(self.summary)
+        d['offline_max_difference'] = self.offline_max_difference
+        d['total_peak_rss_mb'] = sum(self.peak_rss_mb.values())
+        return d
+
+
+def format_result(r: RunResult) -> str:
+    lines = [
+        f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
+        r.text,
+        f'wall time {r.wall_time:.1f} s, real-time factor {r.real_time_factor:.2f}, '
+        f'{r.steps_per_second:.0f} steps/s, {r.cpu_ms_per_step:.2f} ms CPU per step',
+        f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
+        f'({len(r.peak_rss_mb)} processes), {r.peak_pss_mb:.0f} MB in use together (PSS)',
+    ]
+    if r.missing_samples:
+        lines.append(f'WARNING: samples missing in the record: {r.missing_samples}')
+    if r.lost_with_restarts:
+        lines.append(
+            'note: samples lost with their killed sender (started again), not in the record: '
+            f'{r.lost_with_restarts}'
+        )
+    if r.foreign:
+        lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
+    if r.problems:
+        lines.append('diagnostics: ' + '; '.join(r.problems[:5]))
+    if r.differences is not None:
+        lines.append(
+            'max |distributed - offline|: '
+            + ', '.join(f'{k} {v:.3e}' for k, v in r.differences.items())
+        )
+    if r.bag is not None:
+        per_s = r.bag['bytes_per_sim_second']
+        lines.append(
+            f'bag {r.bag["path"]}: {r.bag["messages"]} messages, '
+            f'{r.bag["size_bytes"] / 1e6:.1f} MB'
+            + (f' ({per_s / 1e6:.2f} MB per simulated second)' if per_s else '')
+        )
+    return '\n'.join(lines)
