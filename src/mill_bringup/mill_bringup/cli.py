@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mill_bringup.catalogue import CONTROLLER, TRAJECTORY
+from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, load
 
 
@@ -37,6 +37,13 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         '(the plant keeps the wall clock and holds the newest command, as a drive does)',
     )
     parser.add_argument(
+        '--tuning',
+        choices=('rule',),
+        help='rule: the ADRC law and the ESO observer of every axis at the bandwidths of the '
+        'tuning rule for the sample period and the command delay (mill_models.loop_tuning), '
+        "instead of the scenario's gains, which are designed for its own rate",
+    )
+    parser.add_argument(
         '--skip',
         type=float,
         default=1.0,
@@ -58,6 +65,8 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
         for node in axis_controllers:
             scen.add_override(f'{node.name}.controller={args.controller}')
     set_timing(scen, getattr(args, 'timing', None), getattr(args, 'delay', None))
+    if getattr(args, 'tuning', None):
+        set_tuning(scen)
     if args.duration is not None:
         set_duration(scen, args.duration)
 
@@ -77,6 +86,25 @@ def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> 
         for node in scen.nodes:
             if node.kind.declares('command_delay'):
                 scen.add_override(f'{node.name}.command_delay={delay}')
+
+
+RULE_LAWS = ('adrc', 'pd')  # the laws the tuning rule tunes (mill_models.loop_tuning)
+
+
+def set_tuning(scen: Scenario) -> None:
+    """--tuning rule: every axis's observer the ESO, both at the rule's bandwidths."""
+    for node in scen.nodes_of(CONTROLLER):
+        law = scen.parameters(node.name)['controller']
+        if law not in RULE_LAWS:
+            raise ScenarioError(
+                f'--tuning rule tunes the {" or ".join(RULE_LAWS)} law with the eso observer; '
+                f'{node.name} runs {law}'
+            )
+        scen.add_override(f'{node.name}.pd.omega_c=0.0')
+        scen.add_override(f'{node.name}.design_period=0.0')
+    for node in scen.nodes_of(OBSERVER):
+        for text in ('observer=eso', 'eso.omega_o=0.0', 'design_period=0.0'):
+            scen.add_override(f'{node.name}.{text}')
 
 
 def set_duration(scen: Scenario, duration: float) -> None:

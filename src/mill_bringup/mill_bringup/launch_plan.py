@@ -8,7 +8,8 @@ tested here without a ROS install that has `launch`:
 - namespace: the machine namespace of every node (default: the scenario's, else the root);
 - params_file: a ROS 2 parameter file applied on top of the scenario; its entries are keyed
   `/**`, `NAME`, `/NAME` or `/**/NAME` and must name nodes of the scenario;
-- timing: `lockstep` or `realtime`, given to every node as its `timing` parameter (empty:
+- timing: `lockstep` or `realtime`, set as `run_scenario --timing` sets it (every node's
+  `timing`; realtime also no sim time and one sample of command delay) (empty:
   what the scenario says);
 - log_level: every node's `--log-level`;
 - layout: which nodes share a process (mill_bringup.layout: processes, per_axis, single;
@@ -29,6 +30,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
 from mill_bringup.scenario import (
@@ -78,7 +80,7 @@ ARGUMENTS = (
     Argument(
         'timing',
         '',
-        "lockstep or realtime: every node's timing parameter; empty: the scenario's",
+        "lockstep or realtime, as run_scenario --timing sets it; empty: the scenario's",
     ),
     Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
     Argument(
@@ -163,8 +165,7 @@ def plan(
     if timing:
         if timing not in TIMINGS:
             raise ScenarioError(f'timing must be one of {", ".join(TIMINGS)}, got {timing!r}')
-        for node in scen.nodes:
-            scen.overrides.setdefault(node.name, {})['timing'] = timing
+        set_timing(scen, timing)  # what run_scenario --timing sets, the same way
     if log_level not in LOG_LEVELS:
         raise ScenarioError(f'log_level must be one of {", ".join(LOG_LEVELS)}, got {log_level!r}')
     job = job_for(scen)  # checks the graph: exactly one clock node

@@ -32,3 +32,73 @@ def test_only_a_realtime_run_notes_that_its_verdicts_are_no_reproduction(
     assert paper_text('maharof', {'a': lockstep}, {'a': None}) == "maharof: ['a']"
     both = paper_text('maharof', {'a': lockstep, 'b': realtime, 'c': realtime}, {'a': None})
     assert both == f"{realtime.PAPER_NOTE}\nmaharof: ['a']"  # said once
+
+
+class Source:
+    """What a job reads of a running graph, made up: state stamps, statuses, problems."""
+
+    def __init__(self, stamps: dict[str, int], statuses: dict | None = None) -> None:
+        self.stamps = stamps
+        self.statuses = statuses or {}
+        self.heard: list[str] = []
+
+    def latest_stamp_ns(self, topic: str) -> int:
+        return self.stamps.get(topic, -1)
+
+    def messages(self, topic: str) -> list[bytes]:
+        return []
+
+    def status(self, name: str) -> dict[str, str] | None:
+        return self.statuses.get(name)
+
+    def problems(self) -> list[str]:
+        return list(self.heard)
+
+    def arrival_ns(self, topic: str) -> list[int]:
+        return []
+
+
+def _realtime_slotting():
+    scen = scenario.load('slotting')
+    set_timing(scen, 'realtime')
+    scen.add_override('*.design_period=0.0')
+    return job_for(scen)
+
+
+def test_a_driver_on_the_other_clock_is_refused_in_one_line() -> None:
+    wall = 1_767_000_000 * 10**9  # a system-clock stamp
+    lockstep = job_for(scenario.load('slotting'))
+    with pytest.raises(scenario.ScenarioError, match=r'system clock .* --timing realtime'):
+        lockstep.check(Source({'mill/x/state': wall}))
+    lockstep.check(Source({'mill/x/state': 5 * 10**9}))  # sim time: fine
+    realtime = _realtime_slotting()
+    with pytest.raises(scenario.ScenarioError, match=r'on sim time .* runs in realtime'):
+        realtime.check(Source({'mill/x/state': 10**9}))
+
+
+def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
+    import time
+
+    job = _realtime_slotting()
+    now = time.time_ns()
+    job.start_ns = now - 5 * 10**9
+    fresh = {f'mill/{a}/state': now for a in 'xyz'}
+    job.check(Source(fresh))
+    with pytest.raises(scenario.ScenarioError, match=r'went silent: nothing on mill/y/state'):
+        job.check(Source({**fresh, 'mill/y/state': now - 2 * 10**9}))
+
+
+def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:
+    job = _realtime_slotting()
+    trip = 'y_controller: following error: axis y: following-error trip at 08:00:00.000 UTC'
+    brake = 'plant: z axis: axis z: braked: no fresh command for 10 periods'
+    other = 'plant: realtime: sample rate not held: 3 ticks came late'
+    done = {'trajectory: job': {'state': 'done', 'time': '4.0', 'end_time': '4.0'}}
+    source = Source({}, done)
+    source.heard = [other, trip, brake]
+    assert job.complete(source)
+    source.heard.append('plant: x axis: axis x: braked: no fresh command for 10 periods')
+    # what came after the job's end (the graph stopping) is not the job's
+    assert job.failures(None, source.problems()) == [trip, brake]
+    lockstep = job_for(scenario.load('slotting'))
+    assert lockstep.failures(None, [trip]) == []  # a simulation's trip is its result

@@ -286,7 +286,7 @@ class RealtimeStart:
 
     def _graph_ready(self) -> bool:
         node = self.node
-        if self.refused or set(self.positions) != set(self.axes):
+        if set(self.positions) != set(self.axes):
             return False
         readers = max(len(self.axes), node.params.values['min_subscribers'])
         if node._ref_pub.get_subscription_count() < readers:
@@ -297,6 +297,11 @@ class RealtimeStart:
     def _hold_or_start(self, now: int) -> bool:
         """Before the job: wait for the graph, hold the axes, then start; True once started."""
         node, schedule, v = self.node, self.schedule, self.node.params.values
+        if self.refused:
+            if time.monotonic() >= self.next_report:  # said again: a listener may be late
+                self.next_report = time.monotonic() + 1.0
+                node._report(0.0, 'refused', self.refused, level=DiagnosticStatus.ERROR)
+            return False
         if schedule.hold_ns is None:
             if not self._graph_ready():
                 return False
@@ -313,8 +318,7 @@ class RealtimeStart:
             except ApproachError as exc:
                 self.refused = str(exc)
                 node.get_logger().error(f'job refused: {exc}')
-                node._report(0.0, 'refused', self.refused, level=DiagnosticStatus.ERROR)
-                return False
+                return self._hold_or_start(now)
             node._progress.end_time += approach.duration
             self.commands = self._take_each_axis(
                 topics.joint_command, self._on_command, lambda axis, rejected: None

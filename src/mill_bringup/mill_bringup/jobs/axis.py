@@ -51,6 +51,8 @@ from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
+# A stamp beyond this is a wall-clock time (2001 on), not a simulation's sim time [ns].
+WALL_CLOCK_NS = 10**18
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
@@ -421,6 +423,15 @@ class AxisJob(Job[RunRecord]):
     def progress(self, source: MessageSource) -> float:
         ns = source.latest_stamp_ns(topics.state(self.axes[0]))
         return seconds(ns) if ns >= 0 else -math.inf
+
+    def check(self, source: MessageSource) -> None:
+        ns = source.latest_stamp_ns(topics.state(self.axes[0]))
+        if ns > WALL_CLOCK_NS:
+            raise ScenarioError(
+                f'{self.state_owner} stamps its states with the system clock (a realtime '
+                f'driver, {seconds(ns):.0f} s) but the job runs in lockstep: run it with '
+                '--timing realtime'
+            )
 
     def complete(self, source: MessageSource) -> bool:
         if self.override and self._found is None:

@@ -44,6 +44,10 @@ class MessageSource(Protocol):
         """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
         ...
 
+    def problems(self) -> list[str]:
+        """Every WARN or ERROR status heard so far, `name: message`, once each."""
+        ...
+
     def arrival_ns(self, topic: str) -> Sequence[int]:
         """Wall-clock arrival [ns, system clock] of each message of a timed topic."""
         ...
@@ -131,6 +135,15 @@ class Job(ABC, Generic[R]):
     @abstractmethod
     def complete(self, source: MessageSource) -> bool:
         """Every sample of the job has been produced."""
+
+    def check(self, source: MessageSource) -> None:
+        """While the run goes on: ScenarioError when the graph cannot make the job (a
+        driver on another clock, a drive gone silent)."""
+
+    def failures(self, rec: R, problems: Sequence[str]) -> list[str]:
+        """What went wrong in a finished run that makes it fail (exit code 1): a realtime
+        axis that tripped or was braked. A lockstep trip is a result, not a failure."""
+        return []
 
     def settled(self, source: MessageSource) -> bool:
         """The last messages that follow a complete job have arrived."""

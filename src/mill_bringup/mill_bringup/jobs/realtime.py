@@ -12,20 +12,23 @@ fraction of periods without a fresh command and the state → command latency.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from mill_analysis.metrics import RunRecord, format_summary, summarize
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
+from mill_common.timebase import job_steps, seconds
 
 from mill_analysis import records
-from mill_bringup.jobs.axis import JOINT_STATE, AxisJob, timing_of
+from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
+DRIVE_SILENCE_NS = 1_000_000_000  # no state this long after the start: the drive is gone
 DRIVE_FIGURES = (
     'late_fraction',
     'longest_late_run',
@@ -70,10 +73,15 @@ class RealtimeAxisJob(AxisJob):
         self.drive: dict[str, str] = {}
         self._source: MessageSource | None = None
         self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
+        self._problems_at_end: list[str] | None = None
 
     @property
     def sim_time(self) -> float:
-        return self.end_time  # the path; an approach move, if any, comes on top
+        return self.end_time  # the path, and once started the approach move before it
+
+    @property
+    def samples(self) -> int:
+        return job_steps(self.end_time, self.dt_ns)
 
     def prepare_graph(self, monitored: bool) -> None:
         # No lockstep start: the drive ticks from its activation on. The trajectory starts the
@@ -118,6 +126,36 @@ class RealtimeAxisJob(AxisJob):
             return -math.inf  # not started: the trajectory holds the axes until all answer
         return float(status['time'])
 
+    def check(self, source: MessageSource) -> None:
+        topic = topics.state(self.axes[0])
+        ns = source.latest_stamp_ns(topic)
+        if 0 <= ns < WALL_CLOCK_NS:
+            raise ScenarioError(
+                f'{self.state_owner} stamps its states on sim time (a lockstep plant, '
+                f'{seconds(ns):.3f} s) but the job runs in realtime: run both in one timing'
+            )
+        if self.start_ns is None or ns < 0:
+            return
+        now = time.time_ns()
+        for axis in self.axes:
+            quiet = now - max(source.latest_stamp_ns(topics.state(axis)), self.start_ns)
+            if quiet > DRIVE_SILENCE_NS:
+                raise ScenarioError(
+                    f'the drive went silent: nothing on {topics.state(axis)} from '
+                    f'{self.state_owner} for {quiet / 1e9:.1f} s'
+                )
+
+    def failures(self, rec: RunRecord, problems: Sequence[str]) -> list[str]:
+        """Every axis that tripped or was braked while the job ran (what happens after its
+        end, as the graph stops, is not the job's): on a machine, the job did not complete."""
+        parts = ('following error', *(f'{axis} axis' for axis in self.axes))
+        heard = problems if self._problems_at_end is None else self._problems_at_end
+        return [
+            p
+            for p in heard
+            if any(f': {part}: ' in p for part in parts) and ('trip' in p or 'braked' in p)
+        ]
+
     def complete(self, source: MessageSource) -> bool:
         status = self._job(source)
         if status is None:
@@ -128,7 +166,10 @@ class RealtimeAxisJob(AxisJob):
         if drive is not None:
             self.drive = drive
         self._source = source
-        return status.get('state') == 'done'
+        done = status.get('state') == 'done'
+        if done:
+            self._problems_at_end = source.problems()
+        return done
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         if self.start_ns is None:

@@ -147,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
     signal.signal(signal.SIGTERM, signal.default_int_handler)
     records: dict[str, Any] = {}
-    intact = True
+    intact, failed = True, False
     try:
         scen, runs = load_scenario(args)
         if args.layout is not None:
@@ -169,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
             result = run(job, variant_dir, run_options(args, bags[name]))
             records[name] = result.record
             intact = intact and result.intact
+            failed = failed or bool(result.failures)
             (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
             if name:
                 print(f'variant {name}:')
@@ -183,6 +184,11 @@ def main(argv: list[str] | None = None) -> int:
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
+    if failed:
+        print(
+            'run_scenario: error: the job failed on the machine (see FAILED above)', file=sys.stderr
+        )
+        return 1
     if not intact:
         print(
             'run_scenario: error: the record is incomplete or foreign messages were seen '

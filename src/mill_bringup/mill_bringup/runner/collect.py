@@ -92,6 +92,7 @@ def result(
         problems=collected.problems,
         foreign=job.foreign(record),
         lost_with_restarts=collected.lost,
+        failures=job.failures(record, collected.problems),
         bag=collected.bag,
         record=record,
     )

@@ -34,6 +34,7 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
     reached, last_change = -float('inf'), t_start
     while not job.complete(session.monitor):
         session.spin('before the job ended')
+        job.check(session.monitor)
         now = time.monotonic()
         t = job.progress(session.monitor)
         if t > reached:

@@ -27,6 +27,8 @@ class RunResult:
     foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
     # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
     lost_with_restarts: dict[str, int] = field(default_factory=dict)
+    # what made the job fail (a realtime axis that tripped or was braked): exit code 1
+    failures: list[str] = field(default_factory=list)
     differences: dict[str, float] | None = None  # against the offline run
     bag: dict[str, Any] | None = None
     record: Any = field(default=None, repr=False)
@@ -50,7 +52,8 @@ class RunResult:
 
 
 def format_result(r: RunResult) -> str:
-    lines = [
+    lines = [f'FAILED: {f}' for f in r.failures]
+    lines += [
         f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
         r.text,
         f'wall time {r.wall_time:.1f} s, real-time factor {r.real_time_factor:.2f}, '
