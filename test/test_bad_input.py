@@ -244,7 +244,7 @@ def test_descriptors_show_types_ranges_and_constraints(start_node) -> None:
         omega = d['pd.omega_c']
         assert omega.type == ParameterType.PARAMETER_DOUBLE and not omega.dynamic_typing
         assert omega.description.startswith('natural frequency ω_c')
-        assert omega.additional_constraints == '> 0'
+        assert omega.additional_constraints == '>= 0'  # 0: the tuning rule's
         (r,) = omega.floating_point_range
         assert (r.from_value, r.to_value, r.step) == (0.0, math.inf, 0.0)
         law = d['controller']

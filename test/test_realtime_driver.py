@@ -119,6 +119,7 @@ class Driver(Node):
         self.newest = {}
         self.late = dict.fromkeys(AXES, 0)
         self.published = []
+        self.last_tick = None
         self.t0 = time.monotonic()
         qos = 10
         self.pubs = {a: self.create_publisher(JointState, f'mill/{a}/state', qos) for a in AXES}
@@ -138,6 +139,19 @@ class Driver(Node):
 
     def tick(self):
         ns = time.time_ns()
+        if self.last_tick is not None:                  # the machine moved since the last tick
+            dt = (ns - self.last_tick) * 1e-9           # with what it held: integrate that
+            t = time.monotonic() - self.t0
+            for a in AXES:
+                self.integrate(a, self.held[a], t, dt)
+        self.last_tick = ns
+        for a in AXES:
+            y = round(self.x[a] / ENCODER) * ENCODER
+            msg = JointState(name=[a], position=[y])
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 10**9)
+            msg.header.frame_id = 'plant'
+            self.pubs[a].publish(msg)
+        self.published = (self.published + [ns])[-50:]
         for a in AXES:
             if a in self.newest:                        # zero-order hold of the newest command
                 self.held[a], self.late[a] = self.newest.pop(a), 0
@@ -146,25 +160,15 @@ class Driver(Node):
                 if self.late[a] >= 10 and self.held[a] == self.held[a]:
                     self.held[a] = math.nan             # brake after 10 ticks without one
                     self.report(DiagnosticStatus.WARN, f'axis {a} braked: 10 late ticks')
-        for a in AXES:
-            y = round(self.x[a] / ENCODER) * ENCODER
-            msg = JointState(name=[a], position=[y])
-            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(ns, 10**9)
-            msg.header.frame_id = 'plant'
-            self.pubs[a].publish(msg)
-        self.published = (self.published + [ns])[-50:]
-        t = time.monotonic() - self.t0
-        for a in AXES:
-            self.integrate(a, self.held[a], t)
         if int(ns / 1e9) != int((ns - T * 1e9) / 1e9):  # once a second
             self.report(DiagnosticStatus.OK, 'running')
 
-    def integrate(self, a, u, t):
+    def integrate(self, a, u, t, dt):
         if u != u:                                      # braked: held where it is
             self.v[a] = 0.0
             return
         u = max(-CLAMP, min(CLAMP, u))
-        h = T / SUBSTEPS
+        h = dt / SUBSTEPS
         for _ in range(SUBSTEPS):
             v = self.v[a]
             drive = u / LEAD - DAMPING * v - WEIGHT[a]

@@ -15,7 +15,8 @@ reports; its cycle says when a period runs and what counts as late:
   each axis (zero-order hold). A command must answer a state this drive published. A
   period without a fresh command counts as late; after `brake_after` late periods in a row
   the axis is braked until fresh commands return. Ticks more than half a period late (the
-  machine does not hold the rate) are counted and reported.
+  machine does not hold the rate) are counted and reported. A simulated machine moves by
+  the wall time that really passed between two ticks, as a real one does.
 """
 
 from __future__ import annotations
@@ -56,7 +57,8 @@ class Drive(Protocol):
     next_status: float
 
     def publish_states(self, ns: int) -> None: ...
-    def apply(self, ns: int, efforts: list[float], held: Collection[str] = ()) -> None: ...
+    def write(self, ns: int, efforts: list[float]) -> None: ...
+    def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
     def report_axis(self, axis: str, level: bytes, message: str) -> None: ...
     def publish_status(
         self, force: bool = False, message: str | None = None, level: bytes | None = None
@@ -168,7 +170,8 @@ class LockstepCycle(DriveCycle):
         wait = now - self._last_publish
         self._wait_sum += wait
         self._wait_max = max(self._wait_max, wait)
-        d.apply(self.stamp, self._delay(d.table.values()))
+        d.write(self.stamp, self._delay(d.table.values()))
+        d.advance(self.stamp, d.dt)
         self.k += 1
         if self._missing:  # the step waited this long: the outage's length
             waited = self._watchdog.waited(now)
@@ -244,6 +247,7 @@ class RealtimeCycle(DriveCycle):
     def configure(self) -> None:
         d = self.drive
         self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
+        self._held: Collection[str] = ()  # axes held braked before their first command
         # Ticks that came more than half a period late (the machine does not hold the
         # sample rate), in all and since the last report; ticks while active, their basis.
         self.overruns = self._overruns_reported = self.active_ticks = 0
@@ -268,6 +272,8 @@ class RealtimeCycle(DriveCycle):
         if d.backend is None:
             return
         ns = time.time_ns()  # acquisition time on the system clock
+        if self._recent:  # the machine has moved since the last tick with what it held
+            d.advance(self._recent[-1], (ns - self._recent[-1]) * 1e-9, self._held)
         if d.active:
             self.active_ticks += 1
             if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
@@ -290,7 +296,8 @@ class RealtimeCycle(DriveCycle):
                 d.report_axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
         else:
             efforts = [math.nan] * len(d.axes)
-        d.apply(ns, efforts, held)
+        d.write(ns, efforts)
+        self._held = held
         self.k += 1
 
     def watch(self, now: float) -> None:

@@ -253,12 +253,8 @@ class DriveNode(LifecycleNode):
             if force is not None:
                 self._force_pub.publish(encode_wrench_stamped(ns, 'tool', force))
 
-    def apply(self, ns: int, efforts: list[float], held: Collection[str] = ()) -> None:
-        """Write the efforts, publish the ground truth of sample ns, integrate one period.
-
-        held: axes the drive holds braked before their first command (realtime): that is
-        the state a job starts from, not a fault to report.
-        """
+    def write(self, ns: int, efforts: list[float]) -> None:
+        """Write the efforts and publish the ground truth of sample ns."""
         assert self.backend is not None
         backend = self.backend
         backend.write(efforts)
@@ -267,7 +263,17 @@ class DriveNode(LifecycleNode):
             truth = backend.truth()
             if truth is not None:
                 self._truth_pub.publish(joint_state_bytes(ns, MACHINE_AXES, *truth))
-        backend.advance(self.dt)
+
+    def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None:
+        """Let dt seconds pass with the efforts written (a simulated machine integrates;
+        a real one has moved by itself) and report what the step did to them.
+
+        held: axes the drive holds braked before their first command (realtime): that is
+        the state a job starts from, not a fault to report.
+        """
+        assert self.backend is not None
+        backend = self.backend
+        backend.advance(dt)
         report = backend.last_report
         if report is None:
             return

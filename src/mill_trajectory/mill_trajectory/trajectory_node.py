@@ -30,36 +30,30 @@ reported and after input_timeout ends the node (exit code 3).
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable
 from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mill_common.checks import Rejected, StampCheck, joint_values
+from mill_common.checks import Rejected, StampCheck
 from mill_common.codec import decode_joint_state, encode_joint_trajectory
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
     DATA_QOS,
-    DataInput,
     data_publisher,
-    data_unsubscribe,
     from_stamp,
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
-from mill_common.timebase import period_ns, seconds
-from rclpy.clock import Clock as RosClock
-from rclpy.clock import ClockType
+from mill_common.timebase import period_ns
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
-from mill_trajectory.approach import ApproachError
 from mill_trajectory.config import Schedule, build_schedule, parameter_specs
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.schedule import (
@@ -68,6 +62,7 @@ from mill_trajectory.schedule import (
     Points,
     WallClockReference,
 )
+from mill_trajectory.wall_clock_start import WallClockStart
 
 
 class TrajectoryNode(Node):
@@ -90,7 +85,7 @@ class TrajectoryNode(Node):
             stamp_ns=lambda: self._ticks.newest or 0,
         )
         if isinstance(schedule, WallClockReference):
-            self._realtime = RealtimeStart(self, schedule)
+            self._realtime = WallClockStart(self, schedule)
         elif isinstance(schedule, OverrideReference):
             self.guard.watch(topics.FEED_OVERRIDE)
             self._take_override(self._on_paced_override, DATA_QOS)
@@ -101,7 +96,7 @@ class TrajectoryNode(Node):
             if v['feed_override.enabled']:
                 self._take_override(self._on_user_override, 10)
         self.get_logger().info(
-            f'{v["trajectory"]} path, job ends at t = {self._progress.end_time:.3f} s'
+            f'{v["trajectory"]} path, job ends at t = {self.progress.end_time:.3f} s'
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
@@ -116,7 +111,7 @@ class TrajectoryNode(Node):
             self._override.maximum = values['feed_override.max']
             return
         self._override = FeedOverride(values['feed_override.min'], values['feed_override.max'])
-        self._schedule, self._progress = build_schedule(values, self._override)
+        self._schedule, self.progress = build_schedule(values, self._override)
 
     def _override_scales(self) -> bool:
         s = self._schedule
@@ -143,15 +138,15 @@ class TrajectoryNode(Node):
         assert isinstance(schedule, ClockedReference)
         points = schedule.answer(ns)
         if points is not None:
-            self._ref_pub.publish(self._message(points))
-        self._job_status(schedule.job_time(ns))
+            self.publish(points)
+        self.job_status(schedule.job_time(ns))
 
     def _on_user_override(self, msg: Any) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
         accepted = self._override.accept(float(offered))
         if accepted.problem:
             self.get_logger().warning(accepted.problem)
-            self._report(self.get_clock().now().nanoseconds * 1e-9, 'running', accepted.problem)
+            self.report(self.get_clock().now().nanoseconds * 1e-9, 'running', accepted.problem)
 
     def _on_paced_override(self, msg: Any) -> None:
         ns = from_stamp(msg.header.stamp)
@@ -172,13 +167,20 @@ class TrajectoryNode(Node):
         t = schedule.job_time
         if points.problem:
             self.get_logger().warning(points.problem)
-            self._report(t, 'running', points.problem)
+            self.report(t, 'running', points.problem)
         out = self._message(points)
         self._ref_pub.publish(out)
         self._answer = (ns, out)
-        self._job_status(t)
+        self.job_status(t)
 
     # -- what goes out -------------------------------------------------------------------
+    def publish(self, points: Points) -> None:
+        self._ref_pub.publish(self._message(points))
+
+    def readers(self) -> int:
+        """Subscribers of the reference."""
+        return self._ref_pub.get_subscription_count()
+
     def _message(self, points: Points) -> bytes:
         """The JointTrajectory of these points, serialized (mill_common.codec)."""
         p = points.period_ns
@@ -188,12 +190,12 @@ class TrajectoryNode(Node):
         ]
         return encode_joint_trajectory(points.stamp_ns, self._name, AXES, rows)
 
-    def _job_status(self, t: float) -> None:
-        state = self._progress.update(t)
+    def job_status(self, t: float) -> None:
+        state = self.progress.update(t)
         if state is not None:
-            self._report(t, state, end_time=self._progress.done_at)
+            self.report(t, state, end_time=self.progress.done_at)
 
-    def _report(
+    def report(
         self,
         t: float,
         state: str,
@@ -204,7 +206,7 @@ class TrajectoryNode(Node):
         values: dict[str, object] = {
             'state': state,
             'time': t,
-            'end_time': self._progress.end_time if end_time is None else end_time,
+            'end_time': self.progress.end_time if end_time is None else end_time,
             'feed_override': self._override.value,
         }
         schedule = self._schedule
@@ -216,137 +218,6 @@ class TrajectoryNode(Node):
         self.guard.diagnostics.report(
             self.get_clock().now().nanoseconds, level, topics.JOB_STATUS, message, values, log=False
         )
-
-
-class RealtimeStart:
-    """Realtime: wait for the graph, hold the axes, start the job, publish on the wall clock."""
-
-    def __init__(self, node: TrajectoryNode, schedule: WallClockReference) -> None:
-        self.node, self.schedule = node, schedule
-        v = node.params.values
-        self.axes = list(v['axes'])
-        self.positions: dict[str, float] = {}  # the axes' latest positions
-        self.newest_state_ns = 0
-        self.answered: set[str] = set()  # axes whose controller has commanded
-        self.refused = ''
-        self.next_report = 0.0
-        self.commands: dict[str, DataInput] = {}  # during the hold
-        self.states = self._take_each_axis(topics.state, self._on_state, self._state_dropped)
-        wall = RosClock(clock_type=ClockType.STEADY_TIME)
-        node.create_timer(v['publish_period'], self._publish, clock=wall)
-        node.get_logger().info(
-            f'realtime: the job starts when {", ".join(self.axes)} report their positions'
-        )
-
-    def _take_each_axis(
-        self,
-        topic: Callable[[str], str],
-        on_msg: Callable[[str, Any], None],
-        on_malformed: Callable[[str, Rejected], None],
-    ) -> dict[str, DataInput]:
-        """A depth-1 subscription (the newest message only) to topic(axis) of each axis."""
-        return {
-            axis: take_serialized(
-                self.node,
-                JointState,
-                topic(axis),
-                decode_joint_state,
-                partial(on_msg, axis),
-                1,
-                partial(on_malformed, axis),
-            )
-            for axis in self.axes
-        }
-
-    def _state_dropped(self, axis: str, rejected: Rejected) -> None:
-        self.node.get_logger().warning(
-            f'dropped a state on {topics.state(axis)}: {rejected.reason}',
-            throttle_duration_sec=1.0,
-        )
-
-    def _on_state(self, axis: str, msg: Any) -> None:
-        value = joint_values(msg.name, {'position': msg.position}, axis, ('position',))
-        if isinstance(value, Rejected):
-            self._state_dropped(axis, value)
-            return
-        self.positions[axis] = value[0]
-        self.newest_state_ns = max(self.newest_state_ns, from_stamp(msg.header.stamp))
-
-    def _on_command(self, axis: str, msg: Any) -> None:
-        self.answered.add(axis)  # its controller has states, an estimate and the reference
-
-    def _publish(self) -> None:
-        node, schedule = self.node, self.schedule
-        now = time.time_ns()
-        if schedule.t0 is None and not self._hold_or_start(now):
-            return
-        assert schedule.t0 is not None
-        node._ref_pub.publish(node._message(schedule.running(now)))
-        node._job_status(seconds(now - schedule.t0))
-
-    def _graph_ready(self) -> bool:
-        node = self.node
-        if set(self.positions) != set(self.axes):
-            return False
-        readers = max(len(self.axes), node.params.values['min_subscribers'])
-        if node._ref_pub.get_subscription_count() < readers:
-            return False  # the controllers (one per axis) or a recorder are not listening yet
-        # An observer that is not up yet: its controller could not act.
-        return all(node.count_publishers(topics.estimate(a)) >= 1 for a in self.axes)
-
-    def _hold_or_start(self, now: int) -> bool:
-        """Before the job: wait for the graph, hold the axes, then start; True once started."""
-        node, schedule, v = self.node, self.schedule, self.node.params.values
-        if self.refused:
-            if time.monotonic() >= self.next_report:  # said again: a listener may be late
-                self.next_report = time.monotonic() + 1.0
-                node._report(0.0, 'refused', self.refused, level=DiagnosticStatus.ERROR)
-            return False
-        if schedule.hold_ns is None:
-            if not self._graph_ready():
-                return False
-            here = [self.positions.get(a, 0.0) for a in AXES]
-            axes = [AXES.index(a) for a in self.axes]
-            try:
-                approach = schedule.hold(
-                    here,
-                    axes,
-                    self.newest_state_ns,
-                    v['approach.speed'],
-                    v['approach.max_distance'],
-                )
-            except ApproachError as exc:
-                self.refused = str(exc)
-                node.get_logger().error(f'job refused: {exc}')
-                return self._hold_or_start(now)
-            node._progress.end_time += approach.duration
-            self.commands = self._take_each_axis(
-                topics.joint_command, self._on_command, lambda axis, rejected: None
-            )  # a malformed command is the drive's to report
-            node.get_logger().info(
-                'holding the axes where they stand until every controller commands'
-            )
-        if self.answered != set(self.axes):
-            node._ref_pub.publish(node._message(schedule.holding(now)))
-            if time.monotonic() >= self.next_report:  # seconds may pass: say who is missing
-                self.next_report = time.monotonic() + 1.0
-                missing = [topics.joint_command(a) for a in self.axes if a not in self.answered]
-                message = f'holding the axes: no command yet on {", ".join(missing)}'
-                node._report(0.0, 'waiting', message, level=DiagnosticStatus.OK)
-            return False
-        schedule.start(now)
-        for sub in (*self.states.values(), *self.commands.values()):
-            data_unsubscribe(node, sub)  # where the axes stood and who answers: all it needed
-        self.states.clear()
-        self.commands.clear()
-        node._progress.restart_reports()  # from here on: job time
-        moved = schedule.approach
-        assert moved is not None
-        node.get_logger().info(
-            f'job started; approach of {1e3 * moved.distance:.3f} mm in '
-            f'{moved.duration:.2f} s, ends at t = {node._progress.end_time:.3f} s'
-        )
-        return True
 
 
 def main(argv: list[str] | None = None) -> int:
