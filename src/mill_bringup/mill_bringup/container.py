@@ -129,7 +129,25 @@ def main(argv: list[str] | None = None) -> int:
         from mill_common.intra_process import bus
 
         bus().enable()  # messages between these nodes skip DDS (mill_common.intra_process)
-    return run_nodes(nodes, PROG, argv, own_process)
+    return run_nodes(nodes, PROG, argv, own_process, connect_servo_cycles)
+
+
+def connect_servo_cycles(nodes: Sequence[Any]) -> None:
+    """The observer and the controller of one axis in this process run one servo cycle:
+    the observer hands each estimated sample to the controller at once, which sends its
+    command before the estimate goes out (mill_observers.observer_node, servo)."""
+    observers = {n.axis: n for n in nodes if hasattr(n, 'servo')}
+    for controller in (n for n in nodes if hasattr(n, 'attach')):
+        observer = observers.get(controller.axis)
+        if observer is None or observer.get_namespace() != controller.get_namespace():
+            continue
+        wanted = controller.params.values['observer_node'] or f'{controller.axis}_observer'
+        owner = observer.params.values['controller_node'] or f'{observer.axis}_controller'
+        if wanted != observer.get_name() or owner != controller.get_name():
+            continue  # they take another node's messages: no cycle of their own
+        servo = controller.attach(observer.params.values['plant_node'], observer.commanded)
+        if servo is not None:
+            observer.serve(servo)
 
 
 if __name__ == '__main__':

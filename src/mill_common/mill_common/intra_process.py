@@ -13,7 +13,11 @@ for every reader. This module is that shortcut for the hot-path topics of a cont
   gets that publisher's bytes from the queue instead;
 - the spin loop (`mill_common.node_main.run_nodes`) drains the queue between executor
   events, so callbacks never run inside one another and each sees the bytes a DDS take
-  would have given it, in the order they were published.
+  would have given it, in the order they were published;
+- a publisher made `deferred` (what no loop waits for: estimates, internal states) hands
+  its bytes to this process's subscribers at once but to DDS only once the process has
+  nothing more urgent to do: when the spin loop finds no data callback ready, so the
+  commands of a servo cycle go out first (`flush_later`).
 
 A topic has one legitimate publisher (docs/reliability.md, "one owner per axis"); when it
 is in this process, messages of any other publisher on the topic are not taken here at
@@ -77,18 +81,24 @@ class _Input:
 class _Output:
     """A publisher whose bytes also go straight to this process's subscribers."""
 
-    def __init__(self, bus: IntraProcess, publisher: Publisher, topic: str) -> None:
+    def __init__(
+        self, bus: IntraProcess, publisher: Publisher, topic: str, deferred: bool = False
+    ) -> None:
         self._bus = bus
         self._publisher = publisher
         self._topic = topic
         self._inputs = bus.inputs(topic)  # the list itself: later subscribers join it
+        self._deferred = deferred
 
     @property
     def topic_name(self) -> str:
         return self._topic
 
     def publish(self, msg: Any) -> None:
-        self._publisher.publish(msg)
+        if self._deferred:
+            self._bus.later.append((self._publisher, msg))
+        else:
+            self._publisher.publish(msg)
         if self._inputs:
             data = msg if isinstance(msg, bytes) else serialize_message(msg)
             queue = self._bus.queue
@@ -106,6 +116,8 @@ class IntraProcess:
     def __init__(self) -> None:
         self.enabled = False
         self.queue: deque[tuple[Callable[[bytes], None], bytes]] = deque()
+        self.later: list[tuple[Publisher, Any]] = []  # DDS publishes that wait (deferred)
+        self.activity = 0  # data callbacks run: the spin loop tells busy from idle by it
         self._inputs: dict[str, list[_Input]] = {}
         self._outputs: dict[str, int] = {}  # resolved topic -> local publishers
         self._reported: dict[str, frozenset[str]] = {}
@@ -122,8 +134,16 @@ class IntraProcess:
         return self._outputs.get(topic, 0) > 0
 
     # -- what nodes call ---------------------------------------------------------------------
-    def publisher(self, node: Node, msg_type: Any, topic: str, qos: QoSProfile | int) -> Any:
-        """A publisher of a hot-path topic; delivers in-process too when enabled."""
+    def publisher(
+        self,
+        node: Node,
+        msg_type: Any,
+        topic: str,
+        qos: QoSProfile | int,
+        deferred: bool = False,
+    ) -> Any:
+        """A publisher of a hot-path topic; delivers in-process too when enabled. deferred:
+        nothing waits for it, its DDS publish comes when the process is idle."""
         publisher = node.create_publisher(msg_type, topic, qos)
         if not self.enabled:
             return publisher
@@ -132,7 +152,7 @@ class IntraProcess:
         for listener in self.inputs(resolved):
             self._drop_dds(listener)
         self._watch(node)
-        return _Output(self, publisher, resolved)
+        return _Output(self, publisher, resolved, deferred)
 
     def subscribe(
         self,
@@ -153,6 +173,14 @@ class IntraProcess:
         self._watch(node)
         return listener
 
+    def mute(self, handle: DataInput) -> None:
+        """A subscription whose messages reach its node another way (a servo cycle): it
+        takes nothing any more, from DDS or this process, yet still counts as a reader of
+        its topic for a publisher in this process."""
+        if isinstance(handle, _Input):
+            self._drop_dds(handle)
+            handle.callback = _ignore
+
     def unsubscribe(self, node: Node, handle: DataInput) -> None:
         """End a subscription made by `subscribe`: no more messages reach its callback."""
         if isinstance(handle, _Input):
@@ -169,6 +197,12 @@ class IntraProcess:
     # -- what the spin loop calls ------------------------------------------------------------
     def pending(self) -> bool:
         return bool(self.queue)
+
+    def flush_later(self) -> None:
+        """Publish to DDS what deferred publishers sent, in order."""
+        later, self.later = self.later, []
+        for publisher, msg in later:
+            publisher.publish(msg)
 
     def drain(self, budget: int) -> None:
         """Deliver queued messages, at most `budget` (callbacks may queue more)."""
@@ -212,6 +246,10 @@ class IntraProcess:
                 )
 
 
+def _ignore(data: bytes) -> None:
+    pass
+
+
 _BUS = IntraProcess()
 
 
@@ -224,3 +262,4 @@ def bus() -> IntraProcess:
 data_publisher = _BUS.publisher
 data_subscription = _BUS.subscribe
 data_unsubscribe = _BUS.unsubscribe
+data_mute = _BUS.mute

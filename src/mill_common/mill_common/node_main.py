@@ -82,6 +82,7 @@ EXECUTORS = ('single', 'events')
 # In-process messages delivered between two looks at the executor (mill_common.intra_process):
 # enough that the look (tens of µs) costs little, few enough that DDS events wait little.
 DRAIN_BUDGET = 200
+EVENTS_BETWEEN_CHECKS = 32  # executor events handled between two looks at the loop's end
 
 
 def make_executor() -> Executor:
@@ -232,6 +233,7 @@ def run_nodes(
     executable: str,
     argv: Sequence[str],
     own_process: bool,
+    connect: Callable[[Sequence[Node]], None] | None = None,
 ) -> int:
     """Run nodes in one process, one ROS context and one executor, until one of them ends or
     the process is interrupted; returns the process exit code.
@@ -289,6 +291,9 @@ def run_nodes(
         for label, make_node in makers:
             nodes.append((label, make_node()))
         label = ''
+        if connect is not None:  # nodes of one process that call each other (a container)
+            connect([node for _label, node in nodes])
+        _schedule([node for _label, node in nodes])
         executor = make_executor()
         for _label, node in nodes:
             executor.add_node(node)
@@ -298,9 +303,18 @@ def run_nodes(
         while rclpy.ok() and not stop and _request(nodes) is None:
             if local.enabled:
                 # Messages between the nodes of this process are delivered here, between
-                # executor events, never inside another callback.
-                local.drain(DRAIN_BUDGET)
-                executor.spin_once(timeout_sec=0.0 if local.pending() else 0.2)
+                # executor events, never inside another callback; what no loop waits for
+                # goes to DDS once no data callback is ready (a servo cycle's commands first).
+                # The ends of the loop are asked once the process is idle, not per event.
+                for _ in range(EVENTS_BETWEEN_CHECKS):
+                    local.drain(DRAIN_BUDGET)
+                    busy = local.activity
+                    wait = 0.0 if local.pending() or local.later else 0.2
+                    executor.spin_once(timeout_sec=wait)
+                    if local.activity == busy and not local.pending():
+                        local.flush_later()
+                        if wait:
+                            break  # idle: look at the signals and the exit requests
             else:
                 # The C++ events executor runs callbacks until `ended` is done; the timeout
                 # only bounds how long a signal that arrives while no callback runs waits.
@@ -324,6 +338,8 @@ def run_nodes(
             signal.signal(signum, signal.SIG_IGN)
         if ended in _wakers:
             _wakers.remove(ended)
+        with contextlib.suppress(Exception):
+            intra_process.bus().flush_later()  # what waited for an idle moment goes now
         for _label, node in nodes:
             deliver_before_exit(node)
         if executor is not None:
@@ -342,6 +358,22 @@ def run_nodes(
     if own_process:
         end_process(code)
     return code
+
+
+def _schedule(nodes: Sequence[Node]) -> None:
+    """The process's real-time scheduling, as its nodes' parameters ask (realtime_setup)."""
+    from mill_common import realtime_setup
+
+    params = [getattr(n, 'params', None) for n in nodes]
+    priority, cpus = realtime_setup.wanted(p.values for p in params if p is not None)
+    if not priority and not cpus:
+        return
+    done, refused = realtime_setup.apply(priority, cpus)
+    logger = nodes[0].get_logger()
+    if done:
+        logger.info('real-time scheduling: ' + ', '.join(done))
+    for line in refused:
+        logger.warning(f'real-time scheduling refused, going on without it: {line}')
 
 
 def _of(label: str) -> str:

@@ -389,6 +389,56 @@ def input_watch_specs() -> list[tuple[str, ParamSpec]]:
     ]
 
 
+def _priority(value: Any) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 98:
+        return 'must be a whole number from 0 (normal scheduling) to 98'
+    return None
+
+
+class _Cpus:
+    """Distinct CPU numbers (a list of whole numbers >= 0, possibly empty)."""
+
+    value_type = 'integer_array'
+    text = 'CPU numbers, each once'
+
+    def __call__(self, value: Any) -> str | None:
+        problem = number_list(each=WholeAtLeast(0))(value)
+        if problem is None and len(set(value)) != len(value):
+            return 'must name each CPU once'
+        return problem
+
+
+_REALTIME_SPECS: tuple[tuple[str, ParamSpec], ...] = (
+    (
+        'realtime_priority',
+        ParamSpec(
+            'realtime_priority',
+            0,
+            "SCHED_FIFO priority of this node's process, every thread (1-98; 0: the normal "
+            'scheduler); with it the memory is locked and the garbage collector frozen. The '
+            'highest of the nodes of a process counts',
+            _priority,
+            True,
+        ),
+    ),
+    (
+        'cpu_affinity',
+        ParamSpec(
+            'cpu_affinity',
+            [],
+            "CPUs this node's process may run on ([]: any); the nodes of a process together",
+            _Cpus(),
+            True,
+        ),
+    ),
+)
+
+
+def realtime_specs() -> list[tuple[str, ParamSpec]]:
+    """The real-time scheduling of a node's process (mill_common.realtime_setup)."""
+    return list(_REALTIME_SPECS)
+
+
 def axis_node_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters every per-axis node (controller, observer) has."""
     from mill_common.signals import AXES
@@ -445,6 +495,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
             ),
         ),
         *input_watch_specs(),
+        *realtime_specs(),
         (
             'min_subscribers',
             ParamSpec(

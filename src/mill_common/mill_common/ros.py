@@ -14,9 +14,11 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 
+from mill_common import intra_process
 from mill_common.checks import Rejected
 from mill_common.codec import CodecError, encode_joint_state
 from mill_common.intra_process import DataInput as DataInput  # for the nodes
+from mill_common.intra_process import data_mute as data_mute  # for the nodes
 from mill_common.intra_process import data_publisher as data_publisher  # for the nodes
 from mill_common.intra_process import data_subscription
 from mill_common.intra_process import data_unsubscribe as data_unsubscribe  # for the nodes
@@ -96,7 +98,10 @@ def take_serialized(
     `decode` (a mill_common.codec reader: an object with the message's fields), and bytes
     that are not a `msg_type` go to `malformed` as one Rejected line instead."""
 
+    bus = intra_process.bus()
+
     def take(data: bytes) -> None:
+        bus.activity += 1
         last = _last_decoded
         if data is last[0] and decode is last[1]:
             callback(last[2])  # the same bytes handed to another reader in this process

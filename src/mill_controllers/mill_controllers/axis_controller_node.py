@@ -23,6 +23,7 @@ A trip latches until the `~/reset_trip` service (std_srvs/Trigger) is called or
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -32,6 +33,8 @@ from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
     DATA_QOS,
+    DataInput,
+    data_mute,
     data_publisher,
     from_stamp,
     joint_state_bytes,
@@ -39,6 +42,7 @@ from mill_common.ros import (
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
+from mill_common.signals import Estimate
 from mill_common.timebase import period_ns
 from mill_common.timing import timing
 from rclpy.clock import Clock, ClockType
@@ -79,8 +83,11 @@ class AxisControllerNode(Node):
         self._last_command: bytes | None = None
         self._waiting_since: float | None = None
         self._reported_switch: SwitchRecord | None = None
+        self._commanded: Callable[[int, float], None] | None = None  # the observer's, in a cycle
         self._pub = data_publisher(self, JointState, topics.joint_command(axis), DATA_QOS)
-        self._state_pub = data_publisher(self, JointState, topics.controller_state(axis), DATA_QOS)
+        self._state_pub = data_publisher(
+            self, JointState, topics.controller_state(axis), DATA_QOS, True
+        )
         self.guard = InputGuard(
             self,
             lambda: self.params.values['input_warn_time'],
@@ -92,13 +99,16 @@ class AxisControllerNode(Node):
         self._topics = {slot: source.topic(axis) for slot, source in INPUTS.items()}
         for slot in ('position', 'estimate', 'reference'):
             self.guard.watch(self._topics[slot], self._owners[slot])
+        self._inputs: dict[str, DataInput] = {}
         for slot, source in INPUTS.items():
             depth = self.timing.depth(history=slot == REFERENCE_INPUT)
             topic = self._topics[slot]
             on_bad = partial(self.guard.drop, topic)
             on_msg = partial(self._on_input, slot)
             qos = DATA_QOS if depth is None else depth
-            take_serialized(self, source.message, topic, source.decode, on_msg, qos, on_bad)
+            self._inputs[slot] = take_serialized(
+                self, source.message, topic, source.decode, on_msg, qos, on_bad
+            )
         self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
@@ -165,8 +175,7 @@ class AxisControllerNode(Node):
             self.guard.heard(topic)
         if not samples:
             return
-        wait = slot == CLOCK_INPUT and self.timing.WAITS_FOR_READERS
-        if wait and not readers_ready(self, self._pub, self.params.values['min_subscribers']):
+        if slot == CLOCK_INPUT and not self._readers_ready():
             return  # the plant offers the step again
         self._seen.add(slot)
         again = self.timing.is_offered_again(stamps, ns)
@@ -182,6 +191,43 @@ class AxisControllerNode(Node):
             else:
                 self._join.offer(slot, at, value)
         self._step_due()
+
+    # -- the servo cycle: the observer of this axis in this process hands each sample --------
+    def attach(
+        self, plant_node: str, commanded: Callable[[int, float], None]
+    ) -> Callable[[int, float, Estimate], None] | None:
+        """Take state and estimate from this axis's observer in this process, at once, as
+        it steps, and hand it each command (mill_bringup.container); None if it listens to
+        another plant."""
+        if plant_node != self._owners[CLOCK_INPUT]:
+            return None
+        for slot in (CLOCK_INPUT, 'estimate'):
+            data_mute(self._inputs[slot])  # still a reader of the topic, taking nothing
+        self._commanded = commanded
+        return self.serve
+
+    def serve(self, ns: int, position: float, estimate: Estimate) -> None:
+        """A sample the observer took (its sender and stamp checked) and estimated."""
+        join = self._join
+        for slot in (CLOCK_INPUT, 'estimate'):
+            self.guard.heard(self._topics[slot])
+        if ns == join.last_ns and self._last_command is not None:
+            self._pub.publish(self._last_command)  # the plant offered this step again
+            return
+        if ns < join.last_ns or not self._readers_ready():
+            return  # a sample stepped already; or (lockstep) the plant offers it again
+        self._seen.update((CLOCK_INPUT, 'estimate'))
+        for slot in (CLOCK_INPUT, 'estimate'):
+            self._stamps[slot].accept(ns)
+        join.offer(CLOCK_INPUT, ns, position)
+        join.offer('estimate', ns, estimate)
+        self._step_due()
+
+    def _readers_ready(self) -> bool:
+        """Lockstep: every reader of the command is matched (else the plant offers again)."""
+        if not self.timing.WAITS_FOR_READERS:
+            return True
+        return readers_ready(self, self._pub, self.params.values['min_subscribers'])
 
     def _step_due(self) -> None:
         for ns, inputs in self._join.due():
@@ -199,6 +245,8 @@ class AxisControllerNode(Node):
             ns, (self.axis,), effort=(cmd.effort,), sender=self._name
         )
         self._pub.publish(self._last_command)
+        if self._commanded is not None:
+            self._commanded(ns, cmd.effort)
         if cmd.problem:
             self.get_logger().error(
                 f'no valid command {self.timing.when(ns)}: {cmd.problem}: braking',

@@ -19,6 +19,7 @@ received (the one the drive holds) and the periods between two states run throug
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from functools import partial
 from typing import Any
 
@@ -28,6 +29,8 @@ from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
     DATA_QOS,
+    DataInput,
+    data_mute,
     data_publisher,
     from_stamp,
     joint_state_bytes,
@@ -35,6 +38,7 @@ from mill_common.ros import (
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
+from mill_common.signals import Estimate
 from mill_common.timebase import period_ns
 from mill_common.timing import timing
 from rclpy.clock import Clock, ClockType
@@ -71,8 +75,15 @@ class ObserverNode(Node):
         self._stamps = {slot: self.timing.stamps() for slot in self._topics}
         self._last_estimate: bytes | None = None
         self._stalled_since: float | None = None
-        self._pub = data_publisher(self, JointState, topics.estimate(axis), DATA_QOS)
-        self._state_pub = data_publisher(self, JointState, topics.observer_state(axis), DATA_QOS)
+        # Nothing waits for the estimate in a servo cycle: its controller has it already.
+        self._pub = data_publisher(self, JointState, topics.estimate(axis), DATA_QOS, True)
+        self._state_pub = data_publisher(
+            self, JointState, topics.observer_state(axis), DATA_QOS, True
+        )
+        # A controller of this axis in this process, handed each sample at once (its servo
+        # cycle: mill_bringup.container connects them): (stamp, position, estimate).
+        self.servo: Callable[[int, float, Estimate], None] | None = None
+        self._served: tuple[int, float, Estimate] | None = None
         self.guard = InputGuard(
             self,
             lambda: self.params.values['input_warn_time'],
@@ -81,12 +92,16 @@ class ObserverNode(Node):
             stamp_ns=lambda: self._last_ns or 0,
         )
         depth = self.timing.depth()
+        self._inputs: dict[str, DataInput] = {}
+        self._advancing = False
         for slot, callback in (('state', self._on_state), ('command', self._on_command)):
             topic = self._topics[slot]
             self.guard.watch(topic, self._owners[slot])
             on_bad = partial(self.guard.drop, topic)
             qos = DATA_QOS if depth is None else depth
-            take_serialized(self, JointState, topic, decode_joint_state, callback, qos, on_bad)
+            self._inputs[slot] = take_serialized(
+                self, JointState, topic, decode_joint_state, callback, qos, on_bad
+            )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
             f'axis {axis}: observer {v["observer"]}, timing {v["timing"]}, command_delay '
@@ -141,6 +156,8 @@ class ObserverNode(Node):
             elif ns == self._last_ns and self._last_estimate is not None:
                 if msg.header.frame_id == self._owners['state']:
                     self.guard.heard(self._topics['state'])  # the plant is there, waiting
+                if self.servo is not None and self._served is not None:
+                    self.servo(*self._served)
                 self._pub.publish(self._last_estimate)  # the plant offered this step again
             return
         got = self._accept('state', msg)
@@ -156,17 +173,35 @@ class ObserverNode(Node):
 
     def _on_command(self, msg: JointState) -> None:
         got = self._accept('command', msg)
-        if got is None:
-            return
-        ns, u = got
+        if got is not None:
+            self.commanded(*got)
+
+    def serve(self, servo: Callable[[int, float, Estimate], None]) -> None:
+        """A servo cycle (mill_bringup.container): hand each estimated sample to this axis's
+        controller in this process at once; its commands come back through `commanded`."""
+        self.servo = servo
+        data_mute(self._inputs['command'])  # still a reader of the topic, taking nothing
+
+    def commanded(self, ns: int, u: float) -> None:
+        """The controller's command answering the state of stamp ns (NaN: brake)."""
+        if self.servo is not None:
+            self.guard.heard(self._topics['command'])
         self._stamps['command'].accept(ns)
         self._newest_command = u
         if self.timing.WAITS_FOR_INPUTS and (self._last_ns is None or ns >= self._last_ns):
             self._commands[ns] = u
-            self._advance()
+            if not self._advancing:  # (a servo cycle answers from inside _advance)
+                self._advance()
 
     # -- step and publish ----------------------------------------------------------------
     def _advance(self) -> None:
+        self._advancing = True
+        try:
+            self._step_due()
+        finally:
+            self._advancing = False
+
+    def _step_due(self) -> None:
         loop = self._loop
         assert loop is not None, 'configured in NodeParameters'
         for ns in self.timing.due(self._states):
@@ -174,8 +209,12 @@ class ObserverNode(Node):
             if self.timing.WAITS_FOR_INPUTS and loop.started and acted is None:
                 self._stalled_since = self._stalled_since or time.monotonic()
                 return  # y(k) arrived before u(k − 1): wait for it
-            est = loop.step(self._states.pop(ns), acted, missed, late)
+            y = self._states.pop(ns)
+            est = loop.step(y, acted, missed, late)
             self._last_ns, self._stalled_since = ns, None
+            if self.servo is not None:  # the command first; the estimate when idle
+                self._served = (ns, y, est)
+                self.servo(ns, y, est)
             self._last_estimate = joint_state_bytes(
                 ns,
                 (self.axis,),

@@ -11,6 +11,7 @@ from mill_common.parameters import (
     non_negative_int,
     one_of,
     positive_int,
+    realtime_specs,
 )
 
 TIMINGS = ('lockstep', 'realtime')
@@ -25,6 +26,7 @@ def _owners(value: Any) -> str | None:
 
 
 DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
+    *realtime_specs(),
     (
         'timing',
         ParamSpec(

@@ -15,8 +15,9 @@ reports; its cycle says when a period runs and what counts as late:
   each axis (zero-order hold). A command must answer a state this drive published. A
   period without a fresh command counts as late; after `brake_after` late periods in a row
   the axis is braked until fresh commands return. Ticks more than half a period late (the
-  machine does not hold the rate) are counted and reported. A simulated machine moves by
-  the wall time that really passed between two ticks, as a real one does.
+  machine does not hold the rate) are counted and reported. A simulated machine keeps the
+  wall clock as a real one does: after each tick it moves one period on, and a tick that
+  comes late first moves it by what passed beyond that.
 """
 
 from __future__ import annotations
@@ -42,6 +43,9 @@ from mill_plant.command_delay import CommandDelay
 from mill_plant.command_table import CommandTable
 
 RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
+# A tick later than a period / CATCH_UP moves the machine on first; less is left to the
+# next period (the timer keeps its schedule on average).
+CATCH_UP = 20
 
 
 class Drive(Protocol):
@@ -248,6 +252,7 @@ class RealtimeCycle(DriveCycle):
         d = self.drive
         self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
         self._held: Collection[str] = ()  # axes held braked before their first command
+        self._moved_to = 0  # the wall time [ns] up to which the machine has moved
         # Ticks that came more than half a period late (the machine does not hold the
         # sample rate), in all and since the last report; ticks while active, their basis.
         self.overruns = self._overruns_reported = self.active_ticks = 0
@@ -272,8 +277,10 @@ class RealtimeCycle(DriveCycle):
         if d.backend is None:
             return
         ns = time.time_ns()  # acquisition time on the system clock
-        if self._recent:  # the machine has moved since the last tick with what it held
-            d.advance(self._recent[-1], (ns - self._recent[-1]) * 1e-9, self._held)
+        behind = ns - self._moved_to
+        if self._moved_to and behind > d.dt_ns // CATCH_UP:  # a late tick: it moved on
+            d.advance(self._moved_to, behind * 1e-9, self._held)
+            self._moved_to = ns
         if d.active:
             self.active_ticks += 1
             if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
@@ -298,6 +305,11 @@ class RealtimeCycle(DriveCycle):
             efforts = [math.nan] * len(d.axes)
         d.write(ns, efforts)
         self._held = held
+        # The period that starts now, at once, so that the next tick reads without waiting;
+        # a late tick adds what passed beyond it (above): the machine keeps the wall clock.
+        start = max(ns, self._moved_to)
+        d.advance(start, d.dt, held)
+        self._moved_to = start + d.dt_ns
         self.k += 1
 
     def watch(self, now: float) -> None:

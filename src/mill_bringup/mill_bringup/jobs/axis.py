@@ -46,7 +46,8 @@ from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 from mill_analysis import records
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import Job, MessageSource
-from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.layout import processes
+from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
 
@@ -382,11 +383,15 @@ class AxisJob(Job[RunRecord]):
         return seconds((self.samples - 1) * self.dt_ns)
 
     # -- the distributed run ---------------------------------------------------------------
-    def prepare_graph(self, monitored: bool) -> None:
+    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
         # The monitor listens to every state topic too: the plant waits for it (controller,
-        # observer, monitor), so that the first samples reach the record.
+        # observer, monitor), so that the first samples reach the record. A controller that
+        # shares its observer's process takes the states from it (a servo cycle).
         if monitored:
-            self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 3)
+            readers = 2 if self._servo_cycles(layout) else 3
+            self.scenario.overrides.setdefault(self.plant, {}).setdefault(
+                'min_subscribers', readers
+            )
             # A node started again mid-job (--respawn) answers only once the monitor hears it
             # too: the estimate goes to the controller and the monitor, the command to the
             # plant and the observer.
@@ -394,6 +399,19 @@ class AxisJob(Job[RunRecord]):
                 if node.kind.per_axis:
                     wanted = self.scenario.overrides.setdefault(node.name, {})
                     wanted.setdefault('min_subscribers', 2)
+
+    def _servo_cycles(self, layout: str) -> bool:
+        """Whether an axis's observer and controller share a process in this layout."""
+        for process in processes(self.scenario, layout):
+            roles = [
+                (self.scenario.parameters(n.name)['axis'], n.kind.role)
+                for n in process.nodes
+                if n.kind.per_axis
+            ]
+            axes = {axis for axis, role in roles if role == CONTROLLER}
+            if any(axis in axes for axis, role in roles if role != CONTROLLER):
+                return True
+        return False
 
     def upstream_topics(self) -> list[str]:
         # The monitor cannot see from the plant whether an observer's estimates reach it:

@@ -23,7 +23,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
-from mill_bringup.scenario import NodeLaunch, Scenario
+from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario
 from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 
 R = TypeVar('R')
@@ -100,8 +100,9 @@ class Job(ABC, Generic[R]):
 
     # -- the distributed run ---------------------------------------------------------------
     @abstractmethod
-    def prepare_graph(self, monitored: bool) -> None:
-        """Adjust the scenario before launch (the clock node waits for the monitor too)."""
+    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
+        """Adjust the scenario before launch in this layout (the clock node waits for the
+        monitor too)."""
 
     @abstractmethod
     def upstream_topics(self) -> list[str]:

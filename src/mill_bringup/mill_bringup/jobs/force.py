@@ -28,7 +28,7 @@ from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.jobs.base import Job, MessageSource
-from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
@@ -114,7 +114,7 @@ class ForceJob(Job[ForceRecord]):
         )
 
     # -- the distributed run ---------------------------------------------------------------
-    def prepare_graph(self, monitored: bool) -> None:
+    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
         # The force samples need two listeners: the controller and the monitor.
         if monitored:
             self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 2)

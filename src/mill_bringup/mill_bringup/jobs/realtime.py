@@ -24,7 +24,7 @@ from mill_common.timebase import job_steps, seconds
 from mill_analysis import records
 from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob, timing_of
 from mill_bringup.jobs.base import MessageSource
-from mill_bringup.scenario import Scenario, ScenarioError
+from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
@@ -83,7 +83,7 @@ class RealtimeAxisJob(AxisJob):
     def samples(self) -> int:
         return job_steps(self.end_time, self.dt_ns)
 
-    def prepare_graph(self, monitored: bool) -> None:
+    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
         # No lockstep start: the drive ticks from its activation on. The trajectory starts the
         # job once the monitor hears it too, or the record would miss the job's first periods
         # (its participant may be discovered a second or more after the graph's).

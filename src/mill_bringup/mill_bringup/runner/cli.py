@@ -93,6 +93,14 @@ def parser() -> argparse.ArgumentParser:
         'plant and the peers then wait for a node as long as a start-up may take)',
     )
     parser.add_argument(
+        '--realtime-priority',
+        type=int,
+        metavar='N',
+        help='SCHED_FIFO priority 1-98 of the drive and of the processes of the axis nodes '
+        '(their realtime_priority parameter: memory locked, garbage collector frozen); where '
+        'the system refuses, each says so in one line and goes on',
+    )
+    parser.add_argument(
         '--layout',
         metavar='LAYOUT',
         help='which nodes share a process: processes (each its own), per_axis (observer and '
@@ -150,6 +158,9 @@ def main(argv: list[str] | None = None) -> int:
     intact, failed = True, False
     try:
         scen, runs = load_scenario(args)
+        if args.realtime_priority is not None:
+            for variant in {id(r): r for r in (scen, *runs.values())}.values():
+                variant.add_override(f'*.realtime_priority={args.realtime_priority}')
         if args.layout is not None:
             check_layout(args.layout)
         _apply_namespace(scen, runs, args.namespace, args.private_clock)

@@ -47,7 +47,7 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
     if unknown:
         raise RunError(f'--external: scenario {scen.name} has no node {unknown[0]!r}')
     layout = check_layout(scen.layout if options.layout is None else options.layout)
-    job.prepare_graph(monitored=True)
+    job.prepare_graph(monitored=True, layout=layout)
     clock_names = {n.name for n in job.clock_nodes}
     managed = {n.name for n in job.clock_nodes if n.kind.lifecycle}
     planned = processes(scen, layout, options.external, alone=clock_names - managed)
