@@ -11,13 +11,10 @@ state whose estimate has arrived, the reference interpolated at its stamp, nothi
 
 Each joined sample goes to the ROS-free AxisControlLoop (mill_controllers.control_loop):
 delay aim, law, following-error trip — the object the offline simulator steps too. The
-command goes out on mill/<axis>/joint_command with the state's stamp and the node's name in
-header.frame_id; effort NaN asks the drive to brake (a trip, or a law that cannot compute).
-
-A trip latches until the `~/reset_trip` service (std_srvs/Trigger) is called or
-`following_error_limit` is set; changing `controller` or a gain swaps the law without a bump
-(mill_controllers.switching) and leaves a trip latched. A law with internal estimates
-(adaptive_pi) publishes them on mill/<axis>/controller_state.
+command goes out on mill/<axis>/joint_command (effort NaN: brake); a trip latches until
+`~/reset_trip` (std_srvs/Trigger) or `following_error_limit` is set; `controller` and gains
+switch without a bump; a law's internal estimates go to mill/<axis>/controller_state. In
+a composed process the axis's observer hands over each sample at once (a servo cycle).
 """
 
 from __future__ import annotations
@@ -27,7 +24,6 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, owner_check
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -51,6 +47,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
 from mill_common import topics
+from mill_controllers.axis_reports import AxisReports
 from mill_controllers.base import BASE_INPUTS, AxisController
 from mill_controllers.config import build_controller, build_loop, parameter_specs
 from mill_controllers.control_loop import AxisControlLoop
@@ -58,8 +55,6 @@ from mill_controllers.controller_inputs import CLOCK_INPUT, INPUTS, REFERENCE_IN
 from mill_controllers.sample_join import SampleJoin
 from mill_controllers.switching import SwitchRecord
 from mill_controllers.trip import Trip
-
-TRIP_PART = 'following error'  # the status `<node>: following error`
 
 
 def joined(law: AxisController) -> tuple[str, ...]:
@@ -96,6 +91,7 @@ class AxisControllerNode(Node):
             stamp_ns=lambda: max(self._join.last_ns, 0),
             extra=self._trip_status,
         )
+        self.reports = AxisReports(self.guard.diagnostics, axis, self.timing)
         self._topics = {slot: source.topic(axis) for slot, source in INPUTS.items()}
         for slot in ('position', 'estimate', 'reference'):
             self.guard.watch(self._topics[slot], self._owners[slot])
@@ -253,7 +249,7 @@ class AxisControllerNode(Node):
                 throttle_duration_sec=1.0,
             )
         if cmd.tripped:
-            self._report_trip(ns)
+            self.reports.tripped(ns, loop.trip, self._join.late_references)
         status = loop.law.status()
         if status:
             values = tuple(float(v) for v in status.values())
@@ -261,24 +257,12 @@ class AxisControllerNode(Node):
         record = loop.switch.last_switch
         if record is not None and record is not self._reported_switch:
             self._reported_switch = record
-            self._report_switch(ns, record)
+            blend = self.params.values['blend_time']
+            self.reports.switched(ns, self._law_name, record, blend)
 
     # -- trip, switch, waiting: the log and /diagnostics ---------------------------------
     def _trip_status(self) -> tuple[bytes, str, str, dict[str, object]]:
-        """The axis's following-error status (`<node>: following error`)."""
-        trip = self.loop.trip
-        values: dict[str, object] = {
-            'following_error_limit_m': trip.limit,
-            'late_references': self._join.late_references,
-        }
-        if trip.trip is None:
-            return DiagnosticStatus.OK, TRIP_PART, f'axis {self.axis}: running', values
-        values.update({'trip_time_s': trip.trip.time, 'trip_error_m': trip.trip.error})
-        when = self.timing.when(round(trip.trip.time * 1e9))
-        return DiagnosticStatus.ERROR, TRIP_PART, trip.trip.describe(self.axis, when), values
-
-    def _report_trip(self, ns: int) -> None:
-        self.guard.diagnostics.report(ns, *self._trip_status())
+        return self.reports.status(self.loop.trip, self._join.late_references)
 
     def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
         cleared = self.loop.trip.reset()
@@ -288,31 +272,7 @@ class AxisControllerNode(Node):
         return response
 
     def _log_reset(self, cleared: Trip | None, how: str) -> None:
-        if cleared is not None:
-            when = self.timing.when(round(cleared.time * 1e9))
-            message = f'axis {self.axis}: following-error trip {when} cleared by {how}'
-            self.guard.diagnostics.report(
-                self._join.last_ns,
-                DiagnosticStatus.WARN,
-                TRIP_PART,
-                message,
-                self._trip_status()[3],
-            )
-
-    def _report_switch(self, ns: int, record: SwitchRecord) -> None:
-        name = self._law_name
-        message = (
-            f'switched to {name} {self.timing.when(ns)}: output {record.old_output:.6g} (new '
-            f'law alone {record.new_output:.6g}), offset fades over '
-            f'{self.params.values["blend_time"]:g} s'
-        )
-        values = {
-            'controller': name,
-            'time': repr(record.time),
-            'old_output': repr(record.old_output),
-            'new_output': repr(record.new_output),
-        }
-        self.guard.diagnostics.report(ns, DiagnosticStatus.OK, 'switch', message, values)
+        self.reports.cleared(max(self._join.last_ns, 0), cleared, how, self.loop.trip)
 
     def _report_waiting(self) -> None:
         waiting = self._join.waiting_for()
