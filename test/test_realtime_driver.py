@@ -73,7 +73,6 @@ TOLD = [
     '*_observer.eso.omega_o=0.0',
     '*_controller.pd.omega_c=0.0',
     f'*.sample_period={PERIOD!r}',
-    'trajectory.approach.max_distance=0.002',
 ]
 
 

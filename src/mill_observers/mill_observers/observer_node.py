@@ -18,6 +18,7 @@ received (the one the drive holds) and the periods between two states run throug
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from functools import partial
@@ -241,7 +242,8 @@ class ObserverNode(Node):
             return self._commands.pop(self._last_ns, None), 0, 0.0
         periods = (ns - self._last_ns) / self.timing.period_ns
         whole = max(round(periods), 1)
-        held = 0.0 if self._newest_command is None else self._newest_command
+        # Before its first command the drive holds the axis braked (the contract).
+        held = math.nan if self._newest_command is None else self._newest_command
         return held, min(whole - 1, MAX_COAST), periods - whole
 
     def _report_waiting(self) -> None:
