@@ -20,6 +20,7 @@ from pathlib import Path
 
 from mill_bringup.graph import GraphError
 from mill_bringup.runner.options import RunError
+from mill_bringup.scenario import ScenarioError
 
 from mill_bench import realtime_cases
 from mill_bench.drive_process import realtime_scenario
@@ -49,7 +50,7 @@ def measure(
         if case == FLOOR:
             return realtime_cases.floor(scen, rate, duration, run_dir, domain_id)
         return realtime_cases.hardware(scen, case, rate, run_dir, domain_id)
-    except (RunError, GraphError) as exc:
+    except (RunError, GraphError, ScenarioError) as exc:  # ScenarioError: the job's checks
         return RatePoint(case, rate, {}, 0, 0, notes=(f'the run failed: {exc}',))
 
 
