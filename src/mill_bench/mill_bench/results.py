@@ -11,7 +11,8 @@ from typing import Any
 from mill_bringup.catalogue import PLANT
 from mill_bringup.runner.result import RunResult
 
-from mill_bench import realtime_sweep
+from mill_bench.realtime_figures import CRITERION, FLOOR, RatePoint, highest_held
+from mill_bench.realtime_text import format_sweep
 from mill_bringup import scenario as scenario_mod
 
 
@@ -77,7 +78,8 @@ class Measured:
     floors: list[tuple[float, float]] = field(default_factory=list)
     paired: bool = False
     recording: dict[str, Any] | None = None
-    sweep: list[realtime_sweep.RatePoint] = field(default_factory=list)
+    sweep: list[RatePoint] = field(default_factory=list)  # realtime: floor and layouts
+    sweep_load: float | None = None  # load average (1 min) as the realtime runs began
 
     @property
     def results(self) -> dict[str, RunResult]:
@@ -129,9 +131,11 @@ def figures_of(m: Measured, executor: str) -> dict[str, Any]:
     if m.recording is not None:
         figures['recording'] = m.recording
     if m.sweep:
-        figures['realtime'] = [vars(p) for p in m.sweep]
+        figures['realtime'] = [p.figures() for p in m.sweep]
+        figures['realtime_criterion'] = CRITERION
+        figures['realtime_load_average_1min'] = m.sweep_load
         figures['realtime_highest_held_hz'] = {
-            name: realtime_sweep.highest_held(m.sweep, name) for name in m.layouts
+            name: highest_held(m.sweep, name) for name in (FLOOR, *m.layouts)
         }
     return figures
 
@@ -206,6 +210,8 @@ def text_of(m: Measured, executor: str, record: bool, load_average: float) -> st
     if m.recording is not None:
         lines += recording_lines(m.recording, m.results[m.layouts[0]].sim_time)
     if m.sweep:
-        lines += realtime_sweep.format_sweep(m.sweep, m.layouts)
+        lines += format_sweep(m.sweep, m.layouts)
+        if m.sweep_load is not None:
+            lines.append(f'load average (1 min) as the realtime runs began: {m.sweep_load:.2f}')
     lines.append(f'load average (1 min) at the end: {load_average:.2f}')
     return '\n'.join(lines)
