@@ -269,6 +269,14 @@ def parser() -> argparse.ArgumentParser:
         + CRITERION.replace('%', '%%'),  # argparse formats help with %
     )
     parser.add_argument(
+        '--realtime-priority',
+        type=int,
+        default=0,
+        metavar='N',
+        help='SCHED_FIFO priority of the drive and the axis nodes in the realtime runs (their '
+        'realtime_priority parameter; 0: the normal scheduler)',
+    )
+    parser.add_argument(
         '--realtime-duration',
         type=float,
         default=3.0,
@@ -308,6 +316,7 @@ def measure(args: argparse.Namespace, repeat: int, env: dict[str, str]) -> Measu
         args.realtime_duration,
         env['ROS_DOMAIN_ID'],
         progress=lambda text: print(text, file=sys.stderr),
+        priority=args.realtime_priority,
     )
     return m
 

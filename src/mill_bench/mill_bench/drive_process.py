@@ -36,17 +36,20 @@ from mill_common import topics
 UP = 'waiting for configure'  # what the drive logs once it is up and waits to be activated
 
 
-def realtime_scenario(name: str, rate: float, duration: float) -> Scenario:
+def realtime_scenario(name: str, rate: float, duration: float, priority: int = 0) -> Scenario:
     """The scenario on the wall clock at `rate` [Hz] for `duration` s of its path: one sample
     of delay, the gains of the tuning rule for the rate (run_scenario --tuning rule; the
     scenario's own gains are refused at another rate than theirs), the drive inactive until
-    activated. ScenarioError for a scenario the rule does not tune."""
+    activated; with a priority, the drive and the axis nodes' processes on SCHED_FIFO.
+    ScenarioError for a scenario the rule does not tune."""
     scen = scenario_mod.load(name)
     set_timing(scen, 'realtime')
     set_tuning(scen)
     set_duration(scen, duration)
     scen.add_override(f'*.sample_period={1.0 / rate!r}')
     scen.add_override(f'{drive_node(scen)}.autostart=false')
+    if priority:
+        scen.add_override(f'*.realtime_priority={priority}')
     return scen
 
 

@@ -42,10 +42,17 @@ def parse_rates(text: str) -> list[float]:
 
 
 def measure(
-    name: str, case: str, rate: float, duration: float, run_dir: Path, domain_id: str
+    name: str,
+    case: str,
+    rate: float,
+    duration: float,
+    run_dir: Path,
+    domain_id: str,
+    priority: int = 0,
 ) -> RatePoint:
     """One case at one rate; a run that fails is a point that does not hold, saying why."""
-    scen = realtime_scenario(name, rate, duration)  # a scenario the rule cannot tune: raised
+    # a scenario the rule cannot tune: raised
+    scen = realtime_scenario(name, rate, duration, priority)
     try:
         if case == FLOOR:
             return realtime_cases.floor(scen, rate, duration, run_dir, domain_id)
@@ -61,6 +68,7 @@ def sweep(
     duration: float,
     domain_id: str,
     progress: Callable[[str], object] = print,
+    priority: int = 0,
 ) -> list[RatePoint]:
     """Every rate in the floor and in each layout, the cases of one rate one after the other
     (the machine's speed drifts: what is compared is measured close together)."""
@@ -71,5 +79,6 @@ def sweep(
                 what = 'the floor (echo node)' if case == FLOOR else f'layout {case}'
                 progress(f'{name}: realtime at {rate:g} Hz, the drive apart, {what} ...')
                 run_dir = Path(tmp) / f'{case}_{rate:g}'
-                points.append(measure(name, case, rate, duration, run_dir, domain_id))
+                point = measure(name, case, rate, duration, run_dir, domain_id, priority)
+                points.append(point)
     return points

@@ -81,11 +81,11 @@ def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
 
     job = _realtime_slotting()
     now = time.time_ns()
-    job.start_ns = now - 5 * 10**9
+    job.start_ns = now - 10 * 10**9
     fresh = {f'mill/{a}/state': now for a in 'xyz'}
     job.check(Source(fresh))
     with pytest.raises(scenario.ScenarioError, match=r'went silent: nothing on mill/y/state'):
-        job.check(Source({**fresh, 'mill/y/state': now - 2 * 10**9}))
+        job.check(Source({**fresh, 'mill/y/state': now - 4 * 10**9}))
 
 
 def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:

@@ -28,7 +28,9 @@ from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
-DRIVE_SILENCE_NS = 1_000_000_000  # no state this long after the start: the drive is gone
+# No state this long after the start: the drive is gone (the runner itself may go without
+# the CPU for a second when the graph runs SCHED_FIFO on every core).
+DRIVE_SILENCE_NS = 3_000_000_000
 DRIVE_FIGURES = (
     'late_fraction',
     'longest_late_run',

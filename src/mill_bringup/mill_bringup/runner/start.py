@@ -47,13 +47,14 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
     if unknown:
         raise RunError(f'--external: scenario {scen.name} has no node {unknown[0]!r}')
     layout = check_layout(scen.layout if options.layout is None else options.layout)
+    # Every node's overrides as they were: the next run of the scenario (another layout,
+    # another variant) starts from them again (Launch.restore).
+    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in scen.nodes}
     job.prepare_graph(monitored=True, layout=layout)
     clock_names = {n.name for n in job.clock_nodes}
     managed = {n.name for n in job.clock_nodes if n.kind.lifecycle}
     planned = processes(scen, layout, options.external, alone=clock_names - managed)
     held = [n for p in planned if p.container for n in p.nodes if n.name in clock_names]
-    touched = [n for n in scen.nodes if options.respawn or n in held]
-    given = {n.name: dict(scen.overrides.get(n.name, {})) for n in touched}
     for node in held:
         scen.overrides.setdefault(node.name, {})['autostart'] = False
     if options.respawn:
