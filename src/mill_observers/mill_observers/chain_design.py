@@ -19,6 +19,7 @@ from collections.abc import Iterable
 
 import numpy as np
 from mill_common.parameters import ParameterError, positive
+from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
 
@@ -116,3 +117,31 @@ def advance(z: list[float], g0: float, g1: float, u: float, periods: float) -> l
     out[0] += g0 * u * powers[2] if n > 2 else 0.0
     out[1] += g1 * u * periods
     return out
+
+
+class ChainObserver:
+    """What the observers on a chain of integrators share beyond their design: the state
+    `_z` in scaled units (z_j = T^j x_j), b `_b`, T `_T`, the input column `_g0`, `_g1`."""
+
+    _b: float
+    _T: float
+    _z: list[float]
+    _g0: float
+    _g1: float
+    _initialised: bool
+
+    def elapse(self, u: float, periods: float) -> None:
+        """Run the model on for a fraction of a period (a tick early or late) with u held."""
+        if self._initialised and math.isfinite(u):
+            self._z = advance(self._z, self._g0, self._g1, u, periods)
+
+    def holding_input(self, est: Estimate) -> float:
+        # ẍ = b·u + ξ = 0 at rest: u = −ξ/b
+        return -est.disturbance / self._b
+
+    def preload(self, hold_input: float) -> float | None:
+        if not (self._initialised and math.isfinite(hold_input)):
+            return None
+        disturbance = -self._b * hold_input  # at rest: 0 = b·u + ξ
+        self._z[2] = disturbance * self._T * self._T  # scaled: z₂ = T²·ξ
+        return disturbance

@@ -25,7 +25,12 @@ from mill_common.signals import Estimate
 from mill_models.loop_tuning import loop_tuning
 
 from mill_observers.base import Observer
-from mill_observers.chain_design import ChainDesign, advance, check_gain_and_period
+from mill_observers.chain_design import (
+    ChainDesign,
+    ChainObserver,
+    advance,
+    check_gain_and_period,
+)
 
 
 def _degree(value: Any) -> str | None:
@@ -34,7 +39,7 @@ def _degree(value: Any) -> str | None:
     return None
 
 
-class ExtendedStateObserver(Observer):
+class ExtendedStateObserver(ChainObserver, Observer):
     PREFIX: ClassVar[str] = 'eso'
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
         ParamSpec(
@@ -113,27 +118,11 @@ class ExtendedStateObserver(Observer):
             raise ValueError(f'eso: command is not finite: {u!r}')
         self._z = self._advanced(self._z, u)
 
-    def elapse(self, u: float, periods: float) -> None:
-        """Run the model on for a fraction of a period (a tick early or late) with u held."""
-        if self._initialised and math.isfinite(u):
-            self._z = self._advanced(self._z, u, periods)
-
     def predicted(self, inputs: Sequence[float]) -> Estimate:
         z = self._z
         for u in inputs:
             z = self._advanced(z, u)
         return self._estimate(z)
-
-    def holding_input(self, est: Estimate) -> float:
-        # ẍ = b·u + ξ = 0 at rest: u = −ξ/b
-        return -est.disturbance / self._b
-
-    def preload(self, hold_input: float) -> float | None:
-        if not (self._initialised and math.isfinite(hold_input)):
-            return None
-        disturbance = -self._b * hold_input  # at rest: 0 = b·u + ξ
-        self._z[2] = disturbance * self._T * self._T  # scaled: z₂ = T²·ξ
-        return disturbance
 
     def reset(self) -> None:
         self._z = [0.0] * self._n

@@ -20,12 +20,16 @@ from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
 from mill_observers.base import Observer
-from mill_observers.chain_design import ChainDesign, advance, check_gain_and_period
+from mill_observers.chain_design import (
+    ChainDesign,
+    ChainObserver,
+    check_gain_and_period,
+)
 
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
 
 
-class GpiObserver(Observer):
+class GpiObserver(ChainObserver, Observer):
     """Beltrán 2013 GPI observer for one axis ẍ = b·τ + ξ, ξ a 4th-degree Taylor polynomial.
 
     Estimates position [m], velocity [m/s] and the lumped disturbance ξ [m/s²] from the
@@ -142,11 +146,6 @@ class GpiObserver(Observer):
             z6,
         ]
 
-    def elapse(self, u: float, periods: float) -> None:
-        """Run the model on for a fraction of a period (a tick early or late) with u held."""
-        if self._initialised and math.isfinite(u):
-            self._z = advance(self._z, self._g0, self._g1, u, periods)
-
     def predicted(self, inputs: Sequence[float]) -> Estimate:
         """The estimate after further time updates with these commands; the state is kept.
 
@@ -159,17 +158,6 @@ class GpiObserver(Observer):
         z = self._z
         self._z = saved
         return Estimate(z[0], z[1] * self._inv_T, z[2] * self._inv_T2)
-
-    def holding_input(self, est: Estimate) -> float:
-        # ẍ = b·u + ξ = 0 at rest: u = −ξ/b
-        return -est.disturbance / self._b
-
-    def preload(self, hold_input: float) -> float | None:
-        if not (self._initialised and math.isfinite(hold_input)):
-            return None
-        disturbance = -self._b * hold_input  # at rest: 0 = b·u + ξ
-        self._z[2] = disturbance * self._T * self._T  # scaled: z₂ = T²·ξ
-        return disturbance
 
     def reset(self) -> None:
         """Forget the state; the next correct() initialises from its measurement."""
