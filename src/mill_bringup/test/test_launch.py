@@ -76,7 +76,11 @@ def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
     assert written['/**/y_controller']['ros__parameters']['pd.omega_c'] == 12.0  # the file's
     assert written['/**/plant']['ros__parameters']['substeps'] == 8
     for entry in written.values():
+        # what run_scenario --timing realtime sets: no sim time, one sample of delay
         assert entry['ros__parameters']['timing'] == 'realtime'
+        assert entry['ros__parameters']['use_sim_time'] is False
+    for name in ('plant', 'x_controller', 'z_observer'):
+        assert written[f'/**/{name}']['ros__parameters']['command_delay'] == 1
     for node in plan.nodes:
         assert node.namespace == '/machine2' and node.remappings == []
         assert node.ros_arguments == ['--log-level', 'warn']

@@ -70,7 +70,8 @@ class Timing(ABC):
 
     @abstractmethod
     def when(self, ns: int) -> str:
-        """A stamp as a log says it: job time, or the time of day of a wall-clock stamp."""
+        """A stamp as a log says it ('at ...'): job time, or the time of day of a wall-clock
+        stamp."""
 
     def off_grid(self, stamps_ns: list[int]) -> int | None:
         """The first of these stamps off the sample grid, if the timing has one."""
@@ -106,7 +107,7 @@ class Lockstep(Timing):
         return sorted(pending)
 
     def when(self, ns: int) -> str:
-        return f't = {ns / 1e9:.4f} s'
+        return f'at t = {ns / 1e9:.4f} s'
 
     def off_grid(self, stamps_ns: list[int]) -> int | None:
         return next((ns for ns in stamps_ns if ns % self.period_ns), None)

@@ -32,7 +32,7 @@ def test_realtime_keeps_the_newest_refuses_repeats_and_takes_any_reference() -> 
     assert t.problem(stamps, 1000, None, DT, history=True) is None
     assert t.depth() == 1 and t.depth(history=True) is None
     assert not t.is_offered_again(stamps, 1234)
-    assert t.when(0).endswith('UTC') and Lockstep(DT).when(DT) == 't = 0.0010 s'
+    assert t.when(0).endswith('UTC') and Lockstep(DT).when(DT) == 'at t = 0.0010 s'
 
 
 def test_an_unknown_timing_is_refused_in_one_line() -> None:

@@ -282,7 +282,8 @@ class AxisControllerNode(Node):
             ns, missing = waiting
             names = [self._topics[m] for m in missing]
             detail = ', '.join(f'{n} ({self.count_publishers(n)} publishers)' for n in names)
-            self.get_logger().warning(f'waiting for {self.timing.when(ns)} on {detail}')
+            when = self.timing.when(ns)
+            self.get_logger().warning(f'waiting for the inputs of the state {when} on {detail}')
 
 
 def main(argv: list[str] | None = None) -> int:

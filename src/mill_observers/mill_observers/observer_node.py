@@ -252,7 +252,8 @@ class ObserverNode(Node):
         if time.monotonic() - self._stalled_since > 2.0:
             topic = topics.joint_command(self.axis)
             self.get_logger().warning(
-                f'waiting for the command of {self.timing.when(self._last_ns)} on {topic} '
+                f'waiting for the command answering the state {self.timing.when(self._last_ns)} on '
+                f'{topic} '
                 f'({self.count_publishers(topic)} publishers)'
             )
 

@@ -35,6 +35,7 @@ from mill_common.codec import encode_clock
 from mill_common.lockstep import Action, LockstepWatchdog
 from mill_common.ros import DATA_QOS
 from mill_common.timebase import seconds
+from mill_common.timing import TIMINGS
 from rclpy.clock import Clock, ClockType
 from rosgraph_msgs.msg import Clock as ClockMsg
 
@@ -79,12 +80,15 @@ class Drive(Protocol):
 
 
 class DriveCycle(ABC):
+    TIMING: ClassVar[str]  # the `timing` it is
     STATUS: ClassVar[str]  # the part of the drive's status `<node>: <part>` on /diagnostics
     GRID: ClassVar[bool]  # command stamps lie on the sample grid
 
     def __init__(self, drive: Drive) -> None:
         self.drive = drive
         self.k = 0  # steps (lockstep) or ticks (realtime) so far
+        # how a stamp reads in the log: job time, or the time of day (mill_common.timing)
+        self.when = TIMINGS[self.TIMING](drive.dt_ns).when
 
     @abstractmethod
     def configure(self) -> None:
@@ -121,6 +125,7 @@ class DriveCycle(ABC):
 
 
 class LockstepCycle(DriveCycle):
+    TIMING = 'lockstep'
     STATUS = topics.DRIVE_STATUSES[0]
     GRID = True
 
@@ -245,6 +250,7 @@ class LockstepCycle(DriveCycle):
 
 
 class RealtimeCycle(DriveCycle):
+    TIMING = 'realtime'
     STATUS = topics.DRIVE_STATUSES[1]
     GRID = False
 

@@ -283,7 +283,7 @@ class DriveNode(LifecycleNode):
                 self._faults[axis] += 1
                 if self._faults[axis] == 1:
                     self.get_logger().error(
-                        f'axis {axis} braked at t = {seconds(ns):.4f} s: no finite command '
+                        f'axis {axis} braked {self.cycle.when(ns)}: no finite command '
                         f'on {topics.joint_command(axis)} to apply'
                     )
                     self.publish_status(force=True, message=f'axis {axis} braked')
