@@ -152,8 +152,9 @@ class ObserverNode(Node):
     def _on_state(self, msg: JointState) -> None:
         ns = from_stamp(msg.header.stamp)
         if self._last_ns is not None and ns <= self._last_ns:
-            if not self.timing.WAITS_FOR_INPUTS:
-                self.guard.drop(self._topics['state'], Rejected('stamp repeated or in the past'))
+            if not self.timing.WAITS_FOR_INPUTS or ns < self._last_ns:
+                past = Rejected('stamp repeated or in the past')
+                self.guard.drop(self._topics['state'], past, msg.header.frame_id)
             elif ns == self._last_ns and self._last_estimate is not None:
                 if msg.header.frame_id == self._owners['state']:
                     self.guard.heard(self._topics['state'])  # the plant is there, waiting
