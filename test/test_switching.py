@@ -147,3 +147,22 @@ def test_switch_to_a_law_that_joins_the_observer_model_mid_job(ros_env) -> None:
     job.switch_sample_checks(250_000, 'adaptive_pi', samples_after=400)
     # The law designed its gains from the observer's estimate (its own RLS never ran).
     assert job.law_state['adapted'] == 1.0 and job.law_state['updates'] > 2000
+
+
+@pytest.mark.system
+def test_a_trip_stays_latched_whatever_else_is_set(ros_env) -> None:
+    """Issue 21: only ~/reset_trip or setting following_error_limit clears a trip; a law
+    switch (or any other parameter) leaves the axis braked."""
+    with running_job(ros_env, 'slotting', '--controller', 'pd', '--duration', '2') as job:
+        # without the observer's estimate every axis trips within about 85 ms
+        assert job.spin_until(lambda: any(math.isnan(u) for u in job.commands.values()), 120)
+        assert job.controller.set('controller', 'adrc').successful
+        assert job.controller.set('pd.omega_c', 15.0).successful
+        asked = max(job.commands)
+        assert job.spin_until(lambda: max(job.commands) > asked + 50_000_000, 60)
+        after = [u for ns, u in job.commands.items() if ns > asked]
+        assert after and all(math.isnan(u) for u in after), 'a law switch cleared the trip'
+        assert job.controller.set('following_error_limit', 1.0).successful  # clears it
+        cleared = max(job.commands)
+        assert job.spin_until(lambda: max(job.commands) > cleared + 50_000_000, 60)
+        assert any(math.isfinite(u) for ns, u in job.commands.items() if ns > cleared)
