@@ -186,6 +186,51 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
     assert once_each([v for v in ref if v], 10, 10) and max(ref) >= 10 * (K // 10) - 10
 
 
+@contextlib.contextmanager
+def busy_cores(n: int = 2) -> Iterator[None]:
+    """n processes that keep a core each busy while the block runs (ended on the way out)."""
+    spinners = [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(n)]
+    try:
+        yield
+    finally:
+        for proc in spinners:
+            proc.kill()
+            proc.wait()
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('layout', ['processes', 'single'])
+def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, layout):
+    """Issue 21: the plant steps at most its recorder_window ahead of the steps the runner has
+    recorded whole, so a loaded machine slows the run down and loses nothing."""
+    out = tmp_path / 'run'
+    with busy_cores(2):
+        proc = subprocess.run(
+            [
+                *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '1'),
+                *('--layout', layout, '--record', '--quiet', '--output', str(out)),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert json.loads((out / 'summary.json').read_text())['missing_samples'] == {}
+    _, _, ks = both_readers(out / 'bag')
+    state_k = ks[Q(topics.state('x'))]
+    K, repeats = max(state_k), state_k.count(0) - 1
+    assert K >= 1000  # the job's 1001 samples at least
+    stepped = [Q(topics.CUTTING_FORCE)]
+    stepped += [Q(f(a)) for a in AXES for f in (topics.state, topics.estimate)]
+    stepped += [Q(topics.joint_command(a)) for a in AXES]
+    for name in stepped:  # every step up to where the plant stopped, once (but re-offers)
+        k = ks[name]
+        assert 1 <= k.count(0) <= 1 + repeats and once_each([v for v in k if v], 1), name
+        assert max(k) == K, name
+    assert once_each(ks[Q(topics.GROUND_TRUTH)]) and max(ks[Q(topics.GROUND_TRUTH)]) == K - 1
+
+
 @pytest.mark.system
 def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())

@@ -7,6 +7,8 @@ runner's summary and the report of the run's bag are computed by the same code.
 With `record=RecordOptions(...)` a TopicRecorder writes every topic of the graph to a
 rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only to the
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
+In lockstep it also acknowledges, on mill/recorded, the newest step whose stepped topics it
+holds whole, and the plant waits for that (mill_bringup.recorded_steps): nothing is lost.
 /diagnostics is also kept decoded, for the faults the summary reports.
 
 The monitor runs in the graph's namespace (and with its remappings), so the job's relative
@@ -26,10 +28,13 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
-from mill_common.ros import DATA_QOS
+from mill_common.codec import encode_clock
+from mill_common.ros import DATA_QOS, LATCHED_QOS
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock as ClockMsg
 
+from mill_bringup.recorded_steps import RecordedSteps
 from mill_common import topics
 
 
@@ -39,6 +44,8 @@ class RecordOptions:
     sim_time: bool = True
     compression: str = 'zstd'
     notes: Mapping[str, str] = field(default_factory=dict)  # the bag's custom_data
+    # A lockstep run's handshake: the steps recorded whole are acknowledged on mill/recorded.
+    steps: RecordedSteps | None = None
 
 
 def _own_topics(namespace: str) -> str:
@@ -70,6 +77,9 @@ class Monitor(Node):
         self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
+        self.steps = record.steps if record is not None else None
+        if self.steps is not None:
+            self._ack_pub = self.create_publisher(ClockMsg, topics.RECORDED, LATCHED_QOS)
         if record is not None:
             self.recorder = TopicRecorder(
                 self,
@@ -86,7 +96,7 @@ class Monitor(Node):
             # The rest of the contract, subscribed before the graph starts so that the
             # first step is recorded; discovery adds any other topic.
             for topic, msgtype in (recorded or {}).items():
-                self.recorder.subscribe(topic, msgtype, DATA_QOS)
+                self._listen(topic, msgtype, None)
             self.recorder.subscribe(topics.CLOCK, CLOCK, DATA_QOS)
             diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
@@ -101,16 +111,42 @@ class Monitor(Node):
                 store.append(data)
                 arrivals.append(time.time_ns())
 
+        self._listen(topic, msgtype, keep)
+
+    def _listen(self, topic: str, msgtype: str, keep: Callable[[bytes], None] | None) -> None:
+        """Subscribe to a topic of the job: keep its messages (if `keep`), record them (if
+        recording), acknowledge the steps recorded whole (if the topic is stepped)."""
+        actions = [keep] if keep is not None else []
         if self.recorder is not None:
-            tap = self.recorder.tap(topic, msgtype)
+            actions.append(self.recorder.tap(topic, msgtype))
+        if self.steps is not None and self.steps.stepped(topic):
+            actions.append(self._acknowledger(topic))
+        if len(actions) == 1:
+            on_msg = actions[0]
+        else:
 
             def on_msg(data: bytes) -> None:
-                keep(data)
-                tap(data)
+                for action in actions:
+                    action(data)
 
-            self.create_subscription(message_class(msgtype), topic, on_msg, DATA_QOS, raw=True)
-        else:
-            self.create_subscription(message_class(msgtype), topic, keep, DATA_QOS, raw=True)
+        self.create_subscription(message_class(msgtype), topic, on_msg, DATA_QOS, raw=True)
+
+    def finish_recording(self, samples: int) -> None:
+        """The job's samples are done: the plant may take one more step, then waits for
+        the bag to hold everything up to it (a lockstep run's handshake; else nothing)."""
+        if self.steps is not None and (through := self.steps.freeze(samples)) is not None:
+            self._ack_pub.publish(encode_clock(through))
+
+    def _acknowledger(self, topic: str) -> Callable[[bytes], None]:
+        assert self.steps is not None
+        heard, publish = self.steps.heard, self._ack_pub.publish
+
+        def acknowledge(data: bytes) -> None:
+            ns = cdr_stamp_ns(data)
+            if ns is not None and (through := heard(topic, ns)) is not None:
+                publish(encode_clock(through))
+
+        return acknowledge
 
     # -- what a job reads (mill_bringup.jobs.base.MessageSource) ----------------------------
     def messages(self, topic: str) -> Sequence[bytes]:

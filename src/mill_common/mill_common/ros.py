@@ -32,6 +32,14 @@ DATA_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+# The newest value only, kept for a reader that joins later (an acknowledgement, a status).
+LATCHED_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
 
 def to_stamp(ns: int) -> Time:
     return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)

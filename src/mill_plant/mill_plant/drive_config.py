@@ -14,6 +14,8 @@ from mill_common.parameters import (
     realtime_specs,
 )
 
+from mill_common import topics
+
 TIMINGS = ('lockstep', 'realtime')
 
 
@@ -58,6 +60,18 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'lockstep: samples N between the step a command answers and the step the plant '
             'applies it from (a transport delay; the first N steps get zero input); realtime '
             'has one sample by nature and ignores it',
+            non_negative_int,
+            True,
+        ),
+    ),
+    (
+        'recorder_window',
+        ParamSpec(
+            'recorder_window',
+            0,
+            'lockstep: steps the plant may run ahead of the newest step the recorder has '
+            f'acknowledged on {topics.RECORDED}, so that a bag misses nothing however busy the '
+            'machine (run_scenario --record sets it); 0: do not wait for a recorder',
             non_negative_int,
             True,
         ),

@@ -10,6 +10,9 @@ reports; its cycle says when a period runs and what counts as late:
   node rejoins); a missing command is reported after `command_report_time`, naming the
   axis, the topic and the node that should send it, and when commands return, with the
   length of the silence; after `lockstep_timeout` the node ends with that message.
+  With `recorder_window` W it also waits for the recorder: the states of step j go out only
+  once step j − W has been acknowledged on mill/recorded, so that a busy recorder cannot
+  lose samples (mill_bringup.recorded_steps).
 - `RealtimeCycle`: every sample period of wall time it reads the positions, publishes them
   stamped with the acquisition time on the system clock, and applies the newest command of
   each axis (zero-order hold). A command must answer a state this drive published. A
@@ -33,7 +36,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
 from mill_common.codec import encode_clock
 from mill_common.lockstep import Action, LockstepWatchdog
-from mill_common.ros import DATA_QOS
+from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp
 from mill_common.timebase import seconds
 from mill_common.timing import TIMINGS
 from rclpy.clock import Clock, ClockType
@@ -75,6 +78,7 @@ class Drive(Protocol):
     def get_logger(self) -> Any: ...
     def trigger_activate(self) -> Any: ...
     def create_publisher(self, *args: Any, **kwargs: Any) -> Any: ...
+    def create_subscription(self, *args: Any, **kwargs: Any) -> Any: ...
     def create_timer(self, *args: Any, **kwargs: Any) -> Any: ...
     def get_publishers_info_by_topic(self, topic: str) -> Any: ...
 
@@ -144,6 +148,10 @@ class LockstepCycle(DriveCycle):
         self._wait_sum = self._wait_max = 0.0
         self._last_publish = time.monotonic()
         self._missing: set[str] = set()  # axes reported missing
+        self._window_ns = v['recorder_window'] * d.dt_ns  # 0: no recorder to wait for
+        self._recorded_ns = -1  # the newest step the recorder has acknowledged
+        if self._window_ns:
+            d.create_subscription(ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS)
 
     def activate(self) -> None:
         self.allowed = True  # stepping starts once the peers are matched (see watch)
@@ -163,7 +171,20 @@ class LockstepCycle(DriveCycle):
         return None
 
     def command_taken(self) -> None:
-        if self.drive.table.complete(self.stamp):
+        if self.drive.table.complete(self.stamp) and self._recorder_caught_up():
+            self._advance()
+
+    def _recorder_caught_up(self) -> bool:
+        """Whether the next step may go out: the recorder is at most the window behind it."""
+        return not self._window_ns or self.stamp + self.drive.dt_ns <= (
+            self._recorded_ns + self._window_ns
+        )
+
+    def _on_recorded(self, msg: ClockMsg) -> None:
+        self._recorded_ns = max(self._recorded_ns, from_stamp(msg.clock))
+        d = self.drive
+        started = d.active and self._watchdog.started
+        if started and d.table.complete(self.stamp) and self._recorder_caught_up():
             self._advance()
 
     def _publish_step(self, again: bool = False) -> None:
@@ -207,8 +228,8 @@ class LockstepCycle(DriveCycle):
             d.active = True
             d.get_logger().info('all peers matched: starting lockstep')
             self._publish_step()
-        elif action is Action.OFFER_AGAIN:
-            self._publish_step(again=True)
+        elif action is Action.OFFER_AGAIN and not d.table.complete(self.stamp):
+            self._publish_step(again=True)  # (a step waiting only for the recorder is whole)
         elif action is Action.PEERS_MISSING:
             d.end(3, 'peers never appeared: ' + '; '.join(d.missing_peers()))
         elif action is Action.STALLED:
@@ -227,6 +248,13 @@ class LockstepCycle(DriveCycle):
 
     def _timeout_message(self) -> str:
         d = self.drive
+        if d.table.complete(self.stamp):
+            newest = 'none' if self._recorded_ns < 0 else f't = {seconds(self._recorded_ns):.3f} s'
+            return (
+                f'lockstep timeout: step {self.k} waited '
+                f'{d.params.values["lockstep_timeout"]:g} s for the recorder (its newest '
+                f'acknowledgement on {topics.RECORDED}: {newest})'
+            )
         parts = []
         for axis in d.table.missing(self.stamp):
             topic = topics.joint_command(axis)
@@ -243,10 +271,13 @@ class LockstepCycle(DriveCycle):
 
     def status_values(self) -> dict[str, object]:
         steps = max(self.k, 1)
-        return {
+        out: dict[str, object] = {
             'mean_wait_ms': 1e3 * self._wait_sum / steps,
             'max_wait_ms': 1e3 * self._wait_max,
         }
+        if self._window_ns:
+            out['recorded_s'] = seconds(max(self._recorded_ns, 0))
+        return out
 
 
 class RealtimeCycle(DriveCycle):

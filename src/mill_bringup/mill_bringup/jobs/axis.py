@@ -47,6 +47,7 @@ from mill_analysis import records
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import Job, MessageSource
 from mill_bringup.layout import processes
+from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
 from mill_common import topics
@@ -54,6 +55,10 @@ from mill_common import topics
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 # A stamp beyond this is a wall-clock time (2001 on), not a simulation's sim time [ns].
 WALL_CLOCK_NS = 10**18
+# Steps a recorded run's plant may run ahead of its bag: far inside the writers' history
+# (DATA_QOS, 2000 samples), and with acknowledgements every quarter of it the plant hardly
+# ever waits.
+RECORDER_WINDOW = 200
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
@@ -383,7 +388,9 @@ class AxisJob(Job[RunRecord]):
         return seconds((self.samples - 1) * self.dt_ns)
 
     # -- the distributed run ---------------------------------------------------------------
-    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
+    def prepare_graph(
+        self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
+    ) -> None:
         # The monitor listens to every state topic too: the plant waits for it (controller,
         # observer, monitor), so that the first samples reach the record. A controller that
         # shares its observer's process takes the states from it (a servo cycle).
@@ -399,6 +406,23 @@ class AxisJob(Job[RunRecord]):
                 if node.kind.per_axis:
                     wanted = self.scenario.overrides.setdefault(node.name, {})
                     wanted.setdefault('min_subscribers', 2)
+        if recorded:  # the plant waits for the recorder too: a bag misses nothing
+            wanted = self.scenario.overrides.setdefault(self.plant, {})
+            wanted.setdefault('recorder_window', RECORDER_WINDOW)
+
+    def recorded_steps(self) -> RecordedSteps | None:
+        window = self.scenario.parameters(self.plant)['recorder_window']
+        if not window:
+            return None
+        # The states first (they are always there); a step is whole with its estimates,
+        # commands and cutting force, and the ground truth of the step before.
+        stepped = {topics.state(a): 0 for a in self.axes}
+        for axis in self.axes:
+            stepped[topics.estimate(axis)] = 0
+            stepped[topics.joint_command(axis)] = 0
+        stepped[topics.CUTTING_FORCE] = 0
+        stepped[topics.GROUND_TRUTH] = 1
+        return RecordedSteps(stepped, self.dt_ns, window)
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""

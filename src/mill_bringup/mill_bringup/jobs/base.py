@@ -23,6 +23,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
+from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario
 from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 
@@ -100,9 +101,15 @@ class Job(ABC, Generic[R]):
 
     # -- the distributed run ---------------------------------------------------------------
     @abstractmethod
-    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
+    def prepare_graph(
+        self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
+    ) -> None:
         """Adjust the scenario before launch in this layout (the clock node waits for the
-        monitor too)."""
+        monitor too; if `recorded`, for the recorder where it can)."""
+
+    def recorded_steps(self) -> RecordedSteps | None:
+        """The recorder's handshake with the clock node, if the graph as prepared has one."""
+        return None
 
     @abstractmethod
     def upstream_topics(self) -> list[str]:

@@ -114,7 +114,9 @@ class ForceJob(Job[ForceRecord]):
         )
 
     # -- the distributed run ---------------------------------------------------------------
-    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
+    def prepare_graph(
+        self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
+    ) -> None:
         # The force samples need two listeners: the controller and the monitor.
         if monitored:
             self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 2)

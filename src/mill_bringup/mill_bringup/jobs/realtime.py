@@ -85,8 +85,11 @@ class RealtimeAxisJob(AxisJob):
     def samples(self) -> int:
         return job_steps(self.end_time, self.dt_ns)
 
-    def prepare_graph(self, monitored: bool, layout: str = LAYOUTS[0]) -> None:
-        # No lockstep start: the drive ticks from its activation on. The trajectory starts the
+    def prepare_graph(
+        self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
+    ) -> None:
+        # No lockstep start: the drive ticks from its activation on (nor does it wait for a
+        # recorder: a bag of a realtime run counts what it lost instead). The trajectory starts the
         # job once the monitor hears it too, or the record would miss the job's first periods
         # (its participant may be discovered a second or more after the graph's).
         if monitored:

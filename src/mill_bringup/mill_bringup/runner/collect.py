@@ -16,6 +16,8 @@ from mill_bringup.runner.options import RunOptions
 from mill_bringup.runner.result import RunResult
 from mill_bringup.runner.session import Session
 
+QUIET = 2.0  # [s] without a newly recorded step that end the wait for the recorder
+
 
 @dataclass(frozen=True)
 class Collected:
@@ -33,9 +35,13 @@ class Collected:
 def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
     """Wait for the job's last messages, brake, stop the graph, close the bag; the record."""
     monitor, graph = session.monitor, session.graph
-    settle = time.monotonic() + job.SETTLE_TIMEOUT
-    while time.monotonic() < settle and not job.settled(monitor):
-        session.spin('after the job ended')
+    if monitor.steps is not None:  # the handshake says when the last messages are in
+        monitor.finish_recording(job.samples)  # the plant stops where the bag can wait
+        _catch_up(session)
+    else:
+        settle = time.monotonic() + job.SETTLE_TIMEOUT
+        while time.monotonic() < settle and not job.settled(monitor):
+            session.spin('after the job ended')
     if job.BRAKE_AT_END:
         for node in job.clock_nodes:
             deactivate(monitor, session.executor, node.name, session.progress)
@@ -48,6 +54,18 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
     missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
     problems = graph.notes + monitor.problems()
     return Collected(record, missing, lost, problems, bag, peak, session.peak_pss_mb)
+
+
+def _catch_up(session: Session) -> None:
+    """Wait until the bag holds every step the plant took (nothing is in flight when the
+    graph stops), unless no step comes for QUIET seconds."""
+    steps = session.monitor.steps
+    assert steps is not None, 'a run with the handshake'
+    through, since = steps.through, time.monotonic()
+    while not steps.drained and time.monotonic() - since < QUIET:
+        session.spin('while the recorder caught up')
+        if steps.through != through:
+            through, since = steps.through, time.monotonic()
 
 
 def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:

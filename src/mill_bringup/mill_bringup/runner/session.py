@@ -85,6 +85,7 @@ class Session:
                 Path(options.record_bag),
                 sim_time=job.sim_time_stamps(),
                 notes=records.bag_notes(job.RECORD),  # what `report` reads it as
+                steps=job.recorded_steps(),
             )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
         self._stop = install_stop_handlers()

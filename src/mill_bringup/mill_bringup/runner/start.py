@@ -50,7 +50,7 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
     # Every node's overrides as they were: the next run of the scenario (another layout,
     # another variant) starts from them again (Launch.restore).
     given = {n.name: dict(scen.overrides.get(n.name, {})) for n in scen.nodes}
-    job.prepare_graph(monitored=True, layout=layout)
+    job.prepare_graph(monitored=True, layout=layout, recorded=options.record_bag is not None)
     clock_names = {n.name for n in job.clock_nodes}
     managed = {n.name for n in job.clock_nodes if n.kind.lifecycle}
     planned = processes(scen, layout, options.external, alone=clock_names - managed)
