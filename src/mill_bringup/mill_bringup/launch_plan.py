@@ -25,6 +25,7 @@ trajectory reports the job done.
 
 from __future__ import annotations
 
+import fnmatch
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,9 +42,12 @@ from mill_bringup.scenario import (
     check_layout,
     dump_parameters,
     load,
+    parameter_specs_of,
     parse_yaml,
 )
 from mill_common import topics
+from mill_common.param_sources import flatten
+from mill_common.parameters import unknown_parameters_message
 
 TIMINGS = ('lockstep', 'realtime')
 LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
@@ -118,7 +122,12 @@ class Plan:
 
 
 def _apply_params_file(scen: Scenario, path: str) -> None:
-    """params_file entries as overrides of the scenario's nodes (ScenarioError if unusable)."""
+    """params_file entries as overrides of the scenario's nodes (ScenarioError if unusable).
+
+    As a node reads a parameter file: an entry with a wildcard (`/**`, `/**/x_*`) gives each
+    name to the nodes that declare it and no other; a name that no node it reaches declares
+    is a typo, refused. A node's own entry may hold only names that node declares.
+    """
     try:
         raw = parse_yaml(Path(path).read_text())
     except OSError as exc:
@@ -130,20 +139,33 @@ def _apply_params_file(scen: Scenario, path: str) -> None:
     names = [n.name for n in scen.nodes]
     for key, entry in raw.items():
         values = (entry or {}).get('ros__parameters') if isinstance(entry, dict) else None
+        where = f'params_file {path}: entry {key!r}'
         if not isinstance(values, dict):
-            raise ScenarioError(f'params_file {path}: entry {key!r} has no ros__parameters')
-        if key == '/**':
-            targets = names
-        else:
-            name = str(key).removeprefix('/**/').removeprefix('/')
-            if name not in names:
-                raise ScenarioError(
-                    f'params_file {path}: entry {key!r} names no node of scenario '
-                    f'{scen.name} ({", ".join(names)})'
+            raise ScenarioError(f'{where} has no ros__parameters')
+        pattern = str(key).removeprefix('/**').lstrip('/') or '*'
+        shared = '*' in pattern
+        targets = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
+        if not targets:
+            raise ScenarioError(
+                f'{where} names no node of scenario {scen.name} ({", ".join(names)})'
+            )
+        unknown = {}
+        for param, value in flatten(values).items():
+            declaring = [n for n in targets if scen.declares(n, param)]
+            if not declaring:
+                unknown[param] = value
+            for name in declaring:
+                scen.overrides.setdefault(name, {})[param] = value
+        if unknown:
+            known = {full for n in targets for full, _s in parameter_specs_of(scen.node(n))}
+            if shared:
+                them = 'them' if len(unknown) > 1 else 'it'
+                message = unknown_parameters_message(
+                    unknown, known, reason=f'no node of scenario {scen.name} declares {them}'
                 )
-            targets = [name]
-        for name in targets:
-            scen.overrides.setdefault(name, {}).update(values)
+            else:
+                message = unknown_parameters_message(unknown, known, targets[0])
+            raise ScenarioError(f'{where}: {message}')
 
 
 def plan(

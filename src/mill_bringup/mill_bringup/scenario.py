@@ -213,7 +213,8 @@ class Scenario:
             copy.add_override(text)
         return copy
 
-    def _declares(self, node: str, param: str) -> bool:
+    def declares(self, node: str, param: str) -> bool:
+        """Whether node `node` of the scenario declares parameter `param` (or ROS does)."""
         specs = parameter_specs_of(self.node(node))
         return is_ros_parameter(param) or any(full == param for full, _spec in specs)
 
@@ -255,7 +256,7 @@ class Scenario:
             raise ScenarioError(f'override {text!r} matches no node of scenario {self.name}')
         # A glob gives the value to the matched nodes that declare the name; a node named
         # exactly must declare it. A name that no matched node declares is refused.
-        declaring = [n for n in matched if self._declares(n, param)]
+        declaring = [n for n in matched if self.declares(n, param)]
         if not declaring:
             known = {full for n in matched for full, _s in parameter_specs_of(self.node(n))}
             reason = f'{matched[0]} has no such parameter'

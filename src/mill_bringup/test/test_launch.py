@@ -145,6 +145,53 @@ def test_params_file_must_name_nodes_of_the_scenario(tmp_path: Path) -> None:
         launch_plan.plan('slotting', params_file=str(params))
 
 
+def test_a_shared_params_file_entry_reaches_only_the_nodes_that_declare_it(
+    tmp_path: Path,
+) -> None:
+    params = tmp_path / 'shared.yaml'
+    params.write_text(
+        '/**:\n  ros__parameters:\n    gpi:\n      omega_o: 5.0\n    substeps: 8\n'
+        '/**/x_*:\n  ros__parameters:\n    following_error_limit: 0.002\n'
+    )
+    plan = launch_plan.plan('slotting', params_file=str(params))
+    written = launch_plan.write_parameters(plan, str(tmp_path))
+    entries = {
+        k.removeprefix('/**/'): v['ros__parameters']
+        for k, v in parse_yaml(written.read_text()).items()
+    }
+    assert entries['plant']['substeps'] == 8 and 'gpi.omega_o' not in entries['plant']
+    for axis in 'xyz':
+        assert entries[f'{axis}_observer']['gpi.omega_o'] == 5.0
+        assert 'gpi.omega_o' not in entries[f'{axis}_controller']
+    assert entries['x_controller']['following_error_limit'] == 0.002
+    assert entries['y_controller']['following_error_limit'] != 0.002
+
+
+@pytest.mark.parametrize(
+    ('text', 'message'),
+    [
+        (
+            'x_controller:\n  ros__parameters:\n    pd.omega: 20.0\n',
+            "entry 'x_controller': unknown parameter pd.omega=20.0 (did you mean pd.omega_c?): "
+            'x_controller has no such parameter',
+        ),
+        (
+            '/**:\n  ros__parameters:\n    gpi.omega_oo: 5.0\n',
+            "entry '/**': unknown parameter gpi.omega_oo=5.0 (did you mean gpi.omega_o?): "
+            'no node of scenario slotting declares it',
+        ),
+    ],
+)
+def test_an_unknown_name_names_the_params_file_and_its_entry(
+    tmp_path: Path, text: str, message: str
+) -> None:
+    params = tmp_path / 'mine.yaml'
+    params.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        launch_plan.plan('slotting', params_file=str(params))
+    assert str(info.value) == f'params_file {params}: {message}'
+
+
 def test_exit_codes_as_a_shell_reports_them() -> None:
     assert [launch_plan.exit_code(c) for c in (0, 3, -2, -9, 300)] == [0, 3, 130, 137, 255]
 
