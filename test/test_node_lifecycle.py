@@ -1,14 +1,18 @@
 """Nodes end cleanly on signals, also on the double SIGINT of Ctrl-C under `ros2 launch`
-(the terminal's and the one launch forwards)."""
+(the terminal's and the one launch forwards), and at any moment of their start-up."""
 
 from __future__ import annotations
 
+import os
 import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
-from test.conftest import ros_node, wait_until
+from test.conftest import SCENARIO, ros_node, wait_until
 
 
 def wait_until_in_graph(name: str) -> None:
@@ -93,3 +97,100 @@ def test_ctrl_c_ends_a_running_graph_before_launch_escalates(start_node) -> None
         code, _out, err = node.wait(timeout=5)
         assert code == 0, f'{name}: {err}'
         assert 'Traceback' not in err, f'{name}: {err}'
+
+
+# -- a stop at any moment of the start-up ------------------------------------------------------
+# Points after the process's first own line (s): during the imports, rclpy's init, the nodes'
+# construction, discovery, the first steps; on a slower machine they fall earlier in the
+# start-up. Before that line Python itself starts (about 40 ms here): a signal then ends the
+# process by the signal, as for any Python program (docs/reliability.md).
+START_UP_POINTS = (0.0, 0.05, 0.15, 0.4, 1.0, 2.5)
+CLEAN = ('Traceback', 'Exception ignored', 'race condition', 'terminate called')
+STOP_SIGNALS_MASK = (1 << (signal.SIGINT - 1)) | (1 << (signal.SIGTERM - 1))
+
+
+def _console_script(name: str) -> str:
+    """The executable `ros2 run` starts (the console script), not `python -m`."""
+    return str(Path(sys.executable).with_name(name))
+
+
+def _holds_stop_signals(pid: int) -> bool:
+    """The process runs its own first line: SIGINT and SIGTERM blocked (mill_common.executable)."""
+    try:
+        status = Path(f'/proc/{pid}/status').read_text()
+    except OSError:
+        return False
+    blocked = int(next(ln for ln in status.splitlines() if ln.startswith('SigBlk:')).split()[1], 16)
+    return blocked & STOP_SIGNALS_MASK == STOP_SIGNALS_MASK
+
+
+def _stop_at(proc: subprocess.Popen[str], after: float, first: int) -> float:
+    """`first` signal `after` s after the process's first own line, then SIGTERM 50 ms later
+    if still alive (a user's second Ctrl-C, launch's escalation); how long it took to end [s]."""
+    assert wait_until(lambda: _holds_stop_signals(proc.pid), 60, step=0.001), 'never started'
+    time.sleep(after)
+    t0 = time.monotonic()
+    proc.send_signal(first)
+    time.sleep(0.05)
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGTERM)
+    proc.wait(timeout=60)
+    return time.monotonic() - t0
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('after', START_UP_POINTS)
+@pytest.mark.parametrize('first', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+def test_a_node_stopped_at_any_moment_of_its_start_up_ends_quietly(
+    ros_env, after: float, first: int
+) -> None:
+    proc = subprocess.Popen(
+        [
+            *(_console_script('axis_controller_node'), '--ros-args'),
+            *('-r', '__node:=x_controller', '--params-file', str(SCENARIO)),
+        ],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        took = _stop_at(proc, after, first)
+        out = proc.communicate()[0]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 0, out
+    assert not [c for c in CLEAN if c in out], out
+    assert took < LAUNCH_SIGTERM_TIMEOUT, took
+
+
+@pytest.mark.system
+@pytest.mark.parametrize('after', START_UP_POINTS[::2])
+def test_run_scenario_stopped_at_any_moment_of_its_start_up_ends_quietly(
+    ros_env, tmp_path: Path, after: float
+) -> None:
+    run_dir = tmp_path / 'run'
+    proc = subprocess.Popen(
+        [_console_script('run_scenario'), 'slotting', '--duration', '2', '--output', str(run_dir)],
+        env=ros_env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        took = _stop_at(proc, after, signal.SIGINT)
+        _out, err = proc.communicate()
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    # A run the user stopped is not a finished one: 130, as a shell reports Ctrl-C.
+    assert proc.returncode == 130, err
+    assert err.strip().splitlines()[-1] == 'run_scenario: interrupted', err
+    assert not [c for c in CLEAN if c in err], err
+    assert took < LAUNCH_SIGTERM_TIMEOUT, took
+    for log in sorted((run_dir / 'logs').glob('*.log')):  # the nodes it had started
+        text = log.read_text()
+        assert not [c for c in CLEAN if c in text], f'{log.name}: {text}'

@@ -22,10 +22,10 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'run_scenario = mill_bringup.runner.cli:main',
+            'run_scenario = mill_bringup.executables:run_scenario',
             'offline_sim = mill_bringup.offline:main',
-            'job_watch = mill_bringup.job_watch:main',
-            'mill_container = mill_bringup.container:main',
+            'job_watch = mill_bringup.executables:job_watch',
+            'mill_container = mill_bringup.executables:mill_container',
         ],
     },
 )

@@ -18,8 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'axis_controller_node = mill_controllers.axis_controller_node:main',
-            'force_controller_node = mill_controllers.force_controller_node:main',
+            'axis_controller_node = mill_controllers.executables:axis_controller_node',
+            'force_controller_node = mill_controllers.executables:force_controller_node',
         ],
     },
 )

@@ -18,7 +18,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'observer_node = mill_observers.observer_node:main',
+            'observer_node = mill_observers.executables:observer_node',
         ],
     },
 )

@@ -18,8 +18,8 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'plant_node = mill_plant.plant_node:main',
-            'force_process_node = mill_plant.force_process_node:main',
+            'plant_node = mill_plant.executables:plant_node',
+            'force_process_node = mill_plant.executables:force_process_node',
         ],
     },
 )

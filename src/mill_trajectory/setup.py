@@ -18,7 +18,7 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'trajectory_node = mill_trajectory.trajectory_node:main',
+            'trajectory_node = mill_trajectory.executables:trajectory_node',
         ],
     },
 )

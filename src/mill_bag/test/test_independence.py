@@ -8,7 +8,12 @@ from pathlib import Path
 
 import mill_bag
 
-ALLOWED = {'mill_common.node_main', 'mill_common.parameters', 'mill_common.ros_params'}
+ALLOWED = {
+    'mill_common.executable',
+    'mill_common.node_main',
+    'mill_common.parameters',
+    'mill_common.ros_params',
+}
 MODULES = sorted(Path(mill_bag.__file__).parent.glob('*.py'))
 
 

@@ -25,6 +25,8 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
+from mill_common.executable import hold_stop_signals
+
 from mill_bringup.layout import Process
 from mill_bringup.scenario import Scenario, dump_parameters
 
@@ -71,8 +73,10 @@ def pss_mb(pid: int | str = 'self') -> float:
     return float('nan')
 
 
-def _die_with_parent(parent: int) -> None:
-    """In the child before exec: SIGTERM when the parent dies (Linux; elsewhere nothing)."""
+def _child_setup(parent: int) -> None:
+    """In the child before exec: SIGINT and SIGTERM held until the node can handle them
+    (mill_common.executable), and SIGTERM when the parent dies (Linux; elsewhere nothing)."""
+    hold_stop_signals()
     try:
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
@@ -152,7 +156,7 @@ class Graph:
                     stderr=subprocess.STDOUT,
                     env=self._env,
                     start_new_session=True,
-                    preexec_fn=functools.partial(_die_with_parent, os.getpid()),
+                    preexec_fn=functools.partial(_child_setup, os.getpid()),
                 )
 
     def exited(self) -> dict[str, int]:

@@ -31,6 +31,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from mill_common.param_sources import flatten
+from mill_common.parameters import unknown_parameters_message
+
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
@@ -46,8 +49,6 @@ from mill_bringup.scenario import (
     parse_yaml,
 )
 from mill_common import topics
-from mill_common.param_sources import flatten
-from mill_common.parameters import unknown_parameters_message
 
 TIMINGS = ('lockstep', 'realtime')
 LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')

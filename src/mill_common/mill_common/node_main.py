@@ -10,9 +10,10 @@ import tempfile
 import time
 import weakref
 from collections.abc import Callable, Iterator, Sequence
-from typing import TYPE_CHECKING, Any, NoReturn
+from typing import TYPE_CHECKING, Any
 
 from mill_common.env import ros_environment
+from mill_common.executable import end_process, ignore_stop_signals, release_stop_signals
 from mill_common.param_sources import (
     parameter_rule_problem,
     parameter_rules,
@@ -105,15 +106,17 @@ def make_executor() -> Executor:
     return SingleThreadedExecutor()
 
 
-def install_stop_handlers(wake: Callable[[], None] | None = None) -> list[int]:
-    """SIGINT/SIGTERM only append to the returned list (and call `wake`); the spin loop
-    polls it.
+def install_stop_handlers(
+    wake: Callable[[], None] | None = None, stop: list[int] | None = None
+) -> list[int]:
+    """SIGINT/SIGTERM only append to the returned list (`stop`, or a new one) and call
+    `wake`; the spin loop polls it.
 
     rclpy's own handler raises KeyboardInterrupt wherever Python happens to be,
     and inside a callback run by the C++ EventsExecutor that aborts the process
     (std::terminate). A flag checked between spins is a clean way out.
     """
-    stop: list[int] = []
+    stop = [] if stop is None else stop
 
     def handler(number: int, _frame: Any) -> None:
         stop.append(number)
@@ -179,21 +182,6 @@ def stderr_kept_back() -> Iterator[_Kept]:
             os.close(saved)
             tmp.seek(0)
             kept.text = tmp.read().decode(errors='replace')
-
-
-def end_process(code: int) -> NoReturn:
-    """End this process at once, once its node, executor and ROS context are closed.
-
-    Python's own finalization runs a full garbage collection over every object of numpy,
-    scipy and the node: about a second of CPU per node process. Eight nodes ending
-    together on a busy 2-core machine took 4 to 6 s, beyond the 5 s `ros2 launch` waits
-    after SIGINT before it escalates to SIGTERM (the observers, which load the most, were
-    last). Nothing is left for the finalization to do: streams are flushed here.
-    """
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(Exception):
-            stream.flush()
-    os._exit(code)
 
 
 def _user_args(argv: Sequence[str]) -> list[str]:
@@ -266,22 +254,21 @@ def run_nodes(
         if problem:
             print(f'{executable}: error: --params-file {path}: {problem}', file=sys.stderr)
             return 2
-    # Until the nodes spin, SIGINT and SIGTERM end the start-up at once (KeyboardInterrupt in
-    # Python code): building a node can take seconds on a busy machine, longer than launch
-    # waits after SIGINT. From then on they only set the flag the spin loop polls.
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, signal.default_int_handler)
+    # From here on SIGINT and SIGTERM only append to `stop`, never raise: a KeyboardInterrupt
+    # raised wherever Python happens to be (inside rclpy, a __del__) prints a traceback or
+    # "Exception ignored". Start-up looks at `stop` between its steps, each well under 5 s.
+    stop = install_stop_handlers()
+    release_stop_signals()  # held since the first line (mill_common.executable)
+    if stop:
+        return 0
     try:
         with stderr_kept_back() as kept:
             rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     except RuntimeError as exc:  # rcl's RCLError: arguments or a parameter file it refuses
         print(f'{executable}: error: {rcl_error_message(str(exc))}', file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        return 0
     sys.stderr.write(kept.text)
     ros_params.command_line = argv
-    stop: list[int] = []
     nodes: list[tuple[str, Node]] = []
     executor = None
     code = 0
@@ -289,6 +276,8 @@ def run_nodes(
     ended: Future = Future()  # done when a node asks to end or a stop signal arrives
     try:
         for label, make_node in makers:
+            if stop:
+                raise KeyboardInterrupt  # a stop during start-up ends it as one later does
             nodes.append((label, make_node()))
         label = ''
         if connect is not None:  # nodes of one process that call each other (a container)
@@ -298,7 +287,7 @@ def run_nodes(
         for _label, node in nodes:
             executor.add_node(node)
         _wakers.append(ended)
-        stop = install_stop_handlers(wake=lambda: _wake(ended))
+        install_stop_handlers(wake=lambda: _wake(ended), stop=stop)
         local = intra_process.bus()
         while rclpy.ok() and not stop and _request(nodes) is None:
             if local.enabled:
@@ -334,8 +323,7 @@ def run_nodes(
     finally:
         # A second SIGINT (ros2 launch forwards one after the terminal's) or launch's
         # SIGTERM must not break the teardown.
-        for signum in (signal.SIGINT, signal.SIGTERM):
-            signal.signal(signum, signal.SIG_IGN)
+        ignore_stop_signals()
         if ended in _wakers:
             _wakers.remove(ended)
         with contextlib.suppress(Exception):

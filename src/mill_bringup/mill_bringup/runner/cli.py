@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from mill_bag.errors import BagError
+from mill_common.executable import STOP_SIGNALS, interrupt_once, release_stop_signals
 
 from mill_analysis import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario
@@ -153,10 +154,12 @@ def paper_text(paper: str, jobs: dict[str, Job[Any]], records: dict[str, Any]) -
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     # SIGTERM ends the run like Ctrl-C: the graph is stopped and the bag closed.
-    signal.signal(signal.SIGTERM, signal.default_int_handler)
+    for signum in STOP_SIGNALS:
+        signal.signal(signum, interrupt_once)
     records: dict[str, Any] = {}
     intact, failed = True, False
     try:
+        release_stop_signals()  # held since the first line (mill_common.executable)
         scen, runs = load_scenario(args)
         if args.realtime_priority is not None:
             for variant in {id(r): r for r in (scen, *runs.values())}.values():

@@ -17,6 +17,7 @@ from types import TracebackType
 from typing import TYPE_CHECKING, Any
 
 from mill_common.env import ros_environment
+from mill_common.executable import ignore_stop_signals
 from mill_common.progress import Progress
 
 from mill_analysis import records
@@ -133,6 +134,10 @@ class Session:
         for sig, handler in self._previous.items():
             signal.signal(sig, handler)
         self._previous = {}
+        if self._stop:
+            # A second signal (launch's SIGTERM after its SIGINT) must not interrupt what
+            # the runner still writes.
+            ignore_stop_signals()
 
     def spin(self, when: str) -> None:
         """Take messages for 50 ms, then check the graph (`when`: for its error message).
