@@ -45,6 +45,12 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
     assert summary['offline_max_difference'] <= 1e-9
     # 8 node processes + the runner
     assert len(summary['peak_rss_mb']) == 9
+    # The clean main job is quiet: start-up (discovery before the first step) is no fault,
+    # so no WARN or ERROR on /diagnostics, in the summary or in any node's log.
+    assert summary['problems'] == []
+    for log in sorted((out / 'logs').glob('*.log')):
+        noisy = [ln for ln in log.read_text().splitlines() if ln.startswith(('[WARN]', '[ERROR]'))]
+        assert noisy == [], f'{log.name}: {noisy}'
 
 
 # (scenario, variant, duration [s], samples): each law, observer and plant model of the paper

@@ -6,7 +6,11 @@ Every node that subscribes keeps an `InputGuard`. Its callbacks check each messa
 
 - an input quiet for `warn_after` seconds is a WARN, for `error_after` an ERROR, on
   /diagnostics and in the log, naming the topic and the node expected to publish it; an
-  input that has never been heard is reported as waiting (the graph may still be starting);
+  input that has never been heard is reported as waiting (the graph may still be starting),
+  and until the node has stepped past its first sample a silence is no WARN either: in
+  lockstep the plant holds step 0 (offering it again once a second) until discovery has
+  joined every node, which is start-up, not a fault; an ERROR still ends a start that
+  never comes;
 - when an outage ends, its length is logged and reported;
 - in lockstep, an input silent for `error_after` ends the node with that message (exit 3):
   nobody hangs silently; in real time the node keeps running and keeps reporting;
@@ -57,6 +61,7 @@ class InputGuard:
         self.watches: dict[str, InputWatch] = {}
         self.drops = DropCounter()
         self._levels: dict[str, Level] = {}
+        self._stamps_seen: set[int] = set()  # the node's stamps until it is past its first
         self._next_status = 0.0
         # The node's one publisher on /diagnostics: its other statuses go out here too.
         self.diagnostics = Diagnostics(node)
@@ -75,7 +80,7 @@ class InputGuard:
             infos = self.node.get_publishers_info_by_topic(topic)
             names = sorted({i.node_name for i in infos} - {'_NODE_NAME_UNKNOWN_'})
             w.publisher = ', '.join(names) or 'a node discovery has not named'
-        ended = w.heard(time.monotonic())
+        ended = w.heard(time.monotonic(), counts=self.started)
         if ended is not None:
             self._levels[topic] = Level.OK  # the status sent now says it is back, not silent
             self.node.get_logger().info(
@@ -92,12 +97,22 @@ class InputGuard:
             )
             self._publish(force=True)
 
+    @property
+    def started(self) -> bool:
+        """The node has stepped past its first sample (its stamp has moved on)."""
+        if len(self._stamps_seen) < 2:
+            self._stamps_seen.add(self._stamp_ns())
+        return len(self._stamps_seen) >= 2
+
     def tick(self) -> None:
         now = time.monotonic()
         silent = False
+        started = self.started
         for topic, w in self.watches.items():
             w.warn_after, w.error_after = self._warn_after(), self._error_after()
             level = Level.OK if w.waiting else w.level(now)
+            if level is Level.WARN and not started:
+                level = Level.OK  # start-up (see above)
             old = self._levels.get(topic, Level.OK)
             self._levels[topic] = level
             if level > old:

@@ -29,10 +29,11 @@ class InputWatch:
     last_outage: float = 0.0  # length of the last silence longer than warn_after [s]
     outages: int = 0
 
-    def heard(self, now: float) -> float | None:
-        """An accepted message; returns the length of the silence it ends, if it was one."""
+    def heard(self, now: float, counts: bool = True) -> float | None:
+        """An accepted message; returns the length of the silence it ends, if it was one
+        (counts False: a silence of the start-up, which is no outage)."""
         ended = None
-        if self.last is not None and now - self.last >= self.warn_after:
+        if counts and self.last is not None and now - self.last >= self.warn_after:
             ended = now - self.last
             self.last_outage = ended
             self.outages += 1

@@ -205,7 +205,7 @@ class LockstepCycle(DriveCycle):
         self.k += 1
         if self._missing:  # the step waited this long: the outage's length
             waited = self._watchdog.waited(now)
-            for axis in self._missing:
+            for axis in self._missing if self.k > 1 else ():  # not the start-up's wait
                 d.report_axis(
                     axis,
                     DiagnosticStatus.OK,
@@ -244,7 +244,12 @@ class LockstepCycle(DriveCycle):
                         f'no command for step {self.k} on {topics.joint_command(axis)} from '
                         f'{d.owner_of(axis)} for {waited:.1f} s'
                     )
-                    d.report_axis(axis, DiagnosticStatus.WARN, message)
+                    if self.k == 0:
+                        # Start-up: the route of the first command may still be settling
+                        # (discovery); the lockstep timeout ends a start that never comes.
+                        d.get_logger().info(message + ' (start-up)')
+                    else:
+                        d.report_axis(axis, DiagnosticStatus.WARN, message)
 
     def _timeout_message(self) -> str:
         d = self.drive
@@ -372,7 +377,11 @@ class RealtimeCycle(DriveCycle):
                 message = (
                     f'no fresh command on {topics.joint_command(axis)} from {d.owner_of(axis)}'
                 )
-                d.report_axis(axis, DiagnosticStatus.WARN, message)
+                if c.stamp < 0:
+                    # Start-up: no command yet (discovery); the axis holds until one comes.
+                    d.get_logger().info(message + ' yet (start-up)')
+                else:
+                    d.report_axis(axis, DiagnosticStatus.WARN, message)
             elif quiet < report_time and axis in self._missing:
                 self._missing.discard(axis)
 
