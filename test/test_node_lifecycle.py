@@ -124,18 +124,34 @@ def _holds_stop_signals(pid: int) -> bool:
     return blocked & STOP_SIGNALS_MASK == STOP_SIGNALS_MASK
 
 
-def _stop_at(proc: subprocess.Popen[str], after: float, first: int) -> float:
-    """`first` signal `after` s after the process's first own line, then SIGTERM 50 ms later
-    if still alive (a user's second Ctrl-C, launch's escalation); how long it took to end [s]."""
-    assert wait_until(lambda: _holds_stop_signals(proc.pid), 60, step=0.001), 'never started'
-    time.sleep(after)
-    t0 = time.monotonic()
-    proc.send_signal(first)
-    time.sleep(0.05)
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGTERM)
-    proc.wait(timeout=60)
-    return time.monotonic() - t0
+def _start_and_stop(
+    cmd: list[str], env: dict[str, str], after: float, first: int
+) -> tuple[int, str, float]:
+    """Start cmd, send `first` `after` s after its first own line, then SIGTERM 50 ms later
+    if it still runs (a user's second Ctrl-C, launch's escalation); (exit code, output, how
+    long it took to end [s])."""
+    proc = subprocess.Popen(
+        cmd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        assert wait_until(lambda: _holds_stop_signals(proc.pid), 60, step=0.001), 'no start'
+        time.sleep(after)
+        t0 = time.monotonic()
+        proc.send_signal(first)
+        time.sleep(0.05)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+        out = proc.communicate(timeout=60)[0]
+        return proc.returncode, out, time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
 
 
 @pytest.mark.system
@@ -144,24 +160,16 @@ def _stop_at(proc: subprocess.Popen[str], after: float, first: int) -> float:
 def test_a_node_stopped_at_any_moment_of_its_start_up_ends_quietly(
     ros_env, after: float, first: int
 ) -> None:
-    proc = subprocess.Popen(
+    code, out, took = _start_and_stop(
         [
             *(_console_script('axis_controller_node'), '--ros-args'),
             *('-r', '__node:=x_controller', '--params-file', str(SCENARIO)),
         ],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        start_new_session=True,
+        ros_env,
+        after,
+        first,
     )
-    try:
-        took = _stop_at(proc, after, first)
-        out = proc.communicate()[0]
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
-    assert proc.returncode == 0, out
+    assert code == 0, out
     assert not [c for c in CLEAN if c in out], out
     assert took < LAUNCH_SIGTERM_TIMEOUT, took
 
@@ -172,24 +180,16 @@ def test_run_scenario_stopped_at_any_moment_of_its_start_up_ends_quietly(
     ros_env, tmp_path: Path, after: float
 ) -> None:
     run_dir = tmp_path / 'run'
-    proc = subprocess.Popen(
+    code, out, took = _start_and_stop(
         [_console_script('run_scenario'), 'slotting', '--duration', '2', '--output', str(run_dir)],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
+        ros_env,
+        after,
+        signal.SIGINT,
     )
-    try:
-        took = _stop_at(proc, after, signal.SIGINT)
-        _out, err = proc.communicate()
-    finally:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGKILL)
     # A run the user stopped is not a finished one: 130, as a shell reports Ctrl-C.
-    assert proc.returncode == 130, err
-    assert err.strip().splitlines()[-1] == 'run_scenario: interrupted', err
-    assert not [c for c in CLEAN if c in err], err
+    assert code == 130, out
+    assert out.strip().splitlines()[-1] == 'run_scenario: interrupted', out
+    assert not [c for c in CLEAN if c in out], out
     assert took < LAUNCH_SIGTERM_TIMEOUT, took
     for log in sorted((run_dir / 'logs').glob('*.log')):  # the nodes it had started
         text = log.read_text()
