@@ -20,11 +20,11 @@ from mill_common import topics
 from test.conftest import ros_node, wait_until
 
 
-def module_of(package: str, executable: str) -> str:
-    """The Python module behind a package's console script (what `ros2 run` starts)."""
+def console_script(package: str, executable: str) -> str:
+    """The executable of a package's console script, as `ros2 run` and launch start it."""
     for ep in importlib.metadata.entry_points(group='console_scripts'):
         if ep.name == executable and ep.value.startswith(package + '.'):
-            return ep.value.split(':')[0]
+            return str(Path(sys.executable).with_name(executable))
     raise AssertionError(f'{package} has no executable {executable!r}')
 
 
@@ -61,7 +61,7 @@ def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path) -> None:
     launch_plan.write_parameters(plan, str(tmp_path))
     procs = {}
     for n in plan.nodes:
-        cmd = [sys.executable, '-m', module_of(n.package, n.executable), '--ros-args']
+        cmd = [console_script(n.package, n.executable), '--ros-args']
         cmd += [*n.ros_arguments, '-r', f'__node:={n.name}', '-r', f'__ns:={n.namespace}']
         for f in n.parameters:
             cmd += ['--params-file', f]
