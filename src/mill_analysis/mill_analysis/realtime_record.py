@@ -10,14 +10,15 @@ recorder's receive time, where the bag has one) minus the stamp of the state it 
 
 Samples missing. A realtime drive sends the state of every axis, and the ground truth, at each
 tick with the tick's stamp, and no listener makes it wait: a topic that lacks a tick another of
-these topics holds lost it on the way to the listener (`missing_ticks`), as a lockstep record
-lacks a sample of its grid (mill_analysis.run_record.build_record). Ticks lost on every one of
-them at once cannot be told from ticks the drive skipped (a late timer skips its periods) by
-the stamps alone.
+these topics holds, between its own first and last, lost it on the way to the listener
+(`missing_ticks`), as a lockstep record lacks a sample of its grid
+(mill_analysis.run_record.build_record). Ticks lost on every one of them at once cannot be
+told from ticks the drive skipped (a late timer skips its periods) by the stamps alone.
 """
 
 from __future__ import annotations
 
+from bisect import bisect_left, bisect_right
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import groupby
@@ -125,9 +126,19 @@ def realtime_record(
 
 def missing_ticks(stamps: Mapping[str, Collection[int]]) -> dict[str, int]:
     """Per topic sent at every tick of one clock (topic -> the stamps received), how many
-    of the ticks the topics hold together this one lacks."""
-    ticks: set[int] = set().union(*stamps.values())
-    return {topic: len(ticks.difference(got)) for topic, got in stamps.items()}
+    of the ticks the topics hold together this one lacks between its own first and last:
+    before and after them the listener may not have been subscribed yet, or any more (a
+    recorder that joins a running graph matches its topics one after the other)."""
+    ticks = sorted(set().union(*stamps.values()))
+    out = {}
+    for topic, got in stamps.items():
+        own = set(got)
+        if not own:
+            out[topic] = 0  # never heard: not subscribed, or not sent at all
+            continue
+        first, last = bisect_left(ticks, min(own)), bisect_right(ticks, max(own))
+        out[topic] = last - first - len(own)
+    return out
 
 
 @dataclass(frozen=True)
