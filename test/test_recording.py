@@ -5,6 +5,9 @@
   from it equal the runner's summary; `report` on it writes report.md and the plots.
 - The standalone `recorder`: SIGINT and SIGTERM close a valid bag holding exactly what was
   published; SIGKILL loses at most the last second and the rest is recoverable.
+- A realtime run cannot wait for its recorder: the samples missing per topic and the messages
+  DDS reported lost are the same numbers in the runner's summary, the bag's metadata and
+  `report` (issue 21).
 """
 
 from __future__ import annotations
@@ -238,6 +241,9 @@ def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     assert records.named(run.bag.custom_data) == records.AXIS  # what the runner recorded
     assert run.n == summary['samples'] == 2001
     assert run.missing == {} and summary['missing_samples'] == {}
+    # counted and noted, and nothing lost: a lockstep run waits for its recorder
+    assert run.bag.noted_counts(records.MISSING_SAMPLES) == {} == summary['messages_lost']
+    assert run.messages_lost == {} and run.bag.messages_lost == {}
     from_bag = summarize(run.record, 1.0)
     assert [m.axis for m in from_bag] == [m['axis'] for m in summary['metrics']] == list(AXES)
     for m, ref in zip(from_bag, summary['metrics'], strict=True):
@@ -498,3 +504,43 @@ def test_recorder_and_report_help(ros_env):
         assert done.stdout.startswith('usage: ')
         for word in expected:
             assert word in done.stdout, (module, word)
+
+
+@pytest.mark.system
+def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_env, tmp_path):
+    from mill_analysis.report.kinds import ReportOptions, kind_of
+
+    out = tmp_path / 'run'
+    proc = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'mill_bringup.runner',
+            'commissioning',
+            *('--timing', 'realtime', '--tuning', 'rule', '-p', '*.sample_period=0.01'),
+            *('--duration', '2', '--record', '--quiet', '--output', str(out)),
+        ],
+        env=ros_env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    summary = json.loads((out / 'summary.json').read_text())
+    missing, lost = summary['missing_samples'], summary['messages_lost']
+    # An incomplete record fails the run, as in lockstep; so does a braked axis (a busy
+    # machine may not hold the rate), which is not what this test is about.
+    assert proc.returncode == (1 if missing or summary['failures'] else 0), proc.stderr[-3000:]
+    assert summary['kind'] == records.AXIS_REALTIME
+    bag = open_bag(out / 'bag')
+    assert bag.noted_counts(records.MISSING_SAMPLES) == {Q(t): n for t, n in missing.items()}
+    assert bag.messages_lost == lost
+    options = ReportOptions(skip=0.5, window=0.1, freqs=[], namespace=None, quiet=True)
+    kind = kind_of(out / 'bag')
+    report = kind.read(out / 'bag', 'rt', options)
+    assert report.run.realtime and report.run.n > 0
+    assert (report.run.missing, report.run.messages_lost) == (missing, lost)
+    lines = records.loss_lines(missing, lost)  # one per topic with a loss, none without
+    assert len(lines) == sum(1 for n in (*missing.values(), *lost.values()) if n)
+    printed = [line for line in proc.stdout.splitlines() if line.startswith('WARNING: ')]
+    shown = [line for line in kind.table([report]).splitlines() if line.startswith('WARNING: ')]
+    assert [line for line in printed if 'drive ticked' not in line] == lines == shown

@@ -7,11 +7,19 @@ interpolated at each stamp (mill_common.reference_buffer, as the controllers tak
 estimate and command are the ones stamped like the state they answer, the ground truth the
 one the simulated drive published with it. Latency of a command: its arrival (the
 recorder's receive time, where the bag has one) minus the stamp of the state it answers.
+
+Samples missing. A realtime drive sends the state of every axis, and the ground truth, at each
+tick with the tick's stamp, and no listener makes it wait: a topic that lacks a tick another of
+these topics holds, between its own first and last, lost it on the way to the listener
+(`missing_ticks`), as a lockstep record lacks a sample of its grid
+(mill_analysis.run_record.build_record). Ticks lost on every one of them at once cannot be
+told from ticks the drive skipped (a late timer skips its periods) by the stamps alone.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from bisect import bisect_left, bisect_right
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from itertools import groupby
 from math import nan
@@ -48,8 +56,9 @@ def realtime_record(
     t0: int,
     end_time: float,
     owner: str = '',
-) -> RunRecord:
-    """Samples of the job [t0, t0 + end_time] at the stamps of the first axis's states.
+) -> tuple[RunRecord, dict[str, int]]:
+    """Samples of the job [t0, t0 + end_time] at the stamps of the first axis's states, and
+    per topic the drive sends every tick, the ticks of the job it lacks (`missing_ticks`).
 
     owner: the drive's node name; states sent by any other node are not the machine's.
     """
@@ -83,6 +92,12 @@ def realtime_record(
     estimates = {a: _by_stamp(raw.get(topics.estimate(a), ())) for a in axes}
     commands = {a: _by_stamp(raw.get(topics.joint_command(a), ())) for a in axes}
     truth = _by_stamp(raw.get(topics.GROUND_TRUTH, ()))
+    drive = {topics.state(a): states[a] for a in axes}
+    if truth:  # a hardware driver has none
+        drive[topics.GROUND_TRUTH] = truth
+    missing = missing_ticks(
+        {t: [ns for ns in sent if t0 <= ns <= end_ns] for t, sent in drive.items()}
+    )
     for k, ns in enumerate(stamps):
         for a in axes:
             i = AXES.index(a)
@@ -106,7 +121,24 @@ def realtime_record(
                 if name in AXES:
                     sig['true_velocity'][k, AXES.index(name)] = gt.velocity[j]
                     sig['true_disturbance'][k, AXES.index(name)] = gt.effort[j]
-    return rec
+    return rec, missing
+
+
+def missing_ticks(stamps: Mapping[str, Collection[int]]) -> dict[str, int]:
+    """Per topic sent at every tick of one clock (topic -> the stamps received), how many
+    of the ticks the topics hold together this one lacks between its own first and last:
+    before and after them the listener may not have been subscribed yet, or any more (a
+    recorder that joins a running graph matches its topics one after the other)."""
+    ticks = sorted(set().union(*stamps.values()))
+    out = {}
+    for topic, got in stamps.items():
+        own = set(got)
+        if not own:
+            out[topic] = 0  # never heard: not subscribed, or not sent at all
+            continue
+        first, last = bisect_left(ticks, min(own)), bisect_right(ticks, max(own))
+        out[topic] = last - first - len(own)
+    return out
 
 
 @dataclass(frozen=True)

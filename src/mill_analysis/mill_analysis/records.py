@@ -11,6 +11,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 KEY = 'mill_record'  # the custom_data key of a bag's metadata.yaml
+# custom_data key: samples missing per topic as the runner counted them (its summary's
+# missing_samples, by absolute topic name), JSON (mill_bag.writer.counts_note); '{}' when
+# none is missing; read back by Bag.noted_counts.
+MISSING_SAMPLES = 'mill_missing_samples'
 AXIS = 'axis'  # the three-axis job in lockstep: samples on the grid t = k T
 AXIS_REALTIME = 'axis-realtime'  # the three-axis job on the drive's clock: its own stamps
 FORCE = 'force'  # the cutting-force job of Rubio 2013: one sample per spindle revolution
@@ -27,3 +31,16 @@ def bag_notes(kind: str) -> dict[str, str]:
 def named(custom_data: Mapping[str, str]) -> str | None:
     """The kind of record a bag names in its custom_data, None if it names none."""
     return custom_data.get(KEY) or None
+
+
+def loss_lines(missing: Mapping[str, int], messages_lost: Mapping[str, int]) -> list[str]:
+    """One WARNING line per topic that lacks samples in the record or on which DDS reported
+    messages lost while recording; none where no topic has either (the runner's summary and
+    `report` print these)."""
+    out = [f'WARNING: {t}: samples missing in the record: {n}' for t, n in missing.items() if n]
+    out += [
+        f'WARNING: {t}: messages lost while recording (DDS message_lost): {n}'
+        for t, n in messages_lost.items()
+        if n
+    ]
+    return out

@@ -303,6 +303,9 @@ class BagRun:
     message_count: int
     size_bytes: int
     notes: list[str] = field(default_factory=list)
+    # messages DDS reported lost per topic while the bag was recorded, where its writer
+    # counted them (mill_bag.reader.Bag.messages_lost)
+    messages_lost: dict[str, int] = field(default_factory=dict)
     # A realtime run (the drive's own clock): per axis, the state -> command latency of every
     # command as the recorder received it [ms], the share of states no command answered and
     # the most of them in a row.
@@ -494,6 +497,7 @@ def read_run(
         message_count=total,
         size_bytes=size,
         notes=notes,
+        messages_lost=bag.messages_lost or {},
     )
 
 
@@ -511,7 +515,7 @@ def _realtime_run(
     end_time, source = job_end(statuses)
     if end_time is None:
         end_time = (int(stamps[-1]) - start_ns) * 1e-9
-    record = realtime_record(raw, axes, start_ns, end_time)
+    record, missing = realtime_record(raw, axes, start_ns, end_time)
     timing = command_timing(record, raw, walls, axes, start_ns)
     latency = {axis: t.latency_ms for axis, t in timing.items()}
     unanswered = {axis: t.unanswered for axis, t in timing.items()}
@@ -524,7 +528,7 @@ def _realtime_run(
         dt_ns=dt_ns,
         n=len(record.t),
         record=record,
-        missing={},
+        missing={t: m for t, m in missing.items() if m},
         end_time=end_time,
         job_end_source=source,
         state_wall_ns=None,
@@ -533,6 +537,7 @@ def _realtime_run(
         message_count=total,
         size_bytes=sum(f.stat().st_size for f in bag.files),
         notes=notes,
+        messages_lost=bag.messages_lost or {},
         realtime=True,
         command_latency_ms=latency,
         unanswered=unanswered,

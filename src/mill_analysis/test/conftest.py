@@ -4,7 +4,7 @@ The run is made up (`a_run`): every signal known at every sample, no simulation 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +100,7 @@ def write_foreign_bag(
     foreign_status: bool = False,
     start_ns: int | None = None,
     notes: Mapping[str, str] | None = None,
+    drop: Mapping[str, Collection[int]] | None = None,
 ) -> tuple[Path, RunRecord]:
     """`a_run()`, written by rosbags' Writer as a recorder on wall time would (log time =
     receive time), with the contract's topics and types.
@@ -109,6 +110,7 @@ def write_foreign_bag(
     foreign_status: first a job status of another machine ('/other') with a wrong end_time.
     start_ns: the job status says the job started then (as a realtime job's does).
     notes: the bag's custom_data (what run_scenario --record says of its bag).
+    drop: per contract topic, the samples k the recorder lost (not written).
     """
     from rosbags.rosbag2 import StoragePlugin, Writer
 
@@ -124,6 +126,8 @@ def write_foreign_bag(
         conns = {}
 
         def put(topic: str, msgtype: str, k: int, msg: Any) -> None:
+            if k in (drop or {}).get(topic, ()):
+                return
             for space in namespaces:
                 name = topics.qualify(topic, space)
                 if name not in conns:

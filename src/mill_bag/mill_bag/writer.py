@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import json
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -41,6 +42,9 @@ from mill_bag.types import message_definition
 ROSBAG2_VERSION = 9
 COMPRESSIONS = ('zstd', 'lz4', 'none')
 CUT_SHORT = 'cut_short'  # custom_data key: why the recording ended before it was closed
+# custom_data key: messages DDS reported lost per topic while recording (rclpy's message_lost
+# event), as a JSON object of the topics with a loss; '{}' when the recorder counted none.
+MESSAGES_LOST = 'messages_lost'
 RESERVE_NAME = '.metadata_reserve'  # room kept for the last metadata.yaml (deleted at close)
 RESERVE_MIN = 64 * 1024
 FULL = (errno.ENOSPC, errno.EDQUOT)
@@ -295,6 +299,12 @@ class BagCutShort(BagError):
         self.path = path
         self.reason = reason
         self.messages = messages
+
+
+def counts_note(counts: Mapping[str, int]) -> str:
+    """Per-topic counts as one custom_data note (string -> string): JSON of the topics with
+    a non-zero count, by name (read back by `Bag.noted_counts`)."""
+    return json.dumps({t: int(n) for t, n in sorted(counts.items()) if n})
 
 
 def mcap_library() -> str:

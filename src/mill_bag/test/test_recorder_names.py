@@ -10,27 +10,6 @@ from mill_bag.errors import BagError
 from mill_bag.recorder import TopicRecorder
 
 
-@pytest.fixture
-def node_in(monkeypatch: pytest.MonkeyPatch):
-    import rclpy
-    from rclpy.node import Node
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    nodes = []
-
-    def make(namespace: str, remap: str = '') -> Node:
-        args = ['--ros-args', '-r', remap] if remap else None
-        nodes.append(Node('rec', namespace=namespace, context=context, cli_args=args))
-        return nodes[-1]
-
-    yield make
-    for n in nodes:
-        n.destroy_node()
-    rclpy.try_shutdown(context=context)
-
-
 def test_relative_names_resolve_under_the_namespace(node_in, tmp_path: Path) -> None:
     node = node_in('robot2', '/clock:=/robot2/clock')
     rec = TopicRecorder(node, tmp_path / 'bag', topics=['arm/state', '/joint_states'])

@@ -179,13 +179,15 @@ class RealtimeAxisJob(AxisJob):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         if self.start_ns is None:
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
-        rec = realtime_record(raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner)
+        rec, missing = realtime_record(
+            raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner
+        )
         if self._source is not None:
             source = self._source
             arrivals = {t: source.arrival_ns(t) for t in self.timed_topics()}
             timing = command_timing(rec, raw, arrivals, self.axes, self.start_ns)
             self.received = {axis: t.figures() for axis, t in timing.items()}
-        return rec, {}
+        return rec, {t: m for t, m in missing.items() if m}
 
     def simulation(self, times: CoreTimer | None = None) -> Any:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')

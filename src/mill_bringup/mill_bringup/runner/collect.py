@@ -8,6 +8,9 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from mill_bag.writer import counts_note
+
+from mill_analysis import records
 from mill_bringup.jobs.base import Job, simulate
 from mill_bringup.lifecycle_client import deactivate
 from mill_bringup.lost_samples import split_lost
@@ -15,6 +18,7 @@ from mill_bringup.runner.follow import Timing
 from mill_bringup.runner.options import RunOptions
 from mill_bringup.runner.result import RunResult
 from mill_bringup.runner.session import Session
+from mill_common import topics
 
 QUIET = 2.0  # [s] without a newly recorded step that end the wait for the recorder
 
@@ -26,6 +30,7 @@ class Collected:
     record: Any
     missing: dict[str, int]  # samples missing per topic, not counting `lost`
     lost: dict[str, int]  # samples a killed sender took with it (mill_bringup.lost_samples)
+    messages_lost: dict[str, int]  # per recorded topic, what DDS reported lost (message_lost)
     problems: list[str]  # the graph's notes, WARN and ERROR statuses heard
     bag: dict[str, Any] | None  # path, messages and size of the bag, if one was written
     peak_rss_mb: dict[str, float]  # per process of the graph
@@ -49,11 +54,21 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
     session.peak_pss_mb = max(session.peak_pss_mb, graph.pss())
     graph.stop()
     session.progress.close()
-    bag = _close_bag(session, options)
-    record, gaps = job.record(monitor.raw)
-    missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
+    recorder = monitor.recorder
+    if recorder is not None:
+        _drain(session)
+    try:
+        record, gaps = job.record(monitor.raw)
+        missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
+        if recorder is not None:  # the bag says what its run lacks, as the summary does
+            ns = monitor.get_namespace()
+            absolute = {topics.qualify(t, ns): m for t, m in missing.items()}
+            recorder.note(records.MISSING_SAMPLES, counts_note(absolute))
+    finally:
+        bag = _close_bag(session, options)
     problems = graph.notes + monitor.problems()
-    return Collected(record, missing, lost, problems, bag, peak, session.peak_pss_mb)
+    messages_lost = {t: n for t, n in recorder.lost.items() if n} if recorder is not None else {}
+    return Collected(record, missing, lost, messages_lost, problems, bag, peak, session.peak_pss_mb)
 
 
 def _catch_up(session: Session) -> None:
@@ -68,14 +83,18 @@ def _catch_up(session: Session) -> None:
             through, since = steps.through, time.monotonic()
 
 
-def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:
-    """Take what the nodes sent before they stopped, then close the bag; its figures."""
-    recorder = session.monitor.recorder
-    if recorder is None:
-        return None
+def _drain(session: Session) -> None:
+    """Take what the nodes sent before they stopped."""
     drain = time.monotonic() + 0.3
     while time.monotonic() < drain:
         session.executor.spin_once(timeout_sec=0.05)
+
+
+def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:
+    """Close the bag; its figures."""
+    recorder = session.monitor.recorder
+    if recorder is None:
+        return None
     session.monitor.close_recording()
     return {
         'path': str(options.record_bag),
@@ -110,6 +129,7 @@ def result(
         problems=collected.problems,
         foreign=job.foreign(record),
         lost_with_restarts=collected.lost,
+        messages_lost=collected.messages_lost,
         failures=job.failures(record, collected.problems),
         bag=collected.bag,
         record=record,
