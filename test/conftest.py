@@ -153,3 +153,15 @@ class ParameterClient:
         """name -> rcl_interfaces/msg/ParameterDescriptor, as `ros2 param describe` gets it."""
         response = self._call(self._describe, DescribeParameters.Request(names=list(names)))
         return dict(zip(names, response.descriptors, strict=True))
+
+
+@contextlib.contextmanager
+def busy_cores(n: int = 2) -> Iterator[None]:
+    """n processes that keep a core each busy while the block runs (ended on the way out)."""
+    spinners = [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(n)]
+    try:
+        yield
+    finally:
+        for proc in spinners:
+            proc.kill()
+            proc.wait()

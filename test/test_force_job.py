@@ -31,7 +31,7 @@ from sensor_msgs.msg import JointState
 
 from mill_bringup import scenario
 from mill_common import topics
-from test.conftest import ros_node, wait_until
+from test.conftest import busy_cores, ros_node, wait_until
 
 T = 60.0 / 715.0
 
@@ -136,6 +136,29 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
     # The same stream, the same reference model (ξ, ω_n from the controller's state), the
     # period estimated from the stamps to well below 1 ns: the same sum to rounding.
     assert run.record.j_c == pytest.approx(summary['j_c'], rel=1e-12)
+
+
+@pytest.mark.system
+def test_a_force_jobs_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path) -> None:
+    """Issue 21: the force process steps at most its recorder_window ahead of the revolutions
+    the runner has recorded whole, so a loaded machine slows the run and loses nothing."""
+    out, bag = tmp_path / 'run', tmp_path / 'bag'
+    with busy_cores(2):
+        proc = subprocess.run(
+            [
+                *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
+                *('--quiet', '--output', str(out), '--record', str(bag)),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
+    assert summary['missing_samples'] == {} and summary['messages_lost'] == {}
+    run = read_force_run(bag / 'scheme1')
+    assert run.samples == summary['samples'] and run.missing == {}, run.missing
 
 
 def _force(ns: int, value: float) -> WrenchStamped:

@@ -39,7 +39,7 @@ from sensor_msgs.msg import JointState
 
 from mill_analysis import records
 from mill_common import topics
-from test.conftest import wait_until
+from test.conftest import busy_cores, wait_until
 
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
@@ -187,18 +187,6 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
     assert once_each(truth) and len(truth) in (K, K + 1)
     ref = ks[Q(topics.REFERENCE)]  # one per /clock tick the trajectory answered
     assert once_each([v for v in ref if v], 10, 10) and max(ref) >= 10 * (K // 10) - 10
-
-
-@contextlib.contextmanager
-def busy_cores(n: int = 2) -> Iterator[None]:
-    """n processes that keep a core each busy while the block runs (ended on the way out)."""
-    spinners = [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(n)]
-    try:
-        yield
-    finally:
-        for proc in spinners:
-            proc.kill()
-            proc.wait()
 
 
 @pytest.mark.system

@@ -16,64 +16,84 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from mill_common.timebase import sample_index, sample_stamp_ns
+
 
 class RecordedSteps:
-    def __init__(self, lags: Mapping[str, int], dt_ns: int, window: int) -> None:
-        """lags: stepped topic -> steps its newest message trails the step's states when
+    def __init__(self, lags: Mapping[str, int], period_s: float, window: int) -> None:
+        """lags: stepped topic -> samples its newest message trails the step's states when
         the step is whole (the ground truth of step k goes out with the states of k + 1);
-        the first one is required. window: the plant's `recorder_window` [steps]."""
+        the first one is required. period_s: the job's sample period (stamps are
+        sample_stamp_ns of it, whole ns or not). window: the clock node's `recorder_window`
+        [samples]."""
         if window < 1 or not lags:
             raise ValueError('a handshake needs a window of at least one step and a topic')
-        self._lag_ns = {topic: lag * dt_ns for topic, lag in lags.items()}
+        self._lags = dict(lags)
         self._required = next(iter(lags))
-        self._newest: dict[str, int] = {}
-        self._dt_ns = dt_ns
-        self._window_ns = window * dt_ns
+        self._newest: dict[str, int] = {}  # per topic, the newest whole sample it gives
+        self._period_s = period_s
+        self._window = window
         # Acknowledge every quarter window: the plant never waits for an ack that is due.
-        self._stride_ns = max(1, window // 4) * dt_ns
-        self.sent = -1  # the newest stamp acknowledged
-        self.frozen_at: int | None = None  # where the plant stops, once the job is done
+        self._stride = max(1, window // 4)
+        self._sent = -1  # the newest sample acknowledged
+        self._frozen_at: int | None = None  # where the plant stops, once the job is done
 
     def stepped(self, topic: str) -> bool:
-        return topic in self._lag_ns
+        return topic in self._lags
 
     def heard(self, topic: str, ns: int) -> int | None:
         """A message of `topic` stamped ns was recorded: the stamp to acknowledge now, if any."""
-        lag = self._lag_ns.get(topic)
+        lag = self._lags.get(topic)
         if lag is None:
             return None
-        if ns + lag > self._newest.get(topic, -1):
-            self._newest[topic] = ns + lag
+        k = sample_index(ns, self._period_s) + lag
+        if k > self._newest.get(topic, -1):
+            self._newest[topic] = k
         return self._due()
 
     def _due(self) -> int | None:
-        through, last = self.through, False
-        if self.frozen_at is not None:  # no further than the plant may go
-            cap = self.frozen_at - self._window_ns
+        through, last = self._through, False
+        if self._frozen_at is not None:  # no further than the plant may go
+            cap = self._frozen_at - self._window
             through, last = min(through, cap), through >= cap
-        if through <= self.sent or (through < self.sent + self._stride_ns and not last):
+        if through <= self._sent or (through < max(self._sent, 0) + self._stride and not last):
             return None
-        self.sent = through
-        return through
+        self._sent = through
+        return sample_stamp_ns(through, self._period_s)
 
     @property
-    def through(self) -> int:
-        """The newest step whose messages have all been recorded (−1: none yet)."""
+    def sent(self) -> int:
+        """The stamp of the newest step acknowledged (−1: none yet)."""
+        return -1 if self._sent < 0 else sample_stamp_ns(self._sent, self._period_s)
+
+    @property
+    def _through(self) -> int:
         if self._required not in self._newest:
             return -1
         return min(self._newest.values())
+
+    @property
+    def through(self) -> int:
+        """The stamp of the newest step whose messages have all been recorded (−1: none)."""
+        k = self._through
+        return -1 if k < 0 else sample_stamp_ns(k, self._period_s)
 
     def freeze(self, samples: int) -> int | None:
         """The job's `samples` are done: let the plant step once past them (the ground truth
         of the last sample goes out with that step), or as far as it may go already, and no
         further. The stamp to acknowledge now, if any."""
-        if self.frozen_at is None:
-            # the plant's rule: step j goes out once j T <= acknowledged + W T
-            may = (self.sent + self._window_ns) // self._dt_ns * self._dt_ns
-            self.frozen_at = max(may, samples * self._dt_ns)
+        if self._frozen_at is None:
+            # the plant's rule (mill_common.lockstep.RecorderGate): j <= acknowledged + W
+            self._frozen_at = max(self._sent + self._window, samples)
         return self._due()
+
+    @property
+    def frozen_at(self) -> int | None:
+        """The stamp where the plant stops, once frozen."""
+        k = self._frozen_at
+        return None if k is None else sample_stamp_ns(k, self._period_s)
 
     @property
     def drained(self) -> bool:
         """Frozen, and every step up to where the plant stops has been recorded."""
-        return self.frozen_at is not None and self.through >= self.frozen_at
+        return self._frozen_at is not None and self._through >= self._frozen_at

@@ -4,18 +4,23 @@ from __future__ import annotations
 
 import pytest
 from mill_bringup.recorded_steps import RecordedSteps
+from mill_common.lockstep import RecorderGate
+from mill_common.timebase import sample_stamp_ns
 
-T = 1_000_000  # 1 ms
+T = 1_000_000  # 1 ms [ns]
 STATE, COMMAND, TRUTH = 'mill/x/state', 'mill/x/joint_command', 'mill/ground_truth'
 
 
 def steps(window: int = 8) -> RecordedSteps:
-    return RecordedSteps({STATE: 0, COMMAND: 0, TRUTH: 1}, T, window)
+    return RecordedSteps({STATE: 0, COMMAND: 0, TRUTH: 1}, T / 1e9, window)
 
 
 def plant_may_publish(acked: int, window: int, j: int) -> bool:
-    """The plant's rule (mill_plant.drive_cycle.LockstepCycle): j T <= acknowledged + W T."""
-    return j * T <= acked + window * T
+    """The clock node's rule (mill_common.lockstep.RecorderGate)."""
+    gate = RecorderGate(window, T / 1e9)
+    if acked >= 0:
+        gate.acknowledged(acked)
+    return gate.allows(j)
 
 
 def test_a_step_is_whole_when_every_heard_topic_has_it():
@@ -83,4 +88,36 @@ def test_freeze_when_the_plant_is_already_past_the_end():
 
 def test_a_window_below_one_step_is_refused():
     with pytest.raises(ValueError):
-        RecordedSteps({STATE: 0}, T, 0)
+        RecordedSteps({STATE: 0}, T / 1e9, 0)
+
+
+def test_a_period_of_no_whole_ns_acknowledges_the_clock_nodes_own_stamps() -> None:
+    # One spindle revolution at 7000 rpm (Rubio's force job): stamps are the nearest ns.
+    period = 60.0 / 7000.0
+    stamps = [sample_stamp_ns(k, period) for k in range(100)]
+    force, trace = 'mill/cutting_force', 'mill/cutting_force/trace'
+    s = RecordedSteps({force: 0, trace: 1}, period, 8)
+    gate = RecorderGate(8, period)
+    acks = []
+    for k in range(100):
+        if not gate.allows(k):
+            break
+        heard = [(force, stamps[k])] + ([(trace, stamps[k - 1])] if k else [])
+        for topic, ns in heard:  # what the clock node publishes with sample k
+            ack = s.heard(topic, ns)
+            if ack is not None:
+                acks.append(ack)
+                gate.acknowledged(ack)
+    assert k == 99  # the acknowledgements kept the clock node going to the end
+    assert acks and set(acks) <= set(stamps)  # its own stamps, whole ns or not
+    assert s.through == stamps[99]  # whole: its force, and the trace of 98 that came with it
+    assert acks[-1] == stamps[gate.recorded]
+
+
+def test_the_gate_without_a_window_never_holds() -> None:
+    gate = RecorderGate(0, 1e-3)
+    assert gate.allows(10**9) and gate.describe() == 'none'
+    gate = RecorderGate(4, 1e-3)
+    assert gate.allows(3) and not gate.allows(4)  # W samples from the start
+    gate.acknowledged(3_000_000)
+    assert gate.allows(7) and not gate.allows(8) and gate.describe() == 't = 0.003 s'

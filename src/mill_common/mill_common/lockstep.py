@@ -11,12 +11,17 @@ The clock node (the plant, the force process) calls `tick` from a steady-time ti
   with what they sent before);
 - PEERS_MISSING when peers are still missing after `startup_timeout`, STALLED when no step
   has completed (`progressed`) for `lockstep_timeout`: the node ends with a message.
+
+`RecorderGate` holds a recorded run's clock node within a window of the recorder's
+acknowledgements, so that a bag misses nothing.
 """
 
 from __future__ import annotations
 
 import enum
 from collections.abc import Callable
+
+from mill_common.timebase import sample_index, sample_stamp_ns
 
 
 class Action(enum.Enum):
@@ -77,3 +82,30 @@ class LockstepWatchdog:
             self._retry_at = now + self._retry
             return Action.OFFER_AGAIN
         return Action.WAIT
+
+
+class RecorderGate:
+    """The clock node's side of the recorder handshake (mill_bringup.recorded_steps).
+
+    With a window of W samples, sample j goes out only once the recorder has acknowledged
+    (on mill/recorded) sample j − W: however busy the machine, the clock node never runs
+    more than W samples ahead of the bag. Window 0: there is no recorder to wait for.
+    """
+
+    def __init__(self, window: int, period_s: float) -> None:
+        self.window = window
+        self._period_s = period_s
+        self.recorded = -1  # the newest sample acknowledged (-1: none yet)
+
+    def acknowledged(self, ns: int) -> None:
+        self.recorded = max(self.recorded, sample_index(ns, self._period_s))
+
+    def allows(self, k: int) -> bool:
+        """Whether sample k may go out now."""
+        return not self.window or k <= self.recorded + self.window
+
+    def describe(self) -> str:
+        """The newest acknowledgement, for a timeout's message."""
+        if self.recorded < 0:
+            return 'none'
+        return f't = {sample_stamp_ns(self.recorded, self._period_s) / 1e9:.3f} s'

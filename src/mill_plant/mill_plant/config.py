@@ -26,7 +26,7 @@ from mill_common.signals import AXES
 
 from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import CuttingForceModel
-from mill_plant.drive_config import DRIVE_PARAMETERS
+from mill_plant.drive_config import DRIVE_PARAMETERS, RECORDER_WINDOW
 from mill_plant.models.base import AxisModel
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
@@ -219,6 +219,7 @@ FORCE_PROCESS_PARAMETERS: tuple[ParamSpec, ...] = (
     ),
     LOCKSTEP_TIMEOUT,
     STARTUP_TIMEOUT,
+    RECORDER_WINDOW,
     ParamSpec(
         'min_subscribers',
         1,

@@ -27,6 +27,18 @@ def _owners(value: Any) -> str | None:
     return None
 
 
+# Shared with the force process, the other node that clocks a lockstep run.
+RECORDER_WINDOW = ParamSpec(
+    'recorder_window',
+    0,
+    'lockstep: steps the plant may run ahead of the newest step the recorder has '
+    f'acknowledged on {topics.RECORDED}, so that a bag misses nothing however busy the '
+    'machine (run_scenario --record sets it); 0: do not wait for a recorder',
+    non_negative_int,
+    True,
+)
+
+
 DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
     *realtime_specs(),
     (
@@ -64,18 +76,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             True,
         ),
     ),
-    (
-        'recorder_window',
-        ParamSpec(
-            'recorder_window',
-            0,
-            'lockstep: steps the plant may run ahead of the newest step the recorder has '
-            f'acknowledged on {topics.RECORDED}, so that a bag misses nothing however busy the '
-            'machine (run_scenario --record sets it); 0: do not wait for a recorder',
-            non_negative_int,
-            True,
-        ),
-    ),
+    ('recorder_window', RECORDER_WINDOW),
     (
         'brake_after',
         ParamSpec(

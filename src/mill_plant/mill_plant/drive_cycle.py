@@ -35,7 +35,7 @@ from typing import Any, ClassVar, Protocol
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
 from mill_common.codec import encode_clock
-from mill_common.lockstep import Action, LockstepWatchdog
+from mill_common.lockstep import Action, LockstepWatchdog, RecorderGate
 from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp
 from mill_common.timebase import seconds
 from mill_common.timing import TIMINGS
@@ -148,9 +148,8 @@ class LockstepCycle(DriveCycle):
         self._wait_sum = self._wait_max = 0.0
         self._last_publish = time.monotonic()
         self._missing: set[str] = set()  # axes reported missing
-        self._window_ns = v['recorder_window'] * d.dt_ns  # 0: no recorder to wait for
-        self._recorded_ns = -1  # the newest step the recorder has acknowledged
-        if self._window_ns:
+        self._recorder = RecorderGate(v['recorder_window'], d.dt)
+        if self._recorder.window:
             d.create_subscription(ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS)
 
     def activate(self) -> None:
@@ -176,12 +175,10 @@ class LockstepCycle(DriveCycle):
 
     def _recorder_caught_up(self) -> bool:
         """Whether the next step may go out: the recorder is at most the window behind it."""
-        return not self._window_ns or self.stamp + self.drive.dt_ns <= (
-            self._recorded_ns + self._window_ns
-        )
+        return self._recorder.allows(self.k + 1)
 
     def _on_recorded(self, msg: ClockMsg) -> None:
-        self._recorded_ns = max(self._recorded_ns, from_stamp(msg.clock))
+        self._recorder.acknowledged(from_stamp(msg.clock))
         d = self.drive
         started = d.active and self._watchdog.started
         if started and d.table.complete(self.stamp) and self._recorder_caught_up():
@@ -254,11 +251,10 @@ class LockstepCycle(DriveCycle):
     def _timeout_message(self) -> str:
         d = self.drive
         if d.table.complete(self.stamp):
-            newest = 'none' if self._recorded_ns < 0 else f't = {seconds(self._recorded_ns):.3f} s'
             return (
                 f'lockstep timeout: step {self.k} waited '
                 f'{d.params.values["lockstep_timeout"]:g} s for the recorder (its newest '
-                f'acknowledgement on {topics.RECORDED}: {newest})'
+                f'acknowledgement on {topics.RECORDED}: {self._recorder.describe()})'
             )
         parts = []
         for axis in d.table.missing(self.stamp):
@@ -280,8 +276,8 @@ class LockstepCycle(DriveCycle):
             'mean_wait_ms': 1e3 * self._wait_sum / steps,
             'max_wait_ms': 1e3 * self._wait_max,
         }
-        if self._window_ns:
-            out['recorded_s'] = seconds(max(self._recorded_ns, 0))
+        if self._recorder.window:
+            out['recorded_s'] = seconds(max(self._recorder.recorded, 0) * self.drive.dt_ns)
         return out
 
 

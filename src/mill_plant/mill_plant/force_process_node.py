@@ -14,6 +14,10 @@ Lockstep, one sample per spindle revolution (T = 60/S_s; stamps are the nearest 
    t_k + time_from_start; a repeated time marks a jump or a kink (a depth change, a clamp
    corner), the left value first.
 
+With `recorder_window` W (run_scenario --record) sample k goes out only once the recorder
+has acknowledged sample k − W on mill/recorded (mill_common.lockstep.RecorderGate), so
+that a bag misses nothing however busy the machine.
+
 A non-finite reference never reaches the drive: the last feed is held and an ERROR goes to
 /diagnostics. A reference stamped later than the current step is dropped, counted and
 reported (WARN); an older one is a repeat of an answered sample and is ignored. A step
@@ -33,10 +37,10 @@ from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected
 from mill_common.codec import encode_clock
 from mill_common.diagnostics import Diagnostics
-from mill_common.lockstep import Action, LockstepWatchdog
+from mill_common.lockstep import Action, LockstepWatchdog, RecorderGate
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import algorithm_values
-from mill_common.ros import DATA_QOS, data_publisher, from_stamp, to_stamp
+from mill_common.ros import DATA_QOS, LATCHED_QOS, data_publisher, from_stamp, to_stamp
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES
 from mill_common.timebase import sample_stamp_ns
@@ -82,6 +86,10 @@ class ForceProcessNode(Node):
         self._ref_sub = self.create_subscription(
             JointTrajectory, topics.REFERENCE, self._on_reference, DATA_QOS
         )
+        self._recorder = RecorderGate(v['recorder_window'], self._T)
+        self._held = False  # sample k waits for the recorder
+        if self._recorder.window:
+            self.create_subscription(ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS)
         self.create_timer(0.05, self._watchdog, clock=Clock(clock_type=ClockType.STEADY_TIME))
         m = self._drive.plant.model
         self.get_logger().info(
@@ -113,13 +121,21 @@ class ForceProcessNode(Node):
         return msg
 
     def _publish_sample(self) -> None:
+        self._held = not self._recorder.allows(self._k)
+        if self._held:
+            return  # _on_recorded sends it
         ns = self._stamp_ns()
         self._clock_pub.publish(encode_clock(ns))
         self._force_pub.publish(self._wrench(ns, self._drive.plant.force))
 
+    def _on_recorded(self, msg: ClockMsg) -> None:
+        self._recorder.acknowledged(from_stamp(msg.clock))
+        if self._held:
+            self._publish_sample()
+
     def _on_reference(self, msg: JointTrajectory) -> None:
         ns = from_stamp(msg.header.stamp)
-        if not self._lockstep.started or ns < self._stamp_ns():
+        if self._held or not self._lockstep.started or ns < self._stamp_ns():
             return  # a repeat of an answered sample, or before the start
         if ns != self._stamp_ns():
             reason = (
@@ -194,10 +210,18 @@ class ForceProcessNode(Node):
         if action is Action.START:
             self.get_logger().info('all peers matched: starting lockstep')
             self._publish_sample()
-        elif action is Action.OFFER_AGAIN:
+        elif action is Action.OFFER_AGAIN and not self._held:
             self._publish_sample()
         elif action is Action.PEERS_MISSING:
             request_exit(self, 3, 'peers never appeared: ' + '; '.join(self._missing_peers()))
+        elif action is Action.STALLED and self._held:
+            request_exit(
+                self,
+                3,
+                f'lockstep timeout: step {self._k} waited '
+                f'{self.params.values["lockstep_timeout"]:g} s for the recorder (its newest '
+                f'acknowledgement on {topics.RECORDED}: {self._recorder.describe()})',
+            )
         elif action is Action.STALLED:
             infos = self.get_publishers_info_by_topic(topics.REFERENCE)
             nodes = sorted({i.node_name for i in infos})

@@ -45,7 +45,7 @@ from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
 from mill_analysis import records
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
-from mill_bringup.jobs.base import Job, MessageSource
+from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
 from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
@@ -55,10 +55,6 @@ from mill_common import topics
 JOINT_STATE = 'sensor_msgs/msg/JointState'
 # A stamp beyond this is a wall-clock time (2001 on), not a simulation's sim time [ns].
 WALL_CLOCK_NS = 10**18
-# Steps a recorded run's plant may run ahead of its bag: far inside the writers' history
-# (DATA_QOS, 2000 samples), and with acknowledgements every quarter of it the plant hardly
-# ever waits.
-RECORDER_WINDOW = 200
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
@@ -422,7 +418,7 @@ class AxisJob(Job[RunRecord]):
             stepped[topics.joint_command(axis)] = 0
         stepped[topics.CUTTING_FORCE] = 0
         stepped[topics.GROUND_TRUTH] = 1
-        return RecordedSteps(stepped, self.dt_ns, window)
+        return RecordedSteps(stepped, seconds(self.dt_ns), window)
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""

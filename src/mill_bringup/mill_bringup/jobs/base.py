@@ -30,6 +30,12 @@ from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 R = TypeVar('R')
 
 
+# Samples a recorded lockstep run's clock node may run ahead of its bag: far inside the
+# writers' history (DATA_QOS, 2000 samples), and with acknowledgements every quarter of it
+# the clock node hardly ever waits.
+RECORDER_WINDOW = 200
+
+
 class MessageSource(Protocol):
     """What a job reads of a running graph (the runner's monitor)."""
 

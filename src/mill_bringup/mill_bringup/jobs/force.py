@@ -27,7 +27,8 @@ from mill_models.force_process import ForceProcessModel
 from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
-from mill_bringup.jobs.base import Job, MessageSource
+from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
+from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
@@ -118,8 +119,25 @@ class ForceJob(Job[ForceRecord]):
         self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
     ) -> None:
         # The force samples need two listeners: the controller and the monitor.
+        plant = self.scenario.overrides.setdefault(self.plant, {})
         if monitored:
-            self.scenario.overrides.setdefault(self.plant, {}).setdefault('min_subscribers', 2)
+            plant.setdefault('min_subscribers', 2)
+        if recorded:  # the force process waits for the recorder too: a bag misses nothing
+            plant.setdefault('recorder_window', RECORDER_WINDOW)
+
+    def recorded_steps(self) -> RecordedSteps | None:
+        window = self.scenario.parameters(self.plant)['recorder_window']
+        if not window:
+            return None
+        # A revolution is whole with its force, the controller's answer to it and its trace,
+        # which goes out with the force of the next revolution.
+        stepped = {
+            topics.CUTTING_FORCE: 0,
+            topics.FEED_OVERRIDE: 0,
+            topics.FORCE_CONTROL_STATE: 0,
+            topics.CUTTING_FORCE_TRACE: 1,
+        }
+        return RecordedSteps(stepped, self.period, window)
 
     def upstream_topics(self) -> list[str]:
         return [topics.FEED_OVERRIDE, topics.REFERENCE]
