@@ -153,7 +153,7 @@ def test_switch_to_a_law_that_joins_the_observer_model_mid_job(ros_env) -> None:
 def test_a_trip_stays_latched_whatever_else_is_set(ros_env) -> None:
     """Issue 21: only ~/reset_trip or setting following_error_limit clears a trip; a law
     switch (or any other parameter) leaves the axis braked."""
-    with running_job(ros_env, 'slotting', '--controller', 'pd', '--duration', '2') as job:
+    with running_job(ros_env, 'slotting', '--controller', 'pd', '--duration', '4') as job:
         # without the observer's estimate every axis trips within about 85 ms
         assert job.spin_until(lambda: any(math.isnan(u) for u in job.commands.values()), 120)
         assert job.controller.set('controller', 'adrc').successful
@@ -164,5 +164,8 @@ def test_a_trip_stays_latched_whatever_else_is_set(ros_env) -> None:
         assert after and all(math.isnan(u) for u in after), 'a law switch cleared the trip'
         assert job.controller.set('following_error_limit', 1.0).successful  # clears it
         cleared = max(job.commands)
-        assert job.spin_until(lambda: max(job.commands) > cleared + 50_000_000, 60)
-        assert any(math.isfinite(u) for ns, u in job.commands.items() if ns > cleared)
+        # Commands sent before the limit was set may still be on their way to this test (a
+        # busy machine): wait for the first one computed after it, however late it comes.
+        assert job.spin_until(
+            lambda: any(math.isfinite(u) for ns, u in job.commands.items() if ns > cleared), 120
+        ), 'setting following_error_limit did not clear the trip'
