@@ -31,7 +31,7 @@ from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
 from mill_common.codec import encode_clock
-from mill_common.ros import DATA_QOS, LATCHED_QOS
+from mill_common.ros import LATCHED_QOS, RECORD_QOS
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
@@ -99,7 +99,7 @@ class Monitor(Node):
             # first step is recorded; discovery adds any other topic.
             for topic, msgtype in (recorded or {}).items():
                 self._listen(topic, msgtype, None)
-            self.recorder.subscribe(topics.CLOCK, CLOCK, DATA_QOS)
+            self.recorder.subscribe(topics.CLOCK, CLOCK, RECORD_QOS)
             diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
 
@@ -134,7 +134,7 @@ class Monitor(Node):
         # A recorded topic counts what DDS reports lost on it (mill_bag.recorder: Losses).
         events = self.recorder.lost_events(topic) if self.recorder is not None else None
         self.create_subscription(
-            message_class(msgtype), topic, on_msg, DATA_QOS, event_callbacks=events, raw=True
+            message_class(msgtype), topic, on_msg, RECORD_QOS, event_callbacks=events, raw=True
         )
 
     def finish_recording(self, samples: int) -> None:

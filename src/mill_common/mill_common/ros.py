@@ -32,6 +32,17 @@ DATA_QOS = QoSProfile(
     durability=DurabilityPolicy.VOLATILE,
 )
 
+# A listener that must not lose what it fell behind on (the runner's monitor and recorder):
+# DDS keeps every sample that reached it until it takes them. A KEEP_LAST reader dropped
+# the oldest silently when its process took nothing for a while (no message_lost event);
+# with KEEP_ALL only a writer whose own history overflows can lose one, and that is
+# reported (mill_bag.recorder: Losses).
+RECORD_QOS = QoSProfile(
+    reliability=ReliabilityPolicy.RELIABLE,
+    history=HistoryPolicy.KEEP_ALL,
+    durability=DurabilityPolicy.VOLATILE,
+)
+
 # The newest value only, kept for a reader that joins later (an acknowledgement, a status).
 LATCHED_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
