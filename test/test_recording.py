@@ -230,8 +230,7 @@ def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     assert run.n == summary['samples'] == 2001
     assert run.missing == {} and summary['missing_samples'] == {}
     # counted and noted, and nothing lost: a lockstep run waits for its recorder
-    assert run.bag.noted_counts(records.MISSING_SAMPLES) == {} == summary['messages_lost']
-    assert run.messages_lost == {} and run.bag.messages_lost == {}
+    assert run.bag.noted_counts(records.MISSING_SAMPLES) == {}
     from_bag = summarize(run.record, 1.0)
     assert [m.axis for m in from_bag] == [m['axis'] for m in summary['metrics']] == list(AXES)
     for m, ref in zip(from_bag, summary['metrics'], strict=True):
@@ -514,21 +513,20 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
         timeout=600,
     )
     summary = json.loads((out / 'summary.json').read_text())
-    missing, lost = summary['missing_samples'], summary['messages_lost']
+    missing = summary['missing_samples']
     # An incomplete record fails the run, as in lockstep; so does a braked axis (a busy
     # machine may not hold the rate), which is not what this test is about.
     assert proc.returncode == (1 if missing or summary['failures'] else 0), proc.stderr[-3000:]
     assert summary['kind'] == records.AXIS_REALTIME
     bag = open_bag(out / 'bag')
     assert bag.noted_counts(records.MISSING_SAMPLES) == {Q(t): n for t, n in missing.items()}
-    assert bag.messages_lost == lost
     options = ReportOptions(skip=0.5, window=0.1, freqs=[], namespace=None, quiet=True)
     kind = kind_of(out / 'bag')
     report = kind.read(out / 'bag', 'rt', options)
     assert report.run.realtime and report.run.n > 0
-    assert (report.run.missing, report.run.messages_lost) == (missing, lost)
-    lines = records.loss_lines(missing, lost)  # one per topic with a loss, none without
-    assert len(lines) == sum(1 for n in (*missing.values(), *lost.values()) if n)
+    assert report.run.missing == missing
+    lines = records.loss_lines(missing)  # one per topic with a loss, none without
+    assert len(lines) == sum(1 for n in missing.values() if n)
     printed = [line for line in proc.stdout.splitlines() if line.startswith('WARNING: ')]
     shown = [line for line in kind.table([report]).splitlines() if line.startswith('WARNING: ')]
     assert [line for line in printed if 'drive ticked' not in line] == lines == shown

@@ -33,14 +33,7 @@ def named(custom_data: Mapping[str, str]) -> str | None:
     return custom_data.get(KEY) or None
 
 
-def loss_lines(missing: Mapping[str, int], messages_lost: Mapping[str, int]) -> list[str]:
-    """One WARNING line per topic that lacks samples in the record or on which DDS reported
-    messages lost while recording; none where no topic has either (the runner's summary and
-    `report` print these)."""
-    out = [f'WARNING: {t}: samples missing in the record: {n}' for t, n in missing.items() if n]
-    out += [
-        f'WARNING: {t}: messages lost while recording (DDS message_lost): {n}'
-        for t, n in messages_lost.items()
-        if n
-    ]
-    return out
+def loss_lines(missing: Mapping[str, int]) -> list[str]:
+    """One WARNING line per topic that lacks samples in the record; none where no topic does
+    (the runner's summary and `report` print these)."""
+    return [f'WARNING: {t}: samples missing in the record: {n}' for t, n in missing.items() if n]

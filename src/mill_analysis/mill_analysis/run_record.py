@@ -303,9 +303,6 @@ class BagRun:
     message_count: int
     size_bytes: int
     notes: list[str] = field(default_factory=list)
-    # messages DDS reported lost per topic while the bag was recorded, where its writer
-    # counted them (mill_bag.reader.Bag.messages_lost)
-    messages_lost: dict[str, int] = field(default_factory=dict)
     # A realtime run (the drive's own clock): per axis, the state -> command latency of every
     # command as the recorder received it [ms], the share of states no command answered and
     # the most of them in a row.
@@ -497,7 +494,6 @@ def read_run(
         message_count=total,
         size_bytes=size,
         notes=notes,
-        messages_lost=bag.messages_lost or {},
     )
 
 
@@ -537,7 +533,6 @@ def _realtime_run(
         message_count=total,
         size_bytes=sum(f.stat().st_size for f in bag.files),
         notes=notes,
-        messages_lost=bag.messages_lost or {},
         realtime=True,
         command_latency_ms=latency,
         unanswered=unanswered,

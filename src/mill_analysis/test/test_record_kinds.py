@@ -17,7 +17,6 @@ from mill_analysis.report.kinds import (
     kind_of,
 )
 from mill_bag.errors import BagError
-from mill_bag.writer import MESSAGES_LOST, counts_note
 
 from mill_analysis import records
 from mill_common import topics
@@ -90,44 +89,38 @@ def test_bags_of_the_axis_and_the_force_job_do_not_share_a_report(
 
 
 def test_report_names_every_topic_a_realtime_bag_lacks_samples_of(foreign_bag) -> None:
-    # The recorder lost samples 5 and 6 of y's state and 7 of the ground truth, and DDS
-    # reported two of them and one /rosout message lost (the bag's note).
-    lost = counts_note({'/mill/y/state': 2, '/rosout': 1})
+    # The recorder lost samples 5 and 6 of y's state and 7 of the ground truth.
     path, rec = foreign_bag(
         'mcap',
         start_ns=0,
-        notes={**records.bag_notes(records.AXIS_REALTIME), MESSAGES_LOST: lost},
+        notes=records.bag_notes(records.AXIS_REALTIME),
         drop={topics.state('y'): {5, 6}, topics.GROUND_TRUTH: {7}},
     )
     kind = kind_of(path)
     run = kind.read(path, 'rt', OPTIONS)
     assert run.run.realtime and run.run.n == rec.t.size
     assert run.run.missing == {topics.state('y'): 2, topics.GROUND_TRUTH: 1}
-    assert run.run.messages_lost == {'/mill/y/state': 2, '/rosout': 1}
     warnings = [line for line in kind.table([run]).splitlines() if 'WARNING' in line]
     assert warnings == [
         'WARNING: mill/y/state: samples missing in the record: 2',
         'WARNING: mill/ground_truth: samples missing in the record: 1',
-        'WARNING: /mill/y/state: messages lost while recording (DDS message_lost): 2',
-        'WARNING: /rosout: messages lost while recording (DDS message_lost): 1',
     ]
     markdown = kind.markdown([run], [], ['rt'])
     assert all(f'- rt: {w}' in markdown for w in warnings)
 
 
 def test_a_bag_that_lost_nothing_says_nothing_of_losses(foreign_bag) -> None:
-    notes = {**records.bag_notes(records.AXIS_REALTIME), MESSAGES_LOST: counts_note({})}
-    path, _ = foreign_bag('mcap', start_ns=0, notes=notes)
+    path, _ = foreign_bag('mcap', start_ns=0, notes=records.bag_notes(records.AXIS_REALTIME))
     kind = kind_of(path)
     run = kind.read(path, 'rt', OPTIONS)
-    assert (run.run.missing, run.run.messages_lost) == ({}, {})
+    assert run.run.missing == {}
     assert 'WARNING' not in kind.table([run]) and 'WARNING' not in kind.markdown([run], [], [])
 
 
 def test_a_lockstep_bag_names_the_samples_it_lacks_too(foreign_bag) -> None:
     path, _ = foreign_bag('mcap', drop={topics.estimate('z'): {3}})
     run = kind_of(path).read(path, 'ls', OPTIONS)
-    assert not run.run.realtime and run.run.messages_lost == {}  # rosbags notes no losses
+    assert not run.run.realtime
     assert 'WARNING: mill/z/estimate: samples missing in the record: 1' in kind_of(path).table(
         [run]
     )

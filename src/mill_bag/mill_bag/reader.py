@@ -23,7 +23,7 @@ from pathlib import Path
 import yaml
 
 from mill_bag.errors import BagError
-from mill_bag.writer import CUT_SHORT, MESSAGES_LOST
+from mill_bag.writer import CUT_SHORT
 
 MCAP_MAGIC = b'\x89MCAP0\r\n'
 Row = tuple[str, str, int, int | None, bytes]  # topic, type, log time, publish time, CDR
@@ -63,12 +63,6 @@ class Bag:
         """Why the recording ended before it was closed (a full disk), as the writer noted
         it in metadata.yaml (`custom_data: cut_short`); None if it did not say so."""
         return self.custom_data.get(CUT_SHORT) or None
-
-    @property
-    def messages_lost(self) -> dict[str, int] | None:
-        """Messages DDS reported lost per topic while the bag was recorded (`custom_data:
-        messages_lost`); None where the writer did not count them (another writer)."""
-        return self.noted_counts(MESSAGES_LOST)
 
     def noted_counts(self, key: str) -> dict[str, int] | None:
         """Per-topic counts the writer noted under `key` (mill_bag.writer.counts_note);

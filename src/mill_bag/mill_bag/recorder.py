@@ -21,16 +21,12 @@ stores it. The publish time is always the wall-clock receive time (the
 EventsExecutor does not expose the DDS source timestamp), so the loop timing can
 be analysed from the bag.
 
-Losses. A recorder cannot make a publisher wait, so it counts what it lost: every
-subscription has a message_lost event handler, and the counts per topic go into
-metadata.yaml at every flush (`custom_data: messages_lost`, JSON; `Bag.messages_lost`).
-DDS reports what a writer dropped before this reader had it (measured with Fast DDS 2.14
-of the Jazzy wheels: a reliable writer whose history overflowed, or best effort). A
-message a reader received and then dropped from its own history is never reported: the
-subscriptions therefore keep all (KEEP_ALL), so that a recorder starved of CPU loses
-nothing of what reached it, and one that is stopped makes the writers overflow, which is
-reported. A sequence in the messages themselves shows the rest (for a mill run:
-mill_analysis.realtime_record).
+Losses. A recorder cannot make a publisher wait. Its subscriptions keep all (KEEP_ALL),
+so that a recorder starved of CPU loses nothing of what reached it (a KEEP_LAST reader
+dropped the oldest silently). It attaches no message_lost handler: with one on every
+recorded topic, rclpy's EventsExecutor wedged in EventHandler.take_data once a runner
+stopped for 3 s had lost messages, and took no data again (measured); a mill run's losses
+are counted from the sequence of its samples instead (mill_analysis.realtime_record).
 
 Durability. Messages are buffered in memory by the subscription callbacks and
 written every `flush_period` (<= 1 s) of wall time: each write closes an MCAP
@@ -61,21 +57,13 @@ from typing import Any
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import ParamSpec, StringList, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
-from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.errors import BagError
 from mill_bag.types import message_definition, sim_stamped
-from mill_bag.writer import (
-    COMPRESSIONS,
-    MESSAGES_LOST,
-    BagCutShort,
-    BagWriter,
-    TopicInfo,
-    counts_note,
-)
+from mill_bag.writer import COMPRESSIONS, BagCutShort, BagWriter, TopicInfo
 
 
 def message_class(msgtype: str) -> type:
@@ -118,8 +106,7 @@ def subscription_qos(endpoints: list[Any]) -> QoSProfile:
     only if all publishers offer it. KEEP_ALL: a recorder that falls behind (starved of CPU)
     loses nothing from its own history, where a KEEP_LAST one dropped the oldest silently
     (measured: 2321 of 8000 messages at 1 kHz, for a reader that took nothing for 5 s, and no
-    message_lost event); what is lost then is lost by a writer whose own history
-    overflowed, and DDS reports that (Losses above)."""
+    message_lost event); see Losses above."""
     profiles = [e.qos_profile for e in endpoints]
     reliable = bool(profiles) and all(p.reliability == ReliabilityPolicy.RELIABLE for p in profiles)
     latched = bool(profiles) and all(
@@ -152,8 +139,7 @@ class TopicRecorder:
     as the node resolves them (its namespace and remappings), as `ros2 bag record`
     does; the bag holds absolute names. custom_data: notes for the bag's readers
     (metadata.yaml), e.g. what kind of run it holds; `note` adds one before the bag is
-    closed. `lost` counts the messages DDS reported lost per topic (`lost_events` gives the
-    handler for a subscription you own).
+    closed.
     """
 
     def __init__(
@@ -177,9 +163,7 @@ class TopicRecorder:
             self.regex = re.compile(regex) if regex else None
         except re.error as exc:
             raise BagError(f'regex {regex!r} is not a valid regular expression: {exc}') from None
-        self.lost: dict[str, int] = {}  # messages DDS reported lost, per absolute topic name
-        notes = {**(custom_data or {}), MESSAGES_LOST: counts_note({})}
-        self.writer = BagWriter(output, compression, custom_data=notes)
+        self.writer = BagWriter(output, compression, custom_data=custom_data)
         self._buf: list[tuple[_Topic, int, bytes]] = []
         self._topics: dict[str, _Topic] = {}
         self._subs: list[Any] = []
@@ -225,28 +209,10 @@ class TopicRecorder:
 
         return on_message
 
-    def lost_events(self, topic: str) -> SubscriptionEventCallbacks:
-        """Event handlers that count the messages DDS reports lost on `topic`."""
-        name, lost = self.resolve(topic), self.lost
-
-        def on_lost(info: Any) -> None:
-            # The subscription's running total: under the EventsExecutor total_count_change
-            # came as 0 while total_count grew (measured), so the total is what is kept.
-            lost[name] = max(lost.get(name, 0), int(info.total_count))
-
-        return SubscriptionEventCallbacks(message_lost=on_lost)
-
     def subscribe(self, topic: str, msgtype: str, qos: QoSProfile) -> None:
         callback = self.tap(topic, msgtype)
         self._subs.append(
-            self.node.create_subscription(
-                message_class(msgtype),
-                topic,
-                callback,
-                qos,
-                event_callbacks=self.lost_events(topic),
-                raw=True,
-            )
+            self.node.create_subscription(message_class(msgtype), topic, callback, qos, raw=True)
         )
 
     def note(self, key: str, value: str) -> None:
@@ -330,7 +296,6 @@ class TopicRecorder:
                 stamp = latest
             writer.write(info, stamp, received, data)
         self._latest_sim_ns = latest
-        writer.custom_data[MESSAGES_LOST] = counts_note(self.lost)
         writer.flush()
 
     def close(self) -> None:
@@ -353,18 +318,11 @@ class TopicRecorder:
         return self.writer.message_count
 
     def summary(self) -> str:
-        """What the bag holds, and one line per topic on which messages were lost."""
         size = self.writer.size_bytes / 1e6
-        lines = [
+        return (
             f'bag {self.writer.path}: {self.writer.message_count} messages on '
             f'{len(self.writer.topics)} topics, {size:.1f} MB'
-        ]
-        lines += [
-            f'WARNING: {n} messages lost on {topic} (DDS message_lost)'
-            for topic, n in sorted(self.lost.items())
-            if n
-        ]
-        return '\n'.join(lines)
+        )
 
 
 # -- the recorder node -------------------------------------------------------------------------
@@ -445,8 +403,7 @@ class RecorderNode(Node):
                 cut_before = recorder.writer.cut_short
                 recorder.close()
                 if cut_before is None:
-                    for line in recorder.summary().splitlines():
-                        print(f'recorder: {line}', file=sys.stderr)
+                    print(f'recorder: {recorder.summary()}', file=sys.stderr)
         finally:
             super().destroy_node()
 

@@ -42,9 +42,6 @@ from mill_bag.types import message_definition
 ROSBAG2_VERSION = 9
 COMPRESSIONS = ('zstd', 'lz4', 'none')
 CUT_SHORT = 'cut_short'  # custom_data key: why the recording ended before it was closed
-# custom_data key: messages DDS reported lost per topic while recording (rclpy's message_lost
-# event), as a JSON object of the topics with a loss; '{}' when the recorder counted none.
-MESSAGES_LOST = 'messages_lost'
 RESERVE_NAME = '.metadata_reserve'  # room kept for the last metadata.yaml (deleted at close)
 RESERVE_MIN = 64 * 1024
 FULL = (errno.ENOSPC, errno.EDQUOT)

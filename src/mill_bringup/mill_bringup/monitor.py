@@ -9,8 +9,9 @@ rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
 In lockstep it also acknowledges, on mill/recorded, the newest step whose stepped topics it
 holds whole, and the plant waits for that (mill_bringup.recorded_steps): nothing is lost.
-In realtime nothing waits for it: the recorder counts what DDS reports lost per topic, and the
-job counts the samples missing from the drive's sequence (the run's summary, the bag's notes).
+In realtime nothing waits for it: its subscriptions keep all (RECORD_QOS), so that a runner
+short of CPU loses nothing that reached it, and the job counts the samples missing from the
+drive's sequence (the run's summary, the bag's notes).
 /diagnostics is also kept decoded, for the faults the summary reports.
 
 The monitor runs in the graph's namespace (and with its remappings), so the job's relative
@@ -131,11 +132,7 @@ class Monitor(Node):
                 for action in actions:
                     action(data)
 
-        # A recorded topic counts what DDS reports lost on it (mill_bag.recorder: Losses).
-        events = self.recorder.lost_events(topic) if self.recorder is not None else None
-        self.create_subscription(
-            message_class(msgtype), topic, on_msg, RECORD_QOS, event_callbacks=events, raw=True
-        )
+        self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
 
     def finish_recording(self, samples: int) -> None:
         """The job's samples are done: the plant may take one more step, then waits for

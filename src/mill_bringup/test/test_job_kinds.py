@@ -35,11 +35,15 @@ def test_only_a_realtime_run_notes_that_its_verdicts_are_no_reproduction(
 
 
 class Source:
-    """What a job reads of a running graph, made up: state stamps, statuses, problems."""
+    """What a job reads of a running graph, made up: state stamps, statuses, problems, and
+    when the newest message of a topic arrived."""
 
-    def __init__(self, stamps: dict[str, int], statuses: dict | None = None) -> None:
+    def __init__(
+        self, stamps: dict[str, int], statuses: dict | None = None, arrived: dict | None = None
+    ) -> None:
         self.stamps = stamps
         self.statuses = statuses or {}
+        self.arrived = arrived or {}
         self.heard: list[str] = []
 
     def latest_stamp_ns(self, topic: str) -> int:
@@ -55,7 +59,7 @@ class Source:
         return list(self.heard)
 
     def arrival_ns(self, topic: str) -> list[int]:
-        return []
+        return [self.arrived[topic]] if topic in self.arrived else []
 
 
 def _realtime_slotting():
@@ -83,9 +87,19 @@ def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
     now = time.time_ns()
     job.start_ns = now - 10 * 10**9
     fresh = {f'mill/{a}/state': now for a in 'xyz'}
-    job.check(Source(fresh))
+    job.check(Source(fresh, arrived=fresh))
     with pytest.raises(scenario.ScenarioError, match=r'went silent: nothing on mill/y/state'):
-        job.check(Source({**fresh, 'mill/y/state': now - 4 * 10**9}))
+        job.check(Source(fresh, arrived={**fresh, 'mill/y/state': now - 4 * 10**9}))
+    # a runner that was stopped 4 s takes the states queued meanwhile: old stamps, arriving
+    # now, are no silence of the drive
+    old = {topic: now - 4 * 10**9 for topic in fresh}
+    job.check(Source(old, arrived=fresh))
+    # ... nor, right after the runner's own stall, the states it has not taken yet
+    job = _realtime_slotting()
+    job.start_ns = now - 10 * 10**9
+    job.check(Source(fresh, arrived=fresh))
+    job._checked_ns -= 4 * 10**9  # the runner was stopped 4 s since its last look
+    job.check(Source(old, arrived=old))
 
 
 def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:

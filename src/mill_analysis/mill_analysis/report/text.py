@@ -50,7 +50,7 @@ def text_table(reports: list[RunReport]) -> str:
         lines.append(loop_text(r))
         if r.run.realtime:
             lines.append(realtime_text(r))
-        lines += loss_lines(r.run.missing, r.run.messages_lost)
+        lines += loss_lines(r.run.missing)
         for note in r.run.notes:
             lines.append(f'note: {note}')
     return '\n'.join(lines)
@@ -137,11 +137,7 @@ def markdown(reports: list[RunReport], figures: list[tuple[str, str]], argv: lis
             f'| {run.message_count} | {run.size_bytes / 1e6:.1f} MB | {per_s:.2f} MB '
             f'| {run.job_end_source} |'
         )
-    notes = [
-        (r.label, n)
-        for r in reports
-        for n in [*loss_lines(r.run.missing, r.run.messages_lost), *r.run.notes]
-    ]
+    notes = [(r.label, n) for r in reports for n in [*loss_lines(r.run.missing), *r.run.notes]]
     if notes:
         out.append('')
         out += [f'- {label}: {note}' for label, note in notes]

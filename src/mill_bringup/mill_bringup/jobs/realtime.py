@@ -31,6 +31,8 @@ from mill_common import topics
 # No state this long after the start: the drive is gone (the runner itself may go without
 # the CPU for a second when the graph runs SCHED_FIFO on every core).
 DRIVE_SILENCE_NS = 3_000_000_000
+# The runner checks every 50 ms; a gap this long between two checks is the runner's own.
+RUNNER_STALL_NS = 1_000_000_000
 DRIVE_FIGURES = (
     'late_fraction',
     'longest_late_run',
@@ -72,6 +74,8 @@ class RealtimeAxisJob(AxisJob):
                 f'{self.trajectory}.axes to the same axes'
             )
         self.start_ns: int | None = None
+        self._checked_ns = -1  # when `check` last looked (system clock)
+        self._awake_ns = -1  # when the runner last came back from going without the CPU
         self.drive: dict[str, str] = {}
         self._source: MessageSource | None = None
         self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
@@ -116,7 +120,8 @@ class RealtimeAxisJob(AxisJob):
         return self.start_ns
 
     def timed_topics(self) -> set[str]:
-        return {topics.joint_command(a) for a in self.axes}
+        # the commands for their latency; the states for the drive's silence (check)
+        return {f(a) for a in self.axes for f in (topics.joint_command, topics.state)}
 
     def _job(self, source: MessageSource) -> dict[str, str] | None:
         status = source.status(topics.status_name(self.trajectory, topics.JOB_STATUS))
@@ -142,8 +147,15 @@ class RealtimeAxisJob(AxisJob):
         if self.start_ns is None or ns < 0:
             return
         now = time.time_ns()
+        # Silence counts from when the runner last took a state, not from the state's stamp,
+        # and not across a time the runner itself went without the CPU (or was stopped): it
+        # takes the states queued meanwhile when it resumes; they are no silence of the drive.
+        if self._checked_ns >= 0 and now - self._checked_ns > RUNNER_STALL_NS:
+            self._awake_ns = now
+        self._checked_ns = now
         for axis in self.axes:
-            quiet = now - max(source.latest_stamp_ns(topics.state(axis)), self.start_ns)
+            arrivals = source.arrival_ns(topics.state(axis))
+            quiet = now - max(arrivals[-1] if arrivals else -1, self.start_ns, self._awake_ns)
             if quiet > DRIVE_SILENCE_NS:
                 raise ScenarioError(
                     f'the drive went silent: nothing on {topics.state(axis)} from '

@@ -30,7 +30,6 @@ class Collected:
     record: Any
     missing: dict[str, int]  # samples missing per topic, not counting `lost`
     lost: dict[str, int]  # samples a killed sender took with it (mill_bringup.lost_samples)
-    messages_lost: dict[str, int]  # per recorded topic, what DDS reported lost (message_lost)
     problems: list[str]  # the graph's notes, WARN and ERROR statuses heard
     bag: dict[str, Any] | None  # path, messages and size of the bag, if one was written
     peak_rss_mb: dict[str, float]  # per process of the graph
@@ -67,8 +66,7 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
     finally:
         bag = _close_bag(session, options)
     problems = graph.notes + monitor.problems()
-    messages_lost = {t: n for t, n in recorder.lost.items() if n} if recorder is not None else {}
-    return Collected(record, missing, lost, messages_lost, problems, bag, peak, session.peak_pss_mb)
+    return Collected(record, missing, lost, problems, bag, peak, session.peak_pss_mb)
 
 
 def _catch_up(session: Session) -> None:
@@ -129,7 +127,6 @@ def result(
         problems=collected.problems,
         foreign=job.foreign(record),
         lost_with_restarts=collected.lost,
-        messages_lost=collected.messages_lost,
         failures=job.failures(record, collected.problems),
         bag=collected.bag,
         record=record,

@@ -29,8 +29,6 @@ class RunResult:
     foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
     # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
     lost_with_restarts: dict[str, int] = field(default_factory=dict)
-    # messages DDS reported lost per recorded topic (absolute name), the recorder's count
-    messages_lost: dict[str, int] = field(default_factory=dict)
     # what made the job fail (a realtime axis that tripped or was braked): exit code 1
     failures: list[str] = field(default_factory=list)
     differences: dict[str, float] | None = None  # against the offline run
@@ -65,7 +63,7 @@ def format_result(r: RunResult) -> str:
         f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
         f'({len(r.peak_rss_mb)} processes), {r.peak_pss_mb:.0f} MB in use together (PSS)',
     ]
-    lines += records.loss_lines(r.missing_samples, r.messages_lost)
+    lines += records.loss_lines(r.missing_samples)
     if r.lost_with_restarts:
         lines.append(
             'note: samples lost with their killed sender (started again), not in the record: '
