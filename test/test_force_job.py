@@ -107,20 +107,26 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
 
 
 @pytest.mark.system
-def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
+@pytest.mark.parametrize('busy', [0, 2], ids=['quiet', 'both_cores_busy'])
+def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path, busy: int) -> None:
+    """Also with both cores busy (issue 21): the force process steps at most its
+    recorder_window ahead of the revolutions the runner has recorded whole, so a loaded
+    machine slows the run down and its bag misses nothing."""
     out, bag = tmp_path / 'run', tmp_path / 'bag'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
-            *('--quiet', '--output', str(out), '--record', str(bag)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    with busy_cores(busy):
+        proc = subprocess.run(
+            [
+                *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
+                *('--quiet', '--output', str(out), '--record', str(bag)),
+            ],
+            env=ros_env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+        )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
+    assert summary['missing_samples'] == {}
     report = subprocess.run(
         [sys.executable, '-m', 'mill_analysis.report', str(bag / 'scheme1'), '--out', str(out)],
         env=ros_env,
@@ -136,29 +142,6 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path) -> None:
     # The same stream, the same reference model (ξ, ω_n from the controller's state), the
     # period estimated from the stamps to well below 1 ns: the same sum to rounding.
     assert run.record.j_c == pytest.approx(summary['j_c'], rel=1e-12)
-
-
-@pytest.mark.system
-def test_a_force_jobs_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path) -> None:
-    """Issue 21: the force process steps at most its recorder_window ahead of the revolutions
-    the runner has recorded whole, so a loaded machine slows the run and loses nothing."""
-    out, bag = tmp_path / 'run', tmp_path / 'bag'
-    with busy_cores(2):
-        proc = subprocess.run(
-            [
-                *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
-                *('--quiet', '--output', str(out), '--record', str(bag)),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
-        )
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
-    assert summary['missing_samples'] == {}
-    run = read_force_run(bag / 'scheme1')
-    assert run.samples == summary['samples'] and run.missing == {}, run.missing
 
 
 def _force(ns: int, value: float) -> WrenchStamped:
