@@ -107,6 +107,7 @@ def floor(scen: Scenario, rate: float, duration: float, run_dir: Path, domain_id
             monitor = session.monitor
             _wait_for_echo(monitor, job.axes, spin)
             activate(monitor, session.executor, drive.name, session.progress, _never, READY_TIMEOUT)
+            _wait_for_answers(monitor, job.axes, spin)
             cpu_at = [cpu()]
             end = time.monotonic() + duration
             while time.monotonic() < end:
@@ -137,6 +138,16 @@ def _wait_for_echo(monitor: Monitor, axes: Sequence[str], spin: Callable[[str], 
         if time.monotonic() > deadline:
             raise RunError(f'the echo node was not discovered within {READY_TIMEOUT:g} s')
         spin('before the floor started')
+
+
+def _wait_for_answers(monitor: Monitor, axes: Sequence[str], spin: Callable[[str], None]) -> None:
+    """Until the echo has answered on every axis: the drive counts an axis's ticks from its
+    first command, so on a busy machine the window measured starts once they all count."""
+    deadline = time.monotonic() + READY_TIMEOUT
+    while not all(monitor.messages(topics.joint_command(a)) for a in axes):
+        if time.monotonic() > deadline:
+            raise RunError(f'the echo node did not answer within {READY_TIMEOUT:g} s')
+        spin('before the floor ran')
 
 
 def _next_status(monitor: Monitor, name: str, spin: Callable[[str], None]) -> dict[str, str]:
