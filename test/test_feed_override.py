@@ -66,8 +66,10 @@ def test_override_scales_the_speed_and_bad_values_are_clamped_or_held(start_node
                 override.publish(joint_state(k * TICK_NS, ('feed_override',), (value,)))
                 spin_until(lambda: False, 0.3)
             clock.publish(Clock(clock=to_stamp(k * TICK_NS)))
-            # the chunk of this tick starts where the previous one ended
-            assert spin_until(lambda: any(ns >= (k + 1) * TICK_NS for ns in refs) or k == 0)
+            # the chunk of this tick starts where the previous one ended (the first: any)
+            assert spin_until(
+                lambda: any(ns >= (k + 1) * TICK_NS for ns in refs) or k == 0 < len(refs)
+            )
             return refs[max(refs)]
 
         tick(0, None)
