@@ -116,3 +116,14 @@ def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:
     assert job.failures(None, source.problems()) == [trip, brake]
     lockstep = job_for(scenario.load('slotting'))
     assert lockstep.failures(None, [trip]) == []  # a simulation's trip is its result
+
+
+def test_a_stop_the_drive_counted_fails_the_job_when_its_report_was_lost() -> None:
+    job = _realtime_slotting()
+    done = {
+        'trajectory: job': {'state': 'done', 'time': '4.0', 'end_time': '4.0'},
+        'plant: realtime': {'x.stops': '0', 'y.stops': '1', 'y.stopped': 'no fresh command'},
+    }
+    assert job.complete(Source({}, done))  # no stop heard: the link carried no report
+    (line,) = job.failures(None, [])
+    assert line == 'plant: y axis: stopped by the drive 1 time(s) (now: no fresh command)'

@@ -8,8 +8,16 @@ Every command names the state it answers by its stamp. The drive front end
   hold: a command stays applied until a newer one arrives). A command is fresh if it
   arrived since the last tick; a tick without a fresh command counts as late (from the
   axis's first command on: before it the job has not started), and after
-  `brake_after` late ticks in a row the axis is braked (NaN) until fresh commands return.
-  The longest such run is kept: scattered late ticks cost little, a long run brakes.
+  `brake_after` late ticks in a row the axis is stopped: braked (NaN) and latched. The
+  longest such run is kept: scattered late ticks cost little, a long run stops the axis.
+  The drive's motion guard (mill_plant.motion_guard) stops an axis the same way (`stop`).
+
+A stopped axis stays braked when commands return: the first command that arrives after an
+outage comes from a controller that knows nothing of it. It is released only by an explicit
+handshake, as a servo amplifier's fault is: the owner acknowledges with a brake request (a
+NaN command, what a tripped controller sends) and then re-arms with a valid command, or the
+operator releases it (`release`, the drive's ~/release service); it then holds braked until
+its next fresh command.
 
 It also keeps, per axis, the state → command latency of every fresh command: the time the
 command arrived minus the stamp of the state it answers (both on the drive's clock), in a
@@ -34,14 +42,18 @@ class AxisCommands:
     ticks: int = 0
     late: int = 0
     braked: bool = True  # before the first command an axis is held braked
+    stopped: str = ''  # why the axis is stopped (latched until released), '' if it is not
+    acknowledged: bool = False  # the owner sent a brake request since the stop
+    returned: bool = False  # fresh commands came while stopped (said once)
     latencies: LatencyHistogram = field(default_factory=LatencyHistogram)
 
 
 @dataclass(frozen=True)
 class Tick:
     efforts: list[float]  # what to apply now, NaN = brake
-    newly_braked: list[str]  # axes braked at this tick
-    resumed: list[str]  # axes that got fresh commands again after a brake
+    resumed: list[str]  # axes released by a fresh command (their first, or after a release)
+    stopped: list[str]  # axes stopped (latched) at this tick: no fresh command for too long
+    returned: list[str]  # commands again on a stopped axis: it stays stopped until re-armed
 
 
 class CommandTable:
@@ -56,6 +68,8 @@ class CommandTable:
         if stamp <= c.stamp:
             return False
         c.value, c.stamp, c.fresh = value, stamp, True
+        if c.stopped and math.isnan(value):
+            c.acknowledged = True  # the owner knows: its next valid command re-arms
         if arrived_ns is not None:
             c.latencies.add(arrived_ns - stamp)
         return True
@@ -72,7 +86,10 @@ class CommandTable:
 
     # -- real time -----------------------------------------------------------------------------
     def take(self) -> Tick:
-        efforts, braked, resumed = [], [], []
+        efforts: list[float] = []
+        resumed: list[str] = []
+        stopped: list[str] = []
+        returned: list[str] = []
         for axis, c in self.by_axis.items():
             if c.stamp < 0:
                 efforts.append(math.nan)  # no command yet: the job has not started for it
@@ -81,22 +98,53 @@ class CommandTable:
             if c.fresh:
                 c.fresh = False
                 c.late_in_row = 0
-                if c.braked and c.stamp >= 0:
+                if c.stopped and c.acknowledged and math.isfinite(c.value):
+                    self._release(c)  # re-armed by its owner: brake request, then a command
+                if c.stopped and not c.returned:
+                    c.returned = True
+                    returned.append(axis)
+                elif not c.stopped and c.braked:
                     c.braked = False
                     resumed.append(axis)
             else:
                 c.late += 1
                 c.late_in_row += 1
                 c.longest_late_run = max(c.longest_late_run, c.late_in_row)
-                if not c.braked and c.late_in_row >= self.brake_after:
-                    c.braked = True
-                    braked.append(axis)
+                if not c.stopped and c.late_in_row >= self.brake_after:
+                    self.stop(axis, f'no fresh command for {self.brake_after} periods')
+                    stopped.append(axis)
             efforts.append(math.nan if c.braked else c.value)
-        return Tick(efforts, braked, resumed)
+        return Tick(efforts, resumed, stopped, returned)
+
+    def stop(self, axis: str, reason: str) -> bool:
+        """Stop the axis (braked, latched until released) from now on; False if it was."""
+        c = self.by_axis[axis]
+        if c.stopped:
+            return False
+        c.stopped, c.braked, c.acknowledged, c.returned = reason, True, False, False
+        return True
+
+    def release(self, axis: str) -> bool:
+        """The operator's release of a stopped axis (False if it was not stopped): it holds
+        braked until its next fresh command."""
+        c = self.by_axis[axis]
+        if not c.stopped:
+            return False
+        self._release(c)
+        c.braked, c.late_in_row = True, 0
+        return True
+
+    @staticmethod
+    def _release(c: AxisCommands) -> None:
+        c.stopped, c.acknowledged, c.returned = '', False, False
 
     def brake_all(self) -> None:
         for c in self.by_axis.values():
             c.braked = True
+
+    def stop_reasons(self) -> dict[str, str]:
+        """Why each stopped axis is stopped."""
+        return {a: c.stopped for a, c in self.by_axis.items() if c.stopped}
 
     def late_fraction(self, axis: str) -> float:
         c = self.by_axis[axis]

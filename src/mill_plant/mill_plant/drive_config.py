@@ -82,8 +82,31 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
         ParamSpec(
             'brake_after',
             10,
-            'realtime: periods in a row without a fresh command after which the axis is braked',
+            'realtime: periods in a row without a fresh command after which the axis is '
+            "stopped (braked until re-armed: the controller's brake request then a valid "
+            'command, or ~/release)',
             positive_int,
+        ),
+    ),
+    (
+        'speed_limit',
+        ParamSpec(
+            'speed_limit',
+            0.5,
+            'realtime: an axis faster than this over a period is stopped (braked until '
+            "re-armed), fresh commands or not [m/s]; set it to the machine's rapid traverse",
+            in_range(1e-4, 100.0),
+        ),
+    ),
+    (
+        'hold_deviation',
+        ParamSpec(
+            'hold_deviation',
+            0.0005,
+            'realtime: while its commands are late, an axis holds the last one only within '
+            'this distance of where it stood at its last fresh command, else it is stopped '
+            '(braked until re-armed) [m]',
+            in_range(1e-6, 0.1),
         ),
     ),
     (

@@ -16,8 +16,12 @@ reports; its cycle says when a period runs and what counts as late:
 - `RealtimeCycle`: every sample period of wall time it reads the positions, publishes them
   stamped with the acquisition time on the system clock, and applies the newest command of
   each axis (zero-order hold). A command must answer a state this drive published. A
-  period without a fresh command counts as late; after `brake_after` late periods in a row
-  the axis is braked until fresh commands return. Ticks more than half a period late (the
+  period without a fresh command counts as late; after `brake_after` late periods in a row,
+  or when its motion leaves what the drive allows (mill_plant.motion_guard: a speed limit,
+  and while commands are late a window around where they ended), the axis is stopped:
+  braked, and released only by a re-arm (the owner's brake request then a valid command)
+  or the operator (~/release), never by the first command that returns
+  (mill_plant.command_table). Ticks more than half a period late (the
   machine does not hold the rate) are counted and reported. A simulated machine keeps the
   wall clock as a real one does: after each tick it moves one period on, and a tick that
   comes late first moves it by what passed beyond that.
@@ -45,7 +49,10 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from mill_common import topics
 from mill_plant.command_delay import CommandDelay
 from mill_plant.command_table import CommandTable
+from mill_plant.motion_guard import MotionGuard
 
+# How a stopped axis is released, said with every stop.
+REARM = "the controller's brake request, then a valid command; or ~/release"
 RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
 # A tick later than a period / CATCH_UP moves the machine on first; less is left to the
 # next period (the timer keeps its schedule on average).
@@ -64,7 +71,7 @@ class Drive(Protocol):
     active: bool
     next_status: float
 
-    def publish_states(self, ns: int) -> None: ...
+    def publish_states(self, ns: int) -> list[float]: ...
     def write(self, ns: int, efforts: list[float]) -> None: ...
     def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
     def report_axis(self, axis: str, level: bytes, message: str) -> None: ...
@@ -114,6 +121,10 @@ class DriveCycle(ABC):
 
     def command_taken(self) -> None:  # noqa: B027 (nothing to do by default)
         """A command was accepted into the drive's table."""
+
+    def release(self) -> list[str]:
+        """The operator's release of the stopped axes; those it released."""
+        return []  # lockstep stops no axis by itself
 
     @abstractmethod
     def watch(self, now: float) -> None:
@@ -295,6 +306,9 @@ class RealtimeCycle(DriveCycle):
         # sample rate), in all and since the last report; ticks while active, their basis.
         self.overruns = self._overruns_reported = self.active_ticks = 0
         self._missing: set[str] = set()
+        v = d.params.values
+        self._guard = MotionGuard(d.axes, v['speed_limit'], v['hold_deviation'])
+        self.stops = dict.fromkeys(d.axes, 0)  # times each axis was stopped
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         d.add_timer(d.create_timer(d.dt, self._tick, clock=wall))
 
@@ -323,19 +337,23 @@ class RealtimeCycle(DriveCycle):
             self.active_ticks += 1
             if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
                 self.overruns += 1
-        d.publish_states(ns)
+        positions = d.publish_states(ns)
         self._recent.append(ns)
         held: Collection[str] = d.axes  # inactive: every axis held braked, as expected
         if d.active:
+            self._guard_motion(ns, positions)
             tick = d.table.take()
             efforts = tick.efforts
             held = [a for a, c in d.table.by_axis.items() if c.stamp < 0]  # none came yet
-            for axis in tick.newly_braked:
+            for axis in tick.stopped:
+                moved = self._guard.moved(axis)
+                self._stopped(axis, d.table.by_axis[axis].stopped, moved)
+            for axis in tick.returned:
                 d.report_axis(
                     axis,
                     DiagnosticStatus.ERROR,
-                    f'braked: no fresh command for {d.params.values["brake_after"]} periods '
-                    f'on {topics.joint_command(axis)} (from {d.owner_of(axis)})',
+                    f'commands arriving, but stopped ({d.table.by_axis[axis].stopped}): '
+                    f'braked until re-armed ({REARM})',
                 )
             for axis in tick.resumed:
                 d.report_axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
@@ -349,6 +367,46 @@ class RealtimeCycle(DriveCycle):
         d.advance(start, d.dt, held)
         self._moved_to = start + d.dt_ns
         self.k += 1
+
+    def _guard_motion(self, ns: int, positions: list[float]) -> None:
+        """Stop the axes whose motion the drive does not allow (before any command applies)."""
+        d = self.drive
+        v = d.params.values
+        self._guard.speed_limit, self._guard.hold_deviation = v['speed_limit'], v['hold_deviation']
+        table = d.table.by_axis
+        under_way = {
+            a: x
+            for a, x in zip(d.axes, positions, strict=True)
+            if table[a].stamp >= 0 and not table[a].stopped
+        }
+        holding = {a: not table[a].fresh for a in under_way}
+        for axis, reason in self._guard.check(ns, under_way, holding).items():
+            d.table.stop(axis, reason)
+            self._stopped(axis, reason)
+
+    def _stopped(self, axis: str, reason: str, moved: float = math.nan) -> None:
+        d = self.drive
+        self.stops[axis] += 1
+        where = f'; {1e3 * moved:.3f} mm from where they ended' if moved == moved else ''
+        d.report_axis(
+            axis,
+            DiagnosticStatus.ERROR,
+            f'stopped: {reason} on {topics.joint_command(axis)} (from {d.owner_of(axis)})'
+            f'{where}; braked until re-armed ({REARM})',
+        )
+        d.publish_status(force=True)
+
+    def release(self) -> list[str]:
+        """The operator's release (~/release): the stopped axes, now released."""
+        d = self.drive
+        released = [a for a in d.axes if d.table.release(a)]
+        for axis in released:
+            d.report_axis(
+                axis,
+                DiagnosticStatus.OK,
+                'released by ~/release: braked until its next fresh command',
+            )
+        return released
 
     def watch(self, now: float) -> None:
         d = self.drive
@@ -387,7 +445,10 @@ class RealtimeCycle(DriveCycle):
     def status_values(self) -> dict[str, object]:
         table = self.drive.table
         values: dict[str, object] = {'overruns': self.overruns, 'active_ticks': self.active_ticks}
+        stopped = table.stop_reasons()
         for axis in self.drive.axes:
+            values[f'{axis}.stops'] = self.stops[axis]
+            values[f'{axis}.stopped'] = stopped.get(axis, '')
             values[f'{axis}.late_fraction'] = table.late_fraction(axis)
             values[f'{axis}.longest_late_run'] = table.longest_late_run(axis)
             for key, v in table.latency_stats(axis).items():

@@ -6,7 +6,8 @@ report faults). It is a managed lifecycle node: `configure` builds the backend a
 topics, `activate` starts applying commands, `deactivate` brakes every axis; with
 `autostart` (the default) it does both by itself. When it steps is its `timing`
 (mill_plant.drive_cycle): lockstep (the plant is the clock of a simulation) or realtime
-(the wall clock, zero-order hold, a brake after `brake_after` late periods).
+(the wall clock, zero-order hold; an axis is stopped after `brake_after` late periods or
+on a motion the drive does not allow, and released only by a re-arm or `~/release`).
 
 Every command must come from the axis's owner (header.frame_id, `command_owners`) and answer
 a state of this drive; anything else — another sender, a stamp that answers no state, an
@@ -42,8 +43,10 @@ from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.service import Service
 from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 
 from mill_common import topics
 from mill_plant.backend import DriveBackend
@@ -77,6 +80,7 @@ class DriveNode(LifecycleNode):
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
         self._brake_requested: set[str] = set()  # axes whose last command was not finite
+        self._release_service: Service | None = None
         self._wall_start = time.monotonic()
         self.next_status = 0.0
         self.get_logger().info(
@@ -133,6 +137,8 @@ class DriveNode(LifecycleNode):
         }
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
+        if self._release_service is None:
+            self._release_service = self.create_service(Trigger, '~/release', self._on_release)
         self.cycle.configure()
         self.get_logger().info(
             f'configured: axes {", ".join(self.axes)}, commands from '
@@ -216,6 +222,18 @@ class DriveNode(LifecycleNode):
         self.table.offer(axis, ns, effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
 
+    def _on_release(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        """The operator's release of the stopped axes (mill_plant.command_table)."""
+        released = self.cycle.release() if self.backend is not None else []
+        response.success = bool(released)
+        response.message = (
+            f'released {", ".join(released)}: braked until the next fresh command'
+            if released
+            else 'no axis is stopped'
+        )
+        self.get_logger().info(f'~/release: {response.message}')
+        return response
+
     def end(self, code: int, message: str) -> None:
         """End the node after this callback (run_node exits with code and message)."""
         request_exit(self, code, message)
@@ -239,10 +257,12 @@ class DriveNode(LifecycleNode):
         self.publish_status(force=True)
 
     # -- one period: states out, efforts in ------------------------------------------------
-    def publish_states(self, ns: int) -> None:
+    def publish_states(self, ns: int) -> list[float]:
+        """Read and publish the positions of sample ns; returns them."""
         assert self.backend is not None
         name = self._name
-        for axis, y in zip(self.axes, self.backend.read(), strict=True):
+        positions = self.backend.read()
+        for axis, y in zip(self.axes, positions, strict=True):
             self._state_pubs[axis].publish(
                 joint_state_bytes(ns, (axis,), position=(y,), sender=name)
             )
@@ -252,6 +272,7 @@ class DriveNode(LifecycleNode):
             force = self.backend.cutting_force()
             if force is not None:
                 self._force_pub.publish(encode_wrench_stamped(ns, 'tool', force))
+        return positions
 
     def write(self, ns: int, efforts: list[float]) -> None:
         """Write the efforts and publish the ground truth of sample ns."""

@@ -21,6 +21,8 @@ NODE_ONLY = {
     'startup_timeout',
     'min_subscribers',
     'brake_after',
+    'speed_limit',
+    'hold_deviation',
     'command_report_time',
 }
 

@@ -80,6 +80,7 @@ class RealtimeAxisJob(AxisJob):
         self._source: MessageSource | None = None
         self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
         self._problems_at_end: list[str] | None = None
+        self._drive_at_end: dict[str, str] | None = None
 
     @property
     def sim_time(self) -> float:
@@ -167,11 +168,22 @@ class RealtimeAxisJob(AxisJob):
         end, as the graph stops, is not the job's): on a machine, the job did not complete."""
         parts = ('following error', *(f'{axis} axis' for axis in self.axes))
         heard = problems if self._problems_at_end is None else self._problems_at_end
-        return [
+        out = [
             p
             for p in heard
             if any(f': {part}: ' in p for part in parts) and ('trip' in p or 'braked' in p)
         ]
+        # The drive's own count: its report of a stop may be lost with the link that failed.
+        drive = self.drive if self._drive_at_end is None else self._drive_at_end
+        for axis in self.axes:
+            stops = int(float(drive.get(f'{axis}.stops', '0')))
+            if stops and not any(f': {axis} axis: ' in p and 'stopped' in p for p in out):
+                why = drive.get(f'{axis}.stopped') or 'released since'
+                out.append(
+                    f'{self.state_owner}: {axis} axis: stopped by the drive {stops} time(s) '
+                    f'(now: {why})'
+                )
+        return out
 
     def complete(self, source: MessageSource) -> bool:
         status = self._job(source)
@@ -186,6 +198,7 @@ class RealtimeAxisJob(AxisJob):
         done = status.get('state') == 'done'
         if done:
             self._problems_at_end = source.problems()
+            self._drive_at_end = dict(self.drive)
         return done
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
