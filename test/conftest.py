@@ -17,6 +17,8 @@ from mill_common.env import ros_environment
 from rcl_interfaces.srv import DescribeParameters, GetParameters, SetParameters
 from rclpy.parameter import Parameter, parameter_value_to_python
 
+from test.two_hosts import TwoHosts, two_hosts
+
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = REPO / 'config' / 'slotting.yaml'
 _domains = itertools.count()
@@ -165,3 +167,10 @@ def busy_cores(n: int = 2) -> Iterator[None]:
         for proc in spinners:
             proc.kill()
             proc.wait()
+
+
+@pytest.fixture
+def hosts(ros_env: dict[str, str]) -> Iterator[TwoHosts]:
+    """Two network namespaces joined by a veth pair (test/two_hosts.py), removed afterwards."""
+    with two_hosts(ros_env) as two:
+        yield two

@@ -7,15 +7,18 @@ The drive reads every axis's position at each tick and asks `check` which axes t
 - speed: an axis that moved faster than `speed_limit` over the last period is stopped,
   whether its commands are fresh or not (a runaway);
 - hold: while an axis has no fresh command, the drive holds the last one only while the
-  axis stays within `hold_deviation` of where it stood at its last fresh command — at this
-  tick and, extrapolated at constant acceleration from its last three positions, at the
-  next one. It stops the axis before the extrapolation leaves that window.
+  axis stays within `hold_deviation` of where it would be had it kept the speed it had at
+  its last fresh command — at this tick and, extrapolated at constant acceleration from its
+  last three positions, at the next one. A held command that keeps the axis on its course
+  goes on; one that accelerates it away is stopped before the extrapolation leaves the
+  window.
 
-So when the command stream ends, the axis stops within `hold_deviation` of where it was,
-plus what a change of its acceleration moves it in one period beyond the extrapolation
-(½·Δa·T²: 0.5 mm for Δa = 10 m/s² at T = 10 ms, 5 µm at 1 ms), plus the stopping
-distance of the machine's brake (zero in the simulation). The stop after `brake_after`
-late periods (mill_plant.command_table) bounds the hold in time.
+So when the command stream ends at speed v, the axis stops within v·H + `hold_deviation`
+of where it was (H: the hold, at most `brake_after` periods, after which
+mill_plant.command_table stops the axis), plus what a change of its acceleration moves it
+in one period beyond the extrapolation (½·Δa·T²: 0.5 mm for Δa = 10 m/s² at T = 10 ms,
+5 µm at 1 ms), plus the stopping distance of the machine's brake (zero in the simulation).
+The extrapolation takes the ticks a period apart.
 """
 
 from __future__ import annotations
@@ -28,7 +31,14 @@ from dataclasses import dataclass, field
 @dataclass
 class AxisMotion:
     recent: deque[tuple[int, float]] = field(default_factory=lambda: deque(maxlen=3))
-    anchor: float = math.nan  # the position at the last tick with a fresh command
+    # At the last tick with a fresh command: its stamp [ns], the position and the speed.
+    anchor: tuple[int, float, float] | None = None
+
+    def course(self, ns: int) -> float:
+        """Where the axis would be at ns had it kept the speed of its last fresh command."""
+        assert self.anchor is not None
+        t, x, v = self.anchor
+        return x + v * (ns - t) * 1e-9
 
 
 class MotionGuard:
@@ -47,37 +57,39 @@ class MotionGuard:
         for axis, m in self.by_axis.items():
             if axis not in positions:
                 m.recent.clear()
-                m.anchor = math.nan
+                m.anchor = None
                 continue
             x = positions[axis]
             m.recent.append((ns, x))
             speed = self._speed(m)
-            if speed > self.speed_limit:
+            if abs(speed) > self.speed_limit:
                 out[axis] = (
-                    f'speed {1e3 * speed:.1f} mm/s above the limit {1e3 * self.speed_limit:g} mm/s'
+                    f'speed {1e3 * abs(speed):.1f} mm/s above the limit '
+                    f'{1e3 * self.speed_limit:g} mm/s'
                 )
-            elif not holding.get(axis, False) or math.isnan(m.anchor):
-                m.anchor = x
+            elif not holding.get(axis, False) or m.anchor is None:
+                m.anchor = (ns, x, speed)
             else:
-                far = max(abs(x - m.anchor), abs(self._next(m) - m.anchor))
-                if far > self.hold_deviation:
+                step = ns - m.recent[-2][0] if len(m.recent) > 1 else 0
+                off = max(abs(x - m.course(ns)), abs(self._next(m) - m.course(ns + step)))
+                if off > self.hold_deviation:
                     out[axis] = (
                         f'holding the last command it would leave {1e3 * self.hold_deviation:g}'
-                        f' mm around where its commands ended (at {1e3 * abs(x - m.anchor):.3f}'
-                        ' mm now)'
+                        f' mm around its course when its commands ended ({1e3 * self.moved(axis):.3f}'
+                        ' mm from where they ended)'
                     )
             if axis in out:
                 m.recent.clear()
-                m.anchor = math.nan
+                m.anchor = None
         return out
 
     @staticmethod
     def _speed(m: AxisMotion) -> float:
-        """The mean speed over the last period [m/s] (0 before two positions)."""
+        """The mean velocity over the last period [m/s] (0 before two positions)."""
         if len(m.recent) < 2:
             return 0.0
         (t0, x0), (t1, x1) = m.recent[-2], m.recent[-1]
-        return abs(x1 - x0) / max(t1 - t0, 1) * 1e9
+        return (x1 - x0) / max(t1 - t0, 1) * 1e9
 
     @staticmethod
     def _next(m: AxisMotion) -> float:
@@ -93,4 +105,6 @@ class MotionGuard:
         """How far the axis is from where it stood at its last fresh command [m] (NaN: not
         known)."""
         m = self.by_axis[axis]
-        return abs(m.recent[-1][1] - m.anchor) if m.recent else math.nan
+        if not m.recent or m.anchor is None:
+            return math.nan
+        return abs(m.recent[-1][1] - m.anchor[1])

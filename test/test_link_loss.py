@@ -1,0 +1,210 @@
+"""A link cut in real time: the drive stops the axes by itself and keeps them stopped.
+
+The drive (`plant_node`, timing realtime, 250 Hz, SCHED_FIFO) runs in one network namespace
+on the machine of the hardware-driver test (test_realtime_driver: 60 N of Coulomb friction,
+a process load of 150 N + 80 N at 60 Hz on x and y, 300 N of weight on z); the rest of the
+graph (`run_scenario slotting --timing realtime --external plant`, told that machine) in the
+other, with the following-error limit raised to 50 mm so that the controllers go on
+commanding when the link returns. A probe next to the drive, in its namespace, writes down
+every state it publishes and every command that reaches it. Mid-job the link is cut for 1 s
+and, in a second run, for 5 s. The contract (mill_plant.motion_guard, docs/reliability.md):
+
+- the drive stops every axis (brakes it) within `brake_after` ticks of its last fresh
+  command, and within |v|·H + hold_deviation + ½·Δa·T² of where it stood at the last state
+  its controller answered (v: its speed then, H: the time to the stop, Δa: how much the
+  forces on the axis change in a period — here at most the load's step and swing and a
+  reversal of friction, over the smallest effective mass);
+- when the link returns the controllers command again, and no axis moves: the first
+  command after an outage does not release a stopped axis;
+- the runner ends with exit code 1 and says that the drive stopped the axes (1 s), or that
+  it fell silent (5 s, longer than the runner waits for a state).
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+
+import pytest
+
+from test.test_realtime_driver import MACHINE, MASS, TOLD
+from test.two_hosts import TwoHosts, finish, wait_for_progress
+
+PERIOD = 0.004  # [s]
+BRAKE_AFTER = 10  # the drive's default
+HOLD_DEVIATION = 0.0005  # [m] the drive's default
+# The forces on an axis that can change within a period: the load (150 N) coming or going, its
+# 80 N swing, a reversal of the 60 N of friction; over the smallest effective mass.
+DELTA_A = (150.0 + 2 * 80.0 + 2 * 60.0) / min(MASS.values())
+AXES = ('x', 'y', 'z')
+# After an outage a reliable reader delivers nothing newer until the writer's next heartbeat
+# lets it give up the lost samples (Fast DDS: every 3 s). A link that a servo loop runs
+# over announces more often: every 100 ms here (docs/multi-host.md).
+HEARTBEAT = """<?xml version="1.0" encoding="UTF-8" ?>
+<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
+  <publisher profile_name="servo_link" is_default_profile="true">
+    <times><heartbeatPeriod><sec>0</sec><nanosec>100000000</nanosec></heartbeatPeriod></times>
+  </publisher>
+</profiles>
+"""
+
+PROBE = """
+import sys, time
+import rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+
+out = open(sys.argv[1], 'w', buffering=1)
+rclpy.init()
+node = rclpy.create_node('link_probe')
+qos = QoSProfile(depth=1000, reliability=ReliabilityPolicy.BEST_EFFORT)
+
+def seen(kind, axis):
+    def on(msg):
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
+        value = msg.position[0] if kind == 'state' else msg.effort[0]
+        out.write(f'{kind} {axis} {time.time_ns()} {stamp} {value!r}\\n')
+    return on
+
+for axis in 'xyz':
+    node.create_subscription(JointState, f'mill/{axis}/state', seen('state', axis), qos)
+    node.create_subscription(JointState, f'mill/{axis}/joint_command', seen('command', axis), qos)
+out.write('ready\\n')
+try:
+    rclpy.spin(node)
+except KeyboardInterrupt:
+    pass
+"""
+
+
+def ros_param(text: str) -> str:
+    """`plant.mass=[..]` as a node argument `mass:=[..]`."""
+    name, value = text.split('=', 1)
+    return f'{name.split(".", 1)[1]}:={value}'
+
+
+def wait_for_line(path: Path, needle: str, proc: object) -> None:
+    deadline = time.monotonic() + 300.0
+    while not path.exists() or needle not in path.read_text():
+        assert proc.poll() is None, path.read_text()[-3000:]
+        assert time.monotonic() < deadline, f'no "{needle}" in {path}'
+        time.sleep(0.1)
+
+
+def read_probe(path: Path) -> dict[str, dict[str, list[tuple[int, int, float]]]]:
+    """Per kind and axis: (arrival, stamp, value) in arrival order."""
+    out: dict[str, dict[str, list[tuple[int, int, float]]]] = {
+        'state': {a: [] for a in AXES},
+        'command': {a: [] for a in AXES},
+    }
+    for line in path.read_text().splitlines():
+        parts = line.split()
+        if len(parts) == 5:
+            kind, axis, arrived, stamp, value = parts
+            out[kind][axis].append((int(arrived), int(stamp), float(value)))
+    return out
+
+
+def run_with_cut(hosts: TwoHosts, tmp_path: Path, cut: float) -> tuple[int, str, dict, int, int]:
+    """The job with the link cut for `cut` seconds 1.5 s into it: the runner's exit code and
+    output, what the probe saw, and when (system clock) the link went down and came back."""
+    run = tmp_path / 'run'
+    plant_log, probe_log = tmp_path / 'plant.log', tmp_path / 'probe.txt'
+    script = tmp_path / 'probe.py'
+    script.write_text(PROBE)
+    profile = tmp_path / 'servo_link.xml'
+    profile.write_text(HEARTBEAT)
+    hosts.env['FASTRTPS_DEFAULT_PROFILES_FILE'] = str(profile)
+    udp = {'FASTDDS_BUILTIN_TRANSPORTS': 'UDPv4'}  # not through /dev/shm, past the link
+    with open(plant_log, 'w') as plant_out, open(tmp_path / 'run.out', 'w') as out:
+        args = ['-m', 'mill_plant.plant_node', '--ros-args', '-r', '__node:=plant']
+        args += ['--params-file', str(Path(__file__).parents[1] / 'config' / 'slotting.yaml')]
+        for p in (
+            'timing:=realtime',
+            f'sample_period:={PERIOD!r}',
+            'realtime_priority:=80',
+            *(ros_param(m) for m in MACHINE),
+        ):
+            args += ['-p', f'plant:{p}']
+        plant = hosts.start(hosts.drive, args, plant_out, False, **udp)
+        wait_for_line(plant_log, 'active: applying commands', plant)
+        probe = hosts.start(hosts.drive, [str(script), str(probe_log)], plant_out, False, **udp)
+        wait_for_line(probe_log, 'ready', probe)
+        runner = hosts.start(
+            hosts.control,
+            [
+                *('-m', 'mill_bringup.runner', 'slotting', '--external', 'plant'),
+                *('--timing', 'realtime', '--duration', '6', '--layout', 'single'),
+                *('--realtime-priority', '80', '--output', str(run)),
+                *(arg for text in TOLD for arg in ('-p', text)),
+                *('-p', '*_controller.following_error_limit=0.05'),
+            ],
+            out,
+            True,
+        )
+        lines: list[str] = []
+        wait_for_progress(runner, lines)
+        time.sleep(1.5)
+        down = time.time_ns()
+        hosts.link(up=False)
+        time.sleep(cut)
+        hosts.link(up=True)
+        back = time.time_ns()
+        code = finish(runner, lines, timeout=600)
+        time.sleep(1.0)  # the drive goes on alone: its states after the job, too
+    said = (tmp_path / 'run.out').read_text() + ''.join(lines)  # results, then stderr
+    return code, said, read_probe(probe_log), down, back
+
+
+def check_stops(seen: dict, down: int, back: int) -> None:
+    """Every axis stopped within the contract's ticks and distance, and stayed put."""
+    for axis in AXES:
+        states = sorted((s, x) for _, s, x in seen['state'][axis])
+        commands = [(arrived, s) for arrived, s, _ in seen['command'][axis]]
+        last = max(s for arrived, s in commands if arrived < back)  # the last state answered
+        assert last > down - 10**9, (axis, 'no command in the second before the cut')
+        at = {s: x for s, x in states}
+        ticks = [s for s, _ in states if s >= last]
+        x_end = at[last]
+        before = [s for s, _ in states if s < last]
+        v_end = (x_end - at[before[-1]]) / ((last - before[-1]) * 1e-9)
+        # The stop: the first tick from which the axis never moves again (to the probe's end).
+        final = states[-1][1]
+        moving = [s for s, x in states if s >= last and x != final]
+        stop = next(s for s in ticks if s > (moving[-1] if moving else last))
+        assert stop < back, (axis, 'the axis was still moving when the link returned')
+        # In time: within brake_after ticks after the first tick that had no fresh command
+        # (the tick after the last answered state, or the one after it if that command came
+        # in the same period).
+        assert ticks.index(stop) <= BRAKE_AFTER + 2, (axis, ticks.index(stop))
+        # In distance: on course at v_end until the stop, plus the window and a period's
+        # change of the forces.
+        held = (stop - last) * 1e-9
+        bound = abs(v_end) * held + HOLD_DEVIATION + 0.5 * DELTA_A * PERIOD**2
+        moved = abs(final - x_end)
+        assert moved <= bound, (axis, moved, bound, v_end, held)
+        # Nothing moved after the link returned, though commands came again.
+        after = [x for s, x in states if s > back]
+        assert after and all(x == final for x in after), axis
+
+
+@pytest.mark.system
+def test_a_one_second_cut_stops_the_axes_which_stay_stopped_when_it_returns(
+    hosts: TwoHosts, tmp_path: Path
+) -> None:
+    code, err, seen, down, back = run_with_cut(hosts, tmp_path, 1.0)
+    check_stops(seen, down, back)
+    for axis in AXES:  # the controllers commanded again: no command released the axis
+        assert any(arrived > back for arrived, _, _ in seen['command'][axis]), axis
+    assert code == 1, err[-3000:]
+    stopped = re.findall(r'FAILED: plant: (\w) axis: .*stopped', err)
+    assert sorted(set(stopped)) == list(AXES), err[-3000:]
+
+
+@pytest.mark.system
+def test_a_five_second_cut_stops_the_axes_and_ends_the_job(hosts: TwoHosts, tmp_path: Path) -> None:
+    code, err, seen, down, back = run_with_cut(hosts, tmp_path, 5.0)
+    check_stops(seen, down, back)
+    assert code == 1, err[-3000:]
+    assert 'the drive went silent' in err, err[-3000:]
