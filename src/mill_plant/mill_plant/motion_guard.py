@@ -73,10 +73,11 @@ class MotionGuard:
                 step = ns - m.recent[-2][0] if len(m.recent) > 1 else 0
                 off = max(abs(x - m.course(ns)), abs(self._next(m) - m.course(ns + step)))
                 if off > self.hold_deviation:
+                    moved = 1e3 * self.moved(axis)
                     out[axis] = (
                         f'holding the last command it would leave {1e3 * self.hold_deviation:g}'
-                        f' mm around its course when its commands ended ({1e3 * self.moved(axis):.3f}'
-                        ' mm from where they ended)'
+                        f' mm around its course when its commands ended ({moved:.3f} mm from '
+                        'where they ended)'
                     )
             if axis in out:
                 m.recent.clear()

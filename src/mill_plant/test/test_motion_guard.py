@@ -31,8 +31,8 @@ def test_a_held_command_that_accelerates_the_axis_is_stopped_before_it_leaves_th
         first = next(k for k, s in enumerate(stops) if s)
         assert 'around its course when its commands ended' in stops[first]['x']
 
-        def off(k: int) -> float:  # from the course at 3 mm/s since the last fresh tick, 3
-            return abs(xs[k] - (xs[3] + 0.003 * (k - 3) * 0.01))
+        def off(k: int, xs: list[float] = xs) -> float:  # from the course at 3 mm/s since
+            return abs(xs[k] - (xs[3] + 0.003 * (k - 3) * 0.01))  # the last fresh tick, 3
 
         # The bound: the window plus what the change of acceleration moves it in a period.
         assert off(first) <= 0.5e-3 + 0.5 * a * 0.01**2, a
