@@ -40,7 +40,7 @@ DELTA_A = (150.0 + 2 * 80.0 + 2 * 60.0) / min(MASS.values())
 AXES = ('x', 'y', 'z')
 # After an outage a reliable reader delivers nothing newer until the writer's next heartbeat
 # lets it give up the lost samples (Fast DDS: every 3 s). A link that a servo loop runs
-# over announces more often: every 100 ms here (docs/multi-host.md).
+# over announces more often: every 100 ms here (docs/reliability.md).
 HEARTBEAT = """<?xml version="1.0" encoding="UTF-8" ?>
 <profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
   <publisher profile_name="servo_link" is_default_profile="true">
