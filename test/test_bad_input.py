@@ -189,6 +189,21 @@ BAD_INPUT = [
         "Value type 'double' do not belong at line_num 3",
     ),
     (CONTROLLER, ['-p', 'omega'], None, 'axis_controller_node: error: -p omega: not NAME:=VALUE'),
+    # A file that sets nothing for the node: it would run on its defaults (a 5 mm
+    # following-error limit where the scenario says 1 mm).
+    (
+        CONTROLLER,
+        ['--params-file', 'FILE'],
+        '',
+        'axis_controller_node: error: --params-file FILE: empty: it sets no parameter',
+    ),
+    (
+        CONTROLLER,
+        ['--params-file', 'FILE'],
+        'y_controller:\n  ros__parameters:\n    following_error_limit: 0.001\n',
+        'axis_controller_node: error: --params-file FILE: nothing in it is for /x_controller '
+        '(its entries: /y_controller)',
+    ),
 ]
 
 
@@ -196,7 +211,10 @@ BAD_INPUT = [
 @pytest.mark.parametrize(
     ('node', 'args', 'text', 'line'),
     BAD_INPUT,
-    ids=['wrong-type', 'wrong-int', 'unknown-p', 'unknown-file', 'missing', 'yaml', 'rcl', 'rule'],
+    ids=[
+        *('wrong-type', 'wrong-int', 'unknown-p', 'unknown-file', 'missing', 'yaml', 'rcl'),
+        *('rule', 'empty-file', 'file-for-another-node'),
+    ],
 )
 def test_bad_startup_input_exits_2_with_one_line(start_node, tmp_path, node, args, text, line):
     module, _executable, name = node
