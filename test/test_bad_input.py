@@ -73,6 +73,8 @@ def test_controller_rejects_bad_changes_at_run_time(start_node) -> None:
         _assert_rejected(params.set('pd.omega_c', -1.0), 'pd.omega_c')
         _assert_rejected(params.set('controller', 'bogus'), 'controller')
         _assert_rejected(params.set('axis', 'y'), 'axis')  # read-only
+        undeclared = params.set('pd.omega', 20.0)
+        _assert_rejected(undeclared, 'pd.omega=20.0 (did you mean pd.omega_c?)')
         assert params.get('pd.omega_c', 'controller', 'axis') == before
         assert controller.alive()
 

@@ -9,7 +9,8 @@ statically typed, with the range and constraint text its check gives (`ros2 para
 describe`). A change at run time is coerced (an integer for a double), checked by ROS
 against the declared type and range, validated by the spec and then applied by the node's
 `apply` callback; if any of them refuses, the change is rejected with its reason and the
-node keeps its previous configuration.
+node keeps its previous configuration; so is a name the node does not declare, with the
+closest one it has.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from rcl_interfaces.msg import (
     ParameterType,
     SetParametersResult,
 )
+from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
@@ -37,6 +39,7 @@ from mill_common.parameters import (
     UnknownParameterError,
     coerce,
     is_ros_parameter,
+    unknown_parameters_message,
     validate,
     value_type,
 )
@@ -59,6 +62,18 @@ command_line: list[str] | None = None
 # The names of the nodes that share the node's process (run_nodes sets them: a container's
 # nodes): a parameter file given to a container must hold something for one of them.
 process_nodes: tuple[str, ...] = ()
+
+
+class UndeclaredParameter(ParameterNotDeclaredException):
+    """A change of a name the node does not declare; str() names it, with the closest name.
+
+    rclpy's own exception lists no name (`undeclared parameter(s): []`: its check hands
+    list() a generator that any() has already consumed); raised first, from the pre-set
+    callback, this one is what `ros2 param set` shows as the reason.
+    """
+
+    def __init__(self, message: str) -> None:
+        Exception.__init__(self, message)
 
 
 def _plain(value: Any) -> Any:
@@ -182,6 +197,13 @@ class NodeParameters:
         return Parameter(param.name, value=coerced)
 
     def _coerce(self, params: list[Parameter]) -> list[Parameter]:
+        node = self._node
+        undeclared = {p.name: _plain(p.value) for p in params if not node.has_parameter(p.name)}
+        if undeclared and not getattr(node, '_allow_undeclared_parameters', False):
+            known = list(self._specs) + list(node.list_parameters([], 0).names)
+            message = unknown_parameters_message(undeclared, known, node.get_fully_qualified_name())
+            node.get_logger().warning(f'rejected: {message}')
+            raise UndeclaredParameter(message)
         return [self._typed(p) for p in params]
 
     def _on_set(self, params: list) -> SetParametersResult:

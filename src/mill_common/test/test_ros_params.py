@@ -85,6 +85,24 @@ def test_key_matches_agrees_with_rcl(start, tmp_path: Path, key: str, root, insi
         assert key_matches(key, node.get_fully_qualified_name()) is given, namespace
 
 
+def test_a_change_of_an_undeclared_name_names_it(start, command_line) -> None:
+    from mill_common.ros_params import NodeParameters
+    from rclpy.exceptions import ParameterNotDeclaredException
+    from rclpy.parameter import Parameter
+
+    command_line([])
+    node = start('x_controller', '/')
+    NodeParameters(node, SPECS, lambda values: None)
+    with pytest.raises(ParameterNotDeclaredException) as info:
+        node.set_parameters_atomically([Parameter('pd.omega', value=20.0)])
+    # what `ros2 param set` shows as the reason (rclpy's parameter service: str(exception))
+    assert str(info.value) == (
+        'unknown parameter pd.omega=20.0 (did you mean pd.omega_c?): '
+        '/x_controller has no such parameter'
+    )
+    assert node.set_parameters_atomically([Parameter('pd.omega_c', value=20.0)]).successful
+
+
 def test_a_params_file_with_nothing_for_the_node_is_refused(
     start, command_line, tmp_path: Path
 ) -> None:
