@@ -73,6 +73,8 @@ def test_controller_rejects_bad_changes_at_run_time(start_node) -> None:
         _assert_rejected(params.set('pd.omega_c', -1.0), 'pd.omega_c')
         _assert_rejected(params.set('controller', 'bogus'), 'controller')
         _assert_rejected(params.set('axis', 'y'), 'axis')  # read-only
+        undeclared = params.set('pd.omega', 20.0)
+        _assert_rejected(undeclared, 'pd.omega=20.0 (did you mean pd.omega_c?)')
         assert params.get('pd.omega_c', 'controller', 'axis') == before
         assert controller.alive()
 
@@ -189,6 +191,21 @@ BAD_INPUT = [
         "Value type 'double' do not belong at line_num 3",
     ),
     (CONTROLLER, ['-p', 'omega'], None, 'axis_controller_node: error: -p omega: not NAME:=VALUE'),
+    # A file that sets nothing for the node: it would run on its defaults (a 5 mm
+    # following-error limit where the scenario says 1 mm).
+    (
+        CONTROLLER,
+        ['--params-file', 'FILE'],
+        '',
+        'axis_controller_node: error: --params-file FILE: empty: it sets no parameter',
+    ),
+    (
+        CONTROLLER,
+        ['--params-file', 'FILE'],
+        'y_controller:\n  ros__parameters:\n    following_error_limit: 0.001\n',
+        'axis_controller_node: error: --params-file FILE: nothing in it is for /x_controller '
+        '(its entries: /y_controller)',
+    ),
 ]
 
 
@@ -196,7 +213,10 @@ BAD_INPUT = [
 @pytest.mark.parametrize(
     ('node', 'args', 'text', 'line'),
     BAD_INPUT,
-    ids=['wrong-type', 'wrong-int', 'unknown-p', 'unknown-file', 'missing', 'yaml', 'rcl', 'rule'],
+    ids=[
+        *('wrong-type', 'wrong-int', 'unknown-p', 'unknown-file', 'missing', 'yaml', 'rcl'),
+        *('rule', 'empty-file', 'file-for-another-node'),
+    ],
 )
 def test_bad_startup_input_exits_2_with_one_line(start_node, tmp_path, node, args, text, line):
     module, _executable, name = node

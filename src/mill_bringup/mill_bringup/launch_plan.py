@@ -135,9 +135,12 @@ def _apply_params_file(scen: Scenario, path: str) -> None:
         raise ScenarioError(f'params_file {path}: {exc.strerror or exc}') from None
     except Exception as exc:  # yaml errors
         raise ScenarioError(f'params_file {path}: not valid YAML ({exc})') from None
+    if raw is None:
+        raise ScenarioError(f'params_file {path}: empty: it sets no parameter')
     if not isinstance(raw, dict):
         raise ScenarioError(f'params_file {path}: not a ROS 2 parameter file')
     names = [n.name for n in scen.nodes]
+    given = 0
     for key, entry in raw.items():
         values = (entry or {}).get('ros__parameters') if isinstance(entry, dict) else None
         where = f'params_file {path}: entry {key!r}'
@@ -151,6 +154,7 @@ def _apply_params_file(scen: Scenario, path: str) -> None:
                 f'{where} names no node of scenario {scen.name} ({", ".join(names)})'
             )
         unknown = {}
+        given += len(flatten(values))
         for param, value in flatten(values).items():
             declaring = [n for n in targets if scen.declares(n, param)]
             if not declaring:
@@ -167,6 +171,8 @@ def _apply_params_file(scen: Scenario, path: str) -> None:
             else:
                 message = unknown_parameters_message(unknown, known, targets[0])
             raise ScenarioError(f'{where}: {message}')
+    if not given:  # else the scenario would run as if no params_file had been given
+        raise ScenarioError(f'params_file {path}: no ros__parameters values: it sets no parameter')
 
 
 def plan(

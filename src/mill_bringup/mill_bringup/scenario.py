@@ -300,8 +300,15 @@ def load(name_or_path: str) -> Scenario:
         raw = parse_yaml(path.read_text())
     except yaml.YAMLError as exc:
         raise ScenarioError(f'{path}: not valid YAML ({exc})') from None
-    entry = (raw or {}).get(SCENARIO_KEY, {}).get('ros__parameters')
-    if not entry or 'launch' not in entry:
+    except OSError as exc:
+        raise ScenarioError(f'{path}: {exc.strerror or exc}') from None
+    except UnicodeDecodeError:
+        raise ScenarioError(f'{path}: not a text file') from None
+    if raw is None:
+        raise ScenarioError(f'{path}: empty, not a scenario')
+    scenario = raw.get(SCENARIO_KEY) if isinstance(raw, dict) else None
+    entry = scenario.get('ros__parameters') if isinstance(scenario, dict) else None
+    if not isinstance(entry, dict) or not isinstance(entry.get('launch'), list):
         raise ScenarioError(f'{path}: no {SCENARIO_KEY}: ros__parameters: launch: list')
     nodes = []
     for line in entry['launch']:

@@ -62,6 +62,30 @@ def test_bad_namespace_in_a_file_is_one_line(tmp_path: Path) -> None:
         scenario.load(str(_write(tmp_path, '    namespace: "2x"\n')))
 
 
+NO_LAUNCH = 'no mill_scenario: ros__parameters: launch: list'
+
+
+@pytest.mark.parametrize(
+    ('text', 'message'),
+    [
+        ('', 'empty, not a scenario'),
+        ('# to do\n', 'empty, not a scenario'),
+        ('- plant\n', NO_LAUNCH),
+        ('mill_scenario: 5\n', NO_LAUNCH),
+        ('mill_scenario:\n  ros__parameters:\n    launch: 5\n', NO_LAUNCH),
+    ],
+)
+def test_a_file_that_is_no_scenario_ends_run_scenario_in_one_line(
+    capsys, tmp_path: Path, text: str, message: str
+) -> None:
+    path = tmp_path / 'scen.yaml'
+    path.write_text(text)
+    assert run_scenario_main([str(path), '--output', str(tmp_path / 'run')]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f'run_scenario: error: {path}: {message}']
+    assert not (tmp_path / 'run').exists()  # nothing was started
+
+
 @pytest.mark.parametrize(
     ('args', 'message'),
     [

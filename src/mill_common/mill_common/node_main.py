@@ -226,11 +226,11 @@ def run_nodes(
     """Run nodes in one process, one ROS context and one executor, until one of them ends or
     the process is interrupted; returns the process exit code.
 
-    makers: (label, factory) of each node, built in this order; the label ('' for a node
-    alone in its process) prefixes that node's errors. A node that asks to end
-    (`request_exit`) ends the process, and with it the other nodes, as a crash of one node
-    of a ROS 2 component container does. With own_process, the process ends at once once
-    ROS was initialised (end_process).
+    makers: (label, factory) of each node, built in this order; the label (the node's name
+    in a container, '' for a node alone in its process) prefixes that node's errors. A node
+    that asks to end (`request_exit`) ends the process, and with it the other nodes, as a
+    crash of one node of a ROS 2 component container does. With own_process, the process
+    ends at once once ROS was initialised (end_process).
     """
     argv = list(argv)
     # Keep DDS on loopback unless the user chose otherwise (see README, Network).
@@ -269,6 +269,7 @@ def run_nodes(
         return 2
     sys.stderr.write(kept.text)
     ros_params.command_line = argv
+    ros_params.process_nodes = tuple(label for label, _make in makers if label)
     nodes: list[tuple[str, Node]] = []
     executor = None
     code = 0

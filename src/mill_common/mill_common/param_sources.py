@@ -12,10 +12,15 @@ came from. A node needs that to tell a typo from a value meant for other nodes:
   question about the whole graph, which `run_scenario` answers for a scenario file.
 
 Only the `--ros-args` part of the command line is read (up to `--`), as rcl does.
+
+A parameter file that sets nothing (empty, or no `ros__parameters` values), or nothing for
+the nodes of the process it is given to, is refused: a node would otherwise start on its
+defaults without a word (a following-error limit of 5 mm instead of the scenario's 1 mm).
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -91,9 +96,20 @@ def node_entries(document: Any) -> Iterator[tuple[str, dict[str, Any]]]:
 
 
 def _for_node(key: str, node_name: str, fqn: str) -> bool:
-    """Whether a node key without wildcard names this node."""
+    """Whether the node part of a `-p NODE:NAME:=VALUE` rule names this node."""
     stripped = key.strip('/')
     return stripped in (node_name, fqn.strip('/'))
+
+
+_KEY_TOKENS = {'**': '(?:/[^/]+)*', '*': '/[^/]+'}
+
+
+def key_matches(key: str, fqn: str) -> bool:
+    """Whether the entry `key` of a parameter file applies to the node named `fqn`, as rcl
+    (Jazzy) matches it: `*` is one name token, `**` any number of them (none too), a key
+    without a leading slash is from the root (`x_controller` is /x_controller only)."""
+    pattern = ''.join(_KEY_TOKENS.get(t, '/' + re.escape(t)) for t in key.split('/') if t)
+    return re.fullmatch(pattern, fqn) is not None
 
 
 def parameter_sources(argv: Sequence[str], node_name: str, fqn: str) -> ParameterSources:
@@ -117,9 +133,11 @@ def parameter_sources(argv: Sequence[str], node_name: str, fqn: str) -> Paramete
         except (OSError, yaml.YAMLError):
             continue
         for key, params in node_entries(document):
+            if not key_matches(key, fqn):
+                continue
             if '*' in key:
                 sources.shared.update(params)
-            elif _for_node(key, node_name, fqn):
+            else:
                 sources.direct.update(params)
     return sources
 
@@ -139,7 +157,8 @@ def parameter_rule_problem(rule: str) -> str | None:
 
 
 def params_file_problem(path: str) -> str | None:
-    """Why a --params-file cannot be read, in words; None if it reads as YAML.
+    """Why a --params-file cannot be read or sets nothing, in words; None if it reads as
+    YAML and sets at least one parameter.
 
     What rcl refuses in a well-formed YAML file (a value before `ros__parameters`, a list
     of mixed types) rcl reports itself; see `rcl_error_message`.
@@ -156,13 +175,35 @@ def params_file_problem(path: str) -> str | None:
     except UnicodeDecodeError:
         return 'not a text file'
     try:
-        yaml.safe_load(text)
+        document = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         mark = getattr(exc, 'problem_mark', None)
         problem = getattr(exc, 'problem', None) or type(exc).__name__
         where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
         return f'not valid YAML ({problem}{where})'
-    return None
+    if any(values for _key, values in node_entries(document)):
+        return None
+    if document is None:
+        return 'empty: it sets no parameter'
+    return f'no {ROS_PARAMETERS_KEY} values: it sets no parameter'
+
+
+def params_file_miss(path: str, fqns: Sequence[str]) -> str | None:
+    """Why a parameter file gives the nodes `fqns` (those of one process) nothing, in words;
+    None if one of its entries with values applies to one of them, or if it cannot be read
+    (params_file_problem and rcl say why)."""
+    try:
+        document = yaml.safe_load(Path(path).read_text())
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
+        return None
+    keys = list(dict.fromkeys(key for key, values in node_entries(document) if values))
+    if any(key_matches(key, fqn) for key in keys for fqn in fqns):
+        return None
+    shown = ', '.join(keys[:MAX_KEYS_SHOWN]) + (', ...' if len(keys) > MAX_KEYS_SHOWN else '')
+    return f'nothing in it is for {" or ".join(fqns)} (its entries: {shown or "none"})'
+
+
+MAX_KEYS_SHOWN = 6  # of a file refused by params_file_miss, in its one line
 
 
 def rcl_error_message(message: str) -> str:

@@ -45,6 +45,11 @@ class Registry(Generic[T]):
         """The registered names, in registration order."""
         return tuple(self._entries)
 
+    def name_of(self, cls: type) -> str | None:
+        """The first name `cls` is registered under (what to call a running instance of it);
+        None if it is not registered."""
+        return next((name for name, c in self._entries.items() if c is cls), None)
+
     def classes(self) -> tuple[type[T], ...]:
         """The registered classes, in registration order (a class registered twice once)."""
         return tuple(dict.fromkeys(self._entries.values()))

@@ -2,13 +2,15 @@
 checked, changed atomically.
 
 At start-up every value given to the node (`-p`, parameter files) is checked before it is
-declared: a name the node does not declare, a value of the wrong type and a value its check
+declared: a parameter file that holds nothing for the node (nor for another node of its
+process), a name the node does not declare, a value of the wrong type and a value its check
 refuses each end the node with one line naming the parameter. Each parameter is declared
 statically typed, with the range and constraint text its check gives (`ros2 param
 describe`). A change at run time is coerced (an integer for a double), checked by ROS
 against the declared type and range, validated by the spec and then applied by the node's
 `apply` callback; if any of them refuses, the change is rejected with its reason and the
-node keeps its previous configuration.
+node keeps its previous configuration; so is a name the node does not declare, with the
+closest one it has.
 """
 
 from __future__ import annotations
@@ -26,16 +28,18 @@ from rcl_interfaces.msg import (
     ParameterType,
     SetParametersResult,
 )
+from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-from mill_common.param_sources import parameter_sources
+from mill_common.param_sources import parameter_sources, params_file_miss, params_files
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
     UnknownParameterError,
     coerce,
     is_ros_parameter,
+    unknown_parameters_message,
     validate,
     value_type,
 )
@@ -55,6 +59,21 @@ INT64_MAX = 2**63 - 1
 # The command line the node's process was started with (run_node sets it; else sys.argv):
 # rcl does not tell which overrides came from `-p` and which from a shared file entry.
 command_line: list[str] | None = None
+# The names of the nodes that share the node's process (run_nodes sets them: a container's
+# nodes): a parameter file given to a container must hold something for one of them.
+process_nodes: tuple[str, ...] = ()
+
+
+class UndeclaredParameter(ParameterNotDeclaredException):
+    """A change of a name the node does not declare; str() names it, with the closest name.
+
+    rclpy's own exception lists no name (`undeclared parameter(s): []`: its check hands
+    list() a generator that any() has already consumed); raised first, from the pre-set
+    callback, this one is what `ros2 param set` shows as the reason.
+    """
+
+    def __init__(self, message: str) -> None:
+        Exception.__init__(self, message)
 
 
 def _plain(value: Any) -> Any:
@@ -103,6 +122,7 @@ class NodeParameters:
         # The names being set while `apply` runs (all of them at start-up): a node may act
         # on a name set to the value it had (setting following_error_limit clears a trip).
         self.setting: frozenset[str] = frozenset(self._specs)
+        self._check_files()
         given = self._given_values()
         values: dict[str, Any] = {}
         for name, spec in specs:
@@ -124,6 +144,17 @@ class NodeParameters:
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
+
+    def _check_files(self) -> None:
+        """ValueError naming a parameter file that gives this process's nodes nothing."""
+        node = self._node
+        namespace = node.get_namespace().rstrip('/')
+        fqns = [node.get_fully_qualified_name()]
+        fqns += [f'{namespace}/{n}' for n in process_nodes if n != node.get_name()]
+        for path in params_files(command_line if command_line is not None else sys.argv):
+            problem = params_file_miss(path, fqns)
+            if problem:
+                raise ValueError(f'--params-file {path}: {problem}')
 
     def _given_values(self) -> dict[str, Any]:
         """The values given to the node (-p, parameter files), refusing unknown names.
@@ -166,6 +197,13 @@ class NodeParameters:
         return Parameter(param.name, value=coerced)
 
     def _coerce(self, params: list[Parameter]) -> list[Parameter]:
+        node = self._node
+        undeclared = {p.name: _plain(p.value) for p in params if not node.has_parameter(p.name)}
+        if undeclared and not getattr(node, '_allow_undeclared_parameters', False):
+            known = list(self._specs) + list(node.list_parameters([], 0).names)
+            message = unknown_parameters_message(undeclared, known, node.get_fully_qualified_name())
+            node.get_logger().warning(f'rejected: {message}')
+            raise UndeclaredParameter(message)
         return [self._typed(p) for p in params]
 
     def _on_set(self, params: list) -> SetParametersResult:

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from mill_common.param_sources import (
     flatten,
     parameter_rule_problem,
     parameter_sources,
+    params_file_miss,
     params_file_problem,
     params_files,
     rcl_error_message,
@@ -89,6 +91,47 @@ def test_params_file_problems_in_one_line(tmp_path: Path) -> None:
     good = tmp_path / 'good.yaml'
     good.write_text(SCENARIO)
     assert params_file_problem(str(good)) is None
+
+
+@pytest.mark.parametrize(
+    ('text', 'problem'),
+    [
+        ('', 'empty: it sets no parameter'),
+        ('# gains for later\n', 'empty: it sets no parameter'),
+        ('{}\n', 'no ros__parameters values: it sets no parameter'),
+        ('hello\n', 'no ros__parameters values: it sets no parameter'),
+        (
+            'x_controller:\n  ros__parameters: {}\n',
+            'no ros__parameters values: it sets no parameter',
+        ),
+    ],
+)
+def test_a_params_file_that_sets_nothing_is_a_problem(tmp_path: Path, text: str, problem: str):
+    f = tmp_path / 'p.yaml'
+    f.write_text(text)
+    assert params_file_problem(str(f)) == problem
+
+
+def test_a_params_file_that_holds_nothing_for_the_process_is_named(tmp_path: Path) -> None:
+    f = tmp_path / 'p.yaml'
+    f.write_text(SCENARIO)
+    assert params_file_miss(str(f), ['/x_controller']) is None
+    assert params_file_miss(str(f), ['/plant']) is None  # the /** entry
+    f.write_text(
+        'y_controller:\n  ros__parameters:\n    pd.omega_c: 20.0\n'
+        '/**/z_observer:\n  ros__parameters:\n    gpi.omega_o: 500.0\n'
+        'x_controller:\n  ros__parameters: {}\n'  # an entry without values gives nothing
+    )
+    assert params_file_miss(str(f), ['/x_controller']) == (
+        'nothing in it is for /x_controller (its entries: /y_controller, /**/z_observer)'
+    )
+    # a file given to a container: it must hold something for one of its nodes
+    assert params_file_miss(str(f), ['/x_controller', '/y_controller']) is None
+    assert params_file_miss(str(f), ['/m2/x_controller', '/m2/y_controller']) == (
+        'nothing in it is for /m2/x_controller or /m2/y_controller '
+        '(its entries: /y_controller, /**/z_observer)'
+    )
+    assert params_file_miss(str(f), ['/m2/z_observer']) is None
 
 
 def test_parameter_rules() -> None:

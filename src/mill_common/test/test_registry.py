@@ -45,6 +45,11 @@ def test_names_and_classes_keep_the_registration_order() -> None:
     assert list(REGISTRY) == list(REGISTRY.names()) and len(REGISTRY) == 4
 
 
+def test_the_name_of_a_class_is_the_first_it_is_registered_under() -> None:
+    assert [REGISTRY.name_of(c) for c in (_Fast, _Slow, _Plain)] == ['fast', 'slow', 'plain']
+    assert REGISTRY.name_of(_Base) is None
+
+
 @pytest.mark.parametrize('name', ['FAST', '', 'medium', None, ['fast']])
 def test_an_unknown_name_is_refused_naming_the_parameter_and_the_choices(name: object) -> None:
     with pytest.raises(ParameterError) as info:

@@ -24,16 +24,23 @@ from dataclasses import dataclass
 from mill_common.signals import ControlInputs
 
 from mill_controllers.base import AxisController
+from mill_controllers.registry import CONTROLLERS
 
 
 def check_replacement(old: type[AxisController], new: type[AxisController]) -> str | None:
     """None if `new` may replace `old` on a running plant, else the reason it may not."""
     if old.OUTPUT_UNIT != new.OUTPUT_UNIT:
         return (
-            f'{new.PREFIX} commands {new.OUTPUT_UNIT} but the running {old.PREFIX} '
+            f'{law_name(new)} commands {new.OUTPUT_UNIT} but the running {law_name(old)} '
             f'commands {old.OUTPUT_UNIT}: the plant input cannot change unit mid-job'
         )
     return None
+
+
+def law_name(cls: type[AxisController]) -> str:
+    """The `controller` value that selects a law: its PREFIX is only its parameters'
+    namespace, which laws share (adrc runs on the pd.* gains)."""
+    return CONTROLLERS.name_of(cls) or cls.__name__
 
 
 @dataclass(frozen=True)

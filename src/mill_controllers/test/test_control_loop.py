@@ -75,6 +75,20 @@ def test_a_law_of_another_output_unit_cannot_replace_the_running_one() -> None:
     assert type(lp.law).PREFIX == 'gpi'
 
 
+def test_a_refused_switch_names_the_law_running_after_earlier_switches() -> None:
+    lp = loop()  # pd
+    with pytest.raises(ValueError, match='the running pd commands N·m'):
+        lp.replace(make_controller('machine_pi', B, T, {}))
+    lp.replace(make_controller('adrc', B, T, {}))  # adrc's gains are pd.*, as pd's
+    lp.step(0, 0.0, Estimate(0.0, 0.0, 0.0), refs((0, 0.0)))
+    with pytest.raises(ValueError) as info:
+        lp.replace(make_controller('cascade_pi', B, T, {}))
+    assert str(info.value) == (
+        'cascade_pi commands V but the running adrc commands N·m: '
+        'the plant input cannot change unit mid-job'
+    )
+
+
 def test_lockstep_join_waits_for_every_input_and_the_reference_in_order() -> None:
     join = SampleJoin(Lockstep(DT), SLOTS, 0)
     join.offer('position', 0, 1.0)

@@ -106,4 +106,8 @@ def test_units_must_match() -> None:
     assert check_replacement(AdrcController, GpiController) is None
     assert check_replacement(CascadePi, AdaptivePi) is None
     reason = check_replacement(AdrcController, CascadePi)
-    assert reason is not None and 'V' in reason and 'N·m' in reason
+    # named by the `controller` value, not by the parameter prefix adrc shares with pd
+    assert reason == (
+        'cascade_pi commands V but the running adrc commands N·m: '
+        'the plant input cannot change unit mid-job'
+    )
