@@ -22,8 +22,10 @@ and, in a second run, for 5 s. The contract (mill_plant.motion_guard, docs/relia
 
 from __future__ import annotations
 
+import math
 import re
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -106,9 +108,16 @@ def read_probe(path: Path) -> dict[str, dict[str, list[tuple[int, int, float]]]]
     return out
 
 
-def run_with_cut(hosts: TwoHosts, tmp_path: Path, cut: float) -> tuple[int, str, dict, int, int]:
-    """The job with the link cut for `cut` seconds 1.5 s into it: the runner's exit code and
-    output, what the probe saw, and when (system clock) the link went down and came back."""
+def run_with_cut(
+    hosts: TwoHosts,
+    tmp_path: Path,
+    cut: float,
+    told: tuple[str, ...] = (),
+    after: Callable[[], None] | None = None,
+) -> tuple[int, str, dict, int, int]:
+    """The job with the link cut for `cut` seconds 1.5 s into it, the graph told `told` as
+    well, `after` called once the link is back: the runner's exit code and output, what the
+    probe saw, and when (system clock) the link went down and came back."""
     run = tmp_path / 'run'
     plant_log, probe_log = tmp_path / 'plant.log', tmp_path / 'probe.txt'
     script = tmp_path / 'probe.py'
@@ -135,10 +144,9 @@ def run_with_cut(hosts: TwoHosts, tmp_path: Path, cut: float) -> tuple[int, str,
             hosts.control,
             [
                 *('-m', 'mill_bringup.runner', 'slotting', '--external', 'plant'),
-                *('--timing', 'realtime', '--duration', '6', '--layout', 'single'),
+                *('--timing', 'realtime', '--duration', '8', '--layout', 'single'),
                 *('--realtime-priority', '80', '--output', str(run)),
-                *(arg for text in TOLD for arg in ('-p', text)),
-                *('-p', '*_controller.following_error_limit=0.05'),
+                *(arg for text in (*TOLD, *told) for arg in ('-p', text)),
             ],
             out,
             True,
@@ -151,16 +159,20 @@ def run_with_cut(hosts: TwoHosts, tmp_path: Path, cut: float) -> tuple[int, str,
         time.sleep(cut)
         hosts.link(up=True)
         back = time.time_ns()
+        if after is not None:
+            after()
         code = finish(runner, lines, timeout=600)
         time.sleep(1.0)  # the drive goes on alone: its states after the job, too
     said = (tmp_path / 'run.out').read_text() + ''.join(lines)  # results, then stderr
     return code, said, read_probe(probe_log), down, back
 
 
-def check_stops(seen: dict, down: int, back: int) -> None:
-    """Every axis stopped within the contract's ticks and distance, and stayed put."""
+def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> dict[str, float]:
+    """Every axis stopped within the contract's ticks and distance, and stayed put from then
+    to `until` (default: the probe's end) though commands came; where each stopped."""
+    out = {}
     for axis in AXES:
-        states = sorted((s, x) for _, s, x in seen['state'][axis])
+        states = sorted((s, x) for _, s, x in seen['state'][axis] if until is None or s < until)
         commands = [(arrived, s) for arrived, s, _ in seen['command'][axis]]
         last = max(s for arrived, s in commands if arrived < back)  # the last state answered
         assert last > down - 10**9, (axis, 'no command in the second before the cut')
@@ -169,7 +181,7 @@ def check_stops(seen: dict, down: int, back: int) -> None:
         x_end = at[last]
         before = [s for s, _ in states if s < last]
         v_end = (x_end - at[before[-1]]) / ((last - before[-1]) * 1e-9)
-        # The stop: the first tick from which the axis never moves again (to the probe's end).
+        # The stop: the first tick from which the axis never moves again (to the end).
         final = states[-1][1]
         moving = [s for s, x in states if s >= last and x != final]
         stop = next(s for s in ticks if s > (moving[-1] if moving else last))
@@ -184,27 +196,88 @@ def check_stops(seen: dict, down: int, back: int) -> None:
         bound = abs(v_end) * held + HOLD_DEVIATION + 0.5 * DELTA_A * PERIOD**2
         moved = abs(final - x_end)
         assert moved <= bound, (axis, moved, bound, v_end, held)
-        # Nothing moved after the link returned, though commands came again.
+        # Nothing moved after the link returned.
         after = [x for s, x in states if s > back]
         assert after and all(x == final for x in after), axis
+        out[axis] = final
+    return out
+
+
+# Controllers that know nothing of the outage, as in the attack that found it: no gap trip,
+# and a following-error limit of 50 mm, so that they command on when the link returns.
+UNAWARE = ('*_controller.max_state_gap=0', '*_controller.following_error_limit=0.05')
+
+RESET = """
+import rclpy
+from std_srvs.srv import Trigger
+rclpy.init()
+node = rclpy.create_node('operator')
+for axis in 'xyz':
+    client = node.create_client(Trigger, f'/{axis}_controller/reset_trip')
+    assert client.wait_for_service(timeout_sec=120), axis
+    future = client.call_async(Trigger.Request())
+    rclpy.spin_until_future_complete(node, future, timeout_sec=120)
+    print(axis, future.result().message, flush=True)
+"""
 
 
 @pytest.mark.system
-def test_a_one_second_cut_stops_the_axes_which_stay_stopped_when_it_returns(
+def test_a_one_second_cut_stops_the_axes_and_no_returning_command_releases_them(
     hosts: TwoHosts, tmp_path: Path
 ) -> None:
-    code, err, seen, down, back = run_with_cut(hosts, tmp_path, 1.0)
+    code, said, seen, down, back = run_with_cut(hosts, tmp_path, 1.0, UNAWARE)
     check_stops(seen, down, back)
-    for axis in AXES:  # the controllers commanded again: no command released the axis
-        assert any(arrived > back for arrived, _, _ in seen['command'][axis]), axis
-    assert code == 1, err[-3000:]
-    stopped = re.findall(r'FAILED: plant: (\w) axis: .*stopped', err)
-    assert sorted(set(stopped)) == list(AXES), err[-3000:]
+    for axis in AXES:  # the controllers commanded again, valid commands all
+        again = [u for arrived, _, u in seen['command'][axis] if arrived > back]
+        assert again and all(math.isfinite(u) for u in again), axis
+    assert code == 1, said[-3000:]
+    stopped = re.findall(r'FAILED: plant: (\w) axis: .*stopped', said)
+    assert sorted(set(stopped)) == list(AXES), said[-3000:]
+
+
+@pytest.mark.system
+def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axes_stand(
+    hosts: TwoHosts, tmp_path: Path
+) -> None:
+    """The default controllers (gap trip at 10 periods): each trips on the gap (its brake
+    request acknowledges the stop); the operator resets them; each re-arms holding where its
+    axis stands and the drive releases the axes, which stay there. The limit is 5 mm: across
+    this link the trajectory can start up to a second before the drive has the first
+    commands (docs/reliability.md, known limitations), and y's path runs at 3 mm/s."""
+    reset_log = tmp_path / 'reset.log'
+    reset_at: list[int] = []
+
+    def reset() -> None:
+        time.sleep(1.0)  # the states are back and every controller has tripped
+        script = tmp_path / 'reset.py'
+        script.write_text(RESET)
+        with open(reset_log, 'w') as log:
+            proc = hosts.start(hosts.control, [str(script)], log, False)
+            assert proc.wait(timeout=300) == 0, reset_log.read_text()
+        reset_at.append(time.time_ns())
+
+    limit = ('*_controller.following_error_limit=0.005',)
+    code, said, seen, down, back = run_with_cut(hosts, tmp_path, 1.0, limit, after=reset)
+    assert reset_log.read_text().count('trip cleared') == 3, reset_log.read_text()
+    stood = check_stops(seen, down, back, until=reset_at[0] - 10**9)
+    plant_log = (tmp_path / 'plant.log').read_text()
+    for axis in AXES:
+        assert f'axis {axis}: fresh commands: released' in plant_log, axis
+        # Re-armed where it stood, not thrown at the reference (y's is 15 mm and more away
+        # by now): within the window in which the loop would take the reference up again.
+        # x and z do not move; y moves a little (docs/reliability.md: the observer restarts
+        # with the load and friction it estimated while the axis moved).
+        later = [x for _, s, x in seen['state'][axis] if s > reset_at[0]]
+        assert later and max(abs(x - stood[axis]) for x in later) <= 0.005 / 2, axis
+    trips = re.findall(r'FAILED: (\w)_controller: .*no state for', said)
+    assert sorted(set(trips)) == list(AXES), said[-3000:]
+    assert 'following-error trip' not in said, said[-3000:]  # none before the cut, none after
+    assert code == 1, said[-3000:]
 
 
 @pytest.mark.system
 def test_a_five_second_cut_stops_the_axes_and_ends_the_job(hosts: TwoHosts, tmp_path: Path) -> None:
-    code, err, seen, down, back = run_with_cut(hosts, tmp_path, 5.0)
+    code, said, seen, down, back = run_with_cut(hosts, tmp_path, 5.0, UNAWARE)
     check_stops(seen, down, back)
-    assert code == 1, err[-3000:]
-    assert 'the drive went silent' in err, err[-3000:]
+    assert code == 1, said[-3000:]
+    assert 'the drive went silent' in said, said[-3000:]

@@ -139,7 +139,7 @@ class AxisControllerNode(Node):
             self._join.require(joined(law))
         loop.switch.set_blend_time(values['sample_period'], values['blend_time'])
         if 'following_error_limit' in self.params.setting:  # the one way but the service
-            cleared = loop.trip.set_limit(values['following_error_limit'])
+            cleared = loop.set_limit(values['following_error_limit'])
             self._log_reset(cleared, 'setting following_error_limit')
         self._step_due()
 
@@ -265,7 +265,7 @@ class AxisControllerNode(Node):
         return self.reports.status(self.loop.trip, self._join.late_references)
 
     def _on_reset_trip(self, request: Trigger.Request, response: Trigger.Response) -> Any:
-        cleared = self.loop.trip.reset()
+        cleared = self.loop.reset_trip()
         self._log_reset(cleared, 'the service reset_trip')
         response.success = True
         response.message = 'trip cleared' if cleared else 'no trip to clear'

@@ -40,7 +40,8 @@ class AxisReports:
     def cleared(self, ns: int, cleared: Trip | None, how: str, trip: FollowingErrorTrip) -> None:
         if cleared is not None:
             when = self._when(cleared.time)
-            message = f'axis {self.axis}: following-error trip {when} cleared by {how}'
+            kind = 'trip' if cleared.cause else 'following-error trip'
+            message = f'axis {self.axis}: {kind} {when} cleared by {how}'
             values = self.status(trip, 0)[3]
             self.diagnostics.report(ns, DiagnosticStatus.WARN, TRIP_PART, message, values)
 

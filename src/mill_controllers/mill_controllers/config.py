@@ -10,6 +10,7 @@ from mill_common.parameters import (
     axis_node_specs,
     check_design_period,
     non_negative,
+    non_negative_int,
     positive_or_inf,
     text,
 )
@@ -83,6 +84,22 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             ),
         )
     )
+    specs.append(
+        (
+            'max_state_gap',
+            ParamSpec(
+                'max_state_gap',
+                10,
+                'realtime: a gap of this many sample periods or more between two states means '
+                'the drive has stopped the axis (set it to the drive\'s brake_after): the '
+                'controller trips; reset, it re-arms holding the position it measures and '
+                'takes the reference up again once it comes within half the following-error '
+                'limit; 0: off',
+                non_negative_int,
+                True,
+            ),
+        )
+    )
     return specs + CONTROLLERS.parameter_specs()
 
 
@@ -107,4 +124,5 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['following_error_limit'],
         values['command_delay'],
         values['blend_time'],
+        values['max_state_gap'],
     )

@@ -7,6 +7,10 @@ answers by braking the axis: velocity 0, position held) until the trip is reset 
 node's `reset_trip` service or by setting its `following_error_limit` again. The trip
 remembers when and with which error it happened, for /diagnostics and the log.
 
+The same latch takes a stop the loop decides on another ground (`stop`, with its cause): a
+gap in the states long enough that the drive has stopped the axis (mill_controllers.
+control_loop).
+
 The same object runs in the controller node and in the offline simulator, so a run that
 trips does so at the same sample in both.
 """
@@ -19,18 +23,23 @@ from dataclasses import dataclass
 BRAKE = math.nan  # the effort that asks the drive to brake the axis
 
 
+RESET = '(reset: ~/reset_trip or set following_error_limit)'
+
+
 @dataclass(frozen=True)
 class Trip:
     time: float  # [s]
-    error: float  # following error that tripped [m]
+    error: float  # following error that tripped [m] (NaN: another cause)
     limit: float  # [m]
+    cause: str = ''  # what tripped, if not the following error
 
     def describe(self, axis: str, when: str) -> str:
         """One line for the log and /diagnostics; `when` says the time as the node has it."""
+        if self.cause:
+            return f'axis {axis}: trip {when}: {self.cause}: braked {RESET}'
         return (
             f'axis {axis}: following-error trip {when}, |e| = {1e3 * abs(self.error):.3f} mm '
-            f'> {1e3 * self.limit:g} mm: braked (reset: ~/reset_trip or set '
-            'following_error_limit)'
+            f'> {1e3 * self.limit:g} mm: braked {RESET}'
         )
 
 
@@ -50,6 +59,11 @@ class FollowingErrorTrip:
         if self.trip is None and abs(error) > self.limit:
             self.trip = Trip(t, error, self.limit)
         return self.trip is not None
+
+    def stop(self, t: float, cause: str) -> None:
+        """Latch a trip for another cause (kept if one is latched already)."""
+        if self.trip is None:
+            self.trip = Trip(t, math.nan, self.limit, cause)
 
     def command(self, t: float, error: float, effort: float) -> float:
         """The effort to send: the law's, or the brake request once tripped."""

@@ -61,6 +61,45 @@ def test_the_trip_uses_the_error_at_the_states_own_stamp_and_latches() -> None:
     assert lp.trip.set_limit(5e-3) is not None and not lp.trip.tripped
 
 
+def test_a_gap_in_the_states_trips_and_a_reset_re_arms_holding_the_measured_position() -> None:
+    from mill_common.signals import ControlInputs
+
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, max_state_gap=10)
+    est = Estimate(0.0, 0.0, 0.0)
+
+    def ramp(k: int) -> tuple[float, ReferenceBuffer]:  # a path at 100 mm/s, tracked
+        return 0.1 * k * T, refs((k * DT, 0.1 * k * T))
+
+    for k in (0, 1, 2, 3, 4, 13):  # 9 periods from 4 to 13: the drive still holds
+        cmd = lp.step(k * DT, ramp(k)[0], est, ramp(k)[1])
+        assert not cmd.tripped and math.isfinite(cmd.effort), k
+    stood = ramp(13)[0]  # the drive stopped the axis here
+    gap = lp.step(23 * DT, stood, est, ramp(23)[1])  # 10 periods: the drive has stopped
+    assert gap.tripped and math.isnan(gap.effort)
+    assert lp.trip.trip is not None
+    assert 'no state for 10.0 ms (10 periods): the drive has stopped the axis' in (
+        lp.trip.trip.describe('x', 'at t = 0.023 s')
+    )
+    # Reset: the reference is 1.1 mm away by now. The loop holds where the axis stands: a
+    # small command, not the one that throws the axis at the reference.
+    assert lp.reset_trip() is not None and lp.hold == stood
+    held = lp.step(24 * DT, stood, est, ramp(24)[1])
+    law = make_controller('pd', B, T, {})
+    thrown = law.compute(ControlInputs(0.024, stood, AxisReference(ramp(24)[0], 0, 0), est))
+    assert not held.tripped and abs(held.effort) < 0.01 * abs(thrown)
+    # A reference that comes within half the limit of the held position is taken up again.
+    cmd = lp.step(25 * DT, stood, est, refs((25 * DT, stood + 0.4e-3)))
+    assert lp.hold is None and not cmd.tripped and cmd.effort > 0.1 * thrown
+
+
+def test_a_following_error_trip_reset_goes_back_to_the_reference() -> None:
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, max_state_gap=10)
+    est = Estimate(0.0, 0.0, 0.0)
+    assert lp.step(0, 0.0, est, refs((0, 2e-3))).tripped
+    lp.reset_trip()
+    assert lp.hold is None  # the job's reference, as before
+
+
 def test_a_law_that_cannot_compute_asks_for_the_brake_with_the_reason() -> None:
     lp = loop()
     cmd = lp.step(0, 0.0, Estimate(0.0, math.nan, 0.0), refs((0, 0.0)))
