@@ -91,7 +91,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'max_state_gap',
                 10,
                 'realtime: a gap of this many sample periods or more between two states means '
-                'the drive has stopped the axis (set it to the drive\'s brake_after): the '
+                "the drive has stopped the axis (set it to the drive's brake_after): the "
                 'controller trips; reset, it re-arms holding the position it measures and '
                 'takes the reference up again once it comes within half the following-error '
                 'limit; 0: off',
