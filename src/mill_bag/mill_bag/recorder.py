@@ -435,7 +435,8 @@ class RecorderNode(Node):
 
     def destroy_node(self) -> None:
         """Close the bag. A failure to (a full disk) propagates as a BagError, which run_node
-        prints as one line; a bag cut short while recording has been reported already."""
+        prints as one line; a failure while recording (the bag closed or cut short then) has
+        been reported already, so no summary follows it."""
         recorder, self.recorder = self.recorder, None
         try:
             if recorder is not None:
