@@ -15,11 +15,16 @@ names no sample the owner has not sent already (repeated, in the past, off the g
 negative, far ahead), or, stamped with the next sample, their content is what every reader
 drops (a command's NaN is not among those: it is the controller's brake request).
 
+The run is recorded (`--record`), and the JointStates of the stream also go to a topic no
+node reads (UNRELATED), as any node of the domain may publish anything (issue 25).
+
 Checked: every node lives to the end of the job; the runner ends with exit code 1 only
 because foreign messages were seen, and says so; no sample is missing and the record (the
 foreign and malformed messages left out) equals the offline run exactly; the nodes counted
-drops on /diagnostics. The stream is generated once, derandomized (the same every run);
-hypothesis does not shrink it (that would rerun the graph).
+drops on /diagnostics. The recorder kept running and closed a complete bag: it holds every
+message of UNRELATED with a sane stamp and counts those with a negative one. The stream is
+generated once, derandomized (the same every run); hypothesis does not shrink it (that would
+rerun the graph).
 """
 
 from __future__ import annotations
@@ -36,6 +41,10 @@ from builtin_interfaces.msg import Duration, Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
+from mill_bag.cdr import cdr_stamp_ns
+from mill_bag.reader import open_bag
+from mill_bag.recorder import DROPPED
+from mill_bag.writer import RESERVE_NAME
 from mill_common.ros import DATA_QOS, from_stamp
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -57,6 +66,7 @@ PERIOD = 0.004  # [s] of wall time between two published messages
 MARGIN = 5
 REFERENCE_MARGIN = 30
 TICK = 10  # samples between /clock ticks (clock_period 10 ms)
+UNRELATED = '/fuzz/unrelated'  # recorded (the run records the domain), read by no node
 FAR = 30_000_000_000  # [ns] a far stamp: later than any reference may lead (20 s), and the job
 
 # topic -> (owner named in header.frame_id, fields its readers need of the axis's joint)
@@ -261,7 +271,7 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     runner = subprocess.Popen(
         [
             *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '2'),
-            *('--compare-offline', '--quiet', '--output', str(out)),
+            *('--compare-offline', '--quiet', '--output', str(out), '--record'),
         ],
         env=ros_env,
         stdout=log,
@@ -271,6 +281,7 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     ticks: list[int] = []
     inputs: dict[str, dict[str, int]] = {}  # status name -> the most drops per key seen
     sent: dict[str, int] = {}
+    unrelated: list[int] = []  # stamps sent on UNRELATED once the recorder subscribed
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
         for s in msg.status:
@@ -296,13 +307,18 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
                 )
                 for t in OWNERS
             }
+            other = node.create_publisher(JointState, UNRELATED, DATA_QOS)
             i, next_send = 0, time.monotonic()
             while runner.poll() is None:
                 executor.spin_once(timeout_sec=0.001)
                 if time.monotonic() >= next_send and ticks:
                     fuzz = stream[i % len(stream)]
-                    pubs[fuzz.topic].publish(message(fuzz, max(ticks)))
+                    msg = message(fuzz, max(ticks))
+                    pubs[fuzz.topic].publish(msg)
                     sent[fuzz.topic] = sent.get(fuzz.topic, 0) + 1
+                    if fuzz.topic != topics.REFERENCE and other.get_subscription_count():
+                        other.publish(msg)
+                        unrelated.append(from_stamp(msg.header.stamp))
                     i, next_send = i + 1, next_send + PERIOD
             executor.spin_once(timeout_sec=0.1)
         code = runner.wait(timeout=600)
@@ -334,6 +350,22 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     # ... and without them the record is the offline run's, sample for sample.
     assert summary['events'] == []
     assert summary['offline_max_difference'] == 0.0
+
+    # The recorder kept running and closed a complete bag: every message of UNRELATED with a
+    # sane stamp is in it up to the end of the recording (the stream went on until the runner
+    # exited), those with a negative stamp were counted (with those of the other topics; the
+    # bag's contract topics are checked by the record above).
+    bag = open_bag(out / 'bag')
+    recorded = [cdr_stamp_ns(d) for *_, d in bag.read(topics=[UNRELATED])]
+    n = len(recorded)
+    sane = [ns for ns in unrelated if ns >= 0]
+    assert n > 50 and recorded == sane[:n], (n, len(sane))
+    negative = sum(1 for ns in unrelated[: unrelated.index(sane[n - 1])] if ns < 0)
+    assert negative > 5 and summary['bag']['dropped']['negative stamp'] >= negative
+    assert set(summary['bag']['dropped']) <= {'negative stamp', 'stamp ahead'}
+    assert bag.noted_counts(DROPPED) == summary['bag']['dropped']
+    assert not (out / 'bag' / RESERVE_NAME).exists() and not bag.truncated
+    assert sum(bag.counts.values()) == summary['bag']['messages']
 
     # Every node counted what it dropped, per input, on /diagnostics.
     for a in AXES:

@@ -8,14 +8,14 @@ of `ros2 bag record` (MCAP or sqlite3 storage) read like ours.
 An MCAP file without footer (the recording was killed) is read up to its last
 complete record, and `Bag.truncated` lists it: the writer flushes whole chunks, so
 that is every message up to the last flush. `mill_bag.recover` rewrites it. A bag the
-writer cut short (a full disk) says why in metadata.yaml: `Bag.cut_short`.
+writer cut short (a full disk) says why in metadata.yaml: `Bag.cut_short`. A damaged file
+(flipped bytes) raises BagError in one line saying where and how much is lost;
+`read(damaged=[...])` reads around the damage instead (mill_bag.mcap_read), as `recover` does.
 """
 
 from __future__ import annotations
 
-import io
 import json
-import struct
 from collections.abc import Collection, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,10 +23,8 @@ from pathlib import Path
 import yaml
 
 from mill_bag.errors import BagError
-from mill_bag.writer import CUT_SHORT
-
-MCAP_MAGIC = b'\x89MCAP0\r\n'
-Row = tuple[str, str, int, int | None, bytes]  # topic, type, log time, publish time, CDR
+from mill_bag.mcap_read import Damage, McapFile, Row
+from mill_bag.writer import CUT_SHORT, dump_yaml
 
 
 @dataclass
@@ -75,76 +73,52 @@ class Bag:
         except (ValueError, TypeError, AttributeError):
             return None
 
-    def read(self, topics: Collection[str] | None = None) -> Iterator[Row]:
+    def read(
+        self, topics: Collection[str] | None = None, damaged: list[Damage] | None = None
+    ) -> Iterator[Row]:
+        """Messages of `topics` (None: all). A damaged MCAP file raises BagError, in one line
+        on where; with a `damaged` list, its damaged parts are noted there and the rest is
+        read (mill_bag.mcap_read)."""
         self.counts.clear()
         self.truncated.clear()
         for path in self.files:
             if self.storage == 'mcap':
-                yield from self._read_mcap(path, topics)
+                yield from self._read_mcap(path, topics, damaged)
             else:
                 yield from self._read_rosbags(topics)
                 break
 
-    def _read_mcap(self, path: Path, topics: Collection[str] | None) -> Iterator[Row]:
-        """Schema, channel and chunk records are read by mcap's record classes, chunks
-        decompressed and CRC-checked by mcap. Records are walked by their framing (opcode
-        u8, length u64) and message records read by their fixed header (channel u16,
-        sequence u32, log time u64, publish time u64, data): a Python object per message
-        and per message-index entry would take seconds for a whole job's 600 000 messages.
-        The summary section after DataEnd is not needed and not read."""
-        from mcap.data_stream import ReadDataStream
-        from mcap.exceptions import McapError
-        from mcap.records import Channel, Chunk, Schema
-        from mcap.stream_reader import get_chunk_data_stream
-
-        data = path.read_bytes()
-        if not data.startswith(MCAP_MAGIC):
-            raise BagError(f'{path}: not an MCAP file')
-        complete = data.endswith(MCAP_MAGIC) and len(data) > 2 * len(MCAP_MAGIC)
-        end = complete_prefix(data)
-        if not complete:
+    def _read_mcap(
+        self, path: Path, topics: Collection[str] | None, damaged: list[Damage] | None
+    ) -> Iterator[Row]:
+        hints = self._channel_hints() if damaged is not None and len(self.files) == 1 else None
+        mcap = McapFile(path, self, topics, damaged, hints)
+        if not mcap.complete:
             self.truncated.append(path)
-        schemas: dict[int, str] = {}
-        channels: dict[int, tuple[str, str, bool]] = {}
-        counts = self.counts
-        header = struct.Struct('<HIQQ')
-        frame = struct.Struct('<BQ')
-
-        def record(buf: bytes, start: int, stop: int) -> ReadDataStream:
-            return ReadDataStream(io.BytesIO(buf[start:stop]))
-
-        def walk(buf: bytes, pos: int, stop: int, top: bool) -> Iterator[Row]:
-            while pos < stop:
-                opcode, length = frame.unpack_from(buf, pos)
-                start, pos = pos + 9, pos + 9 + length
-                if opcode == 0x05:  # message
-                    cid, _seq, log_time, publish_time = header.unpack_from(buf, start)
-                    topic, msgtype, wanted = channels[cid]
-                    counts[topic] += 1
-                    if wanted:
-                        yield topic, msgtype, log_time, publish_time, buf[start + 22 : pos]
-                elif opcode == 0x06 and top:  # chunk
-                    chunk = Chunk.read(record(buf, start, pos))
-                    stream, size = get_chunk_data_stream(chunk, validate_crc=True)
-                    yield from walk(stream.read(size), 0, size, False)
-                elif opcode == 0x03:  # schema
-                    schema = Schema.read(record(buf, start, pos))
-                    schemas[schema.id] = schema.name
-                elif opcode == 0x04:  # channel
-                    channel = Channel.read(record(buf, start, pos))
-                    msgtype = schemas.get(channel.schema_id, '')
-                    wanted = topics is None or channel.topic in topics
-                    channels[channel.id] = (channel.topic, msgtype, wanted)
-                    self.types[channel.topic] = msgtype
-                    self.qos[channel.topic] = channel.metadata.get('offered_qos_profiles', '')
-                    counts.setdefault(channel.topic, 0)
-                elif opcode in (0x0F, 0x02) and top:  # data end, footer: the summary follows
-                    return
-
         try:
-            yield from walk(data, len(MCAP_MAGIC), end, True)
-        except (McapError, struct.error, KeyError, ValueError, IndexError) as exc:
+            yield from mcap.rows()
+        except BagError:
+            raise  # McapFile's own: with the file and where
+        except Exception as exc:  # mcap, zstandard, lz4 and struct raise many types
             raise BagError(f'{path}: damaged MCAP file ({exc or type(exc).__name__})') from None
+
+    def _channel_hints(self) -> dict[int, tuple[str, str, str]]:
+        """Channel id -> (topic, type, QoS YAML) as mill_bag's writer numbers its channels: its
+        topics in metadata.yaml's order, from 1. Recovers the messages of a killed recording
+        whose channel definitions were in a damaged chunk (mill_bag.mcap_read)."""
+        info = (self.metadata or {}).get('rosbag2_bagfile_information') or {}
+        out = {}
+        try:
+            for i, entry in enumerate(info.get('topics_with_message_count') or [], 1):
+                t = entry['topic_metadata']
+                out[i] = (
+                    str(t['name']),
+                    str(t['type']),
+                    dump_yaml(t.get('offered_qos_profiles') or []),
+                )
+        except (KeyError, TypeError, AttributeError):
+            return {}
+        return out
 
     def _read_rosbags(self, topics: Collection[str] | None) -> Iterator[Row]:
         from rosbags.rosbag2 import Reader
@@ -161,22 +135,6 @@ class Bag:
                     yield conn.topic, conn.msgtype, timestamp, None, data
         except Exception as exc:  # rosbags raises several types; all mean "unreadable"
             raise BagError(f'{self.path}: cannot read the bag ({exc})') from None
-
-
-def complete_prefix(data: bytes) -> int:
-    """Length of the longest prefix of an MCAP file made of whole records.
-
-    Each top-level record is opcode (1 byte), length (uint64), body; a recording
-    killed mid-write ends in a partial record, which this cuts off.
-    """
-    pos = len(MCAP_MAGIC)
-    end = len(data)
-    while pos + 9 <= end:
-        (length,) = struct.unpack_from('<Q', data, pos + 1)
-        if pos + 9 + length > end:
-            break
-        pos += 9 + length
-    return pos
 
 
 def open_bag(path: str | Path) -> Bag:

@@ -21,6 +21,15 @@ stores it. The publish time is always the wall-clock receive time (the
 EventsExecutor does not expose the DDS source timestamp), so the loop timing can
 be analysed from the bag.
 
+Bad input. Any node of the domain may publish anything, so every message is checked before
+it is written (mill_bag.intake): a negative, invalid or (on sim time) far-ahead stamp, more
+than `max_message_bytes`, bytes that are no CDR, or a topic of an unknown type is dropped,
+counted per kind and logged (one line per kind and second); the counts are in the summary
+line and in metadata.yaml (custom_data `dropped_messages`). A header stamp reaches the MCAP
+writer only once checked, and the writer refuses a time it cannot hold without touching the
+file. Anything else that fails while writing closes the bag (at its last flush, if the MCAP
+writer itself failed) and ends the recorder with one line saying so.
+
 Losses. A recorder cannot make a publisher wait. Its subscriptions keep all (KEEP_ALL),
 so that a recorder starved of CPU loses nothing of what reached it (a KEEP_LAST reader
 dropped the oldest silently). It attaches no message_lost handler: with one on every
@@ -55,15 +64,17 @@ from pathlib import Path
 from typing import Any
 
 from mill_common.node_main import request_exit, run_node
-from mill_common.parameters import ParamSpec, StringList, in_range, one_of, text
+from mill_common.parameters import ParamSpec, StringList, WholeAtLeast, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.errors import BagError
+from mill_bag.intake import MAX_MESSAGE_BYTES, UNKNOWN_TYPE, Intake, Rejected
 from mill_bag.types import message_definition, sim_stamped
-from mill_bag.writer import COMPRESSIONS, BagCutShort, BagWriter, TopicInfo
+from mill_bag.writer import COMPRESSIONS, BagCutShort, BagWriter, TopicInfo, counts_note
+
+DROPPED = 'dropped_messages'  # custom_data note: messages dropped per kind (intake), JSON
 
 
 def message_class(msgtype: str) -> type:
@@ -155,6 +166,7 @@ class TopicRecorder:
         discovery_period: float = 0.5,
         discover: bool = True,
         custom_data: Mapping[str, str] | None = None,
+        max_message_bytes: int = MAX_MESSAGE_BYTES,
     ) -> None:
         self.node = node
         self.sim_time = sim_time
@@ -168,7 +180,7 @@ class TopicRecorder:
         self._topics: dict[str, _Topic] = {}
         self._subs: list[Any] = []
         self._skipped: set[str] = set()
-        self._latest_sim_ns = 0
+        self.intake = Intake(sim_time, max_message_bytes)
         self.closed = False
         self.error: str | None = None  # why writing failed, if it did
         steady = Clock(clock_type=ClockType.STEADY_TIME)
@@ -240,7 +252,7 @@ class TopicRecorder:
                 self.subscribe(name, msgtype, subscription_qos(endpoints))
             except BagError as exc:
                 self._skipped.add(name)
-                self.node.get_logger().warning(f'not recording {name}: {exc}')
+                self._drop(name, Rejected(UNKNOWN_TYPE, str(exc)))
                 continue
             self._note_publishers(self._topics[name], endpoints)
 
@@ -255,6 +267,11 @@ class TopicRecorder:
             entry.type_hash = str(endpoints[0].topic_type_hash) or None
 
     # -- writing -----------------------------------------------------------------------------
+    def _drop(self, topic: str, rejected: Rejected) -> None:
+        line = self.intake.drop(topic, rejected, time.monotonic())
+        if line is not None:
+            self.node.get_logger().warning(line)
+
     def _on_flush_timer(self) -> None:
         # Nothing may be thrown through the executor: a failed write ends the node instead.
         if self.error is not None:
@@ -265,9 +282,23 @@ class TopicRecorder:
         except BagCutShort as exc:  # a full disk: the bag ends at its last complete flush
             self.error = str(exc)
             request_exit(self.node, 1, self.error)
-        except (OSError, ValueError) as exc:
-            self.error = f'cannot write the bag {self.writer.path}: {exc}'
+        except Exception as exc:  # not bad input (intake drops that): the bag is closed
+            self.error = self._close_after(exc)
             request_exit(self.node, 1, self.error)
+
+    def _close_after(self, exc: Exception) -> str:
+        """Close the bag after a write failed unexpectedly; what happened, in one line."""
+        why = f'{type(exc).__name__}: {exc}' if str(exc) else type(exc).__name__
+        self.closed = True
+        writer = self.writer
+        try:
+            writer.close()
+            end = ''
+        except Exception:  # the MCAP writer is broken: end at the last complete flush
+            writer.abort(why)
+            end = ' at its last flush (`python -m mill_bag recover` completes it)'
+        n = writer.message_count
+        return f'cannot write the bag {writer.path} ({why}); closed it{end} with {n} messages'
 
     def flush(self) -> None:
         """Write what arrived since the last flush as one chunk; refresh metadata.yaml."""
@@ -278,8 +309,12 @@ class TopicRecorder:
         batch = buf[:n]
         del buf[:n]
         writer = self.writer
-        latest = self._latest_sim_ns
+        intake = self.intake
         for entry, received, data in batch:
+            log_time = intake.log_time(data, entry.stamped, received)
+            if isinstance(log_time, Rejected):
+                self._drop(entry.name, log_time)
+                continue
             info = entry.info
             if info is None:
                 if entry.qos is None and not self.closed:
@@ -287,31 +322,26 @@ class TopicRecorder:
                 info = entry.info = writer.add_topic(
                     entry.name, entry.msgtype, entry.qos or [], entry.type_hash
                 )
-            if not self.sim_time:
-                stamp = received
-            elif entry.stamped and (decoded := cdr_stamp_ns(data)) is not None:
-                stamp = decoded
-                latest = max(latest, stamp)
-            else:
-                stamp = latest
-            writer.write(info, stamp, received, data)
-        self._latest_sim_ns = latest
+            writer.write(info, log_time, received, data)
+        if intake.dropped:  # discovery counts too: noted at every flush
+            self.note(DROPPED, counts_note(intake.counts))
         writer.flush()
 
     def close(self) -> None:
-        """Write the rest and close the bag (idempotent; BagCutShort if the disk is full)."""
+        """Write the rest and close the bag (idempotent). BagCutShort if the disk is full;
+        any other failure closes the bag as `_close_after` can and raises BagError saying so."""
         for timer in self._timers:
             timer.cancel()
         if self.writer.closed:
             return
         try:
-            try:
-                self.flush()
-            finally:
-                self.closed = True
-                self.writer.close()
-        except OSError as exc:
-            raise BagError(f'cannot write the bag {self.writer.path}: {exc}') from None
+            self.flush()
+            self.closed = True
+            self.writer.close()
+        except BagCutShort:
+            raise
+        except Exception as exc:
+            raise BagError(self._close_after(exc)) from None
 
     @property
     def message_count(self) -> int:
@@ -319,9 +349,10 @@ class TopicRecorder:
 
     def summary(self) -> str:
         size = self.writer.size_bytes / 1e6
+        dropped = self.intake.describe()
         return (
             f'bag {self.writer.path}: {self.writer.message_count} messages on '
-            f'{len(self.writer.topics)} topics, {size:.1f} MB'
+            f'{len(self.writer.topics)} topics, {size:.1f} MB' + (f'; {dropped}' if dropped else '')
         )
 
 
@@ -363,6 +394,13 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             in_range(0.05, 1.0),
             True,
         ),
+        ParamSpec(
+            'max_message_bytes',
+            MAX_MESSAGE_BYTES,
+            'a message with more serialized bytes is dropped and counted (mill_bag.intake)',
+            WholeAtLeast(1024),
+            True,
+        ),
     ]
     return [(s.name, s) for s in specs]
 
@@ -385,6 +423,7 @@ class RecorderNode(Node):
             sim_time=sim_time,
             compression=v['compression'],
             flush_period=v['flush_period'],
+            max_message_bytes=v['max_message_bytes'],
         )
         what = sorted(self.recorder.names)
         if v['regex']:
@@ -396,13 +435,14 @@ class RecorderNode(Node):
 
     def destroy_node(self) -> None:
         """Close the bag. A failure to (a full disk) propagates as a BagError, which run_node
-        prints as one line; a bag cut short while recording has been reported already."""
+        prints as one line; a failure while recording (the bag closed or cut short then) has
+        been reported already, so no summary follows it."""
         recorder, self.recorder = self.recorder, None
         try:
             if recorder is not None:
-                cut_before = recorder.writer.cut_short
+                failed_before = recorder.error is not None
                 recorder.close()
-                if cut_before is None:
+                if not failed_before:
                     print(f'recorder: {recorder.summary()}', file=sys.stderr)
         finally:
             super().destroy_node()

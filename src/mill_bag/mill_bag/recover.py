@@ -1,11 +1,14 @@
-"""Recovering a killed recording: its MCAP files rewritten as complete ones.
+"""Recovering a killed recording or a damaged bag: its MCAP files rewritten as complete ones.
 
 A recording killed hard (SIGKILL, power loss) leaves MCAP files without summary
 and footer, which most readers refuse (`mill_bag.reader` reads them up to the last
-complete chunk). `recover` writes every message of the complete records into a new
-file with the same channels (QoS, type hash), keeps the original as
-NAME.mcap.truncated and rebuilds metadata.yaml from the data. It needs room for the
-new file; on a full disk it removes what it began and leaves the bag as it was.
+complete chunk). A file with flipped bytes has damaged chunks, which readers refuse
+whole. `recover` writes every message it can read into a new file with the same channels
+(QoS, type hash): all of the complete records of a killed recording, every chunk but the
+damaged ones of a damaged file (mill_bag.mcap_read says what each damaged part cost). It
+keeps the original as NAME.mcap.truncated (NAME.mcap.damaged) and rebuilds metadata.yaml
+from the data, with a `damaged` note if anything was lost. It needs room for the new file;
+on a full disk it removes what it began and leaves the bag as it was.
 
     python -m mill_bag recover BAG
 """
@@ -19,6 +22,7 @@ from pathlib import Path
 import yaml
 
 from mill_bag.errors import BagError
+from mill_bag.mcap_read import Damage
 from mill_bag.reader import Bag, open_bag
 from mill_bag.types import message_definition
 from mill_bag.writer import (
@@ -30,25 +34,33 @@ from mill_bag.writer import (
     os_reason,
 )
 
+DAMAGED = 'damaged'  # custom_data note of a recovered bag: what its damaged parts cost
 
-def recover(path: str | Path) -> tuple[int, int]:
-    """Rewrite the truncated MCAP files of a killed recording as complete ones.
 
-    Every message of the complete records is kept, with its channel metadata (QoS,
-    type hash); metadata.yaml is rebuilt from the data (keeping a cut-short note). The
-    original file is kept next to it as NAME.mcap.truncated. Returns (messages kept,
-    files rewritten). Nothing changes until every new file is written: a failure (a full
-    disk) removes what was begun and raises BagError with the bag as it was.
+def recover(path: str | Path, damaged: list[Damage] | None = None) -> tuple[int, int]:
+    """Rewrite the truncated or damaged MCAP files of a bag as complete ones.
+
+    Every message that reads is kept, with its channel metadata (QoS, type hash); each
+    damaged part is appended to `damaged`. metadata.yaml is rebuilt from the data (keeping
+    the writer's notes). The original file is kept next to it as NAME.mcap.truncated
+    (.damaged). Returns (messages kept, files rewritten). Nothing changes until every new
+    file is written: a failure (a full disk) removes what was begun and raises BagError
+    with the bag as it was.
     """
     bag = open_bag(path)
     if bag.storage != 'mcap':
         raise BagError(f'{bag.path}: only MCAP bags can be recovered')
-    rows = list(bag.read())
-    if not bag.truncated:
-        return len(rows), 0
+    found: list[Damage] = []
+    kept = sum(1 for _ in bag.read(damaged=found))
+    if damaged is not None:
+        damaged.extend(found)
+    broken = {d.path for d in found}
+    todo = [f for f in bag.files if f in bag.truncated or f in broken]
+    if not todo:
+        return kept, 0
     written: list[Path] = []  # every file begun, removed again if anything fails
     try:
-        done = [_rewrite(src, bag, written) for src in bag.truncated]
+        done = [_rewrite(src, bag, written) for src in todo]
         metadata = None
         if bag.path.is_dir():
             metadata = bag.path / 'metadata.yaml.recovering'
@@ -57,26 +69,33 @@ def recover(path: str | Path) -> tuple[int, int]:
             start = min((d.start for d in done if d.start is not None), default=0)
             end = max((d.end for d in done if d.end is not None), default=0)
             # The writer's notes (a cut-short reason, what the bag holds) stay.
-            meta = bag_metadata(
-                [d.src.name for d in done], topics, start, end - start, bag.custom_data
-            )
+            notes = bag.custom_data | ({DAMAGED: describe_loss(found)} if found else {})
+            meta = bag_metadata([d.src.name for d in done], topics, start, end - start, notes)
             metadata.write_text(dump_yaml(meta) + '\n')
     except OSError as exc:
         for begun in written:
             begun.unlink(missing_ok=True)
-        needed = sum(src.stat().st_size for src in bag.truncated) / 1e6
+        needed = sum(src.stat().st_size for src in todo) / 1e6
         raise BagError(
             f'cannot recover {bag.path}: {os_reason(exc)} (the complete copy needs about '
             f'{needed:.1f} MB next to it); the bag is unchanged'
         ) from None
     # Only renames from here: they need no room.
     for d in done:
-        d.src.rename(d.src.with_name(d.src.name + '.truncated'))
+        suffix = '.damaged' if d.src in broken else '.truncated'
+        d.src.rename(d.src.with_name(d.src.name + suffix))
         d.tmp.rename(d.src)
     if metadata is not None:
         metadata.replace(bag.path / 'metadata.yaml')
         (bag.path / RESERVE_NAME).unlink(missing_ok=True)
     return sum(info.count for d in done for info in d.topics), len(done)
+
+
+def describe_loss(damaged: list[Damage]) -> str:
+    """'2 damaged parts, 300 messages lost' (', and more' where a part's count is unknown)."""
+    lost = sum(d.messages or 0 for d in damaged)
+    more = ', and more' if any(d.messages is None for d in damaged) else ''
+    return f'{len(damaged)} damaged part(s), {lost} messages lost{more}'
 
 
 @dataclass
@@ -97,11 +116,11 @@ def _rewrite(src: Path, bag: Bag, written: list[Path]) -> _Rewritten:
     with open(tmp, 'wb') as out:
         writer = Writer(out, compression=CompressionType.ZSTD)
         writer.start(profile='ros2', library=f'mill recover ({mcap_library()})')
-        sub = open_bag(src) if bag.path.is_dir() else bag
+        sub = bag if len(bag.files) == 1 else open_bag(src)  # a bag: its channel hints too
         infos: dict[str, TopicInfo] = {}
         schemas: dict[str, int] = {}
         start = end = None
-        for topic, msgtype, log_time, publish_time, data in sub.read():
+        for topic, msgtype, log_time, publish_time, data in sub.read(damaged=[]):
             info = infos.get(topic)
             if info is None:
                 msgdef, rihs01 = message_definition(msgtype)

@@ -110,10 +110,14 @@ def decode(msgtype: str, data: bytes) -> Any:
     """A CDR message as an object with the message's field names (as rclpy's).
 
     sensor_msgs/JointState, most messages of a joint control loop, is read by `joint_state_cdr`
-    (4x faster); everything else, and any JointState it does not accept, by rosbags.
+    (4x faster); everything else, and any JointState it does not accept, by rosbags. Bytes
+    that are no such message (any node may publish anything) raise BagError, in one line.
     """
     if msgtype == JOINT_STATE:
         msg = joint_state_cdr(data)
         if msg is not None:
             return msg
-    return typestore().deserialize_cdr(data, msgtype)
+    try:
+        return typestore().deserialize_cdr(data, msgtype)
+    except Exception as exc:  # rosbags' SerdeError, KeyError for an unknown type, ...
+        raise BagError(f'{len(data)} bytes that are no {msgtype}: {exc}') from None

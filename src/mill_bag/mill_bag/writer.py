@@ -45,6 +45,7 @@ CUT_SHORT = 'cut_short'  # custom_data key: why the recording ended before it wa
 RESERVE_NAME = '.metadata_reserve'  # room kept for the last metadata.yaml (deleted at close)
 RESERVE_MIN = 64 * 1024
 FULL = (errno.ENOSPC, errno.EDQUOT)
+MAX_TIME = (1 << 64) - 1  # MCAP times are uint64 ns
 
 
 def os_reason(exc: OSError) -> str:
@@ -189,8 +190,15 @@ class BagWriter:
         return info
 
     def write(self, topic: TopicInfo, log_time: int, publish_time: int, data: bytes) -> None:
+        """Add one message. BagError (the bag unchanged) for times MCAP cannot hold: mcap
+        would fail halfway through the record and leave the chunk unreadable."""
         if self.closed:
             raise BagError(f'the bag {self.path} is closed' + self._why())
+        if not (0 <= log_time <= MAX_TIME and 0 <= publish_time <= MAX_TIME):
+            raise BagError(
+                f'{topic.name}: log time {log_time} / publish time {publish_time} ns is no '
+                'MCAP time (0 to 2^64 - 1)'
+            )
         self._mcap.add_message(topic.channel_id, log_time, data, publish_time, topic.count)
         topic.count += 1
         self.message_count += 1
@@ -247,19 +255,30 @@ class BagWriter:
         self._reserved = size
 
     def _cut(self, exc: OSError) -> None:
-        """Stop at the last complete flush: free the reserve, write the metadata of what the
-        file holds with the reason, close the file; raise BagCutShort."""
+        """Stop at the last complete flush (see `abort`); raise BagCutShort."""
+        self.abort(os_reason(exc))
+        info = self._flushed['rosbag2_bagfile_information']
+        assert self.cut_short is not None
+        raise BagCutShort(self.path, self.cut_short, info['message_count'])
+
+    def abort(self, reason: str) -> None:
+        """End the bag at its last complete flush, for `reason`: what was written since is
+        dropped (it may be half a record), the reserve freed, and metadata.yaml describes what
+        the file holds and says why it ends there. The file has no footer: readers read it,
+        `recover` completes it."""
+        if self.closed:
+            return
         self.closed = True
-        self.cut_short = os_reason(exc)
+        self.cut_short = reason
         self._file.close()
         (self.path / RESERVE_NAME).unlink(missing_ok=True)
         self._reserved = 0
         info = self._flushed['rosbag2_bagfile_information']
         info['custom_data'] = {**self.custom_data, CUT_SHORT: self.cut_short}
+        self.message_count = info['message_count']  # what the file holds
         # If even this fails, the metadata of the last flush stays: the file still reads.
         with contextlib.suppress(OSError):
             write_metadata_file(self.path, self._flushed)
-        raise BagCutShort(self.path, self.cut_short, info['message_count'])
 
     def close(self) -> None:
         if self.closed:

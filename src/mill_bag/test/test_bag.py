@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 import yaml
 from mill_bag.cdr import joint_state_cdr
+from mill_bag.errors import BagError
 from mill_bag.reader import Bag, open_bag
 from mill_bag.recover import recover
 from mill_bag.types import (
@@ -275,6 +276,8 @@ def test_joint_state_reader_equals_rosbags(
     assert joint_state_cdr(big_endian) is None  # left to rosbags
     assert decode(JOINT_STATE, big_endian).name == names
     assert joint_state_cdr(data[:-9]) is None  # cut short: refused, not misread
+    with pytest.raises(BagError, match=f'{len(data) - 9} bytes that are no {JOINT_STATE}: '):
+        decode(JOINT_STATE, data[:-9])  # ... and by rosbags, in one line
 
 
 # -- python -m mill_bag ---------------------------------------------------------------------

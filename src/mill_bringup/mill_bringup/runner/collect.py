@@ -98,6 +98,7 @@ def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:
         'path': str(options.record_bag),
         'messages': recorder.message_count,
         'size_bytes': recorder.writer.size_bytes,
+        'dropped': dict(recorder.intake.counts),  # bad messages per kind (mill_bag.intake)
     }
 
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from mill_bag.intake import describe as describe_drops
+
 from mill_analysis import records
 
 
@@ -85,4 +87,7 @@ def format_result(r: RunResult) -> str:
             f'{r.bag["size_bytes"] / 1e6:.1f} MB'
             + (f' ({per_s / 1e6:.2f} MB per simulated second)' if per_s else '')
         )
+        dropped = describe_drops(r.bag.get('dropped') or {})
+        if dropped:
+            lines[-1] += f'; {dropped} (bad messages, not recorded)'
     return '\n'.join(lines)
