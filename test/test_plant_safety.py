@@ -237,8 +237,9 @@ def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
         pub = node.create_publisher(JointState, COMMAND, DATA_QOS)
 
         def on_state(msg: JointState) -> None:
-            # finite for 50 ticks, then the brake request (NaN) of a tripped controller
-            effort = FINITE if len(answered) < 50 else math.nan
+            # finite for 15 ticks (it reaches about 0.3 m/s, below the drive's speed
+            # limit), then the brake request (NaN) of a tripped controller
+            effort = FINITE if len(answered) < 15 else math.nan
             answered.append(from_stamp(msg.header.stamp))
             pub.publish(
                 joint_state(
@@ -265,6 +266,54 @@ def test_realtime_drive_holds_its_axes_before_the_first_command_without_a_fault(
     assert any(s.message == 'axis x braked' for s in errors[first_request:]), [
         s.message for s in errors
     ]
+
+
+@pytest.mark.system
+def test_a_realtime_stop_holds_against_returning_commands_until_the_operator_releases(
+    start_node,
+) -> None:
+    """The controller answers 30 states, falls silent for 30 (the drive stops the axis
+    within 10: the held torque takes it off its course within a few), then answers again
+    with the same torque: the axis stays where it stopped, and the drive says why.
+    ~/release (std_srvs/Trigger) lets the next fresh command act: it moves."""
+    from std_srvs.srv import Trigger
+
+    plant = start_realtime_drive(start_node, '0.01')
+    statuses: list[str] = []
+    positions: list[tuple[int, float]] = []
+    with ros_node('x_controller') as (node, executor):
+        pub = node.create_publisher(JointState, COMMAND, DATA_QOS)
+
+        def on_state(msg: JointState) -> None:
+            ns = from_stamp(msg.header.stamp)
+            positions.append((ns, msg.position[0]))
+            if not 30 <= len(positions) < 60:  # silent for 30 ticks
+                pub.publish(joint_state(ns, ('x',), effort=(FINITE,), sender='x_controller'))
+
+        node.create_subscription(JointState, STATE, on_state, DATA_QOS)
+        node.create_subscription(
+            DiagnosticArray,
+            topics.DIAGNOSTICS,
+            lambda m: statuses.extend(s.message for s in m.status),
+            10,
+        )
+        assert spin_until(executor, lambda: len(positions) > 100, 120), statuses
+        stopped = [m for m in statuses if 'axis x: stopped: ' in m]
+        assert len(stopped) == 1, statuses
+        assert any('axis x: commands arriving, but stopped' in m for m in statuses), statuses
+        held = [x for _, x in positions[62:]]  # from two ticks after the commands returned
+        assert len(set(held)) == 1, held[:5]  # not moved by the returning commands
+        client = node.create_client(Trigger, '/plant/release')
+        assert client.wait_for_service(timeout_sec=60)
+        future = client.call_async(Trigger.Request())
+        executor.spin_until_future_complete(future, timeout_sec=60)
+        assert future.result() is not None
+        assert future.result().message == 'released x: braked until the next fresh command'
+        count = len(positions)
+        assert spin_until(executor, lambda: len(positions) > count + 20, 60)
+        assert positions[-1][1] > held[-1]  # +0.05 N·m drives it towards +x again
+        assert plant.alive(), plant.stop()[2]
+    assert any('released by ~/release' in m for m in statuses), statuses
 
 
 @pytest.mark.system

@@ -346,8 +346,13 @@ class RealtimeCycle(DriveCycle):
             efforts = tick.efforts
             held = [a for a, c in d.table.by_axis.items() if c.stamp < 0]  # none came yet
             for axis in tick.stopped:
+                reason = d.table.by_axis[axis].stopped
                 moved = self._guard.moved(axis)
-                self._stopped(axis, d.table.by_axis[axis].stopped, moved)
+                self._stopped(
+                    axis,
+                    f'{reason} on {topics.joint_command(axis)} (from {d.owner_of(axis)}); '
+                    f'{1e3 * moved:.3f} mm from where it stood at the last one',
+                )
             for axis in tick.returned:
                 d.report_axis(
                     axis,
@@ -384,17 +389,12 @@ class RealtimeCycle(DriveCycle):
             d.table.stop(axis, reason)
             self._stopped(axis, reason)
 
-    def _stopped(self, axis: str, reason: str, moved: float = math.nan) -> None:
-        d = self.drive
+    def _stopped(self, axis: str, reason: str) -> None:
         self.stops[axis] += 1
-        where = f'; {1e3 * moved:.3f} mm from where they ended' if moved == moved else ''
-        d.report_axis(
-            axis,
-            DiagnosticStatus.ERROR,
-            f'stopped: {reason} on {topics.joint_command(axis)} (from {d.owner_of(axis)})'
-            f'{where}; braked until re-armed ({REARM})',
+        self.drive.report_axis(
+            axis, DiagnosticStatus.ERROR, f'stopped: {reason}; braked until re-armed ({REARM})'
         )
-        d.publish_status(force=True)
+        self.drive.publish_status(force=True)
 
     def release(self) -> list[str]:
         """The operator's release (~/release): the stopped axes, now released."""
