@@ -1,8 +1,11 @@
 """Monitor: the runner's node. Keeps the messages a job's record is built from, and records.
 
 Subscriptions take the serialized bytes (no Python message per sample while the run goes
-on); the job decodes them once at the end with the same code that reads bags, so the
-runner's summary and the report of the run's bag are computed by the same code.
+on), with the order they arrived in (mill_analysis.record_checks.Received: the record takes
+them through the nodes' checks in that order); the job decodes them once at the end with the
+same code that reads bags, so the runner's summary and the report of the run's bag are
+computed by the same code. Every topic of the job it records it also keeps: what the bag
+holds of the job, the record counts.
 
 With `record=RecordOptions(...)` a TopicRecorder writes every topic of the graph to a
 rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only to the
@@ -28,6 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_analysis.record_checks import Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
@@ -76,7 +80,7 @@ class Monitor(Node):
         super().__init__(
             name, namespace=namespace, cli_args=['--ros-args', *rules] if rules else None
         )
-        self.raw: dict[str, list[bytes]] = {}
+        self.raw = Received()
         self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
@@ -97,21 +101,30 @@ class Monitor(Node):
         self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, 100)
         if self.recorder is not None:
             # The rest of the contract, subscribed before the graph starts so that the
-            # first step is recorded; discovery adds any other topic.
+            # first step is recorded (and kept: the record counts it); discovery adds any
+            # other topic.
             for topic, msgtype in (recorded or {}).items():
-                self._listen(topic, msgtype, None)
+                if topic not in kept:
+                    self._keep(topic, msgtype)
             self.recorder.subscribe(topics.CLOCK, CLOCK, RECORD_QOS)
             diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
-        keep: Callable[[bytes], None] = store.append
+        order = self.raw.order
         arrivals = self.arrivals.get(topic)
-        if arrivals is not None:  # when each message came, on the system clock (latency)
+        if arrivals is None:
 
             def keep(data: bytes) -> None:
                 store.append(data)
+                order.append(topic)
+
+        else:  # when each message came, on the system clock (latency)
+
+            def keep(data: bytes) -> None:
+                store.append(data)
+                order.append(topic)
                 arrivals.append(time.time_ns())
 
         self._listen(topic, msgtype, keep)

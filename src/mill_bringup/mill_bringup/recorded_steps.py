@@ -7,9 +7,11 @@ monitor feeds every message it records of the job's stepped topics here and publ
 of the bag: no writer's history (2000 samples deep) can overflow before the recorder takes
 its samples, and at the end (`freeze`) the plant stops at a step the bag can wait for.
 
-A topic counts once it has been heard: a topic the job does not publish (no observer on an
-axis, no cutting-force listener) must not hold the plant. The first topic (the states of
-the first axis) counts from the start.
+Every stepped topic counts from the start: a step is whole only once each of them holds it,
+so the job lists exactly the topics its graph publishes at every step. (A topic counted
+only once heard let the plant run on while a controller, not yet matched with the runner,
+sent commands nobody recorded: a loaded run lacked commands 0-648 of two axes. The
+controllers now also wait for the runner as a reader, mill_bringup.jobs.axis.)
 """
 
 from __future__ import annotations
@@ -23,13 +25,12 @@ class RecordedSteps:
     def __init__(self, lags: Mapping[str, int], period_s: float, window: int) -> None:
         """lags: stepped topic -> samples its newest message trails the step's states when
         the step is whole (the ground truth of step k goes out with the states of k + 1);
-        the first one is required. period_s: the job's sample period (stamps are
+        every one is required. period_s: the job's sample period (stamps are
         sample_stamp_ns of it, whole ns or not). window: the clock node's `recorder_window`
         [samples]."""
         if window < 1 or not lags:
             raise ValueError('a handshake needs a window of at least one step and a topic')
         self._lags = dict(lags)
-        self._required = next(iter(lags))
         self._newest: dict[str, int] = {}  # per topic, the newest whole sample it gives
         self._period_s = period_s
         self._window = window
@@ -68,9 +69,12 @@ class RecordedSteps:
 
     @property
     def _through(self) -> int:
-        if self._required not in self._newest:
-            return -1
-        return min(self._newest.values())
+        return min(self._newest.get(topic, -1) for topic in self._lags)
+
+    def behind(self) -> list[str]:
+        """The stepped topics the newest whole step waits for (none recorded further)."""
+        through = self._through
+        return [t for t in self._lags if self._newest.get(t, -1) == through]
 
     @property
     def through(self) -> int:

@@ -116,3 +116,31 @@ def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:
     assert job.failures(None, source.problems()) == [trip, brake]
     lockstep = job_for(scenario.load('slotting'))
     assert lockstep.failures(None, [trip]) == []  # a simulation's trip is its result
+
+
+def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_topic() -> None:
+    """The runner keeps the commands too (its record counts them), so a controller answers only
+    once the plant, its observer and the runner hear it; the plant of a recorded run waits
+    for every topic of a step, the commands included, from the first step on."""
+    from mill_bringup.catalogue import CONTROLLER
+
+    from mill_common import topics
+
+    job = job_for(scenario.load('slotting'))
+    job.prepare_graph(monitored=True, recorded=True)
+    scen = job.scenario
+    for node in scen.nodes:
+        if node.kind.per_axis:
+            wanted = 3 if node.kind.role == CONTROLLER else 2
+            assert scen.parameters(node.name)['min_subscribers'] == wanted, node.name
+    assert {topics.joint_command(a) for a in 'xyz'} <= set(job.monitor_topics())
+    steps = job.recorded_steps()
+    assert steps is not None
+    stepped = [f(a) for a in 'xyz' for f in (topics.state, topics.estimate, topics.joint_command)]
+    for topic in [*stepped, topics.CUTTING_FORCE, topics.GROUND_TRUTH]:
+        assert steps.stepped(topic), topic
+    for topic in stepped[:-1]:  # all but z's command: nothing is whole yet
+        steps.heard(topic, 0)
+    steps.heard(topics.CUTTING_FORCE, 0)
+    steps.heard(topics.GROUND_TRUTH, 0)
+    assert steps.through == -1 and steps.behind() == [topics.joint_command('z')]

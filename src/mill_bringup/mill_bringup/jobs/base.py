@@ -182,7 +182,16 @@ class Job(ABC, Generic[R]):
         """The same as JSON-ready values."""
 
     def foreign(self, rec: R) -> dict[str, int]:
-        """Messages the record left out per topic: from another sender, or malformed."""
+        """Messages the record left out per topic: what the nodes drop (another sender, a
+        stamp they refuse, malformed; mill_analysis.record_checks)."""
+        return {}
+
+    def dropped(self, rec: R) -> dict[str, list[tuple[int, str]]]:
+        """The same per topic and reason: (messages, the first one's reason), most first."""
+        return {}
+
+    def gaps(self, rec: R) -> dict[str, list[tuple[int, int]]]:
+        """Per topic with samples missing, the runs (first, last) of them."""
         return {}
 
     def owners(self) -> dict[str, str]:
