@@ -165,3 +165,22 @@ def busy_cores(n: int = 2) -> Iterator[None]:
         for proc in spinners:
             proc.kill()
             proc.wait()
+
+
+RUNNER = (sys.executable, '-m', 'mill_bringup.runner')
+
+
+def run_scenario(
+    env: dict[str, str], *args: str, timeout: float = 600
+) -> subprocess.CompletedProcess[str]:
+    """`run_scenario ARGS` to its end, its output captured."""
+    return subprocess.run(
+        [*RUNNER, *args], env=env, capture_output=True, text=True, timeout=timeout
+    )
+
+
+def start_scenario(env: dict[str, str], *args: str) -> subprocess.Popen[str]:
+    """`run_scenario ARGS` started, its output piped."""
+    return subprocess.Popen(
+        [*RUNNER, *args], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )

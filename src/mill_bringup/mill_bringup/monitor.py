@@ -10,8 +10,10 @@ holds of the job, the record counts.
 With `record=RecordOptions(...)` a TopicRecorder writes every topic of the graph to a
 rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only to the
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
-In lockstep it also acknowledges, on mill/recorded, the newest step whose stepped topics it
-holds whole, and the plant waits for that (mill_bringup.recorded_steps): nothing is lost.
+In lockstep it also acknowledges, on mill/recorded, after each write of the bag, the newest
+step whose stepped topics the bag's file holds whole, and the plant waits for that
+(mill_bringup.recorded_steps): nothing is lost, and a SIGKILL of the runner costs at most the
+plant's `recorder_window` steps.
 In realtime nothing waits for it: its subscriptions keep all (RECORD_QOS), so that a runner
 short of CPU loses nothing that reached it, and the job counts the samples missing from the
 drive's sequence (the run's summary, the bag's notes).
@@ -29,6 +31,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_analysis.record_checks import Received
@@ -44,12 +47,32 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_common import topics
 
+# [s] between two writes of the runner's bag: the topics outside the lockstep handshake
+# (/clock, the reference, /diagnostics, logs) a SIGKILL of the runner may lose; and, as the
+# steps are acknowledged after each write, at most recorder_window steps per period go out
+# (docs/reliability.md, "Recording through a crash").
+FLUSH_PERIOD = 0.25
+
+
+class _AcknowledgingRecorder(TopicRecorder):
+    """A TopicRecorder that, after each write of its bag, acknowledges the steps it holds."""
+
+    def __init__(self, *args: Any, written: Callable[[], None], **kwargs: Any) -> None:
+        self._written = written
+        super().__init__(*args, **kwargs)
+
+    def flush(self) -> None:
+        super().flush()
+        if not (self.closed or self.writer.closed):  # a bag cut short holds nothing more
+            self._written()
+
 
 @dataclass(frozen=True)
 class RecordOptions:
     path: Path
     sim_time: bool = True
     compression: str = 'zstd'
+    flush_period: float = FLUSH_PERIOD
     notes: Mapping[str, str] = field(default_factory=dict)  # the bag's custom_data
     # A lockstep run's handshake: the steps recorded whole are acknowledged on mill/recorded.
     steps: RecordedSteps | None = None
@@ -88,12 +111,14 @@ class Monitor(Node):
         if self.steps is not None:
             self._ack_pub = self.create_publisher(ClockMsg, topics.RECORDED, LATCHED_QOS)
         if record is not None:
-            self.recorder = TopicRecorder(
+            self.recorder = _AcknowledgingRecorder(
                 self,
                 record.path,
+                written=self._written,
                 regex=_own_topics(self.get_namespace()),
                 sim_time=record.sim_time,
                 compression=record.compression,
+                flush_period=record.flush_period,
                 custom_data=record.notes,
             )
         for topic, msgtype in kept.items():
@@ -150,19 +175,27 @@ class Monitor(Node):
     def finish_recording(self, samples: int) -> None:
         """The job's samples are done: the plant may take one more step, then waits for
         the bag to hold everything up to it (a lockstep run's handshake; else nothing)."""
-        if self.steps is not None and (through := self.steps.freeze(samples)) is not None:
+        if self.steps is None or self.recorder is None:
+            return
+        self.recorder.flush()  # what it holds is written: the freeze may acknowledge it
+        if (through := self.steps.freeze(samples)) is not None:
+            self._ack_pub.publish(encode_clock(through))
+
+    def _written(self) -> None:
+        """The bag's file holds what was heard so far: acknowledge the steps it holds whole."""
+        if self.steps is not None and (through := self.steps.written()) is not None:
             self._ack_pub.publish(encode_clock(through))
 
     def _acknowledger(self, topic: str) -> Callable[[bytes], None]:
         assert self.steps is not None
-        heard, publish = self.steps.heard, self._ack_pub.publish
+        heard = self.steps.heard
 
-        def acknowledge(data: bytes) -> None:
+        def note(data: bytes) -> None:
             ns = cdr_stamp_ns(data)
-            if ns is not None and (through := heard(topic, ns)) is not None:
-                publish(encode_clock(through))
+            if ns is not None:
+                heard(topic, ns)
 
-        return acknowledge
+        return note
 
     # -- what a job reads (mill_bringup.jobs.base.MessageSource) ----------------------------
     def messages(self, topic: str) -> Sequence[bytes]:

@@ -2,10 +2,12 @@
 
 A lockstep plant with `recorder_window` W publishes the states of step j only once the
 recorder has acknowledged step j − W on mill/recorded (mill_plant.drive_cycle). The runner's
-monitor feeds every message it records of the job's stepped topics here and publishes what
-`heard` returns. However busy the machine, the plant is then never more than W steps ahead
-of the bag: no writer's history (2000 samples deep) can overflow before the recorder takes
-its samples, and at the end (`freeze`) the plant stops at a step the bag can wait for.
+monitor feeds every message it records of the job's stepped topics here (`heard`) and, after
+each write of its bag, publishes what `written` returns: the newest step the bag holds whole
+on disk. However busy the machine, the plant is then never more than W steps ahead of the
+bag's file: no writer's history (2000 samples deep) can overflow before the recorder takes
+its samples, a SIGKILL of the runner costs at most the last W steps of every stepped topic,
+and at the end (`freeze`) the plant stops at a step the bag can wait for.
 
 Every stepped topic counts from the start: a step is whole only once each of them holds it,
 so the job lists exactly the topics its graph publishes at every step. (A topic counted
@@ -34,30 +36,31 @@ class RecordedSteps:
         self._newest: dict[str, int] = {}  # per topic, the newest whole sample it gives
         self._period_s = period_s
         self._window = window
-        # Acknowledge every quarter window: the plant never waits for an ack that is due.
-        self._stride = max(1, window // 4)
         self._sent = -1  # the newest sample acknowledged
         self._frozen_at: int | None = None  # where the plant stops, once the job is done
 
     def stepped(self, topic: str) -> bool:
         return topic in self._lags
 
-    def heard(self, topic: str, ns: int) -> int | None:
-        """A message of `topic` stamped ns was recorded: the stamp to acknowledge now, if any."""
+    def heard(self, topic: str, ns: int) -> None:
+        """A message of `topic` stamped ns was recorded (taken into the bag's buffer)."""
         lag = self._lags.get(topic)
         if lag is None:
-            return None
+            return
         k = sample_index(ns, self._period_s) + lag
         if k > self._newest.get(topic, -1):
             self._newest[topic] = k
+
+    def written(self) -> int | None:
+        """Everything heard so far is in the bag's file (a write just ended): the stamp to
+        acknowledge now, if any."""
         return self._due()
 
     def _due(self) -> int | None:
-        through, last = self._through, False
+        through = self._through
         if self._frozen_at is not None:  # no further than the plant may go
-            cap = self._frozen_at - self._window
-            through, last = min(through, cap), through >= cap
-        if through <= self._sent or (through < max(self._sent, 0) + self._stride and not last):
+            through = min(through, self._frozen_at - self._window)
+        if through <= self._sent:
             return None
         self._sent = through
         return sample_stamp_ns(through, self._period_s)
@@ -85,7 +88,7 @@ class RecordedSteps:
     def freeze(self, samples: int) -> int | None:
         """The job's `samples` are done: let the plant step once past them (the ground truth
         of the last sample goes out with that step), or as far as it may go already, and no
-        further. The stamp to acknowledge now, if any."""
+        further. The stamp to acknowledge now, if any (everything heard so far written)."""
         if self._frozen_at is None:
             # the plant's rule (mill_common.lockstep.RecorderGate): j <= acknowledged + W
             self._frozen_at = max(self._sent + self._window, samples)

@@ -438,9 +438,12 @@ class AxisJob(Job[RunRecord]):
         return False
 
     def upstream_topics(self) -> list[str]:
-        # The monitor cannot see from the plant whether an observer's estimates reach it:
-        # the plant starts once the monitor has matched their publishers.
+        # The monitor cannot see from the plant whether an observer's estimates or a
+        # controller's commands reach it: the plant starts once the monitor has matched their
+        # publishers. (A node counts its readers, and any reader counts: a `ros2 topic echo`
+        # would let it answer before the runner hears it.)
         out = [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
+        out += [topics.joint_command(a) for a in self.axes]
         return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
 
     def monitor_topics(self) -> dict[str, str]:

@@ -30,10 +30,11 @@ from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 R = TypeVar('R')
 
 
-# Samples a recorded lockstep run's clock node may run ahead of its bag: far inside the
-# writers' history (DATA_QOS, 2000 samples), and with acknowledgements every quarter of it
-# the clock node hardly ever waits.
-RECORDER_WINDOW = 200
+# Samples a recorded lockstep run's clock node may run ahead of its bag's file: far inside
+# the writers' history (DATA_QOS, 2000 samples), and what a SIGKILL of the runner may cost at
+# most. The runner acknowledges after each write (every monitor.FLUSH_PERIOD), so the clock
+# node takes at most this many steps per write.
+RECORDER_WINDOW = 400
 
 
 class MessageSource(Protocol):
