@@ -41,7 +41,7 @@ from sensor_msgs.msg import JointState
 
 from mill_analysis import records
 from mill_common import topics
-from test.conftest import busy_cores, start_scenario, wait_until
+from test.conftest import busy_cores, run_scenario, start_scenario, wait_until
 
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
@@ -68,23 +68,8 @@ def recorded_run(ros_env, tmp_path_factory) -> dict:
     """`run_scenario slotting --duration 2 --record` once for the module: run dir and stdout."""
     if 'dir' not in _RUN:
         out = tmp_path_factory.mktemp('recorded') / 'run'
-        proc = subprocess.run(
-            [
-                sys.executable,
-                '-m',
-                'mill_bringup.runner',
-                'slotting',
-                '--duration',
-                '2',
-                '--record',
-                '--quiet',
-                '--output',
-                str(out),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env, 'slotting', '--duration', '2', '--record', '--quiet', '--output', str(out)
         )
         assert proc.returncode == 0, proc.stderr[-3000:]
         _RUN.update(dir=out, stdout=proc.stdout)
@@ -199,15 +184,10 @@ def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, l
     recorded whole, so a loaded machine slows the run down and loses nothing."""
     out = tmp_path / 'run'
     with busy_cores(2):
-        proc = subprocess.run(
-            [
-                *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '1'),
-                *('--layout', layout, '--record', '--quiet', '--output', str(out)),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env,
+            *('slotting', '--duration', '1', '--layout', layout),
+            *('--record', '--quiet', '--output', str(out)),
         )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert json.loads((out / 'summary.json').read_text())['missing_samples'] == {}
