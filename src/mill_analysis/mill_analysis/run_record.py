@@ -447,7 +447,8 @@ def read_run(
                 f'{bag.path}: a realtime run without its start (no start_stamp_ns in the '
                 'job status on /diagnostics)'
             )
-        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
+        owners = records.owners(bag.custom_data, ns)
+        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
     diffs = np.diff(stamps)
     dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
     if dt_ns <= 0:
@@ -509,12 +510,13 @@ def _realtime_run(
     start_ns: int,
     stamps: np.ndarray,
     total: int,
+    owners: Mapping[str, str],
 ) -> BagRun:
     """A realtime run's record at the drive's stamps, and the commands' timing."""
     end_time, source = job_end(statuses)
     if end_time is None:
         end_time = (int(stamps[-1]) - start_ns) * 1e-9
-    record, missing = realtime_record(raw, axes, start_ns, end_time)
+    record, missing = realtime_record(raw, axes, start_ns, end_time, owners)
     timing = command_timing(record, raw, walls, axes, start_ns)
     latency = {axis: t.latency_ms for axis, t in timing.items()}
     unanswered = {axis: t.unanswered for axis, t in timing.items()}
