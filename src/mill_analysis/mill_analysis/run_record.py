@@ -103,9 +103,17 @@ def build_record(
     def checked(msg, i, fields):  # what the node of the topic would take, or Rejected
         return joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
 
+    # Each handler checks a message's content as the node reading the topic does: Rejected,
+    # or how to put its values into sample k once its stamp is taken.
     def on_state(msg, i):
         got = checked(msg, i, ('position',))
-        return got if isinstance(got, Rejected) else lambda k: position.__setitem__((k, i), got[0])
+        if isinstance(got, Rejected):
+            return got
+
+        def put(k):
+            position[k, i] = got[0]
+
+        return put
 
     def on_estimate(msg, i):
         got = checked(msg, i, ('position', 'velocity', 'effort'))
@@ -122,7 +130,11 @@ def build_record(
         if isinstance(got, Rejected) and not got.non_finite:
             return got
         value = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
-        return lambda k: torque.__setitem__((k, i), value)
+
+        def put(k):
+            torque[k, i] = value
+
+        return put
 
     def on_truth(msg, _i):
         try:
@@ -141,7 +153,11 @@ def build_record(
 
     def on_force(msg, _i):
         f = msg.wrench.force
-        return lambda k: force.__setitem__(k, (f.x, f.y, f.z))
+
+        def put(k):
+            force[k] = (f.x, f.y, f.z)
+
+        return put
 
     def on_reference(msg, _i):
         # all points checked before any is used, as the controllers do
@@ -196,10 +212,10 @@ def build_record(
         problem = intake.problem(topic, ns, msg.header.frame_id)
         if problem is None:
             try:
-                got = handler[0](msg, handler[1])
-            except (IndexError, ValueError, AttributeError) as exc:
-                got = Rejected(f'malformed: {exc}')
-            problem = got if isinstance(got, Rejected) else None
+                put = handler[0](msg, handler[1])
+            except (IndexError, ValueError) as exc:
+                put = Rejected(f'malformed: {exc}')
+            problem = put if isinstance(put, Rejected) else None
         if problem is not None:
             intake.drop(topic, problem)
             continue
@@ -210,7 +226,7 @@ def build_record(
         intake.accept(topic, ns)
         k = ns // dt_ns
         if 0 <= k < n:
-            got(k)
+            put(k)
             if topic in seen and topic != ref_topic:
                 seen[topic].add(k)
     rec.foreign = intake.drops.per_topic()

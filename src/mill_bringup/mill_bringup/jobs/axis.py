@@ -412,9 +412,8 @@ class AxisJob(Job[RunRecord]):
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
             return None
-        # A step is whole with its states, estimates, commands and cutting force (the plant
-        # publishes it to the recorder), and the ground truth of the step before, if the
-        # plant publishes it.
+        # A step is whole with its states, estimates, commands and cutting force, and the
+        # ground truth of the step before if the plant publishes it.
         stepped = {topics.state(a): 0 for a in self.axes}
         for axis in self.axes:
             stepped[topics.estimate(axis)] = 0
@@ -439,9 +438,7 @@ class AxisJob(Job[RunRecord]):
 
     def upstream_topics(self) -> list[str]:
         # The monitor cannot see from the plant whether an observer's estimates or a
-        # controller's commands reach it: the plant starts once the monitor has matched their
-        # publishers. (A node counts its readers, and any reader counts: a `ros2 topic echo`
-        # would let it answer before the runner hears it.)
+        # controller's commands reach it: the plant starts once it has matched their publishers.
         out = [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
         out += [topics.joint_command(a) for a in self.axes]
         return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
