@@ -174,3 +174,22 @@ def hosts(ros_env: dict[str, str]) -> Iterator[TwoHosts]:
     """Two network namespaces joined by a veth pair (test/two_hosts.py), removed afterwards."""
     with two_hosts(ros_env) as two:
         yield two
+
+
+RUNNER = (sys.executable, '-m', 'mill_bringup.runner')
+
+
+def run_scenario(
+    env: dict[str, str], *args: str, timeout: float = 600
+) -> subprocess.CompletedProcess[str]:
+    """`run_scenario ARGS` to its end, its output captured."""
+    return subprocess.run(
+        [*RUNNER, *args], env=env, capture_output=True, text=True, timeout=timeout
+    )
+
+
+def start_scenario(env: dict[str, str], *args: str) -> subprocess.Popen[str]:
+    """`run_scenario ARGS` started, its output piped."""
+    return subprocess.Popen(
+        [*RUNNER, *args], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )

@@ -68,6 +68,10 @@ REFERENCE_MARGIN = 30
 TICK = 10  # samples between /clock ticks (clock_period 10 ms)
 UNRELATED = '/fuzz/unrelated'  # recorded (the run records the domain), read by no node
 FAR = 30_000_000_000  # [ns] a far stamp: later than any reference may lead (20 s), and the job
+# A far-ahead sample of the other topics: 0.3 s to 2 s ahead (the attack of issue 25), later
+# than the plant can be and within the job, so its owner's message of it comes later: the
+# record, like the nodes, must not take the spoof first.
+AHEAD = 300
 
 # topic -> (owner named in header.frame_id, fields its readers need of the axis's joint)
 JOINT_STATE_TOPICS: dict[str, tuple[str, tuple[str, ...]]] = {}
@@ -202,7 +206,21 @@ def stamp_of(fuzz: Fuzz, c: int) -> int:
         return (base + fuzz.amount % 20) * T_NS + 1 + fuzz.amount % (T_NS - 1)
     if fuzz.stamp == 'negative':
         return -fuzz.amount
-    return c * T_NS + FAR + fuzz.amount * T_NS  # far_ahead
+    if fuzz.topic == topics.REFERENCE:
+        return c * T_NS + FAR + fuzz.amount * T_NS  # far_ahead
+    return (c + AHEAD + fuzz.amount % 1700) * T_NS
+
+
+# Ten valid states of x in the plant's name, 0.3 s to 1.2 s ahead of the newest tick (issue 25:
+# the record took them as the first message of their samples).
+SPOOFS = range(AHEAD, 4 * AHEAD + 1, AHEAD // 3)
+
+
+def spoof(k: int) -> JointState:
+    msg = JointState(name=['x'], position=[0.5])
+    msg.header.stamp = stamp_msg(k * T_NS)
+    msg.header.frame_id = OWNERS[topics.state('x')]
+    return msg
 
 
 def stamp_msg(ns: int) -> Time:
@@ -309,8 +327,13 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
             }
             other = node.create_publisher(JointState, UNRELATED, DATA_QOS)
             i, next_send = 0, time.monotonic()
+            spoofed = False
             while runner.poll() is None:
                 executor.spin_once(timeout_sec=0.001)
+                if not spoofed and ticks:  # the attack of issue 25, once, with valid states
+                    for ahead in SPOOFS:
+                        pubs[topics.state('x')].publish(spoof(max(ticks) + ahead))
+                    spoofed = True
                 if time.monotonic() >= next_send and ticks:
                     fuzz = stream[i % len(stream)]
                     msg = message(fuzz, max(ticks))
@@ -343,10 +366,15 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     assert summary['missing_samples'] == {}
     assert any(p.startswith('plant: ownership') for p in summary['problems'])
     assert set(summary['foreign']) == {
-        *(topics.state(a) for a in AXES),
-        *(topics.estimate(a) for a in AXES),
+        *(f(a) for a in AXES for f in (topics.state, topics.estimate, topics.joint_command)),
         topics.REFERENCE,
     }, summary['foreign']
+    # ... each with its reasons: the spoofs ahead of the plant with the owner's name among them
+    reasons = {t: ' '.join(r for _, r in why) for t, why in summary['dropped'].items()}
+    spoofed = {f.topic for f in stream if f.sender is None and f.stamp == 'far_ahead'}
+    spoofed.discard(topics.REFERENCE)  # a reference may lead by 20 s: its far stamps are far
+    spoofed.add(topics.state('x'))
+    assert all('ahead of the plant' in reasons[t] for t in spoofed), reasons
     # ... and without them the record is the offline run's, sample for sample.
     assert summary['events'] == []
     assert summary['offline_max_difference'] == 0.0

@@ -28,6 +28,7 @@ from mill_common.timebase import sample_stamp_ns
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 
+from mill_analysis.records import missing_ranges
 from mill_common import topics
 
 # /mill/force_control/state: force used, reference, feed command, override, active β, depth
@@ -58,6 +59,7 @@ class ForceRecord:
     fine: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=list)
     held_samples: int = 0
     j_c: float = math.nan
+    gaps: dict[str, list[tuple[int, int]]] = field(default_factory=dict)  # missing, per topic
 
     @classmethod
     def empty(cls, n: int, period: float) -> ForceRecord:
@@ -166,6 +168,7 @@ def record_from_messages(
     rec.trace_ns = np.array([p[0] for p in trace], dtype=np.int64)
     rec.trace_force = np.array([p[1] for p in trace])
     missing = {t: n - len(ks) for t, ks in seen.items()}
+    rec.gaps = {t: missing_ranges(ks, n) for t, ks in seen.items() if len(ks) < n}
     return rec, {t: m for t, m in missing.items() if m}
 
 
@@ -186,6 +189,12 @@ class ForceBagRun:
     missing: dict[str, int]
     message_count: int
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def held(self) -> int:
+        """The samples of the job the bag holds (a force sample each)."""
+        measured = self.record.measured
+        return 0 if measured is None else int(np.isfinite(measured).sum())
 
 
 def is_force_bag(counts: Mapping[str, int]) -> bool:

@@ -13,6 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from mill_common.signals import AXES
 
+from mill_analysis.record_checks import Drops
+
 SIGNALS = (
     'position',  # measured position [m]
     'reference',  # reference position [m]
@@ -37,8 +39,12 @@ class RunRecord:
     t: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
     events: list[str] = field(default_factory=list)  # what happened besides the signals
-    # Messages left out per topic: sent by another node than the topic's owner, or malformed.
+    # Messages left out per topic: what the nodes drop (mill_analysis.record_checks): sent by
+    # another node than the topic's owner, a stamp they refuse, or malformed; and why.
     foreign: dict[str, int] = field(default_factory=dict)
+    drops: Drops = field(default_factory=Drops)
+    # Per topic, the runs (first, last) of the samples it lacks.
+    gaps: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
     # A job with a force controller: one row per control instant, columns FORCE_CONTROL
     force_control: np.ndarray | None = None
 
@@ -54,6 +60,8 @@ class RunRecord:
             {k: v[:n] for k, v in self.signals.items()},
             self.events,
             self.foreign,
+            self.drops,
+            self.gaps,
             self.force_control,
         )
 
@@ -64,6 +72,7 @@ class RunRecord:
         for k, v in self.signals.items():
             out.signals[k][:old] = v
         out.events, out.foreign, out.force_control = self.events, self.foreign, self.force_control
+        out.drops, out.gaps = self.drops, self.gaps
         return out
 
     def __getitem__(self, name: str) -> np.ndarray:

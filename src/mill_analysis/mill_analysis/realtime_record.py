@@ -30,8 +30,10 @@ from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, AxisReference
+from mill_common.timing import Realtime
 
 from mill_analysis.metrics import SIGNALS, RunRecord
+from mill_analysis.record_checks import Drops, Intake, arrival_order, subset
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -42,12 +44,28 @@ def _ns(stamp: Any) -> int:
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
-def _by_stamp(messages: Sequence[bytes]) -> dict[int, Any]:
-    out = {}
-    for data in messages:
-        msg = decode(JOINT_STATE, data)
-        out[_ns(msg.header.stamp)] = msg
-    return out
+def _by_stamp(messages: Sequence[Any]) -> dict[int, Any]:
+    return {_ns(msg.header.stamp): msg for msg in messages}
+
+
+def _taken(
+    raw: Mapping[str, Sequence[bytes]], owners: Mapping[str, str]
+) -> tuple[dict[str, list[Any]], Drops]:
+    """The decoded messages a realtime node would take, per topic, in the order they arrived
+    (mill_analysis.record_checks: its sender, its stamp not repeated nor in the past), and
+    what was left out."""
+    intake = Intake(Realtime(1), owners, stepped=(), history=[topics.REFERENCE])
+    out: dict[str, list[Any]] = {t: [] for t in raw}
+    for topic, data in arrival_order(raw, list(raw)):
+        msg = decode(JOINT_TRAJECTORY if topic == topics.REFERENCE else JOINT_STATE, data)
+        ns = _ns(msg.header.stamp)
+        problem = intake.problem(topic, ns, msg.header.frame_id)
+        if problem is not None:
+            intake.drop(topic, problem)
+            continue
+        intake.accept(topic, ns)
+        out[topic].append(msg)
+    return out, intake.drops
 
 
 def realtime_record(
@@ -55,19 +73,19 @@ def realtime_record(
     axes: Sequence[str],
     t0: int,
     end_time: float,
-    owner: str = '',
+    owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
     """Samples of the job [t0, t0 + end_time] at the stamps of the first axis's states, and
     per topic the drive sends every tick, the ticks of the job it lacks (`missing_ticks`).
 
-    owner: the drive's node name; states sent by any other node are not the machine's.
+    owners: the node each topic must come from (the drive for the states); what a node would
+    drop (another sender, a stamp repeated or in the past) is left out and counted in the
+    record's `foreign` and `drops`.
     """
-    states = {a: _by_stamp(raw.get(topics.state(a), ())) for a in axes}
-    if owner:
-        states = {
-            a: {ns: m for ns, m in s.items() if m.header.frame_id == owner}
-            for a, s in states.items()
-        }
+    wanted = [topics.REFERENCE, topics.GROUND_TRUTH]
+    wanted += [f(a) for a in axes for f in (topics.state, topics.estimate, topics.joint_command)]
+    taken, drops = _taken(subset(raw, wanted), owners or {})
+    states = {a: _by_stamp(taken.get(topics.state(a), ())) for a in axes}
     end_ns = t0 + round(end_time * 1e9)
     stamps = sorted(ns for ns in states[axes[0]] if t0 <= ns <= end_ns)
     n = len(stamps)
@@ -75,10 +93,10 @@ def realtime_record(
         np.array([(ns - t0) * 1e-9 for ns in stamps]),
         {s: np.full((n, len(AXES)), np.nan) for s in SIGNALS},
     )
+    rec.foreign, rec.drops = drops.per_topic(), drops
     sig = rec.signals
     refs = {a: ReferenceBuffer() for a in axes}
-    for data in raw.get(topics.REFERENCE, ()):
-        msg = decode(JOINT_TRAJECTORY, data)
+    for msg in taken.get(topics.REFERENCE, ()):
         base = _ns(msg.header.stamp)
         names = list(msg.joint_names)
         for p in msg.points:
@@ -89,9 +107,9 @@ def realtime_record(
                     vel = p.velocities[j] if len(p.velocities) > j else 0.0
                     acc = p.accelerations[j] if len(p.accelerations) > j else 0.0
                     refs[a].add(at, AxisReference(p.positions[j], vel, acc))
-    estimates = {a: _by_stamp(raw.get(topics.estimate(a), ())) for a in axes}
-    commands = {a: _by_stamp(raw.get(topics.joint_command(a), ())) for a in axes}
-    truth = _by_stamp(raw.get(topics.GROUND_TRUTH, ()))
+    estimates = {a: _by_stamp(taken.get(topics.estimate(a), ())) for a in axes}
+    commands = {a: _by_stamp(taken.get(topics.joint_command(a), ())) for a in axes}
+    truth = _by_stamp(taken.get(topics.GROUND_TRUTH, ()))
     drive = {topics.state(a): states[a] for a in axes}
     if truth:  # a hardware driver has none
         drive[topics.GROUND_TRUTH] = truth

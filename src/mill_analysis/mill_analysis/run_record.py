@@ -18,7 +18,6 @@ reads only that machine's statuses.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,10 +37,13 @@ from mill_bag.types import (
 from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps
+from mill_common.timing import Lockstep
 
+from mill_analysis import records
 from mill_analysis.bag_status import job_end, job_start, plant_status
 from mill_analysis.metrics import RunRecord
 from mill_analysis.realtime_record import command_timing, realtime_record
+from mill_analysis.record_checks import Intake, Received, arrival_order, drop_lines, subset
 from mill_common import topics as topic_names
 
 # progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
@@ -73,183 +75,188 @@ def build_record(
     listened: Iterable[str],
     owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
-    """Decoded messages (topic, message) -> RunRecord of n samples at t = k T.
+    """Decoded messages (topic, message), in the order one listener received them ->
+    RunRecord of n samples at t = k T.
 
-    The one place where messages become signals: the runner's monitor and the
-    bag reader both call it. A message belongs to sample k when its header stamp
-    is exactly k T (0 <= k < n); of a repeated stamp the first message counts (the nodes
-    take the first too), and a reference older than the newest one is left out.
-    owners {topic: node}: a message of such a topic whose header.frame_id names another
-    sender is left out, as is a malformed one (what the node reading the topic drops: no
-    joint, too short, not finite, a reference point off the grid; a command's NaN is a brake
-    request and kept); both are counted in the record's `foreign`. Also returns, per listened
-    per-sample topic, how many of the n samples are missing.
+    The one place where messages become signals: the runner's monitor and the bag reader
+    both call it. Each message goes through the nodes' checks (mill_analysis.record_checks:
+    its sender against `owners` {topic: node}, its stamp as the lockstep timing takes it,
+    its content as the node reading the topic takes it: the joint there, the arrays long
+    enough, the values finite, the reference's points on the grid; a command's NaN is a
+    brake request and kept); what a node would drop is left out, counted in the record's
+    `foreign` and, with its reason, in `drops`. A message belongs to sample k when its stamp
+    is k T (0 <= k < n); of a sample offered again the first message counts, as the nodes
+    take the first. Also returns, per listened topic, how many of the n samples are missing
+    (the reference: samples no point of it covers); the record's `gaps` say which.
     """
     owners = owners or {}
+    listened = list(listened)
+    ref_topic = topic_names.REFERENCE
     rec = RunRecord.empty(n, dt_ns / 1e9)
     s = rec.signals
-    seen: dict[str, set[int]] = {t: set() for t in listened if t != topic_names.REFERENCE}
+    seen: dict[str, set[int]] = {t: set() for t in listened}
     position, torque, force = s['position'], s['torque'], s['force']
     est_v, est_d = s['estimate_velocity'], s['estimate_disturbance']
     ref_p, ref_v = s['reference'], s['reference_velocity']
     true_v, true_d = s['true_velocity'], s['true_disturbance']
 
-    def checked(msg, i, fields):  # what the node of the topic would take, or ValueError
-        got = joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
+    def checked(msg, i, fields):  # what the node of the topic would take, or Rejected
+        return joint_values(msg.name, {f: getattr(msg, f) for f in fields}, AXES[i], fields)
+
+    # Each handler checks a message's content as the node reading the topic does: Rejected,
+    # or how to put its values into sample k once its stamp is taken.
+    def on_state(msg, i):
+        got = checked(msg, i, ('position',))
         if isinstance(got, Rejected):
-            raise ValueError(got.reason)
-        return got
+            return got
 
-    def on_state(k, msg, i):
-        (position[k, i],) = checked(msg, i, ('position',))
+        def put(k):
+            position[k, i] = got[0]
 
-    def on_estimate(k, msg, i):
-        _, est_v[k, i], est_d[k, i] = checked(msg, i, ('position', 'velocity', 'effort'))
+        return put
 
-    def on_command(k, msg, i):
-        got = joint_values(msg.name, {'effort': msg.effort}, AXES[i], ('effort',))
+    def on_estimate(msg, i):
+        got = checked(msg, i, ('position', 'velocity', 'effort'))
+        if isinstance(got, Rejected):
+            return got
+
+        def put(k):
+            est_v[k, i], est_d[k, i] = got[1], got[2]
+
+        return put
+
+    def on_command(msg, i):
+        got = checked(msg, i, ('effort',))
         if isinstance(got, Rejected) and not got.non_finite:
-            raise ValueError(got.reason)
-        torque[k, i] = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
+            return got
+        value = math.nan if isinstance(got, Rejected) else got[0]  # NaN: a brake request
 
-    def on_truth(k, msg, _i):
-        for j, name in enumerate(msg.name):
-            i = AXES.index(name)
-            true_v[k, i] = msg.velocity[j]
-            true_d[k, i] = msg.effort[j]
+        def put(k):
+            torque[k, i] = value
 
-    def on_force(k, msg, _i):
+        return put
+
+    def on_truth(msg, _i):
+        try:
+            rows = [
+                (AXES.index(name), msg.velocity[j], msg.effort[j])
+                for j, name in enumerate(msg.name)
+            ]
+        except (IndexError, ValueError):
+            return Rejected(f'ground truth of joints {list(msg.name)} without their values')
+
+        def put(k):
+            for i, v, d in rows:
+                true_v[k, i], true_d[k, i] = v, d
+
+        return put
+
+    def on_force(msg, _i):
         f = msg.wrench.force
-        force[k] = (f.x, f.y, f.z)
+
+        def put(k):
+            force[k] = (f.x, f.y, f.z)
+
+        return put
+
+    def on_reference(msg, _i):
+        # all points checked before any is used, as the controllers do
+        values = []
+        for point in msg.points:
+            offset = _ns(point.time_from_start)
+            if offset % dt_ns:
+                return Rejected(f'a point at {offset} ns is off the grid')
+            arrays = {
+                'positions': point.positions,
+                'velocities': point.velocities,
+                'accelerations': point.accelerations,
+            }
+            got = point_values(
+                msg.joint_names, arrays, axes, ['positions'], ['velocities', 'accelerations']
+            )
+            if isinstance(got, Rejected):
+                return got
+            values.append((offset // dt_ns, got['positions'], got['velocities']))
+        covered = seen.get(ref_topic)
+
+        def put(k):
+            for offset, pos, vel in values:
+                kp = k + offset
+                if 0 <= kp < n:
+                    for axis, p_i, v_i in zip(axes, pos, vel, strict=True):
+                        i = AXES.index(axis)
+                        ref_p[kp, i], ref_v[kp, i] = p_i, v_i
+                    if covered is not None:
+                        covered.add(kp)
+
+        return put
 
     handlers: dict[str, tuple] = {
         topic_names.GROUND_TRUTH: (on_truth, None),
         topic_names.CUTTING_FORCE: (on_force, None),
+        ref_topic: (on_reference, None),
     }
     for axis in axes:
         i = AXES.index(axis)
         handlers[topic_names.state(axis)] = (on_state, i)
         handlers[topic_names.estimate(axis)] = (on_estimate, i)
         handlers[topic_names.joint_command(axis)] = (on_command, i)
-
-    foreign = rec.foreign
-    first: dict[str, set[int]] = {}  # samples of each topic taken already
-    newest_reference = -1
+    intake = Intake(
+        Lockstep(dt_ns), owners, [t for t in handlers if t != ref_topic], history=[ref_topic]
+    )
     for topic, msg in messages:
-        owner = owners.get(topic)
-        if owner is not None and msg.header.frame_id != owner:
-            foreign[topic] = foreign.get(topic, 0) + 1
+        handler = handlers.get(topic)
+        if handler is None:
             continue
-        k, rem = divmod(_ns(msg.header.stamp), dt_ns)
-        if rem != 0 or not 0 <= k < n:
+        ns = _ns(msg.header.stamp)
+        problem = intake.problem(topic, ns, msg.header.frame_id)
+        if problem is None:
+            try:
+                put = handler[0](msg, handler[1])
+            except (IndexError, ValueError) as exc:
+                put = Rejected(f'malformed: {exc}')
+            problem = put if isinstance(put, Rejected) else None
+        if problem is not None:
+            intake.drop(topic, problem)
             continue
-        taken = first.setdefault(topic, set())
-        if k in taken or (topic == topic_names.REFERENCE and k < newest_reference):
-            continue  # a repeat (the same values) or a message in the past: the first counts
-        try:
-            if topic == topic_names.REFERENCE:
-                if len(msg.points) == 0:
-                    continue  # nothing in it
-                values = []  # all points checked before any is used, as the controllers do
-                for point in msg.points:
-                    offset = _ns(point.time_from_start)
-                    if offset % dt_ns:
-                        raise ValueError('a point off the sample grid')
-                    arrays = {
-                        'positions': point.positions,
-                        'velocities': point.velocities,
-                        'accelerations': point.accelerations,
-                    }
-                    got = point_values(
-                        msg.joint_names,
-                        arrays,
-                        axes,
-                        ['positions'],
-                        ['velocities', 'accelerations'],
-                    )
-                    if isinstance(got, Rejected):
-                        raise ValueError(got.reason)
-                    values.append((k + offset // dt_ns, got['positions'], got['velocities']))
-                for kp, pos, vel in values:
-                    if 0 <= kp < n:
-                        for axis, p_i, v_i in zip(axes, pos, vel, strict=True):
-                            i = AXES.index(axis)
-                            ref_p[kp, i], ref_v[kp, i] = p_i, v_i
-                newest_reference = k
-                taken.add(k)
-                continue
-            handler = handlers.get(topic)
-            if handler is None:
-                continue
-            handler[0](k, msg, handler[1])
-        except (IndexError, ValueError):
-            foreign[topic] = foreign.get(topic, 0) + 1  # malformed: too short, unknown joint
-            continue
-        taken.add(k)
-        if topic in seen:
-            seen[topic].add(k)
+        if topic == ref_topic and not len(msg.points):
+            continue  # nothing in it (the controllers take nothing from it either)
+        if intake.again(topic, ns):
+            continue  # the sample offered again: the first message counts
+        intake.accept(topic, ns)
+        k = ns // dt_ns
+        if 0 <= k < n:
+            put(k)
+            if topic in seen and topic != ref_topic:
+                seen[topic].add(k)
+    rec.foreign = intake.drops.per_topic()
+    rec.drops = intake.drops
     missing = {t: n - len(ks) for t, ks in seen.items()}
+    rec.gaps = {t: records.missing_ranges(ks, n) for t, ks in seen.items() if len(ks) < n}
     return rec, missing
 
 
 def record_from_raw(
-    raw: dict[str, list[bytes]],
-    types: dict[str, str],
+    raw: Mapping[str, Sequence[bytes]],
+    types: Mapping[str, str],
     axes: Sequence[str],
     n: int,
     dt_ns: int,
-    workers: int = 1,
     progress: ProgressCallback | None = None,
     owners: Mapping[str, str] | None = None,
 ) -> tuple[RunRecord, dict[str, int]]:
-    """Serialized messages per topic -> decode -> build_record; what the monitor and the bag
-    reader both call. With workers > 1 the topics are split between forked processes, each
-    running build_record on its share; every (sample, axis) value comes from one topic, so
-    the merged record is the one a single call gives. `progress('decoding', done, total)`
-    is called now and then with the number of messages decoded."""
+    """Serialized messages per topic -> decode -> build_record, in the order they arrived
+    (`Received`; a plain mapping: each topic after the one before); what the monitor and the
+    bag reader both call. `progress('decoding', done, total)` is called now and then with the
+    number of messages decoded."""
     listened = list(raw)
     total = sum(len(raw[t]) for t in listened)
-    if workers <= 1:
-        messages = ((t, decode(types[t], d)) for t in listened for d in raw[t])
-        if progress is not None:
-            messages = _counted(messages, lambda done: progress('decoding', done, total))
-        return build_record(messages, axes, n, dt_ns, listened, owners)
-    import multiprocessing
-
-    global _SHARED  # read by the forked workers, not pickled
-    groups: list[list[str]] = [[] for _ in range(workers)]
-    loads = [0] * workers
-    for topic in sorted(listened, key=lambda t: -len(raw[t])):
-        i = loads.index(min(loads))
-        groups[i].append(topic)
-        loads[i] += len(raw[topic])
-    context = multiprocessing.get_context('fork')
-    decoded = context.Value('q', 0)  # messages decoded by all workers, for progress
-    _SHARED = (raw, types, list(axes), n, dt_ns, decoded, owners)
-    try:
-        with context.Pool(workers) as pool:
-            pending = pool.map_async(_record_part, [g for g in groups if g])
-            while not pending.ready():
-                pending.wait(0.5)
-                if progress is not None:
-                    progress('decoding', decoded.value, total)
-            parts = pending.get()
-    finally:
-        _SHARED = None
+    messages: Iterable[tuple[str, Any]] = (
+        (t, decode(types[t], d)) for t, d in arrival_order(raw, listened)
+    )
     if progress is not None:
-        progress('decoding', total, total)
-    rec = RunRecord.empty(n, dt_ns / 1e9)
-    missing: dict[str, int] = {}
-    for signals, part_missing, part_foreign in parts:
-        for name, values in signals.items():
-            have = ~np.isnan(values)
-            rec.signals[name][have] = values[have]
-        missing.update(part_missing)
-        rec.foreign.update(part_foreign)
-    return rec, missing
-
-
-_SHARED: tuple | None = None
+        messages = _counted(messages, lambda done: progress('decoding', done, total))
+    return build_record(messages, axes, n, dt_ns, listened, owners)
 
 
 def _counted(items: Iterable[Any], report: Callable[[int], None], every: int = 20_000):
@@ -260,26 +267,6 @@ def _counted(items: Iterable[Any], report: Callable[[int], None], every: int = 2
             report(count)
         yield item
     report(count)
-
-
-def _record_part(
-    topics_part: list[str],
-) -> tuple[dict[str, np.ndarray], dict[str, int], dict[str, int]]:
-    assert _SHARED is not None, 'set for the worker processes before they start'
-    raw, types, axes, n, dt_ns, decoded, owners = _SHARED
-
-    last = 0
-
-    def add(done: int) -> None:
-        nonlocal last
-        with decoded.get_lock():
-            decoded.value += done - last
-        last = done
-
-    messages = ((t, decode(types[t], d)) for t in topics_part for d in raw[t])
-    messages = _counted(messages, add, every=5_000)
-    rec, missing = build_record(messages, axes, n, dt_ns, topics_part, owners)
-    return rec.signals, missing, rec.foreign
 
 
 # -- the run in a bag ------------------------------------------------------------------------
@@ -310,6 +297,34 @@ class BagRun:
     command_latency_ms: dict[str, np.ndarray] = field(default_factory=dict)
     unanswered: dict[str, float] = field(default_factory=dict)
     longest_unanswered: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def held(self) -> tuple[int, float]:
+        """The samples of the job the bag holds (a state of every axis), and the time of the
+        last of them [s] (NaN: none)."""
+        pos = self.record['position'][:, [AXES.index(a) for a in self.axes]]
+        have = np.flatnonzero(np.isfinite(pos).all(axis=1))
+        return len(have), float(self.record.t[have[-1]]) if len(have) else math.nan
+
+    def losses(self) -> list[str]:
+        """What the bag lacks: a line per topic with samples missing (which ones, where
+        known), and per topic with messages the nodes would drop, left out of the record."""
+        return records.loss_lines(self.missing, self.record.gaps) + drop_lines(
+            self.record.drops.reasons()
+        )
+
+    def extent(self) -> str:
+        """What the bag holds of the job, as `report` says it: '6001 samples', or '2061 of the
+        job's 6001 samples, the last at t = 2.060 s of 6.000 s' (a realtime run's samples are
+        the drive's ticks the bag holds: '2061 samples, the last at ...')."""
+        held, last = self.held
+        end = float(self.record.t[-1]) if self.n else math.nan
+        if self.realtime and self.end_time is not None:  # samples at the drive's ticks
+            end = self.end_time
+        if held == self.n and not last < end - 1.5 * self.dt_ns * 1e-9:
+            return f'{self.n} samples'
+        count = f'{held} samples' if held == self.n else f"{held} of the job's {self.n} samples"
+        return f'{count}, the last at t = {last:.3f} s of {end:.3f} s'
 
 
 def run_namespace(names: Iterable[str], where: str, namespace: str | None = None) -> str:
@@ -378,6 +393,7 @@ def read_run(
     # One pass over the bag: every topic that is a contract topic in some namespace is
     # kept by its absolute name; the namespace is chosen once every name is known.
     kept: dict[str, _Stream | None] = {}
+    order: list[str] = []  # the kept topics' names in file order: the order they arrived
     info = (bag.metadata or {}).get('rosbag2_bagfile_information') or {}
     expected = info.get('message_count') if isinstance(info, dict) else None
     all_statuses: list[Any] = []
@@ -398,13 +414,15 @@ def read_run(
             stream.data.append(data)
             stream.log_times.append(log_time)
             stream.publish_times.append(publish_time)
+            order.append(name)
     if progress is not None:
         progress('reading', read, expected)
     total = sum(bag.counts.values())
     if total == 0:
         raise BagError(f'{bag.path} holds no messages')
     ns = run_namespace(bag.counts, str(bag.path), namespace)
-    raw: dict[str, list[bytes]] = {}
+    raw = Received()
+    relative: dict[str, str] = {}
     walls: dict[str, list[int | None]] = {}  # publish times of the state messages
     for topic, msgtype in wanted_types.items():
         name = topic_names.qualify(topic, ns)
@@ -416,7 +434,9 @@ def read_run(
                 f'{bag.path}: topic {name} has type {stream.msgtype}, expected {msgtype}'
             )
         raw[topic] = stream.data
+        relative[name] = topic
         walls[topic] = stream.publish_times
+    raw.order = [relative[name] for name in order if name in relative]
     feed_stream = kept.get(topic_names.qualify(topic_names.FEED_OVERRIDE, ns))
     feed = (
         []
@@ -443,7 +463,8 @@ def read_run(
                 f'{bag.path}: a realtime run without its start (no start_stamp_ns in the '
                 'job status on /diagnostics)'
             )
-        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total)
+        owners = records.owners(bag.custom_data, ns)
+        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
     diffs = np.diff(stamps)
     dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
     if dt_ns <= 0:
@@ -457,10 +478,9 @@ def read_run(
         n = last // dt_ns + 1
         source = 'last sample of every state topic (no job status on /diagnostics)'
         notes.append('no job status on /diagnostics: every sample up to the last state is used')
-    listened = {t: raw[t] for t in record_topics(axes) if t in raw}
-    to_decode = sum(len(v) for v in listened.values())
-    workers = min(2, os.cpu_count() or 1) if to_decode > 100_000 else 1
-    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, workers, progress)
+    listened = subset(raw, record_topics(axes))
+    owners = records.owners(bag.custom_data, ns)
+    record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, progress, owners)
     # Wall-clock arrival of each sample of the first axis, where the storage has
     # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
     wall = None
@@ -506,18 +526,29 @@ def _realtime_run(
     start_ns: int,
     stamps: np.ndarray,
     total: int,
+    owners: Mapping[str, str],
 ) -> BagRun:
     """A realtime run's record at the drive's stamps, and the commands' timing."""
     end_time, source = job_end(statuses)
     if end_time is None:
         end_time = (int(stamps[-1]) - start_ns) * 1e-9
-    record, missing = realtime_record(raw, axes, start_ns, end_time)
+    record, missing = realtime_record(raw, axes, start_ns, end_time, owners)
     timing = command_timing(record, raw, walls, axes, start_ns)
     latency = {axis: t.latency_ms for axis, t in timing.items()}
     unanswered = {axis: t.unanswered for axis, t in timing.items()}
     diffs = np.diff(stamps)
     dt_ns = int(np.median(diffs)) if diffs.size else 0
     notes = ["realtime run: samples at the drive's stamps, the reference interpolated there"]
+    # A bag that ends before the job (a recorder killed): the drive's ticks after its last
+    # state are in no topic, which `realtime_record` cannot see; counted at the drive's rate.
+    last_ns = int(stamps[-1]) if stamps.size else start_ns
+    tail = (start_ns + round(end_time * 1e9) - last_ns) // dt_ns if dt_ns else 0
+    if tail > 1:
+        missing = {t: m + tail for t, m in missing.items()}
+        notes.append(
+            f"the bag ends at t = {(last_ns - start_ns) * 1e-9:.3f} s of the job's "
+            f'{end_time:.3f} s: about {tail} samples of every topic are not in it'
+        )
     return BagRun(
         bag=bag,
         axes=axes,

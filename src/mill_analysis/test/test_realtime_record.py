@@ -83,11 +83,13 @@ def test_a_realtime_record_counts_the_drives_ticks_missing_per_topic() -> None:
     raw[topics.state('y')].append(joint_state_bytes(T0 + DT // 2, ('y',), (1.0,), sender='m'))
     truth = (0.0, 0.0)
     raw[topics.GROUND_TRUTH] = sent('truth', lambda ns: joint_state_bytes(ns, 'xy', *[truth] * 3))
-    rec, missing = realtime_record(raw, ['x', 'y'], T0, 9 * DT * 1e-9, owner='d')
+    owners = {topics.state(a): 'd' for a in 'xy'}
+    rec, missing = realtime_record(raw, ['x', 'y'], T0, 9 * DT * 1e-9, owners)
     assert missing == {topics.state('x'): 1, topics.state('y'): 2, topics.GROUND_TRUTH: 1}
     assert rec.t.size == 9  # x's states of ticks 0 .. 9 but 6
     assert np.isnan(rec.signals['position'][2:4, 1]).all()
     assert not np.isnan(rec.signals['position'][[0, 1, 4], 1]).any()
+    assert rec.foreign == {topics.state('y'): 1}  # the other sender's state, left out
 
 
 def test_a_realtime_record_without_ground_truth_counts_the_states_only() -> None:

@@ -124,3 +124,63 @@ def test_a_lockstep_bag_names_the_samples_it_lacks_too(foreign_bag) -> None:
     assert 'WARNING: mill/z/estimate: samples missing in the record: 1' in kind_of(path).table(
         [run]
     )
+
+
+PER_SAMPLE = [
+    *(f(a) for a in 'xyz' for f in (topics.state, topics.estimate, topics.joint_command)),
+    topics.GROUND_TRUTH,
+    topics.CUTTING_FORCE,
+]
+
+
+@pytest.mark.parametrize('kind_name', [records.AXIS, records.AXIS_REALTIME])
+def test_a_bag_cut_short_says_what_it_holds_and_lacks(foreign_bag, kind_name) -> None:
+    # The recorder was killed after sample 199 of the job's 401 (0.4 s).
+    realtime = kind_name == records.AXIS_REALTIME
+    path, _ = foreign_bag(
+        'mcap',
+        start_ns=0 if realtime else None,
+        notes=records.bag_notes(kind_name),
+        drop={t: range(200, 401) for t in [*PER_SAMPLE, topics.REFERENCE]},
+    )
+    kind = kind_of(path)
+    run = kind.read(path, 'cut', OPTIONS)
+    table = kind.table([run]).splitlines()
+    assert run.run.held == (200, 0.199)
+    if realtime:  # the drive's ticks after the bag's last state, at its rate
+        assert table[0].endswith('(200 samples, the last at t = 0.199 s of 0.400 s, T = 1 ms)')
+        assert run.run.missing == {t: 201 for t in [*map(topics.state, 'xyz'), topics.GROUND_TRUTH]}
+        assert 'the bag ends at t = 0.199 s' in kind.table([run])
+    else:
+        assert table[0].endswith(
+            "(200 of the job's 401 samples, the last at t = 0.199 s of 0.400 s, T = 1 ms)"
+        )
+        assert run.run.missing == dict.fromkeys([*PER_SAMPLE, topics.REFERENCE], 201)
+        command = topics.joint_command('y')
+        line = f'WARNING: {command}: samples missing in the record: 201 (k = 200–400)'
+        assert line in table
+        assert f'- cut: {line}' in kind.markdown([run], [], ['cut'])
+        assert '| 200 of 401 | 1 ms | 0.199 s |' in kind.markdown([run], [], ['cut'])
+
+
+def test_a_bag_that_names_its_topics_owners_leaves_out_what_they_did_not_send(
+    foreign_bag,
+) -> None:
+    # The writer names no sender (frame_id ''): a bag that says the plant sends the states of
+    # y has none of them from the plant.
+    notes = {
+        **records.bag_notes(records.AXIS),
+        **records.owners_note({topics.state('y'): 'plant'}, '/'),
+    }
+    path, rec = foreign_bag('mcap', notes=notes)
+    run = kind_of(path).read(path, 'owned', OPTIONS).run
+    assert run.record.foreign == {topics.state('y'): rec.t.size}
+    assert run.missing == {topics.state('y'): rec.t.size}
+    assert f'ERROR: {topics.state("y")}: {rec.t.size} messages left out of the record: ' in (
+        '\n'.join(run.losses())
+    )
+    assert records.owners(notes, '/') == {topics.state('y'): 'plant'}
+    assert (
+        records.owners(notes, '/machine2') == {}
+        and records.owners({records.OWNERS: '['}, '/') == {}
+    )

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
 from mill_analysis.metrics import SIGNALS, summarize
+from mill_analysis.record_checks import Received, subset
 from mill_analysis.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
@@ -34,20 +35,21 @@ def test_a_bag_of_another_writer_gives_the_record_it_holds(foreign_bag, storage)
         assert run.state_wall_ns is not None and run.state_wall_ns[1] - run.state_wall_ns[0] > 0
 
 
-def test_record_built_in_two_processes_equals_one(foreign_bag) -> None:
-    path, _ = foreign_bag('mcap')
-    raw: dict[str, list[bytes]] = {}
+def test_the_record_counts_every_listened_topic_in_the_order_the_bag_holds(foreign_bag) -> None:
+    path, rec = foreign_bag('mcap')
+    raw = Received()
     for topic, _type, _log, _pub, data in open_bag(path).read():
-        raw.setdefault(topic, []).append(data)
+        relative = topic.removeprefix('/')
+        raw.setdefault(relative, []).append(data)
+        raw.order.append(relative)
     types = record_topics(AXES)
-    raw = {t: raw[topics.qualify(t)] for t in types}
-    one, missing_one = record_from_raw(raw, types, AXES, 401, 1_000_000, workers=1)
-    two, missing_two = record_from_raw(raw, types, AXES, 401, 1_000_000, workers=2)
-    assert missing_one == missing_two == dict.fromkeys(missing_one, 0)
-    assert len(missing_one) == 3 * 3 + 2  # every listened per-sample topic
+    listened = subset(raw, types)
+    got, missing = record_from_raw(listened, types, AXES, 401, 1_000_000)
+    # every per-sample topic, commands too, and the reference: no sample missing
+    assert missing == dict.fromkeys(types, 0)
+    assert got.foreign == {} and got.gaps == {}
     for name in SIGNALS:
-        np.testing.assert_array_equal(one[name], two[name], err_msg=name)
-        assert np.isfinite(one[name]).any(), name
+        np.testing.assert_array_equal(got[name], rec[name], err_msg=name)
 
 
 def test_a_namespaced_run_reads_as_the_root_one(foreign_bag) -> None:
@@ -101,7 +103,7 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
         (state, _state(T, ['y', 'x'], [9.0, 2.0])),
         (state, _state(2 * T, ['x'], [math.nan])),  # not finite: malformed, not the first
         (ref, _reference(T, [0, T], 5.0)),
-        (ref, _reference(0, [0, T, 2 * T], 9.0)),  # older than the newest reference: left out
+        (ref, _reference(0, [0, T, 2 * T], 9.0)),  # in the past: left out
         (ref, _reference(2 * T, [0, T // 2], 9.0)),  # a point off the grid: malformed
         (ref, _reference(2 * T, [0], math.inf)),  # not finite: malformed, not the first
         (ref, _reference(2 * T, [0], 7.0, sender='intruder')),  # foreign
@@ -111,8 +113,9 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
     rec, missing = build_record(messages, ['x'], 3, T, [state, ref], owners)
     np.testing.assert_array_equal(rec['position'][:, 0], [1.0, 2.0, np.nan])
     np.testing.assert_array_equal(rec['reference'][:, 0], [np.nan, 5.0, 6.0])
-    assert rec.foreign == {state: 3, ref: 3}
-    assert missing == {state: 1}
+    assert rec.foreign == {state: 3, ref: 4}
+    assert missing == {state: 1, ref: 1}  # sample 0 has no reference point
+    assert rec.gaps == {state: [(2, 2)], ref: [(0, 0)]}
 
 
 def test_a_repeated_answer_to_a_reoffered_sample_is_one_override() -> None:

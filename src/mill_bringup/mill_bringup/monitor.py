@@ -1,14 +1,19 @@
 """Monitor: the runner's node. Keeps the messages a job's record is built from, and records.
 
 Subscriptions take the serialized bytes (no Python message per sample while the run goes
-on); the job decodes them once at the end with the same code that reads bags, so the
-runner's summary and the report of the run's bag are computed by the same code.
+on), with the order they arrived in (mill_analysis.record_checks.Received: the record takes
+them through the nodes' checks in that order); the job decodes them once at the end with the
+same code that reads bags, so the runner's summary and the report of the run's bag are
+computed by the same code. Every topic of the job it records it also keeps: what the bag
+holds of the job, the record counts.
 
 With `record=RecordOptions(...)` a TopicRecorder writes every topic of the graph to a
 rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only to the
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
-In lockstep it also acknowledges, on mill/recorded, the newest step whose stepped topics it
-holds whole, and the plant waits for that (mill_bringup.recorded_steps): nothing is lost.
+In lockstep it also acknowledges, on mill/recorded, after each write of the bag, the newest
+step whose stepped topics the bag's file holds whole, and the plant waits for that
+(mill_bringup.recorded_steps): nothing is lost, and a SIGKILL of the runner costs at most the
+plant's `recorder_window` steps.
 In realtime nothing waits for it: its subscriptions keep all (RECORD_QOS), so that a runner
 short of CPU loses nothing that reached it, and the job counts the samples missing from the
 drive's sequence (the run's summary, the bag's notes).
@@ -26,8 +31,10 @@ import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_analysis.record_checks import Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
@@ -40,12 +47,32 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_common import topics
 
+# [s] between two writes of the runner's bag: the topics outside the lockstep handshake
+# (/clock, the reference, /diagnostics, logs) a SIGKILL of the runner may lose; and, as the
+# steps are acknowledged after each write, at most recorder_window steps per period go out
+# (docs/reliability.md, "Recording through a crash").
+FLUSH_PERIOD = 0.25
+
+
+class _AcknowledgingRecorder(TopicRecorder):
+    """A TopicRecorder that, after each write of its bag, acknowledges the steps it holds."""
+
+    def __init__(self, *args: Any, written: Callable[[], None], **kwargs: Any) -> None:
+        self._written = written
+        super().__init__(*args, **kwargs)
+
+    def flush(self) -> None:
+        super().flush()
+        if not (self.closed or self.writer.closed):  # a bag cut short holds nothing more
+            self._written()
+
 
 @dataclass(frozen=True)
 class RecordOptions:
     path: Path
     sim_time: bool = True
     compression: str = 'zstd'
+    flush_period: float = FLUSH_PERIOD
     notes: Mapping[str, str] = field(default_factory=dict)  # the bag's custom_data
     # A lockstep run's handshake: the steps recorded whole are acknowledged on mill/recorded.
     steps: RecordedSteps | None = None
@@ -76,7 +103,7 @@ class Monitor(Node):
         super().__init__(
             name, namespace=namespace, cli_args=['--ros-args', *rules] if rules else None
         )
-        self.raw: dict[str, list[bytes]] = {}
+        self.raw = Received()
         self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
@@ -84,12 +111,14 @@ class Monitor(Node):
         if self.steps is not None:
             self._ack_pub = self.create_publisher(ClockMsg, topics.RECORDED, LATCHED_QOS)
         if record is not None:
-            self.recorder = TopicRecorder(
+            self.recorder = _AcknowledgingRecorder(
                 self,
                 record.path,
+                written=self._written,
                 regex=_own_topics(self.get_namespace()),
                 sim_time=record.sim_time,
                 compression=record.compression,
+                flush_period=record.flush_period,
                 custom_data=record.notes,
             )
         for topic, msgtype in kept.items():
@@ -97,21 +126,30 @@ class Monitor(Node):
         self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, 100)
         if self.recorder is not None:
             # The rest of the contract, subscribed before the graph starts so that the
-            # first step is recorded; discovery adds any other topic.
+            # first step is recorded (and kept: the record counts it); discovery adds any
+            # other topic.
             for topic, msgtype in (recorded or {}).items():
-                self._listen(topic, msgtype, None)
+                if topic not in kept:
+                    self._keep(topic, msgtype)
             self.recorder.subscribe(topics.CLOCK, CLOCK, RECORD_QOS)
             diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
-        keep: Callable[[bytes], None] = store.append
+        order = self.raw.order
         arrivals = self.arrivals.get(topic)
-        if arrivals is not None:  # when each message came, on the system clock (latency)
+        if arrivals is None:
 
             def keep(data: bytes) -> None:
                 store.append(data)
+                order.append(topic)
+
+        else:  # when each message came, on the system clock (latency)
+
+            def keep(data: bytes) -> None:
+                store.append(data)
+                order.append(topic)
                 arrivals.append(time.time_ns())
 
         self._listen(topic, msgtype, keep)
@@ -137,19 +175,27 @@ class Monitor(Node):
     def finish_recording(self, samples: int) -> None:
         """The job's samples are done: the plant may take one more step, then waits for
         the bag to hold everything up to it (a lockstep run's handshake; else nothing)."""
-        if self.steps is not None and (through := self.steps.freeze(samples)) is not None:
+        if self.steps is None or self.recorder is None:
+            return
+        self.recorder.flush()  # what it holds is written: the freeze may acknowledge it
+        if (through := self.steps.freeze(samples)) is not None:
+            self._ack_pub.publish(encode_clock(through))
+
+    def _written(self) -> None:
+        """The bag's file holds what was heard so far: acknowledge the steps it holds whole."""
+        if self.steps is not None and (through := self.steps.written()) is not None:
             self._ack_pub.publish(encode_clock(through))
 
     def _acknowledger(self, topic: str) -> Callable[[bytes], None]:
         assert self.steps is not None
-        heard, publish = self.steps.heard, self._ack_pub.publish
+        heard = self.steps.heard
 
-        def acknowledge(data: bytes) -> None:
+        def note(data: bytes) -> None:
             ns = cdr_stamp_ns(data)
-            if ns is not None and (through := heard(topic, ns)) is not None:
-                publish(encode_clock(through))
+            if ns is not None:
+                heard(topic, ns)
 
-        return acknowledge
+        return note
 
     # -- what a job reads (mill_bringup.jobs.base.MessageSource) ----------------------------
     def messages(self, topic: str) -> Sequence[bytes]:

@@ -127,3 +127,31 @@ def test_a_stop_the_drive_counted_fails_the_job_when_its_report_was_lost() -> No
     assert job.complete(Source({}, done))  # no stop heard: the link carried no report
     (line,) = job.failures(None, [])
     assert line == 'plant: y axis: stopped by the drive 1 time(s) (now: no fresh command)'
+
+
+def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_topic() -> None:
+    """The runner keeps the commands too (its record counts them), so a controller answers only
+    once the plant, its observer and the runner hear it; the plant of a recorded run waits
+    for every topic of a step, the commands included, from the first step on."""
+    from mill_bringup.catalogue import CONTROLLER
+
+    from mill_common import topics
+
+    job = job_for(scenario.load('slotting'))
+    job.prepare_graph(monitored=True, recorded=True)
+    scen = job.scenario
+    for node in scen.nodes:
+        if node.kind.per_axis:
+            wanted = 3 if node.kind.role == CONTROLLER else 2
+            assert scen.parameters(node.name)['min_subscribers'] == wanted, node.name
+    assert {topics.joint_command(a) for a in 'xyz'} <= set(job.monitor_topics())
+    steps = job.recorded_steps()
+    assert steps is not None
+    stepped = [f(a) for a in 'xyz' for f in (topics.state, topics.estimate, topics.joint_command)]
+    for topic in [*stepped, topics.CUTTING_FORCE, topics.GROUND_TRUTH]:
+        assert steps.stepped(topic), topic
+    for topic in stepped[:-1]:  # all but z's command: nothing is whole yet
+        steps.heard(topic, 0)
+    steps.heard(topics.CUTTING_FORCE, 0)
+    steps.heard(topics.GROUND_TRUTH, 0)
+    assert steps.through == -1 and steps.behind() == [topics.joint_command('z')]

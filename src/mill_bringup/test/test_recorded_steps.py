@@ -15,74 +15,90 @@ def steps(window: int = 8) -> RecordedSteps:
     return RecordedSteps({STATE: 0, COMMAND: 0, TRUTH: 1}, T / 1e9, window)
 
 
-def plant_may_publish(acked: int, window: int, j: int) -> bool:
-    """The clock node's rule (mill_common.lockstep.RecorderGate)."""
+def step_messages(k: int, command: bool = True) -> list[tuple[str, int]]:
+    """What the plant, a controller and the plant again send with step k: its state, its
+    command, and with the state the ground truth of step k - 1."""
+    out = [(STATE, k * T)] + ([(TRUTH, (k - 1) * T)] if k else [])
+    return out + ([(COMMAND, k * T)] if command else [])
+
+
+def run(
+    s: RecordedSteps, window: int, steps_per_write: int, last: int = 99, command: bool = True
+) -> tuple[int, list[int]]:
+    """The plant steps as the acknowledgements let it (mill_common.lockstep.RecorderGate)
+    until step `last`; the recorder writes its bag every `steps_per_write` steps it takes in
+    and acknowledges after each write. The step the plant stopped at, and the acks [steps]."""
     gate = RecorderGate(window, T / 1e9)
-    if acked >= 0:
-        gate.acknowledged(acked)
-    return gate.allows(j)
+    if s.sent >= 0:
+        gate.acknowledged(s.sent)
+    acks: list[int] = []
+    k = 0
+    while k <= last and gate.allows(k):
+        for topic, ns in step_messages(k, command):
+            s.heard(topic, ns)
+        if (k + 1) % steps_per_write == 0 and (ack := s.written()) is not None:
+            acks.append(ack // T)
+            gate.acknowledged(ack)
+        k += 1
+    return k, acks
 
 
-def test_a_step_is_whole_when_every_heard_topic_has_it():
+def test_a_step_is_whole_when_every_topic_has_it() -> None:
     s = steps()
     for k in range(5):
         s.heard(STATE, k * T)
-    assert s.through == 4 * T  # only the states heard so far
+    assert s.through == -1 and s.written() is None  # no command and no ground truth yet
     s.heard(COMMAND, 2 * T)
-    assert s.through == 2 * T
+    assert s.through == -1 and s.behind() == [TRUTH]
     s.heard(TRUTH, 3 * T)  # the ground truth of step 3 comes with the states of step 4
-    assert s.through == 2 * T
+    assert s.through == 2 * T and s.behind() == [COMMAND]
     s.heard(COMMAND, 4 * T)
     assert s.through == 4 * T
+    assert s.written() == 4 * T and s.written() is None  # acknowledged once
 
 
-def test_nothing_counts_before_the_first_topic_and_other_topics_are_ignored():
-    s = steps()
-    assert s.heard(COMMAND, 7 * T) is None and s.through == -1
-    assert s.heard('/rosout', 9 * T) is None and not s.stepped('/rosout')
-
-
-def test_acknowledged_every_quarter_window_and_never_backwards():
+def test_commands_never_heard_hold_the_plant_at_the_window() -> None:
+    """The load that lost commands 0-648 of two axes: the runner had not matched their
+    senders. A topic not yet heard holds the plant W steps in, it does not let it run on."""
     s = steps(window=8)
-    acks = []
-    for k in range(20):
-        for topic in (STATE, COMMAND):
-            ack = s.heard(topic, k * T)
-            if ack is not None:
-                acks.append(ack // T)
-    assert acks == [2, 4, 6, 8, 10, 12, 14, 16, 18]  # stride 8 // 4 = 2 steps
-    assert s.heard(STATE, 3 * T) is None  # a re-offered old step changes nothing
+    stopped, acks = run(s, 8, steps_per_write=1, command=False)
+    assert stopped == 8 and acks == [] and s.behind() == [COMMAND]
+
+
+def test_only_what_was_written_is_acknowledged_so_the_plant_stays_a_window_ahead_of_the_file():
+    s = steps(window=8)
+    stopped, acks = run(s, 8, steps_per_write=3, last=40)
+    assert acks[:4] == [2, 5, 8, 11]  # after each write, the newest step it holds whole
+    assert stopped == 41  # ... and the plant went on to the end
+    # A SIGKILL of the recorder between two writes: the file holds every step up to the last
+    # acknowledgement, the plant sent at most `window` steps more.
+    s = steps(window=8)
+    stopped, acks = run(s, 8, steps_per_write=20, last=40)
+    assert stopped == 8 and acks == []  # no write yet: held at the window
+    assert s.heard('/rosout', 9 * T) is None and not s.stepped('/rosout')
 
 
 def test_freeze_lets_the_plant_pass_the_last_sample_once_and_waits_for_it():
     window = 8
     s = steps(window)
     for k in range(3):
-        for topic in (STATE, COMMAND):
-            s.heard(topic, k * T)
-    assert s.sent == 2 * T
+        for topic, ns in step_messages(k):
+            s.heard(topic, ns)
+    assert s.written() == 2 * T and s.sent == 2 * T
     # the job has 30 samples: the plant may go on to step 30 (ground truth of 29)
-    ack = s.freeze(30)
-    assert ack is None and s.frozen_at == 30 * T and not s.drained
-    acks = []
-    for k in range(3, 40):  # what the plant publishes, as the acknowledgements let it
-        if not plant_may_publish(s.sent, window, k):
-            break
-        for topic in (STATE, COMMAND, TRUTH):
-            ack = s.heard(topic, (k - 1 if topic == TRUTH else k) * T)
-            if ack is not None:
-                acks.append(ack // T)
-    assert k == 31  # it stopped right after the step that carries the last ground truth
+    assert s.freeze(30) is None and s.frozen_at == 30 * T and not s.drained
+    stopped, acks = run(s, window, steps_per_write=1, last=39)
+    assert stopped == 31  # it stopped right after the step that carries the last ground truth
     assert acks[-1] == 30 - window and s.drained
 
 
 def test_freeze_when_the_plant_is_already_past_the_end():
     s = steps(window=8)
     for k in range(40):
-        for topic in (STATE, COMMAND):
-            s.heard(topic, k * T)
-    assert s.sent == 38 * T
-    assert s.freeze(30) is None and s.frozen_at == 46 * T  # where it may go already
+        for topic, ns in step_messages(k):
+            s.heard(topic, ns)
+    assert s.written() == 39 * T
+    assert s.freeze(30) is None and s.frozen_at == 47 * T  # where it may go already
     assert not s.drained
 
 
@@ -104,10 +120,10 @@ def test_a_period_of_no_whole_ns_acknowledges_the_clock_nodes_own_stamps() -> No
             break
         heard = [(force, stamps[k])] + ([(trace, stamps[k - 1])] if k else [])
         for topic, ns in heard:  # what the clock node publishes with sample k
-            ack = s.heard(topic, ns)
-            if ack is not None:
-                acks.append(ack)
-                gate.acknowledged(ack)
+            s.heard(topic, ns)
+        if k % 2 and (ack := s.written()) is not None:  # a write every second revolution
+            acks.append(ack)
+            gate.acknowledged(ack)
     assert k == 99  # the acknowledgements kept the clock node going to the end
     assert acks and set(acks) <= set(stamps)  # its own stamps, whole ns or not
     assert s.through == stamps[99]  # whole: its force, and the trace of 98 that came with it

@@ -14,13 +14,19 @@ import numpy as np
 from mill_models.reference_model import ContinuousReference
 
 from mill_analysis.force_record import ForceBagRun
+from mill_analysis.records import loss_lines
+
+
+def _samples(run: ForceBagRun) -> str:
+    """The samples the bag holds, of the job's when it holds fewer."""
+    return f'{run.held}' if run.held == run.samples else f'{run.held}/{run.samples}'
 
 
 def _row(label: str, run: ForceBagRun) -> str:
     rec = run.record
     betas = ', '.join(f'{b:g}' for b in dict.fromkeys(rec.beta[np.isfinite(rec.beta)].tolist()))
     return (
-        f'{label:<20} {run.samples:>7d} {run.period * 1e3:>9.4f} {rec.j_c:>12.6g} '
+        f'{label:<20} {_samples(run):>7} {run.period * 1e3:>9.4f} {rec.j_c:>12.6g} '
         f'{np.nanmean(rec.override):>9.4f} {np.nanmin(rec.override):>8.4f} '
         f'{np.nanmax(rec.override):>8.4f}  {betas}'
     )
@@ -40,8 +46,7 @@ def force_table(runs: list[tuple[str, ForceBagRun]]) -> str:
     ]
     lines += [_row(label, run) for label, run in runs]
     for label, run in runs:
-        if run.missing:
-            lines.append(f'{label}: samples missing per topic: {run.missing}')
+        lines += [f'{label}: {line}' for line in loss_lines(run.missing, run.record.gaps)]
         for note in run.notes:
             lines.append(f'{label}: note: {note}')
     return '\n'.join(lines)
@@ -60,11 +65,15 @@ def force_markdown(
     ]
     for label, run in runs:
         lines.append(
-            f'| {label} | `{run.path}` | {run.samples} | {run.period * 1e3:.4f} | '
+            f'| {label} | `{run.path}` | {_samples(run)} | {run.period * 1e3:.4f} | '
             f'{run.reference_force:g} | {run.damping:g}, {run.omega_n:.4g} | '
             f'{run.record.j_c:.6g} | {np.nanmean(run.record.override):.4f} |'
         )
-    notes = [f'- {label}: {n}' for label, run in runs for n in run.notes]
+    notes = [
+        f'- {label}: {n}'
+        for label, run in runs
+        for n in [*loss_lines(run.missing, run.record.gaps), *run.notes]
+    ]
     if notes:
         lines += ['', *notes]
     for name, title in figures:

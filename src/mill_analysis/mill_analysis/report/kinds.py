@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
 
 from mill_bag.errors import BagError
-from mill_bag.reader import Bag, open_bag
+from mill_bag.reader import open_bag
 from mill_common.progress import Progress
 
 from mill_analysis import records
@@ -190,18 +190,4 @@ def kind_of(path: Path) -> RecordKind[Any]:
                 f'({", ".join(KINDS)})'
             )
         return KINDS[name]
-    return ForceRecords() if is_force_bag(bag_topics(bag)) else AxisRecords()
-
-
-def bag_topics(bag: Bag) -> dict[str, int]:
-    """The topics of a bag (from its metadata.yaml, else by reading it)."""
-    try:
-        info = bag.metadata['rosbag2_bagfile_information']  # type: ignore[index]
-        return {
-            t['topic_metadata']['name']: int(t.get('message_count', 0))
-            for t in info['topics_with_message_count']
-        }
-    except (KeyError, TypeError):
-        for _ in bag.read(topics=()):
-            pass
-        return dict(bag.counts)
+    return ForceRecords() if is_force_bag(records.bag_counts(bag)) else AxisRecords()

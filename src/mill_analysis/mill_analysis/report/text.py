@@ -8,7 +8,6 @@ import math
 import numpy as np
 
 from mill_analysis.metrics import format_summary
-from mill_analysis.records import loss_lines
 from mill_analysis.report.analysis import RunReport
 
 
@@ -29,7 +28,7 @@ def text_table(reports: list[RunReport]) -> str:
     lines = []
     for r in reports:
         lines.append(
-            f'== {r.label}: {r.run.bag.path} ({r.run.n} samples, T = {r.run.dt_ns / 1e6:g} ms)'
+            f'== {r.label}: {r.run.bag.path} ({r.run.extent()}, T = {r.run.dt_ns / 1e6:g} ms)'
         )
         lines.append(format_summary(r.summary, r.skip))
         head = f'axis   max RMS_{r.window:g}s e [um]'
@@ -50,7 +49,7 @@ def text_table(reports: list[RunReport]) -> str:
         lines.append(loop_text(r))
         if r.run.realtime:
             lines.append(realtime_text(r))
-        lines += loss_lines(r.run.missing)
+        lines += r.run.losses()
         for note in r.run.notes:
             lines.append(f'note: {note}')
     return '\n'.join(lines)
@@ -130,14 +129,16 @@ def markdown(reports: list[RunReport], figures: list[tuple[str, str]], argv: lis
     ]
     for r in reports:
         run = r.run
-        sim = (run.n - 1) * run.dt_ns / 1e9
+        held, last = run.held
+        sim = last if held else math.nan  # what the bag holds of the job
+        samples = f'{held}' if held == run.n else f'{held} of {run.n}'
         per_s = run.size_bytes / sim / 1e6 if sim > 0 else math.nan
         out.append(
-            f'| {r.label} | `{run.bag.path}` | {run.n} | {run.dt_ns / 1e6:g} ms | {sim:.3f} s '
+            f'| {r.label} | `{run.bag.path}` | {samples} | {run.dt_ns / 1e6:g} ms | {sim:.3f} s '
             f'| {run.message_count} | {run.size_bytes / 1e6:.1f} MB | {per_s:.2f} MB '
             f'| {run.job_end_source} |'
         )
-    notes = [(r.label, n) for r in reports for n in [*loss_lines(r.run.missing), *r.run.notes]]
+    notes = [(r.label, n) for r in reports for n in [*r.run.losses(), *r.run.notes]]
     if notes:
         out.append('')
         out += [f'- {label}: {note}' for label, note in notes]

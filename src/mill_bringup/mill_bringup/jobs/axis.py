@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 from mill_analysis.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
+from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
@@ -395,13 +396,14 @@ class AxisJob(Job[RunRecord]):
             self.scenario.overrides.setdefault(self.plant, {}).setdefault(
                 'min_subscribers', readers
             )
-            # A node started again mid-job (--respawn) answers only once the monitor hears it
-            # too: the estimate goes to the controller and the monitor, the command to the
-            # plant and the observer.
+            # An axis node answers only once the monitor hears it too (at the start, and when
+            # --respawn starts it again mid-job): the estimate goes to the controller and the
+            # monitor, the command to the plant, the observer and the monitor. A command sent
+            # before the monitor matched its sender is lost to the record and the bag.
             for node in self.scenario.nodes:
                 if node.kind.per_axis:
                     wanted = self.scenario.overrides.setdefault(node.name, {})
-                    wanted.setdefault('min_subscribers', 2)
+                    wanted.setdefault('min_subscribers', 3 if node.kind.role == CONTROLLER else 2)
         if recorded:  # the plant waits for the recorder too: a bag misses nothing
             wanted = self.scenario.overrides.setdefault(self.plant, {})
             wanted.setdefault('recorder_window', RECORDER_WINDOW)
@@ -410,14 +412,15 @@ class AxisJob(Job[RunRecord]):
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
             return None
-        # The states first (they are always there); a step is whole with its estimates,
-        # commands and cutting force, and the ground truth of the step before.
+        # A step is whole with its states, estimates, commands and cutting force, and the
+        # ground truth of the step before if the plant publishes it.
         stepped = {topics.state(a): 0 for a in self.axes}
         for axis in self.axes:
             stepped[topics.estimate(axis)] = 0
             stepped[topics.joint_command(axis)] = 0
         stepped[topics.CUTTING_FORCE] = 0
-        stepped[topics.GROUND_TRUTH] = 1
+        if self.scenario.parameters(self.plant)['publish_ground_truth']:
+            stepped[topics.GROUND_TRUTH] = 1
         return RecordedSteps(stepped, seconds(self.dt_ns), window)
 
     def _servo_cycles(self, layout: str) -> bool:
@@ -434,9 +437,10 @@ class AxisJob(Job[RunRecord]):
         return False
 
     def upstream_topics(self) -> list[str]:
-        # The monitor cannot see from the plant whether an observer's estimates reach it:
-        # the plant starts once the monitor has matched their publishers.
+        # The monitor cannot see from the plant whether an observer's estimates or a
+        # controller's commands reach it: the plant starts once it has matched their publishers.
         out = [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
+        out += [topics.joint_command(a) for a in self.axes]
         return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
 
     def monitor_topics(self) -> dict[str, str]:
@@ -444,6 +448,7 @@ class AxisJob(Job[RunRecord]):
         for axis in self.axes:
             out[topics.state(axis)] = JOINT_STATE
             out[topics.estimate(axis)] = JOINT_STATE
+            out[topics.joint_command(axis)] = JOINT_STATE
         out[topics.REFERENCE] = JOINT_TRAJECTORY
         out[topics.GROUND_TRUTH] = JOINT_STATE
         if self.force_controller:
@@ -451,9 +456,8 @@ class AxisJob(Job[RunRecord]):
         return out
 
     def recorded_topics(self) -> dict[str, str]:
-        out = {topics.joint_command(a): JOINT_STATE for a in self.axes}
-        out[topics.CUTTING_FORCE] = WRENCH_STAMPED
-        return out
+        # Only when recorded: the plant publishes the force to a listener only (it costs).
+        return {topics.CUTTING_FORCE: WRENCH_STAMPED}
 
     def sim_time_stamps(self) -> bool:
         return bool(self.scenario.raw_parameters(self.trajectory).get('use_sim_time', False))
@@ -484,8 +488,8 @@ class AxisJob(Job[RunRecord]):
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         aside = topics.FORCE_CONTROL_STATE
-        kept = {t: list(raw[t]) for t in self.monitor_topics() if t in raw and t != aside}
         types = {**self.monitor_topics(), **self.recorded_topics()}
+        kept = subset(raw, [t for t in types if t != aside])  # every one the monitor kept
         rec, missing = record_from_raw(
             kept, types, self.axes, self.samples, self.dt_ns, owners=self.owners()
         )
@@ -542,6 +546,12 @@ class AxisJob(Job[RunRecord]):
 
     def foreign(self, rec: RunRecord) -> dict[str, int]:
         return dict(rec.foreign)
+
+    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
+        return rec.drops.reasons()
+
+    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
+        return dict(rec.gaps)
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}

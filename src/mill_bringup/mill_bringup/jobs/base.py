@@ -30,10 +30,11 @@ from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 R = TypeVar('R')
 
 
-# Samples a recorded lockstep run's clock node may run ahead of its bag: far inside the
-# writers' history (DATA_QOS, 2000 samples), and with acknowledgements every quarter of it
-# the clock node hardly ever waits.
-RECORDER_WINDOW = 200
+# Samples a recorded lockstep run's clock node may run ahead of its bag's file: far inside
+# the writers' history (DATA_QOS, 2000 samples), and what a SIGKILL of the runner may cost at
+# most. The runner acknowledges after each write (every monitor.FLUSH_PERIOD), so the clock
+# node takes at most this many steps per write.
+RECORDER_WINDOW = 400
 
 
 class MessageSource(Protocol):
@@ -182,7 +183,16 @@ class Job(ABC, Generic[R]):
         """The same as JSON-ready values."""
 
     def foreign(self, rec: R) -> dict[str, int]:
-        """Messages the record left out per topic: from another sender, or malformed."""
+        """Messages the record left out per topic: what the nodes drop (another sender, a
+        stamp they refuse, malformed; mill_analysis.record_checks)."""
+        return {}
+
+    def dropped(self, rec: R) -> dict[str, list[tuple[int, str]]]:
+        """The same per topic and reason: (messages, the first one's reason), most first."""
+        return {}
+
+    def gaps(self, rec: R) -> dict[str, list[tuple[int, int]]]:
+        """Per topic with samples missing, the runs (first, last) of them."""
         return {}
 
     def owners(self) -> dict[str, str]:

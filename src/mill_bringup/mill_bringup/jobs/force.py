@@ -172,6 +172,9 @@ class ForceJob(Job[ForceRecord]):
         )
         return rec, missing
 
+    def gaps(self, rec: ForceRecord) -> dict[str, list[tuple[int, int]]]:
+        return dict(rec.gaps)
+
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> ForceLoopSimulation:
         cv = self.controller_values

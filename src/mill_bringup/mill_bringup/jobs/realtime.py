@@ -204,9 +204,7 @@ class RealtimeAxisJob(AxisJob):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
         if self.start_ns is None:
             raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
-        rec, missing = realtime_record(
-            raw, self.axes, self.start_ns, self.end_time, owner=self.state_owner
-        )
+        rec, missing = realtime_record(raw, self.axes, self.start_ns, self.end_time, self.owners())
         if self._source is not None:
             source = self._source
             arrivals = {t: source.arrival_ns(t) for t in self.timed_topics()}

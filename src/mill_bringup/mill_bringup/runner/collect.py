@@ -6,8 +6,10 @@ from __future__ import annotations
 import resource
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+from mill_bag.reader import open_bag
 from mill_bag.writer import counts_note
 
 from mill_analysis import records
@@ -29,9 +31,11 @@ class Collected:
 
     record: Any
     missing: dict[str, int]  # samples missing per topic, not counting `lost`
+    missing_ranges: dict[str, list[tuple[int, int]]]  # of the topics in `missing`
     lost: dict[str, int]  # samples a killed sender took with it (mill_bringup.lost_samples)
     problems: list[str]  # the graph's notes, WARN and ERROR statuses heard
     bag: dict[str, Any] | None  # path, messages and size of the bag, if one was written
+    missing_from_bag: dict[str, int]  # per topic, received but not in the bag
     peak_rss_mb: dict[str, float]  # per process of the graph
     peak_pss_mb: float  # graph + runner
 
@@ -65,8 +69,25 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
             recorder.note(records.MISSING_SAMPLES, counts_note(absolute))
     finally:
         bag = _close_bag(session, options)
+    ranges = {t: r for t, r in job.gaps(record).items() if t in missing}
+    short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
-    return Collected(record, missing, lost, problems, bag, peak, session.peak_pss_mb)
+    return Collected(record, missing, ranges, lost, problems, bag, short, peak, session.peak_pss_mb)
+
+
+def _missing_from_bag(session: Session, options: RunOptions) -> dict[str, int]:
+    """Per topic the runner kept, the messages it received that the closed bag does not hold
+    (its metadata.yaml's counts): a bag that lacks a sample fails the run as the record
+    does. Each message reaches the bag and the record by the same callback; this checks what
+    was written."""
+    ns = session.monitor.get_namespace()
+    written = records.bag_counts(open_bag(Path(str(options.record_bag))))
+    out = {}
+    for topic, kept in session.monitor.raw.items():
+        short = len(kept) - written.get(topics.qualify(topic, ns), 0)
+        if short > 0:
+            out[topic] = short
+    return out
 
 
 def _catch_up(session: Session) -> None:
@@ -123,10 +144,13 @@ def result(
         peak_rss_mb=peak,
         domain_id=domain_id,
         missing_samples=collected.missing,
+        missing_ranges=collected.missing_ranges,
+        missing_from_bag=collected.missing_from_bag,
         summary=job.summary_json(record, options.skip),
         text=job.summary(record, options.skip),
         problems=collected.problems,
         foreign=job.foreign(record),
+        dropped=job.dropped(record),
         lost_with_restarts=collected.lost,
         failures=job.failures(record, collected.problems),
         bag=collected.bag,

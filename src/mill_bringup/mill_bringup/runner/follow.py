@@ -47,7 +47,7 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
             continue
         limit = _stall_limit(session, options, now)
         if now - last_change > limit:
-            raise RunError(f'the run stalled: no new sample for {limit:g} s')
+            raise RunError(f'the run stalled: no new sample for {limit:g} s{_waiting(session)}')
         # Over the first half second the factor means nothing (one step in a microsecond).
         elapsed = now - t_first
         rtf = f'real-time factor {reached / elapsed:.2f}' if elapsed >= 0.5 else ''
@@ -63,6 +63,15 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
         for name, used in graph.cpu_by_process().items()
     }
     return Timing(wall, cpu)
+
+
+def _waiting(session: Session) -> str:
+    """What a recorded lockstep run's plant may be waiting for: the topics the bag lacks."""
+    steps = session.monitor.steps
+    if steps is None:
+        return ''
+    whole = f't = {steps.through / 1e9:.3f} s' if steps.through >= 0 else 'no step yet'
+    return f' (the bag holds every topic up to {whole}; it waits for {", ".join(steps.behind())})'
 
 
 def _stall_limit(session: Session, options: RunOptions, now: float) -> float:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
+from mill_analysis.record_checks import drop_lines
 from mill_bag.intake import describe as describe_drops
 
 from mill_analysis import records
@@ -29,6 +30,12 @@ class RunResult:
     text: str  # the job's summary as text
     problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
     foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
+    # ... per topic and reason: (messages, the first one's reason) (Job.dropped)
+    dropped: dict[str, list[tuple[int, str]]] = field(default_factory=dict)
+    # per topic missing samples, the runs (first, last) of them
+    missing_ranges: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
+    # per topic, messages the runner received that its bag does not hold
+    missing_from_bag: dict[str, int] = field(default_factory=dict)
     # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
     lost_with_restarts: dict[str, int] = field(default_factory=dict)
     # what made the job fail (a realtime axis that tripped or was braked): exit code 1
@@ -39,9 +46,11 @@ class RunResult:
 
     @property
     def intact(self) -> bool:
-        """No sample missing, nothing foreign in the record or in the drive's graph."""
+        """No sample missing from the record or the bag, nothing foreign in the record or in
+        the drive's graph."""
         owned = not any('ownership' in p for p in self.problems)
-        return not self.missing_samples and not self.foreign and owned
+        complete = not self.missing_samples and not self.missing_from_bag
+        return complete and not self.foreign and owned
 
     @property
     def offline_max_difference(self) -> float | None:
@@ -65,13 +74,18 @@ def format_result(r: RunResult) -> str:
         f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
         f'({len(r.peak_rss_mb)} processes), {r.peak_pss_mb:.0f} MB in use together (PSS)',
     ]
-    lines += records.loss_lines(r.missing_samples)
+    lines += records.loss_lines(r.missing_samples, r.missing_ranges)
+    lines += [
+        f'ERROR: {t}: the bag holds {n} messages fewer than the runner received'
+        for t, n in r.missing_from_bag.items()
+    ]
     if r.lost_with_restarts:
         lines.append(
             'note: samples lost with their killed sender (started again), not in the record: '
             f'{r.lost_with_restarts}'
         )
-    if r.foreign:
+    lines += drop_lines(r.dropped)
+    if r.foreign and not r.dropped:  # a job that counts them without the reasons
         lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
     if r.problems:
         lines.append('diagnostics: ' + '; '.join(r.problems[:5]))

@@ -85,7 +85,11 @@ class Session:
             record = RecordOptions(
                 Path(options.record_bag),
                 sim_time=job.sim_time_stamps(),
-                notes=records.bag_notes(job.RECORD),  # what `report` reads it as
+                # what `report` reads it as, and who sends each topic (what it leaves out)
+                notes={
+                    **records.bag_notes(job.RECORD),
+                    **records.owners_note(job.owners(), job.scenario.namespace),
+                },
                 steps=job.recorded_steps(),
             )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}

@@ -1,0 +1,158 @@
+"""What the nodes would take of the messages a listener received: the record's intake. ROS-free.
+
+A node drops a message sent by another node than its topic's owner (`owner_check`), with a
+stamp its timing refuses (mill_common.timing: negative, off the sample grid, in the past,
+ahead of the plant) or with content it cannot use (`joint_values`); of a sample offered
+again the first message counts. A run's record (the runner's, and `report`'s of a bag) takes
+the messages in the order the listener received them through the same checks (`Intake`), so
+that it holds what the nodes acted on: a message they drop is left out of the record too,
+and counted per topic with its reason (`Drops`).
+
+How far the plant has got. A node checks `ahead` against the newest state it has accepted:
+nothing it receives can be later than one sample after it, because the plant publishes step
+k + 1 only after every node answered step k. A listener outside the loop (the runner, a
+recorder) gets each writer's messages in order, but not two writers' in the order they were
+sent: a step's estimate may reach it before that step's state. Every message it accepted
+proves the plant had reached its step, so the newest step of any accepted per-sample message
+(`stepped`: states, estimates, commands, cutting force, ground truth) stands in for the newest
+state; not the reference, which may lead by its preview (REFERENCE_LEAD_NS).
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Collection, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from mill_common.checks import REFERENCE_LEAD_NS, Rejected, StampCheck, owner_check
+from mill_common.timing import Timing
+
+# The numbers of a reason, so that reasons that differ only in them count together.
+_NUMBER = re.compile(r'-?\d+(\.\d+)?')
+
+
+@dataclass
+class Drops:
+    """Messages left out of a record, per topic and reason: how many, and the first one's
+    reason as the check gave it (reasons that differ only in their numbers count together)."""
+
+    counts: dict[str, dict[str, int]] = field(default_factory=dict)
+    first: dict[str, dict[str, str]] = field(default_factory=dict)
+
+    def add(self, topic: str, rejected: Rejected) -> None:
+        kind = _NUMBER.sub('#', rejected.reason)
+        counts = self.counts.setdefault(topic, {})
+        counts[kind] = counts.get(kind, 0) + 1
+        self.first.setdefault(topic, {}).setdefault(kind, rejected.reason)
+
+    def per_topic(self) -> dict[str, int]:
+        return {t: sum(kinds.values()) for t, kinds in self.counts.items()}
+
+    def reasons(self) -> dict[str, list[tuple[int, str]]]:
+        """Per topic: (messages, the first one's reason) of each reason, most first."""
+        return {
+            topic: sorted(((n, self.first[topic][k]) for k, n in kinds.items()), reverse=True)
+            for topic, kinds in self.counts.items()
+        }
+
+
+def drop_lines(reasons: Mapping[str, Sequence[tuple[int, str]]]) -> list[str]:
+    """One ERROR line per topic with messages left out of a record (`Drops.reasons`): what
+    the runner's summary and `report` print."""
+    out = []
+    for topic, why in reasons.items():
+        total = sum(n for n, _ in why)
+        text = '; '.join(f'{n} like "{reason}"' for n, reason in why)
+        out.append(f'ERROR: {topic}: {total} messages left out of the record: {text}')
+    return out
+
+
+class Intake:
+    """The checks of the nodes, on one listener's messages in the order it received them.
+
+    timing: the graph's (mill_common.timing); owners: the node each topic must come from
+    (header.frame_id; a topic without one: anyone); stepped: the per-sample topics whose
+    accepted stamps tell how far the plant has got; history: topics that carry points ahead
+    (the reference: it may lead by REFERENCE_LEAD_NS).
+    """
+
+    def __init__(
+        self,
+        timing: Timing,
+        owners: Mapping[str, str],
+        stepped: Collection[str],
+        history: Collection[str] = (),
+    ) -> None:
+        self.timing = timing
+        self.owners = dict(owners)
+        self.stepped = set(stepped)
+        self.history = set(history)
+        self.reached: int | None = None  # the newest step an accepted message proves
+        self.drops = Drops()
+        self._stamps: dict[str, StampCheck] = {}
+
+    def _stamp_check(self, topic: str) -> StampCheck:
+        stamps = self._stamps.get(topic)
+        if stamps is None:
+            stamps = self._stamps[topic] = self.timing.stamps()
+        return stamps
+
+    def problem(self, topic: str, ns: int, sender: str) -> Rejected | None:
+        """What a node would drop this message for, by its sender and stamp (None: nothing)."""
+        problem = owner_check(sender, self.owners.get(topic, ''))
+        if problem is not None:
+            return problem
+        history = topic in self.history
+        lead = REFERENCE_LEAD_NS if history else self.timing.period_ns
+        return self.timing.problem(self._stamp_check(topic), ns, self.reached, lead, history)
+
+    def again(self, topic: str, ns: int) -> bool:
+        """A sample offered again (its first message counts)."""
+        return self.timing.is_offered_again(self._stamp_check(topic), ns)
+
+    def accept(self, topic: str, ns: int) -> None:
+        self._stamp_check(topic).accept(ns)
+        if topic in self.stepped and (self.reached is None or ns > self.reached):
+            self.reached = ns
+
+    def drop(self, topic: str, rejected: Rejected) -> None:
+        self.drops.add(topic, rejected)
+
+
+class Received(dict[str, list[bytes]]):
+    """Serialized messages per topic, and the topic of each message in the order they arrived
+    (what `Intake` needs: the order of one listener)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.order: list[str] = []
+
+
+def subset(raw: Mapping[str, Sequence[bytes]], topics: Collection[str]) -> Received:
+    """The messages of these topics in `raw`, in the order they arrived where it knows it."""
+    out = Received()
+    out.update({t: list(raw[t]) for t in topics if t in raw})
+    order = getattr(raw, 'order', None)
+    out.order = (
+        [t for t in order if t in out] if order is not None else [t for t in out for _ in out[t]]
+    )
+    return out
+
+
+def arrival_order(
+    raw: Mapping[str, Sequence[bytes]], topics: Collection[str]
+) -> Iterator[tuple[str, bytes]]:
+    """(topic, message) of `topics` in the order they arrived (`Received`); from a mapping
+    that does not know it, each topic's messages after the topic before."""
+    order = getattr(raw, 'order', None)
+    if order is None:
+        for topic in topics:
+            for data in raw.get(topic, ()):
+                yield topic, data
+        return
+    cursor = dict.fromkeys(topics, 0)
+    for topic in order:
+        i = cursor.get(topic)
+        if i is not None:
+            cursor[topic] = i + 1
+            yield topic, raw[topic][i]
