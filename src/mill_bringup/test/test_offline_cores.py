@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_bringup.jobs.axis import build_axis_loops
+from mill_bringup.axis_simulation import build_axis_loops
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.offline import CoreTimes

@@ -3,8 +3,9 @@
 Lockstep, sample k at t_k = k T: the plant publishes the measured positions y(k); each
 observer corrects with y(k) and publishes its estimate; each controller joins state,
 estimate and reference of t_k and publishes its command u(k); the plant integrates to k + 1
-and each observer predicts with u(k). `AxisSimulation` makes exactly these calls in this
-order in one process, so the distributed record equals the offline one bit for bit.
+and each observer predicts with u(k). `AxisSimulation` (mill_bringup.axis_simulation)
+makes exactly these calls in this order in one process, so the distributed record equals
+the offline one bit for bit.
 
 With a force controller (the adaptive feed of Rubio 2013 on the Kline job) the plant also
 publishes the cutting force of sample k with its measured positions; at each control instant
@@ -30,27 +31,19 @@ from mill_analysis.metrics import FORCE_CONTROL, RunRecord, format_summary, summ
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
-from mill_common.reference_buffer import ReferenceBuffer
-from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
-from mill_controllers.config import build_loop
-from mill_controllers.control_loop import AxisControlLoop
-from mill_controllers.force_control import ForceFeedLoop, ForceSampler, tool_depth
-from mill_observers.config import build_observer_loop
-from mill_observers.observer_loop import ObserverLoop
-from mill_plant.command_delay import CommandDelay
-from mill_plant.simulated_machine import SimulatedMachine
-from mill_trajectory.config import build_job, build_schedule
-from mill_trajectory.feed_override import FeedOverride, JobEnd
-from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
+from mill_controllers.force_control import ForceFeedLoop
+from mill_trajectory.config import build_job
+from mill_trajectory.feed_override import JobEnd
 
 from mill_analysis import records
+from mill_bringup.axis_simulation import AxisSimulation, axis_delays, build_axis_loops, timing_of
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
 from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
-from mill_bringup.simulation import CoreTimer, NoTimer
+from mill_bringup.simulation import CoreTimer
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -58,217 +51,6 @@ JOINT_STATE = 'sensor_msgs/msg/JointState'
 WALL_CLOCK_NS = 10**18
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
-
-
-def timing_of(scen: Scenario, node: str) -> str:
-    """A node's `timing` parameter (lockstep for nodes that have none)."""
-    return str(scen.parameters(node).get('timing', 'lockstep'))
-
-
-def axis_delays(scen: Scenario) -> dict[int, int]:
-    """command_delay of each axis's controller and observer, which must agree."""
-    delays: dict[int, int] = {}
-    for node in scen.nodes:
-        if not node.kind.per_axis:
-            continue
-        values = scen.parameters(node.name)
-        i = axis_index(values['axis'])
-        if delays.setdefault(i, values['command_delay']) != values['command_delay']:
-            raise ScenarioError(
-                f'scenario {scen.name}: the {AXES[i]} controller and observer disagree on '
-                'command_delay'
-            )
-    return delays
-
-
-def build_axis_loops(scen: Scenario) -> tuple[dict[int, AxisControlLoop], dict[int, ObserverLoop]]:
-    """The controller's and the observer's per-sample step of each axis, by axis index,
-    built from the scenario as their nodes build them, and checked to fit together.
-
-    ScenarioError if an active axis lacks one, or if a controller designs with the
-    observer's model estimate and the observer of its axis estimates none.
-    """
-    pv = scen.parameters(scen.nodes_of(PLANT)[0].name)
-    controllers: dict[int, AxisControlLoop] = {}
-    observers: dict[int, ObserverLoop] = {}
-    names: dict[int, str] = {}
-    for node in scen.nodes:
-        if not node.kind.per_axis:
-            continue  # a force controller, say: not an axis core
-        values = scen.parameters(node.name)
-        i = axis_index(values['axis'])
-        if node.kind.role == CONTROLLER:
-            controllers[i] = build_loop(values)
-        else:
-            observers[i] = build_observer_loop(values)
-            names[i] = f'{node.name} (observer {values["observer"]})'
-    active = [i for i, a in enumerate(AXES) if a in pv['axes']]
-    missing = [AXES[i] for i in active if i not in controllers or i not in observers]
-    if missing:
-        raise ScenarioError(
-            f'scenario {scen.name}: axes {missing} lack a controller or an observer'
-        )
-    for i in active:
-        if controllers[i].law.needs_model and not observers[i].observer.PROVIDES_MODEL:
-            raise ScenarioError(
-                f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
-                f'model estimate, but {names[i]} estimates none (use observer rls)'
-            )
-    return controllers, observers
-
-
-class AdaptiveFeed:
-    """The force controller of an axis job and the trajectory's answer to its override."""
-
-    def __init__(self, job: AxisJob, schedule: OverrideReference) -> None:
-        cv = job.scenario.parameters(job.force_controller)
-        self.loop = ForceFeedLoop.from_parameters(cv)
-        self.sampler = ForceSampler(self.loop.T, cv['force_component'], cv['force_measure'])
-        self.reference = cv['reference_force']
-        self.top = cv['workpiece_top'] if cv['depth_source'] == 'position' else None
-        self.schedule = schedule
-        self.rows: list[tuple[float, ...]] = []
-
-    def offer(self, ns: int, force: tuple[float, float, float], z: float) -> Points | None:
-        """At a control instant, the override and the reference points it sets."""
-        hit = self.sampler.offer(ns, force)
-        if hit is None:
-            return None
-        j, measured = hit
-        depth = None
-        if self.top is not None:
-            depth = tool_depth(self.top, z) if math.isfinite(z) else 0.0
-        cmd = self.loop.step(j * self.loop.T, self.reference, measured, depth)
-        self.rows.append(
-            (
-                seconds(ns),
-                cmd.force,
-                self.reference,
-                cmd.feed_command,
-                cmd.override,
-                cmd.beta,
-                cmd.depth,
-            )
-        )
-        return self.schedule.answer(ns, cmd.override, cmd.slope)
-
-    @property
-    def last_sample(self) -> int | None:
-        return self.schedule.scaled.last_sample
-
-
-class AxisSimulation:
-    """Sample by sample, the steps the graph makes (plant -> observer -> controller -> plant):
-    the same ROS-free objects the nodes step, fed as the messages feed them."""
-
-    def __init__(self, job: AxisJob, times: CoreTimer | None) -> None:
-        scen = job.scenario
-        pv = scen.parameters(job.plant)
-        # The machine behind the plant node's front end: the same backend, the same calls.
-        self.machine = SimulatedMachine(pv)
-        self.active = [AXES.index(a) for a in self.machine.axes]
-        self.dt_ns = job.dt_ns
-        self.dt = seconds(job.dt_ns)
-        controllers, observers = build_axis_loops(scen)
-        self.controllers = {i: controllers[i] for i in self.active}
-        self.observers = {i: observers[i] for i in self.active}
-        self.acted: dict[int, float | None] = dict.fromkeys(self.active)
-        # The reference points each controller holds, from the trajectory's schedule.
-        tv = scen.parameters(job.trajectory)
-        override = FeedOverride(tv['feed_override.min'], tv['feed_override.max'])
-        self.schedule, _ = build_schedule(tv, override)
-        self.clock_every = max(1, round(pv['clock_period'] * 1e9 / self.dt_ns))
-        self.buffers = {i: ReferenceBuffer() for i in self.active}
-        self.delay = CommandDelay(pv['command_delay'], len(self.active))
-        self.job = job
-        self.feed: AdaptiveFeed | None = None
-        if job.force_controller:
-            if not isinstance(self.schedule, OverrideReference):
-                raise ScenarioError(
-                    f'scenario {scen.name}: the feed override reaches the trajectory '
-                    "asynchronously, so the job has no offline twin (set the trajectory's "
-                    'feed_override.lockstep and feed_override.period)'
-                )
-            self.feed = AdaptiveFeed(job, self.schedule)
-        self.rec = RunRecord.empty(min(job.samples, job.max_samples), self.dt)
-        self.k = -1
-        self.clock = times or NoTimer()
-
-    def _reference_points(
-        self, k: int, ns: int, force: tuple[float, float, float], measured: list[float]
-    ) -> None:
-        """The points the trajectory sends at this sample, into each controller's buffer."""
-        points: Points | None = None
-        if self.feed is not None:
-            z = measured[self.active.index(2)] if 2 in self.active else math.nan
-            points = self.feed.offer(ns, force, z)
-        elif isinstance(self.schedule, ClockedReference) and k % self.clock_every == 0:
-            points = self.schedule.answer(ns)  # the plant's /clock tick
-        if points is None:
-            return
-        for at, sample in zip(points.stamps(), points.samples, strict=True):
-            for i in self.active:
-                self.buffers[i].add(at, sample.axis(i))
-
-    def step(self, k: int) -> None:
-        if k >= len(self.rec.t):
-            self.rec = self.rec.grown(2 * len(self.rec.t), self.dt)
-        s = self.rec.signals
-        ns = k * self.dt_ns
-        clock, machine = self.clock, self.machine
-        clock.start()
-        measured = machine.read()
-        force = machine.cutting_force()  # of this sample's state, sent with the states
-        self._reference_points(k, ns, force, measured)
-        clock.lap('trajectory')
-        efforts = []
-        for i, y in zip(self.active, measured, strict=True):
-            clock.start()
-            observer = self.observers[i]
-            est = observer.step(y, self.acted[i])
-            model = observer.model_estimate()
-            clock.lap('observer')
-            loop = self.controllers[i]
-            u = loop.step(ns, y, est, self.buffers[i], model).effort
-            clock.lap('controller')
-            self.acted[i] = u
-            efforts.append(u)
-            ref = self.buffers[i].at(ns)
-            assert ref is not None, 'the controller stepped on it'
-            s['position'][k, i] = y
-            s['reference'][k, i] = ref.position
-            s['reference_velocity'][k, i] = ref.velocity
-            s['estimate_velocity'][k, i] = est.velocity
-            s['estimate_disturbance'][k, i] = est.disturbance
-            s['torque'][k, i] = u
-            self.buffers[i].forget_before(ns)
-        machine.write(self.delay(efforts))
-        _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
-        s['force'][k] = force
-        clock.start()
-        machine.advance(self.dt)
-        clock.lap('plant')
-        self.k = k
-
-    def finished(self) -> bool:
-        last = None if self.feed is None else self.feed.last_sample
-        if last is not None and self.k >= last:
-            self.job.end_at(last)
-            return True
-        return False
-
-    def record(self) -> RunRecord:
-        self.rec = self.rec.trimmed(self.k + 1)
-        if self.feed is not None:
-            rows = np.array(self.feed.rows, dtype=float)
-            self.rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
-        self.rec.events = [
-            f'{AXES[i]} axis: following-error trip at t = {trip.time:.4f} s, '
-            f'|e| = {1e3 * abs(trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
-            for i, loop in sorted(self.controllers.items())
-            if (trip := loop.trip.trip) is not None
-        ]
-        return self.rec
 
 
 class AxisJob(Job[RunRecord]):

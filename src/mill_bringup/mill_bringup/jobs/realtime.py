@@ -22,7 +22,8 @@ from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
 from mill_analysis import records
-from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob, timing_of
+from mill_bringup.axis_simulation import timing_of
+from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
