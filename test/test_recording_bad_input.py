@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import json
 import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -26,7 +24,7 @@ from mill_common.ros import DATA_QOS
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from test.conftest import ros_node, wait_until
+from test.conftest import ros_node, start_scenario, wait_until
 from test.test_recording import FakePlant, both_readers, metadata_counts
 
 Q = topics.qualify
@@ -52,15 +50,8 @@ def assert_closed_whole(bag: Path, dropped: int) -> dict[str, int]:
 @pytest.mark.system
 def test_a_negative_stamp_does_not_end_a_recorded_run(ros_env, tmp_path) -> None:
     out = tmp_path / 'run'
-    runner = subprocess.Popen(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '1'),
-            *('--record', '--quiet', '--output', str(out)),
-        ],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+    runner = start_scenario(
+        ros_env, 'slotting', '--duration', '1', '--record', '--quiet', '--output', str(out)
     )
     sent = 0
     try:
