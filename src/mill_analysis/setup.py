@@ -19,6 +19,7 @@ setup(
     entry_points={
         'console_scripts': [
             'report = mill_analysis.report.cli:main',
+            'identify = mill_analysis.identify.cli:main',
         ],
     },
 )

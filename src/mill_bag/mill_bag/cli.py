@@ -9,10 +9,10 @@ times ...`). Exit code 0: the bag is complete (now); 3: it is, but damaged parts
 
 from __future__ import annotations
 
-import argparse
 import sys
 from collections.abc import Sequence
-from typing import NoReturn
+
+from mill_common.one_line_parser import OneLineParser
 
 from mill_bag.errors import BagError
 from mill_bag.mcap_read import Damage
@@ -21,15 +21,10 @@ from mill_bag.recover import describe_loss, recover
 PROG = 'mill_bag'
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:  # one line, no usage block
-        print(f'{PROG}: error: {message}', file=sys.stderr)
-        raise SystemExit(2)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = _Parser(
+    parser = OneLineParser(
         prog='python -m mill_bag',
+        name=PROG,
         description='Rosbag2 MCAP bag tools. recover: rewrite the MCAP file of a killed '
         'recording (no footer) or a damaged one as a complete bag that every reader opens; '
         'one line per damaged part says what is lost (exit code 3).',

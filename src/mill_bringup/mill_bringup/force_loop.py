@@ -30,11 +30,12 @@ import argparse
 import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 from mill_analysis.force_record import ForceRecord
 from mill_analysis.papers import rubio_claims
+from mill_common.one_line_parser import OneLineParser
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
@@ -294,12 +295,6 @@ def _table(rows: Sequence[tuple[str, str]]) -> str:
     return '\n'.join(f'{a:<{w}}  {b}' for a, b in rows)
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:  # one line, no usage block
-        print(f'{self.prog}: error: {message}', file=sys.stderr)
-        raise SystemExit(2)
-
-
 def _profile(text: str) -> list[float] | None:
     try:
         values = [float(v) for v in text.replace(',', ' ').split()]
@@ -309,7 +304,9 @@ def _profile(text: str) -> list[float] | None:
 
 
 def main(argv: Sequence[str] | None = None, out: Callable[[str], None] = print) -> int:
-    parser = _Parser(prog='python -m mill_bringup.force_loop', description=__doc__.split('\n')[0])
+    parser = OneLineParser(
+        prog='python -m mill_bringup.force_loop', description=__doc__.split('\n')[0]
+    )
     parser.add_argument('--plot', default='', help='write the J_c vs β plot to this PNG')
     parser.add_argument('--step', type=float, default=0.1, help='β step of the sweep')
     parser.add_argument(

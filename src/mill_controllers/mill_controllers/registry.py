@@ -10,6 +10,7 @@ from mill_common.registry import Registry
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
 from mill_controllers.base import AxisController
 from mill_controllers.cascade_pi import CascadePi
+from mill_controllers.excitation import ExcitationController
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.sliding_gpi import SlidingGpiController
@@ -24,6 +25,7 @@ CONTROLLERS: Registry[AxisController] = Registry(
         'cascade_pi': CascadePi,  # Maharof 2018 §4.1, output in V
         'adaptive_pi': AdaptivePi,  # Hatwesh 2013 self-tuning PI, output in V
         'machine_pi': MachinePi,  # Hatwesh 2013 fixed machine PI, output in V
+        'excitation': ExcitationController,  # soft PD hold + binary torque, to identify
     },
 )
 

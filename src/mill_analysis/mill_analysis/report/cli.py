@@ -22,17 +22,11 @@ import math
 import sys
 import time
 from pathlib import Path
-from typing import NoReturn
 
 from mill_bag.errors import BagError
+from mill_common.one_line_parser import OneLineParser
 
 from mill_analysis.report.kinds import ReportOptions, kind_of
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:  # one line, no usage block
-        print(f'{self.prog}: error: {message}', file=sys.stderr)
-        raise SystemExit(2)
 
 
 def _freqs(text: str) -> list[float]:
@@ -81,7 +75,7 @@ def labels_for(paths: list[Path]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    parser = _Parser(
+    parser = OneLineParser(
         prog='report',
         description='Analyse rosbag2 bags of mill runs: print a table, write DIR/report.md '
         'and PNG plots. Several bags are compared side by side.',

@@ -1,0 +1,119 @@
+"""`identify BAG`: the model of every axis from a recorded identify run, its table and plot.
+
+Reads the positions and commands of a bag (`run_scenario identify --record`, or any bag of
+the mill topics with enough motion), fits each axis (mill_models.identification), prints the
+table, plots model against measurement on held-out data and writes the machine model that
+`tune` reads. Any axis the record cannot identify gets one line saying why and no model file
+is written (exit 1); bad options and unreadable bags one line (exit 2 / 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from mill_bag.errors import BagError
+from mill_common.one_line_parser import OneLineParser
+from mill_models.identification import (
+    AxisIdentification,
+    FitSettings,
+    IdentificationError,
+    identify_axis,
+)
+
+from mill_analysis.identify import machine_file
+from mill_analysis.identify.plot import plot
+from mill_analysis.identify.table import table
+from mill_analysis.run_record import read_run
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f'{text!r} must be > 0')
+    return value
+
+
+def _parser() -> OneLineParser:
+    p = OneLineParser(
+        prog='identify',
+        description='Identify each axis of a recorded run (run_scenario identify --record): '
+        "input gain b, viscous and Coulomb friction, constant load and delay of x'' = "
+        "b·u(t − d·T) − α·x' − β·sign(x') − γ, with 95 %% intervals; the table, a plot of "
+        'model against held-out measurement, and the machine model file that tune reads.',
+    )
+    p.add_argument('bag', help='bag directory or .mcap file')
+    p.add_argument('--output', '-o', type=Path, help='machine model (default: BAG/../machine.yaml)')
+    p.add_argument('--plot', type=Path, help='plot file (default: BAG/../identify.png)')
+    p.add_argument('--axes', default='x,y,z', help='axes to identify (default x,y,z)')
+    p.add_argument('--skip', type=float, default=1.0, help='leave out t < SKIP [s] (default 1)')
+    p.add_argument(
+        '--max-delay', type=int, default=5, help='largest delay tried [samples] (default 5)'
+    )
+    p.add_argument('--pitch', type=_positive, help='screw pitch [m/rev]: also print forces in N')
+    return p
+
+
+def longest_finite(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The longest run of samples where both are finite (an axis that tripped ends there)."""
+    ok = np.isfinite(x) & np.isfinite(u)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    if not edges.size:
+        return x[:0], u[:0]
+    starts, stops = edges[::2], edges[1::2]
+    i = int(np.argmax(stops - starts))
+    return x[starts[i] : stops[i]], u[starts[i] : stops[i]]
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    axes = [a.strip() for a in args.axes.split(',') if a.strip()]
+    if not axes or any(a not in 'xyz' or len(a) != 1 for a in axes):
+        print(f'identify: error: --axes {args.axes!r}: a list of x, y, z', file=sys.stderr)
+        return 2
+    if args.max_delay < 1:
+        print('identify: error: --max-delay must be at least 1', file=sys.stderr)
+        return 2
+    try:
+        run = read_run(args.bag)
+    except (BagError, OSError, ValueError) as exc:
+        print(f'identify: error: {exc}', file=sys.stderr)
+        return 1
+    rec = run.record
+    T = run.dt_ns * 1e-9
+    keep = rec.t >= args.skip
+    settings = FitSettings(max_delay=args.max_delay)
+    fits: dict[str, tuple[AxisIdentification, np.ndarray, np.ndarray]] = {}
+    failed = []
+    for axis in axes:
+        i = 'xyz'.index(axis)
+        x, u = longest_finite(rec.signals['position'][keep, i], rec.signals['torque'][keep, i])
+        try:
+            fits[axis] = (identify_axis(x, u, T, settings), x, u)
+        except IdentificationError as exc:
+            failed.append(f'identify: {axis}: {exc}')
+    for line in failed:
+        print(line, file=sys.stderr)
+    if failed:
+        print('identify: no machine model written', file=sys.stderr)
+        return 1
+    models = {a: f[0] for a, f in fits.items()}
+    run_dir = Path(args.bag).resolve().parent
+    out = args.output or run_dir / 'machine.yaml'
+    picture = args.plot or run_dir / 'identify.png'
+    print(f'{args.bag}: {len(rec.t)} samples at T = {1e3 * T:g} ms, from t = {args.skip:g} s')
+    print(table(models, args.pitch))
+    machine_file.write(out, machine_file.MachineModel(T, models, str(args.bag)))
+    plot(picture, fits)
+    print(f'machine model: {out}\nplot: {picture}\nnext: tune {out} (docs/bring-up.md)')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,138 @@
+"""Excitation for identifying an axis: a soft PD hold plus a random binary torque (ROS-free).
+
+The identify job (config/identify.yaml, docs/bring-up.md) records an axis moving under this
+law and fits its model to the record (mill_models.identification). What the fit needs is
+what the law gives: an input that is rich (a pseudo-random binary sequence whose bits are
+independent of the motion), motion in both directions at many speeds, and an axis that
+stays near its reference. A low-bandwidth PD (eq. (9) of Beltrán 2013 with ξ̂ = 0) keeps it
+there; being soft, it lets the binary torque move the axis. Above `max_speed` the binary
+torque opposes the motion instead of following its sequence, so the speed stays bounded
+whatever the true input gain; the controller's following-error trip bounds the travel.
+
+The torque amplitude is asked for as an acceleration, since the input gain b is what the
+job is to find: amplitude = acceleration / b with the nominal b the law is given.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import numpy as np
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    non_negative,
+    positive,
+    validate_all,
+)
+from mill_common.signals import ControlInputs
+
+from mill_controllers.pd_law import AdrcController
+
+
+class ExcitationController(AdrcController):
+    """PD hold (bandwidth omega_c) + ±amplitude random binary torque, bit period in s."""
+
+    PREFIX: ClassVar[str] = 'excitation'
+    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
+        ParamSpec(
+            'omega_c',
+            30.0,
+            'bandwidth of the PD hold [rad/s]: low, so that the binary torque moves the axis',
+            positive,
+        ),
+        ParamSpec('zeta_c', 1.0, 'damping ratio of the PD hold [-]', positive),
+        ParamSpec(
+            'acceleration',
+            1.0,
+            'amplitude of the binary torque as the acceleration it gives with the nominal '
+            'input gain [m/s²]; choose it well above the friction (torque = acceleration / b)',
+            positive,
+        ),
+        ParamSpec(
+            'bit_period',
+            0.01,
+            'shortest time between two changes of the binary torque [s]; each bit lasts one '
+            'to four of these, at random',
+            positive,
+        ),
+        ParamSpec(
+            'max_speed',
+            0.05,
+            'above this speed the binary torque opposes the motion [m/s]',
+            positive,
+        ),
+        ParamSpec(
+            'seed',
+            1,
+            'seed of the random sequence (one per axis gives independent sequences) [-]',
+            non_negative,
+        ),
+        ParamSpec(
+            'torque_limit',
+            5.0,
+            'command saturation ±limit [N·m]; the amplitude and the hold must fit in it',
+            positive,
+        ),
+    )
+
+    def __init__(
+        self,
+        input_gain: float,
+        sample_period: float,
+        omega_c: float = 30.0,
+        zeta_c: float = 1.0,
+        acceleration: float = 1.0,
+        bit_period: float = 0.01,
+        max_speed: float = 0.05,
+        seed: int = 1,
+        torque_limit: float = 5.0,
+    ) -> None:
+        super().__init__(input_gain, sample_period, omega_c, zeta_c, torque_limit)
+        self.amplitude = acceleration / abs(input_gain)  # [N·m]
+        if self.amplitude >= torque_limit:
+            raise ParameterError(
+                'excitation.acceleration',
+                acceleration,
+                f'needs {self.amplitude:.3g} N·m, not below excitation.torque_limit = '
+                f'{torque_limit:g} N·m',
+            )
+        self._bit = max(1, round(bit_period / sample_period))  # [samples]
+        self._max_speed = max_speed
+        self._seed = int(seed)
+        self.reset()
+
+    @classmethod
+    def from_parameters(
+        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> ExcitationController:
+        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
+        return cls(input_gain, sample_period, **v)
+
+    def reset(self) -> None:
+        self._rng = np.random.default_rng(self._seed)
+        self._sign = 1.0
+        self._left = 0  # samples left in the current bit
+        self._excitation = 0.0
+
+    def _next_sign(self) -> float:
+        if self._left == 0:
+            self._sign = 1.0 if self._rng.random() < 0.5 else -1.0
+            self._left = self._bit * int(self._rng.integers(1, 5))
+        self._left -= 1
+        return self._sign
+
+    def compute(self, inputs: ControlInputs) -> float:
+        hold = super().compute(inputs)
+        sign = self._next_sign()  # the sequence advances every sample, whatever the speed
+        v = inputs.estimate.velocity
+        if abs(v) > self._max_speed:
+            sign = -math.copysign(1.0, v)
+        self._excitation = sign * self.amplitude
+        limit = self.torque_limit
+        return min(limit, max(-limit, hold + self._excitation))
+
+    def status(self) -> dict[str, float]:
+        return {'excitation': self._excitation}
