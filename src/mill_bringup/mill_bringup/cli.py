@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
-from mill_bringup.scenario import Scenario, ScenarioError, load
+from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
 
 
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
@@ -17,6 +17,14 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         default=[],
         metavar='NODE.NAME=VALUE',
         help='override a node parameter; NODE may be a glob',
+    )
+    parser.add_argument(
+        '--params-file',
+        action='append',
+        default=[],
+        metavar='FILE',
+        help='a ROS 2 parameter file applied on top of the scenario, before any --param '
+        '(e.g. the one tune writes); repeatable',
     )
     parser.add_argument(
         '--controller', help='the law of every axis controller (shortcut for -p, e.g. pd)'
@@ -55,7 +63,9 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
-    """--param, --controller and --duration."""
+    """--params-file, --param, --controller and --duration."""
+    for path in getattr(args, 'params_file', []):
+        apply_params_file(scen, path)
     for text in args.param:
         scen.add_override(text)
     if args.controller:

@@ -25,14 +25,10 @@ trajectory reports the job done.
 
 from __future__ import annotations
 
-import fnmatch
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-
-from mill_common.param_sources import flatten
-from mill_common.parameters import unknown_parameters_message
 
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
@@ -42,11 +38,10 @@ from mill_bringup.scenario import (
     NodeLaunch,
     Scenario,
     ScenarioError,
+    apply_params_file,
     check_layout,
     dump_parameters,
     load,
-    parameter_specs_of,
-    parse_yaml,
 )
 from mill_common import topics
 
@@ -122,59 +117,6 @@ class Plan:
     parameters: dict[str, Any] = field(default_factory=dict)  # the file every node gets
 
 
-def _apply_params_file(scen: Scenario, path: str) -> None:
-    """params_file entries as overrides of the scenario's nodes (ScenarioError if unusable).
-
-    As a node reads a parameter file: an entry with a wildcard (`/**`, `/**/x_*`) gives each
-    name to the nodes that declare it and no other; a name that no node it reaches declares
-    is a typo, refused. A node's own entry may hold only names that node declares.
-    """
-    try:
-        raw = parse_yaml(Path(path).read_text())
-    except OSError as exc:
-        raise ScenarioError(f'params_file {path}: {exc.strerror or exc}') from None
-    except Exception as exc:  # yaml errors
-        raise ScenarioError(f'params_file {path}: not valid YAML ({exc})') from None
-    if raw is None:
-        raise ScenarioError(f'params_file {path}: empty: it sets no parameter')
-    if not isinstance(raw, dict):
-        raise ScenarioError(f'params_file {path}: not a ROS 2 parameter file')
-    names = [n.name for n in scen.nodes]
-    given = 0
-    for key, entry in raw.items():
-        values = (entry or {}).get('ros__parameters') if isinstance(entry, dict) else None
-        where = f'params_file {path}: entry {key!r}'
-        if not isinstance(values, dict):
-            raise ScenarioError(f'{where} has no ros__parameters')
-        pattern = str(key).removeprefix('/**').lstrip('/') or '*'
-        shared = '*' in pattern
-        targets = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
-        if not targets:
-            raise ScenarioError(
-                f'{where} names no node of scenario {scen.name} ({", ".join(names)})'
-            )
-        unknown = {}
-        given += len(flatten(values))
-        for param, value in flatten(values).items():
-            declaring = [n for n in targets if scen.declares(n, param)]
-            if not declaring:
-                unknown[param] = value
-            for name in declaring:
-                scen.overrides.setdefault(name, {})[param] = value
-        if unknown:
-            known = {full for n in targets for full, _s in parameter_specs_of(scen.node(n))}
-            if shared:
-                them = 'them' if len(unknown) > 1 else 'it'
-                message = unknown_parameters_message(
-                    unknown, known, reason=f'no node of scenario {scen.name} declares {them}'
-                )
-            else:
-                message = unknown_parameters_message(unknown, known, targets[0])
-            raise ScenarioError(f'{where}: {message}')
-    if not given:  # else the scenario would run as if no params_file had been given
-        raise ScenarioError(f'params_file {path}: no ros__parameters values: it sets no parameter')
-
-
 def plan(
     scenario: str,
     namespace: str = '',
@@ -190,7 +132,7 @@ def plan(
     if namespace:
         scen.set_namespace(namespace)
     if params_file:
-        _apply_params_file(scen, params_file)
+        apply_params_file(scen, params_file)
     if timing:
         if timing not in TIMINGS:
             raise ScenarioError(f'timing must be one of {", ".join(TIMINGS)}, got {timing!r}')

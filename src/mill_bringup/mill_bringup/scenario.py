@@ -342,3 +342,56 @@ def load(name_or_path: str) -> Scenario:
     for name in scen.variants:
         scen.variant(name)  # every override must name a node of the scenario
     return scen
+
+
+def apply_params_file(scen: Scenario, path: str) -> None:
+    """params_file entries as overrides of the scenario's nodes (ScenarioError if unusable).
+
+    As a node reads a parameter file: an entry with a wildcard (`/**`, `/**/x_*`) gives each
+    name to the nodes that declare it and no other; a name that no node it reaches declares
+    is a typo, refused. A node's own entry may hold only names that node declares.
+    """
+    try:
+        raw = parse_yaml(Path(path).read_text())
+    except OSError as exc:
+        raise ScenarioError(f'params_file {path}: {exc.strerror or exc}') from None
+    except Exception as exc:  # yaml errors
+        raise ScenarioError(f'params_file {path}: not valid YAML ({exc})') from None
+    if raw is None:
+        raise ScenarioError(f'params_file {path}: empty: it sets no parameter')
+    if not isinstance(raw, dict):
+        raise ScenarioError(f'params_file {path}: not a ROS 2 parameter file')
+    names = [n.name for n in scen.nodes]
+    given = 0
+    for key, entry in raw.items():
+        values = (entry or {}).get('ros__parameters') if isinstance(entry, dict) else None
+        where = f'params_file {path}: entry {key!r}'
+        if not isinstance(values, dict):
+            raise ScenarioError(f'{where} has no ros__parameters')
+        pattern = str(key).removeprefix('/**').lstrip('/') or '*'
+        shared = '*' in pattern
+        targets = [n for n in names if fnmatch.fnmatchcase(n, pattern)]
+        if not targets:
+            raise ScenarioError(
+                f'{where} names no node of scenario {scen.name} ({", ".join(names)})'
+            )
+        unknown = {}
+        given += len(flatten(values))
+        for param, value in flatten(values).items():
+            declaring = [n for n in targets if scen.declares(n, param)]
+            if not declaring:
+                unknown[param] = value
+            for name in declaring:
+                scen.overrides.setdefault(name, {})[param] = value
+        if unknown:
+            known = {full for n in targets for full, _s in parameter_specs_of(scen.node(n))}
+            if shared:
+                them = 'them' if len(unknown) > 1 else 'it'
+                message = unknown_parameters_message(
+                    unknown, known, reason=f'no node of scenario {scen.name} declares {them}'
+                )
+            else:
+                message = unknown_parameters_message(unknown, known, targets[0])
+            raise ScenarioError(f'{where}: {message}')
+    if not given:  # else the scenario would run as if no params_file had been given
+        raise ScenarioError(f'params_file {path}: no ros__parameters values: it sets no parameter')

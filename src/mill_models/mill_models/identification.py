@@ -94,11 +94,10 @@ class AxisIdentification:
     def torque(self, name: str) -> Interval:
         """A friction or load term as the motor torque that balances it [N·m, N·m·s/m]."""
         term: Interval = getattr(self, name)
-        b = self.b.value
-        rel = math.hypot(term.half_width / term.value if term.value else 0.0, self.b.half_width / b)
-        return Interval(
-            term.value / b, abs(term.value / b) * rel if term.value else term.half_width / b
-        )
+        b = self.b
+        # both intervals propagated to first order
+        half = math.hypot(term.half_width / b.value, term.value * b.half_width / b.value**2)
+        return Interval(term.value / b.value, half)
 
     def as_dict(self) -> dict[str, float | int]:
         out: dict[str, float | int] = {'sample_period': self.sample_period, 'delay': self.delay}
@@ -205,11 +204,14 @@ def identify_axis(
     dof = n - 2 * len(fit) - len(NAMES)
     cov = (best / dof) * np.linalg.inv(A.T @ A)
     half = Z95 * np.sqrt(np.diag(cov))
-    est = [Interval(float(v), float(h)) for v, h in zip(theta, half, strict=True)]
+    b, alpha, beta, gamma = (Interval(float(v), float(h)) for v, h in zip(theta, half, strict=True))
     ident = AxisIdentification(
         T,
         d,
-        *est,
+        b,
+        alpha,
+        beta,
+        gamma,
         resolution=resolution_of(x),
         windows=len(fit),
         held_out=len(held),

@@ -104,7 +104,10 @@ def _axis(entry: Any, T: float, where: str) -> AxisIdentification:
     return AxisIdentification(
         T,
         int(v['delay']),
-        *(Interval(v[n], v[f'{n}_ci']) for n in NAMES),
+        Interval(v['b'], v['b_ci']),
+        Interval(v['alpha'], v['alpha_ci']),
+        Interval(v['beta'], v['beta_ci']),
+        Interval(v['gamma'], v['gamma_ci']),
         resolution=v['resolution'],
         windows=int(v['windows']),
         held_out=int(v['held_out']),

@@ -1,0 +1,1 @@
+"""`tune`: parameters for an identified machine, their margins and the tracking they predict."""

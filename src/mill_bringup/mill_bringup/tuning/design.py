@@ -1,0 +1,104 @@
+"""The parameters `tune` gives an identified axis: ADRC law with the ESO, by pole placement.
+
+The law (Beltrán 2013 eq. (9)) places the tracking-error poles at ω_c with damping ζ_c; the
+extended-state observer puts its error poles at −ω_o. The bandwidths are the tuning rule's
+for the sample period and the identified delay (mill_models.loop_tuning: ω_o·(N + 3/2)·T =
+0.75, ω_c = ω_o/3), which keeps the margins the same at every rate; then
+
+- the encoder: its quantization (q/√12 RMS) must not move the command by more than
+  `noise_share` of the torque limit, else ω_o (and ω_c with it) comes down until it does;
+- the friction and the load: the torque that balances them, (β + |γ|)/b, must leave at least
+  half the torque limit to accelerate with, else the axis is refused.
+
+The observer starts from the identified load (hold_torque = γ/b), so a vertical axis does not
+sag when it is released, and both roles are told the identified input gain and delay.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from mill_models.identification import AxisIdentification
+from mill_models.loop_tuning import loop_tuning
+
+from mill_bringup.tuning.margins import Margins
+
+ZETA_C = 0.7071  # damping of the tracking-error poles, as the papers' and the rule's
+NOISE_SHARE = 0.01  # of the torque limit, RMS
+TORQUE_SHARE = 0.5  # of the torque limit that friction and load may take
+NOISE_STEP = 0.8  # ω_o is lowered by this factor until the noise fits
+
+
+class TuneError(ValueError):
+    """The axis cannot be tuned as asked; str() says why in one line."""
+
+
+@dataclass(frozen=True)
+class AxisTuning:
+    axis: str
+    omega_o: float  # [rad/s]
+    omega_c: float  # [rad/s]
+    margins: Margins
+    torque_noise: float  # RMS command from the encoder's quantization [N·m]
+    limited_by: str  # 'rate and delay' or 'encoder'
+
+    def controller(
+        self, m: AxisIdentification, delay: int, torque_limit: float, following_error_limit: float
+    ) -> dict[str, object]:
+        return {
+            'controller': 'adrc',
+            'input_gain': m.b.value,
+            'command_delay': delay,
+            'pd.omega_c': self.omega_c,
+            'pd.zeta_c': ZETA_C,
+            'pd.torque_limit': torque_limit,
+            'following_error_limit': following_error_limit,
+        }
+
+    def observer(self, m: AxisIdentification, delay: int) -> dict[str, object]:
+        return {
+            'observer': 'eso',
+            'input_gain': m.b.value,
+            'command_delay': delay,
+            'eso.omega_o': self.omega_o,
+            'eso.degree': 0,
+            'hold_torque': m.gamma.value / m.b.value,
+        }
+
+
+def check_torque(axis: str, m: AxisIdentification, torque_limit: float) -> None:
+    need = (abs(m.beta.value) + abs(m.gamma.value)) / m.b.value
+    if need > TORQUE_SHARE * torque_limit:
+        raise TuneError(
+            f'{axis}: friction and load take {need:.3g} N·m of the {torque_limit:g} N·m torque '
+            f'limit (more than {100 * TORQUE_SHARE:g} %): nothing left to accelerate with'
+        )
+
+
+def design_axis(
+    axis: str,
+    m: AxisIdentification,
+    T: float,
+    delay: int,
+    torque_limit: float,
+    margins_at: Callable[[float, float], Margins],
+) -> AxisTuning:
+    """margins_at(ω_o, ω_c): the margins of the loop built with those bandwidths."""
+    check_torque(axis, m, torque_limit)
+    rule = loop_tuning(T, delay)
+    omega_o, limited_by = rule.omega_o, 'rate and delay'
+    quantization = m.resolution / math.sqrt(12.0)
+    for _ in range(40):
+        found = margins_at(omega_o, omega_o * rule.omega_c / rule.omega_o)
+        noise = found.noise_gain * quantization
+        if noise <= NOISE_SHARE * torque_limit:
+            return AxisTuning(
+                axis, omega_o, omega_o * rule.omega_c / rule.omega_o, found, noise, limited_by
+            )
+        omega_o, limited_by = omega_o * NOISE_STEP, 'encoder'
+    raise TuneError(
+        f'{axis}: the encoder ({1e6 * m.resolution:.3g} µm) moves the command by more than '
+        f'{100 * NOISE_SHARE:g} % of the torque limit at any usable bandwidth'
+    )
