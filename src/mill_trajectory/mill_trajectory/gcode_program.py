@@ -18,7 +18,7 @@ from mill_common.parameters import ParameterError, ParamSpec, number_list, posit
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.gcode import read_program
 from mill_trajectory.gcode_words import GcodeError
-from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan
+from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
 from mill_trajectory.toolpath import Travel, check_travel, pieces_of
 
 # A small machine (the Beltrán 2013 axes: 3.175 mm pitch screws, 10 N·m): 3 m/min,
@@ -27,7 +27,7 @@ DEFAULT_VELOCITY = [0.05, 0.05, 0.05]
 DEFAULT_ACCELERATION = [0.5, 0.5, 0.5]
 DEFAULT_JERK = [10.0, 10.0, 10.0]
 DEFAULT_TOLERANCE = 1e-5
-WIDE_TRAVEL = Travel((-math.inf,) * 3, (math.inf,) * 3)  # type: ignore[arg-type]
+WIDE_TRAVEL = Travel((-math.inf, -math.inf, -math.inf), (math.inf, math.inf, math.inf))
 
 
 def _limit(value: Any) -> str | None:
@@ -94,19 +94,19 @@ class GcodeTrajectory(Trajectory):
         self.end_time = planned.end_time
 
     @classmethod
-    def from_parameters(  # type: ignore[override]
+    def from_parameters(
         cls, values: Mapping[str, Any], travel: Travel = WIDE_TRAVEL, override_max: float = 1.0
     ) -> GcodeTrajectory:
         """Read, check and plan; ParameterError('file', ...) with 'file:line:column: what'."""
         v = validate_all(cls.PARAMETERS, values)
         limits = Limits(
-            tuple(v['max_velocity']),  # type: ignore[arg-type]
-            tuple(a if a > 0 else math.inf for a in v['max_acceleration']),  # type: ignore[arg-type]
-            tuple(j if j > 0 else math.inf for j in v['max_jerk']),  # type: ignore[arg-type]
+            xyz(v['max_velocity']),
+            xyz([a if a > 0 else math.inf for a in v['max_acceleration']]),
+            xyz([j if j > 0 else math.inf for j in v['max_jerk']]),
             v['tolerance'],
         ).scaled(max(override_max, 1.0))
         try:
-            moves = read_program(v['file'], tuple(v['start']), tuple(v['work_offset']))  # type: ignore[arg-type]
+            moves = read_program(v['file'], xyz(v['start']), xyz(v['work_offset']))
             pieces, wheres = pieces_of(moves, limits.tolerance)
             check_travel(pieces, wheres, travel)
             planned = plan(pieces, limits)

@@ -26,6 +26,8 @@ class Where:
     column: int
 
     def __str__(self) -> str:
+        if self.line <= 0:  # the file as a whole (it cannot be read)
+            return self.file
         return f'{self.file}:{self.line}:{self.column}'
 
 

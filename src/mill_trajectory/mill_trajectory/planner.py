@@ -25,23 +25,33 @@ junction misses the tolerance or that cannot hold its two half-transitions is sl
 SLOW_DOWN until none does; slowing a piece only shortens its transitions and lengthens its
 time, so this ends. So that a slow corner slows only its neighbourhood, a straight piece
 is first cut at distances tolerance·2^i from both of its ends: the speed can then rise
-piece by piece along the line (a junction of parallel pieces has no deviation). The start and end are junctions with rest; an acceleration or jerk limit
-of inf is no limit (with both inf, the velocity steps at each corner, as the straight cuts
-of Beltrán 2013 eq. (19)-(22)).
+piece by piece along the line (a junction of parallel pieces has no deviation). The start
+and end are junctions with rest; an acceleration or jerk limit of inf is no limit (with
+both inf, the velocity steps at each corner, as the straight cuts of Beltrán 2013
+eq. (19)-(22), and pieces are not cut).
 """
 
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from mill_trajectory.base import Trajectory, TrajectorySample
 
 Point = tuple[float, float, float]
+
+
+def xyz(values: Sequence[float]) -> Point:
+    """Three numbers as a point."""
+    return (float(values[0]), float(values[1]), float(values[2]))
+
+
 _ZERO: Point = (0.0, 0.0, 0.0)
 DEVIATION = 3.0 / 32.0  # max |∫ s − step| over a transition, per |ΔV|·T
 SLOW_DOWN = 0.97  # factor a piece's speed falls by per planning pass
@@ -104,7 +114,7 @@ class PlannedPath(Trajectory):
     PREFIX = 'planned'
 
     @classmethod
-    def from_parameters(cls, values: object) -> PlannedPath:  # type: ignore[override]
+    def from_parameters(cls, values: Mapping[str, Any]) -> PlannedPath:
         raise NotImplementedError('a planned path is built by plan()')
 
     def __init__(self, segments: list[_Segment], corners: list[float], end: Point) -> None:
@@ -165,7 +175,7 @@ class PlanError(ValueError):
 
 def _caps(pieces: Sequence[Piece], dirs: np.ndarray, limits: Limits) -> np.ndarray:
     vmax = np.asarray(limits.velocity, dtype=float)
-    with np.errstate(divide='ignore'):
+    with np.errstate(divide='ignore', over='ignore'):  # a tiny direction component: no cap
         along = np.where(np.abs(dirs) > 0.0, vmax / np.abs(dirs), np.inf).min(axis=1)
     return np.minimum(np.array([p.speed for p in pieces]), along)
 
@@ -181,9 +191,10 @@ def _split(p: Piece, base: float) -> list[Piece]:
         d *= 2.0
     points = [p.start]
     for f in sorted(cuts):
-        points.append(tuple(a + (b - a) * f / length for a, b in zip(p.start, p.end, strict=True)))  # type: ignore[arg-type]
+        point = tuple(a + (b - a) * f / length for a, b in zip(p.start, p.end, strict=True))
+        points.append(point)  # type: ignore[arg-type]
     points.append(p.end)
-    return [Piece(a, b, p.speed) for a, b in zip(points[:-1], points[1:], strict=True)]
+    return [Piece(a, b, p.speed) for a, b in itertools.pairwise(points)]
 
 
 def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
