@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
 
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
@@ -58,6 +60,12 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         help='metrics over t >= SKIP (start transient excluded) [s]',
     )
     parser.add_argument(
+        '--program',
+        metavar='FILE.ngc',
+        help='run this G-code part program (trajectory gcode, planned within the gcode.max_* '
+        "limits) from where the scenario's job starts",
+    )
+    parser.add_argument(
         '--variant', help="run only this one of the scenario's variants (default: all of them)"
     )
 
@@ -77,8 +85,28 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
     set_timing(scen, getattr(args, 'timing', None), getattr(args, 'delay', None))
     if getattr(args, 'tuning', None):
         set_tuning(scen)
+    if getattr(args, 'program', None):
+        set_program(scen, args.program)
     if args.duration is not None:
         set_duration(scen, args.duration)
+
+
+def set_program(scen: Scenario, program: str) -> None:
+    """--program: every trajectory node runs this G-code file, from its job's start point."""
+    from mill_trajectory.config import build_job
+
+    path = Path(program).resolve()
+    if not path.is_file():
+        raise ScenarioError(f'--program: {program}: no such G-code file')
+    for node in scen.nodes_of(TRAJECTORY):
+        start = build_job(scen.parameters(node.name)).trajectory.sample(0.0).position
+        scen.add_override(f'{node.name}.trajectory=gcode')
+        scen.add_override(f'{node.name}.gcode.file={json.dumps(str(path))}')
+        scen.add_override(f'{node.name}.gcode.start={json.dumps(list(start))}')
+        try:  # read, checked and planned whole before anything starts
+            build_job(scen.parameters(node.name))
+        except ValueError as exc:
+            raise ScenarioError(f'--program: {exc}') from None
 
 
 def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> None:

@@ -17,6 +17,7 @@ from mill_common.parameters import (
     input_watch_specs,
     non_negative,
     non_negative_int,
+    number_list,
     one_of,
     positive,
 )
@@ -30,6 +31,8 @@ from mill_trajectory.feed_override import (
     PeriodicOverridePath,
     TimeScaledPath,
 )
+from mill_trajectory.gcode_program import GcodeTrajectory
+from mill_trajectory.planner import xyz
 from mill_trajectory.registry import TRAJECTORIES
 from mill_trajectory.schedule import (
     ClockedReference,
@@ -37,6 +40,7 @@ from mill_trajectory.schedule import (
     OverrideReference,
     WallClockReference,
 )
+from mill_trajectory.toolpath import Travel
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -185,6 +189,22 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             'feed_override.max',
             ParamSpec('max', 1.5, 'largest accepted feed override [-]', in_range(0.0, 10.0)),
         ),
+        (
+            'travel.min',
+            ParamSpec(
+                'min',
+                [-1.0, -1.0, -1.0],
+                "the machine's travel: lowest x, y, z the reference may reach [m]; a path "
+                'that leaves the travel is refused before anything moves',
+                number_list(3),
+            ),
+        ),
+        (
+            'travel.max',
+            ParamSpec(
+                'max', [1.0, 1.0, 1.0], "the machine's travel: highest x, y, z [m]", number_list(3)
+            ),
+        ),
         *input_watch_specs(),
     ]
     return specs + TRAJECTORIES.parameter_specs()
@@ -204,13 +224,34 @@ class Job:
 
 
 def build_job(values: dict[str, Any]) -> Job:
+    """The job's path, checked against the travel (ValueError naming where it leaves it)."""
     cls = TRAJECTORIES.get(values['trajectory'])
     own = algorithm_values(cls, values)
-    path = cls.from_parameters(own)
+    travel = Travel(xyz(values['travel.min']), xyz(values['travel.max']))
+    if any(lo > hi for lo, hi in zip(travel.minimum, travel.maximum, strict=True)):
+        raise ValueError('travel.min must not exceed travel.max on any axis')
+    path: Trajectory
+    if cls is GcodeTrajectory:
+        # Planned so that no feed override up to feed_override.max breaks a limit.
+        headroom = values['feed_override.max'] if values['feed_override.enabled'] else 1.0
+        path = GcodeTrajectory.from_parameters(own, travel, headroom)
+    else:
+        path = cls.from_parameters(own)
+        check_path_travel(path, travel, values['sample_period'])
     end = path.end_time + values['settle_time']
     if values['duration'] > 0:
         end = min(end, values['duration'])
     return Job(path, end)
+
+
+def check_path_travel(path: Trajectory, travel: Travel, sample_period: float) -> None:
+    """ValueError at the first reference point, on the sample grid, outside the travel."""
+    steps = math.ceil(path.end_time / sample_period) if math.isfinite(path.end_time) else 0
+    for k in range(steps + 1):
+        t = min(k * sample_period, path.end_time)
+        problem = travel.outside(path.sample(t).position)
+        if problem:
+            raise ValueError(f'the path leaves the machine travel at t = {t:.6g} s: {problem}')
 
 
 def preview_samples(values: dict[str, Any], dt_ns: int) -> int:

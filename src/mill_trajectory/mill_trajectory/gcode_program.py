@@ -1,0 +1,118 @@
+"""A G-code part program, checked and planned whole before anything moves. ROS-free.
+
+`trajectory: gcode` with `gcode.file: part.ngc`: the file is read (mill_trajectory.gcode),
+its arcs cut into chords (mill_trajectory.toolpath), its path checked against the machine's
+travel (the trajectory node's travel.min / travel.max), and the feed planned within the
+per-axis limits and the path tolerance (mill_trajectory.planner). Any problem is one line
+'file:line:column: what'.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from mill_common.parameters import ParameterError, ParamSpec, number_list, positive, validate_all
+
+from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.gcode import read_program
+from mill_trajectory.gcode_words import GcodeError
+from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
+from mill_trajectory.toolpath import Travel, check_travel, pieces_of
+
+# A small machine (the Beltrán 2013 axes: 3.175 mm pitch screws, 10 N·m): 3 m/min,
+# 0.5 m/s², 10 m/s³ per axis, corners within 0.01 mm.
+DEFAULT_VELOCITY = [0.05, 0.05, 0.05]
+DEFAULT_ACCELERATION = [0.5, 0.5, 0.5]
+DEFAULT_JERK = [10.0, 10.0, 10.0]
+DEFAULT_TOLERANCE = 1e-5
+WIDE_TRAVEL = Travel((-math.inf, -math.inf, -math.inf), (math.inf, math.inf, math.inf))
+
+
+def _limit(value: Any) -> str | None:
+    """Three numbers >= 0 (0: no limit)."""
+    reason = number_list(3)(value)
+    if reason:
+        return reason
+    return 'must be >= 0 (0: no limit)' if any(v < 0 for v in value) else None
+
+
+def _positive3(value: Any) -> str | None:
+    reason = number_list(3)(value)
+    if reason:
+        return reason
+    return 'must be > 0' if any(not v > 0 for v in value) else None
+
+
+def _file(value: Any) -> str | None:
+    return None if isinstance(value, str) and value.strip() else 'must name a G-code file'
+
+
+class GcodeTrajectory(Trajectory):
+    """The planned path of a G-code file (see the module doc)."""
+
+    PREFIX = 'gcode'
+    PARAMETERS = (
+        ParamSpec('file', 'part.ngc', 'the G-code (RS274/NGC) part program to run', _file),
+        ParamSpec(
+            'start',
+            [0.0, 0.0, 0.0],
+            'where the tool stands when the program starts [m]',
+            number_list(3),
+        ),
+        ParamSpec(
+            'work_offset',
+            [0.0, 0.0, 0.0],
+            'G54 work offset: machine position of the program zero x, y, z [m]',
+            number_list(3),
+        ),
+        ParamSpec('max_velocity', DEFAULT_VELOCITY, 'per-axis velocity limit [m/s]', _positive3),
+        ParamSpec(
+            'max_acceleration',
+            DEFAULT_ACCELERATION,
+            'per-axis acceleration limit [m/s^2]; 0 = none (the velocity steps at corners)',
+            _limit,
+        ),
+        ParamSpec(
+            'max_jerk',
+            DEFAULT_JERK,
+            'per-axis jerk limit [m/s^3]; 0 = none',
+            _limit,
+        ),
+        ParamSpec(
+            'tolerance',
+            DEFAULT_TOLERANCE,
+            'path tolerance: how far a blended corner or an arc chord may leave the '
+            'programmed path [m] (as LinuxCNC G64 P)',
+            positive,
+        ),
+    )
+
+    def __init__(self, planned: PlannedPath) -> None:
+        self.planned = planned
+        self.end_time = planned.end_time
+
+    @classmethod
+    def from_parameters(
+        cls, values: Mapping[str, Any], travel: Travel = WIDE_TRAVEL, override_max: float = 1.0
+    ) -> GcodeTrajectory:
+        """Read, check and plan; ParameterError('file', ...) with 'file:line:column: what'."""
+        v = validate_all(cls.PARAMETERS, values)
+        limits = Limits(
+            xyz(v['max_velocity']),
+            xyz([a if a > 0 else math.inf for a in v['max_acceleration']]),
+            xyz([j if j > 0 else math.inf for j in v['max_jerk']]),
+            v['tolerance'],
+        ).scaled(max(override_max, 1.0))
+        try:
+            moves = read_program(v['file'], xyz(v['start']), xyz(v['work_offset']))
+            pieces, wheres = pieces_of(moves, limits.tolerance)
+            check_travel(pieces, wheres, travel)
+            planned = plan(pieces, limits)
+        except (GcodeError, PlanError) as exc:
+            raise ParameterError('file', v['file'], str(exc)) from None
+        return cls(planned)
+
+    def sample(self, t: float) -> TrajectorySample:
+        return self.planned.sample(t)

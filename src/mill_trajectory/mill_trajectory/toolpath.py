@@ -1,0 +1,93 @@
+"""G-code moves to the planner's straight pieces, and the machine's travel. ROS-free.
+
+An arc becomes chords whose sagitta is at most half the path tolerance, so that chords
+and corner blends (the other half, mill_trajectory.planner) stay within the tolerance of
+the programmed arc. A helix climbs linearly in its angle.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from mill_trajectory.gcode import Move, Point
+from mill_trajectory.gcode_words import GcodeError, Where
+from mill_trajectory.planner import Piece
+
+AXIS_NAMES = 'xyz'
+
+
+@dataclass(frozen=True)
+class Travel:
+    """The machine's travel per axis [m]: minimum and maximum of x, y, z."""
+
+    minimum: Point
+    maximum: Point
+
+    def outside(self, p: Sequence[float]) -> str | None:
+        """Why p is outside the travel (None: inside)."""
+        for i, name in enumerate(AXIS_NAMES):
+            if p[i] < self.minimum[i]:
+                return f'{name} = {p[i]:.6g} m is below travel.min {self.minimum[i]:g} m'
+            if p[i] > self.maximum[i]:
+                return f'{name} = {p[i]:.6g} m is above travel.max {self.maximum[i]:g} m'
+        return None
+
+
+def arc_points(move: Move, tolerance: float) -> list[Point]:
+    """The chord ends of an arc, its end point last (its start not included)."""
+    assert move.center is not None
+    a, b, n = move.plane
+    s, e, c = move.start, move.end, move.center
+    r0 = math.hypot(s[a] - c[a], s[b] - c[b])
+    r1 = math.hypot(e[a] - c[a], e[b] - c[b])
+    # Chord angle whose sagitta r(1 − cos(θ/2)) is half the tolerance.
+    cos_half = max(1.0 - 0.5 * tolerance / max(r0, r1), -1.0)
+    step = 2.0 * math.acos(cos_half)
+    count = max(1, math.ceil(abs(move.sweep) / step)) if step > 0 else 1
+    start_angle = math.atan2(s[b] - c[b], s[a] - c[a])
+    points: list[Point] = []
+    for i in range(1, count):
+        f = i / count
+        angle = start_angle + move.sweep * f
+        r = r0 + (r1 - r0) * f  # an IJK end within tolerance of the circle: a slight spiral
+        p = [0.0, 0.0, 0.0]
+        p[a] = c[a] + r * math.cos(angle)
+        p[b] = c[b] + r * math.sin(angle)
+        p[n] = s[n] + (e[n] - s[n]) * f
+        points.append((p[0], p[1], p[2]))
+    points.append(e)
+    return points
+
+
+def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], list[Where]]:
+    """The planner's pieces and, for each, the line of the move it comes from."""
+    pieces: list[Piece] = []
+    wheres: list[Where] = []
+    for m in moves:
+        if m.kind in ('dwell', 'stop'):
+            pieces.append(Piece(m.start, m.end, dwell=m.duration, rest=True))
+            wheres.append(m.where)
+            continue
+        speed = math.inf if m.feed is None else m.feed
+        here = m.start
+        ends = arc_points(m, tolerance) if m.kind == 'arc' else [m.end]
+        for p in ends:
+            pieces.append(Piece(here, p, speed))
+            wheres.append(m.where)
+            here = p
+    return pieces, wheres
+
+
+def check_travel(pieces: Sequence[Piece], wheres: Sequence[Where], travel: Travel) -> None:
+    """GcodeError at the first move whose piece leaves the travel.
+
+    The planned path between two piece ends stays in the triangle of their corner, so the
+    ends (inside a box) are all there is to check.
+    """
+    for piece, where in zip(pieces, wheres, strict=True):
+        for p in (piece.start, piece.end):
+            problem = travel.outside(p)
+            if problem:
+                raise GcodeError(where, f'move outside the machine travel: {problem}')
