@@ -24,6 +24,7 @@ setup(
         'console_scripts': [
             'run_scenario = mill_bringup.executables:run_scenario',
             'offline_sim = mill_bringup.offline:main',
+            'tune = mill_bringup.tuning.cli:main',
             'job_watch = mill_bringup.executables:job_watch',
             'mill_container = mill_bringup.executables:mill_container',
         ],

@@ -112,6 +112,7 @@ class Scenario:
     namespace: str = topics.ROOT  # the machine namespace every node of the graph runs in
     private_clock: bool = False  # remap the simulation's /clock to NAMESPACE/clock
     layout: str = LAYOUTS[0]  # which nodes share a process (mill_bringup.layout)
+    params_files: list[str] = field(default_factory=list)  # applied with apply_params_file
 
     @property
     def name(self) -> str:
@@ -207,6 +208,7 @@ class Scenario:
             namespace=self.namespace,
             private_clock=self.private_clock,
             layout=self.layout,
+            params_files=list(self.params_files),
         )
         copy.overrides = {node: dict(values) for node, values in self.overrides.items()}
         for text in self.variants[name]:
@@ -395,3 +397,4 @@ def apply_params_file(scen: Scenario, path: str) -> None:
             raise ScenarioError(f'{where}: {message}')
     if not given:  # else the scenario would run as if no params_file had been given
         raise ScenarioError(f'params_file {path}: no ros__parameters values: it sets no parameter')
+    scen.params_files.append(str(path))

@@ -14,17 +14,12 @@ import math
 import sys
 from pathlib import Path
 
-import numpy as np
 from mill_bag.errors import BagError
 from mill_common.one_line_parser import OneLineParser
-from mill_models.identification import (
-    AxisIdentification,
-    FitSettings,
-    IdentificationError,
-    identify_axis,
-)
+from mill_models.identification import FitSettings
 
 from mill_analysis.identify import machine_file
+from mill_analysis.identify.fit_record import identify_record
 from mill_analysis.identify.plot import plot
 from mill_analysis.identify.table import table
 from mill_analysis.run_record import read_run
@@ -60,17 +55,6 @@ def _parser() -> OneLineParser:
     return p
 
 
-def longest_finite(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The longest run of samples where both are finite (an axis that tripped ends there)."""
-    ok = np.isfinite(x) & np.isfinite(u)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
-    if not edges.size:
-        return x[:0], u[:0]
-    starts, stops = edges[::2], edges[1::2]
-    i = int(np.argmax(stops - starts))
-    return x[starts[i] : stops[i]], u[starts[i] : stops[i]]
-
-
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     axes = [a.strip() for a in args.axes.split(',') if a.strip()]
@@ -87,19 +71,9 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     rec = run.record
     T = run.dt_ns * 1e-9
-    keep = rec.t >= args.skip
-    settings = FitSettings(max_delay=args.max_delay)
-    fits: dict[str, tuple[AxisIdentification, np.ndarray, np.ndarray]] = {}
-    failed = []
-    for axis in axes:
-        i = 'xyz'.index(axis)
-        x, u = longest_finite(rec.signals['position'][keep, i], rec.signals['torque'][keep, i])
-        try:
-            fits[axis] = (identify_axis(x, u, T, settings), x, u)
-        except IdentificationError as exc:
-            failed.append(f'identify: {axis}: {exc}')
+    fits, failed = identify_record(rec, T, axes, args.skip, FitSettings(max_delay=args.max_delay))
     for line in failed:
-        print(line, file=sys.stderr)
+        print(f'identify: {line}', file=sys.stderr)
     if failed:
         print('identify: no machine model written', file=sys.stderr)
         return 1

@@ -44,6 +44,7 @@ from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
+from mill_bringup.tuning.prediction_file import against_prediction
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -300,7 +301,14 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        text = '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
+        metrics = summarize(rec, skip)
+        text = '\n'.join(
+            [
+                format_summary(metrics, skip),
+                *against_prediction(self.scenario, metrics, float(rec.t[-1])),
+                *rec.events,
+            ]
+        )
         if rec.force_control is None or not len(rec.force_control):
             return text
         lines = [

@@ -27,6 +27,7 @@ from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
+from mill_bringup.tuning.prediction_file import against_prediction
 from mill_common import topics
 
 # No state this long after the start: the drive is gone (the runner itself may go without
@@ -244,7 +245,11 @@ class RealtimeAxisJob(AxisJob):
         )
 
     def summary(self, rec: RunRecord, skip: float) -> str:
-        lines = [format_summary(summarize(rec, skip), skip)]
+        metrics = summarize(rec, skip)
+        lines = [
+            format_summary(metrics, skip),
+            *against_prediction(self.scenario, metrics, float(rec.t[-1])),
+        ]
         lines.append(
             'axis   periods without a fresh command   in a row   state->command latency [ms]: '
             f'median    p99     max   (from {self.figures_source()})'

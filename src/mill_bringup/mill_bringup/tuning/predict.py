@@ -11,7 +11,6 @@ t >= skip is the prediction a verification run is compared with.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 from mill_analysis.identify.machine_file import MachineModel
 from mill_analysis.metrics import summarize
@@ -22,18 +21,9 @@ from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.scenario import Scenario, apply_params_file, load
 from mill_bringup.tuning.design import TuneError
+from mill_bringup.tuning.prediction_file import Prediction
 
 STANDARD_GRAVITY = 9.80665
-
-
-@dataclass(frozen=True)
-class Prediction:
-    scenario: str
-    sample_period: float
-    skip: float
-    rms: dict[str, float]  # [m]
-    max: dict[str, float]  # [m]
-    events: list[str]
 
 
 def machine_overrides(scen: Scenario, plant: str, model: MachineModel) -> list[str]:
@@ -102,6 +92,7 @@ def predict(
         scen.name,
         T,
         skip,
+        float(rec.t[-1]),
         {m.axis: m.rms_error for m in metrics},
         {m.axis: m.max_error for m in metrics},
         list(rec.events),

@@ -1,0 +1,44 @@
+"""Every axis of a run's record identified (mill_models.identification), or why not."""
+
+from __future__ import annotations
+
+import numpy as np
+from mill_models.identification import (
+    AxisIdentification,
+    FitSettings,
+    IdentificationError,
+    identify_axis,
+)
+
+from mill_analysis.metrics import RunRecord
+
+# axis -> (model, the positions and commands it was fitted to)
+Fits = dict[str, tuple[AxisIdentification, np.ndarray, np.ndarray]]
+
+
+def longest_finite(x: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The longest run of samples where both are finite (an axis that tripped ends there)."""
+    ok = np.isfinite(x) & np.isfinite(u)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], ok.astype(int), [0]])))
+    if not edges.size:
+        return x[:0], u[:0]
+    starts, stops = edges[::2], edges[1::2]
+    i = int(np.argmax(stops - starts))
+    return x[starts[i] : stops[i]], u[starts[i] : stops[i]]
+
+
+def identify_record(
+    rec: RunRecord, T: float, axes: list[str], skip: float, settings: FitSettings
+) -> tuple[Fits, list[str]]:
+    """The fits of the axes that could be identified, and a line for each that could not."""
+    keep = rec.t >= skip
+    fits: Fits = {}
+    failed = []
+    for axis in axes:
+        i = 'xyz'.index(axis)
+        x, u = longest_finite(rec.signals['position'][keep, i], rec.signals['torque'][keep, i])
+        try:
+            fits[axis] = (identify_axis(x, u, T, settings), x, u)
+        except IdentificationError as exc:
+            failed.append(f'{axis}: {exc}')
+    return fits, failed

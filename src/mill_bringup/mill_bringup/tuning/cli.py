@@ -1,0 +1,222 @@
+"""`tune MACHINE`: the parameter file for an identified machine, its margins and prediction.
+
+Reads the machine model `identify` wrote, designs every axis's ADRC law and ESO observer at
+the sample period asked for (mill_bringup.tuning.design), prints the margins of each loop as
+built (mill_bringup.tuning.margins), writes the ROS 2 parameter file and runs the job offline
+on the identified machine for the tracking it predicts (mill_bringup.tuning.predict), which a
+`run_scenario SCENARIO --params-file FILE` run then reports itself against. Anything that
+cannot be tuned gets one line and no file (exit 1); bad options one line (exit 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from functools import partial
+from pathlib import Path
+
+from mill_analysis.identify.machine_file import MachineFileError, MachineModel, read
+from mill_common.one_line_parser import OneLineParser
+from mill_controllers.config import build_loop
+from mill_models.identification import AxisIdentification
+from mill_observers.config import build_observer_loop
+
+from mill_bringup.scenario import ScenarioError, load
+from mill_bringup.tuning.design import AxisTuning, TuneError, design_axis
+from mill_bringup.tuning.margins import Margins, UnstableLoop, margins
+from mill_bringup.tuning.params_file import write_params
+from mill_bringup.tuning.predict import predict
+from mill_bringup.tuning.prediction_file import Prediction, prediction_path, write_prediction
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f'{text!r} must be > 0')
+    return value
+
+
+def _parser() -> OneLineParser:
+    p = OneLineParser(
+        prog='tune',
+        description='Design the ADRC law and ESO observer of every identified axis for a sample '
+        'period (pole placement at the bandwidths of the tuning rule, limited by the encoder), '
+        'print their margins, write the ROS 2 parameter file and predict the tracking of a job '
+        'on the identified machine.',
+    )
+    p.add_argument('machine', help='machine model written by identify')
+    p.add_argument('--sample-period', type=_positive, help='[s] (default: as identified)')
+    p.add_argument(
+        '--delay',
+        type=int,
+        help='command delay [samples] (default: as identified; needed at another sample period)',
+    )
+    p.add_argument('--torque-limit', type=_positive, default=5.0, help='[N·m] (default 5)')
+    p.add_argument(
+        '--following-error-limit',
+        type=_positive,
+        default=0.001,
+        help='trip threshold [m] (default 0.001)',
+    )
+    p.add_argument(
+        '--scenario',
+        default='slotting',
+        help='the job to predict (default slotting); its nodes are named '
+        '<axis>_controller and <axis>_observer',
+    )
+    p.add_argument('--duration', type=_positive, help='predict only this much of the job [s]')
+    p.add_argument('--skip', type=float, default=1.0, help='metrics over t >= SKIP [s]')
+    p.add_argument(
+        '--output',
+        '-o',
+        type=Path,
+        help='parameter file (default: tuned.yaml next to the machine model)',
+    )
+    return p
+
+
+def _margins_at(
+    scenario: str,
+    axis: str,
+    T: float,
+    delay: int,
+    m: AxisIdentification,
+    omega_o: float,
+    omega_c: float,
+) -> Margins:
+    scen = load(scenario)
+    for text in (
+        f'*.sample_period={T!r}',
+        '*.design_period=0.0',
+        f'*.command_delay={delay}',
+        f'{axis}_controller.controller=adrc',
+        f'{axis}_controller.input_gain={m.b.value!r}',
+        f'{axis}_controller.pd.omega_c={omega_c!r}',
+        f'{axis}_controller.pd.zeta_c=0.7071',
+        f'{axis}_observer.observer=eso',
+        f'{axis}_observer.input_gain={m.b.value!r}',
+        f'{axis}_observer.eso.omega_o={omega_o!r}',
+        f'{axis}_observer.eso.degree=0',
+    ):
+        scen.add_override(text)
+    cv, ov = scen.parameters(f'{axis}_controller'), scen.parameters(f'{axis}_observer')
+    return margins(
+        lambda: (build_observer_loop(ov), build_loop(cv)), m.b.value, m.alpha.value, delay, T
+    )
+
+
+def _delay(model: MachineModel, T: float, asked: int | None) -> int:
+    if asked is not None:
+        if asked < 0:
+            raise TuneError(f'--delay must be a whole number >= 0, got {asked}')
+        return asked
+    delays = {m.delay for m in model.axes.values()}
+    if not math.isclose(T, model.sample_period, rel_tol=1e-9):
+        raise TuneError(
+            f'the machine was identified at T = {1e3 * model.sample_period:g} ms: at '
+            f'{1e3 * T:g} ms give --delay (a drive that applies each command at its next tick: 1)'
+        )
+    if len(delays) != 1:
+        raise TuneError(f'the axes have different delays {sorted(delays)}: give --delay')
+    return delays.pop()
+
+
+def _header(
+    model: MachineModel, machine: str, T: float, delay: int, tuned: dict[str, AxisTuning]
+) -> str:
+    lines = [
+        f'tune {machine}: ADRC law + ESO observer at T = {1e3 * T:g} ms, {delay} sample(s) '
+        'of delay',
+        f'identified from {model.source or "?"}',
+    ]
+    for a, t in tuned.items():
+        lines.append(
+            f'{a}: observer {t.omega_o:.1f} rad/s, controller {t.omega_c:.1f} rad/s '
+            f'(limited by the {t.limited_by}); {t.margins.text()}'
+        )
+    return '\n'.join(lines)
+
+
+def _report(tuned: dict[str, AxisTuning], pred: Prediction | None) -> str:
+    rows = [
+        '| axis | ω_o [rad/s] | ω_c [rad/s] | limited by | crossover [rad/s] | phase margin | '
+        'gain margin | delay margin [samples] | encoder noise [mN·m RMS] | predicted RMS e '
+        '[µm] | predicted max e [µm] |',
+        '|---|---|---|---|---|---|---|---|---|---|---|',
+    ]
+    for a, t in tuned.items():
+        mg = t.margins
+        gm = 'inf' if math.isinf(mg.gain_db) else f'{mg.gain_db:.1f} dB'
+        rms = f'{1e6 * pred.rms[a]:.3g}' if pred and a in pred.rms else '-'
+        peak = f'{1e6 * pred.max[a]:.3g}' if pred and a in pred.max else '-'
+        rows.append(
+            f'| {a} | {t.omega_o:.1f} | {t.omega_c:.1f} | {t.limited_by} | {mg.crossover:.0f} | '
+            f'{mg.phase:.0f}° | {gm} | {mg.delay:.2f} | {1e3 * t.torque_noise:.3g} | {rms} | '
+            f'{peak} |'
+        )
+    return '\n'.join(rows)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = _parser().parse_args(argv)
+    try:
+        model = read(Path(args.machine))
+        T = args.sample_period or model.sample_period
+        delay = _delay(model, T, args.delay)
+        tuned = {
+            a: design_axis(
+                a,
+                m,
+                T,
+                delay,
+                args.torque_limit,
+                partial(_margins_at, args.scenario, a, T, delay, m),
+            )
+            for a, m in model.axes.items()
+        }
+    except (MachineFileError, TuneError, ScenarioError) as exc:
+        print(f'tune: error: {exc}', file=sys.stderr)
+        return 1
+    except UnstableLoop as exc:
+        print(
+            f'tune: error: {exc}: the identified model is not one this rule can stabilise',
+            file=sys.stderr,
+        )
+        return 1
+    out = args.output or Path(args.machine).resolve().parent / 'tuned.yaml'
+    nodes: dict[str, dict[str, object]] = {}
+    for a, t in tuned.items():
+        m = model.axes[a]
+        nodes[f'{a}_controller'] = t.controller(
+            m, delay, args.torque_limit, args.following_error_limit
+        )
+        nodes[f'{a}_observer'] = t.observer(m, delay)
+    write_params(out, T, nodes, _header(model, args.machine, T, delay, tuned))
+    print(
+        f'tune {args.machine}: T = {1e3 * T:g} ms, delay {delay} sample(s); predicting '
+        f'{args.scenario} offline on the identified machine ...',
+        flush=True,
+    )
+    try:
+        pred = predict(args.scenario, str(out), model, delay, args.skip, args.duration)
+    except (TuneError, ScenarioError) as exc:
+        out.unlink()
+        print(f'tune: error: {exc}', file=sys.stderr)
+        return 1
+    write_prediction(prediction_path(out), pred)
+    print(_report(tuned, pred))
+    for event in pred.events:
+        print(f'predicted: {event}')
+    print(
+        f'parameter file: {out}\nprediction: {prediction_path(out)}\n'
+        f'next: run_scenario {args.scenario} --params-file {out}'
+    )
+    return 1 if pred.events else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
