@@ -27,7 +27,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_analysis.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
+from mill_analysis.metrics import (
+    FORCE_CONTROL,
+    RunRecord,
+    summarize,
+    summarize_contour,
+    summary_text,
+)
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
@@ -300,7 +306,7 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        text = '\n'.join([format_summary(summarize(rec, skip), skip), *rec.events])
+        text = '\n'.join([summary_text(rec, skip), *rec.events])
         if rec.force_control is None or not len(rec.force_control):
             return text
         lines = [
@@ -319,6 +325,7 @@ class AxisJob(Job[RunRecord]):
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         out: dict[str, Any] = {
             'metrics': [vars(m) for m in summarize(rec, skip)],
+            'contour_error': vars(c) if (c := summarize_contour(rec, skip)) else None,
             'events': rec.events,
         }
         if rec.force_control is not None:

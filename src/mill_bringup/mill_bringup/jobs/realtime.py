@@ -16,7 +16,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import RunRecord, format_summary, summarize
+from mill_analysis.metrics import RunRecord, summary_text
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
@@ -244,7 +244,7 @@ class RealtimeAxisJob(AxisJob):
         )
 
     def summary(self, rec: RunRecord, skip: float) -> str:
-        lines = [format_summary(summarize(rec, skip), skip)]
+        lines = [summary_text(rec, skip)]
         lines.append(
             'axis   periods without a fresh command   in a row   state->command latency [ms]: '
             f'median    p99     max   (from {self.figures_source()})'
