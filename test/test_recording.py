@@ -27,7 +27,7 @@ import pytest
 import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
-from mill_analysis.metrics import summarize
+from mill_analysis.metrics import summarize, summarize_contour
 from mill_analysis.run_record import read_run
 from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
 from mill_bag.reader import open_bag
@@ -219,6 +219,10 @@ def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     for m, ref in zip(from_bag, summary['metrics'], strict=True):
         for key in ('max_error', 'rms_error', 'rms_disturbance_error', 'rms_disturbance'):
             assert abs(getattr(m, key) - ref[key]) <= 1e-12, (m.axis, key)
+    contour = summarize_contour(run.record, 1.0)
+    assert contour is not None and contour.axes == summary['contour_error']['axes'] == 'xyz'
+    for key in ('max_error', 'rms_error'):
+        assert abs(getattr(contour, key) - summary['contour_error'][key]) <= 1e-12, key
     assert summary['bag']['messages'] == run.message_count == sum(run.bag.counts.values())
 
 
@@ -239,10 +243,12 @@ def test_report_on_the_recorded_run(recorded_run, tmp_path):
     text = (out / 'report.md').read_text()
     for name in PNGS:
         assert (out / name).stat().st_size > 10_000 and f']({name})' in text
-    # The runner's summary block, printed again from the bag by the same code.
+    # The runner's summary block (per axis, then the contour error), printed again from the
+    # bag by the same code.
     runner_lines = recorded_run['stdout'].splitlines()
     start = next(i for i, line in enumerate(runner_lines) if line.startswith('axis   max |e|'))
-    assert '\n'.join(runner_lines[start : start + 4]) in proc.stdout
+    assert runner_lines[start + 4].startswith('contour error (distance to the programmed')
+    assert '\n'.join(runner_lines[start : start + 5]) in proc.stdout
     assert 'no feed override in this bag' in proc.stdout
     assert 'lockstep wait for commands mean' in proc.stdout
 

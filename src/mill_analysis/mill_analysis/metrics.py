@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from mill_common.signals import AXES
 
+from mill_analysis.contour import distance_to_path
 from mill_analysis.record_checks import Drops
 
 SIGNALS = (
@@ -122,7 +123,60 @@ def summarize(record: RunRecord, skip: float = 1.0) -> list[AxisMetrics]:
     return out
 
 
-def format_summary(metrics: list[AxisMetrics], skip: float) -> str:
+@dataclass(frozen=True)
+class Contour:
+    """The contour error of a run, per sample (see `contour_error`)."""
+
+    axes: str  # the axes of the path, e.g. 'xyz'
+    distance: np.ndarray  # (n,) [m], NaN where the measured position is not known
+    nearest: np.ndarray  # (n, 3): the nearest point of the path [m], NaN off its axes
+
+
+@dataclass(frozen=True)
+class ContourMetrics:
+    axes: str  # the axes of the path
+    max_error: float  # max contour error after the skip [m]
+    rms_error: float  # RMS contour error after the skip [m]
+
+
+def contour_error(record: RunRecord) -> Contour | None:
+    """The contour error: for each sample, the distance from the measured position to the
+    programmed path, the polyline through every reference position of the run, in the space
+    of the run's axes (those with a measured position; 3-D for x, y, z). It is the distance
+    to the nearest point of the path, not to the reference of the same instant: a tool that
+    lags along its path has a tracking error but no contour error; a corner cut short has
+    one. What a machinist measures on the part. None for a run without a measured axis.
+    """
+    cols = [i for i in range(len(AXES)) if np.isfinite(record['position'][:, i]).any()]
+    ref = record['reference'][:, cols]
+    if not cols or not np.isfinite(ref).all(axis=1).any():
+        return None
+    distance, near = distance_to_path(ref, record['position'][:, cols])
+    nearest = np.full((len(record.t), len(AXES)), np.nan)
+    nearest[:, cols] = near
+    return Contour(''.join(AXES[i] for i in cols), distance, nearest)
+
+
+def summarize_contour(
+    record: RunRecord, skip: float = 1.0, contour: Contour | None = None
+) -> ContourMetrics | None:
+    """Max and RMS contour error over t >= skip (`contour_error`, computed if not given)."""
+    if contour is None:
+        contour = contour_error(record)
+    if contour is None:
+        return None
+    after = contour.distance[record.t >= skip]
+    return ContourMetrics(contour.axes, _max_abs(after), _rms(after))
+
+
+def summary_text(record: RunRecord, skip: float) -> str:
+    """The summary a run prints: per-axis metrics and the contour error."""
+    return format_summary(summarize(record, skip), skip, summarize_contour(record, skip))
+
+
+def format_summary(
+    metrics: list[AxisMetrics], skip: float, contour: ContourMetrics | None = None
+) -> str:
     lines = [
         f'axis   max |e| [mm]   RMS e [mm]   RMS(xi_hat - xi) [m/s^2]   RMS xi [m/s^2]'
         f'   (t >= {skip:g} s)'
@@ -131,5 +185,10 @@ def format_summary(metrics: list[AxisMetrics], skip: float) -> str:
         lines.append(
             f'{m.axis:>4}   {m.max_error * 1e3:12.6f}   {m.rms_error * 1e3:10.6f}'
             f'   {m.rms_disturbance_error:24.6f}   {m.rms_disturbance:14.6f}'
+        )
+    if contour is not None:
+        lines.append(
+            f'contour error (distance to the programmed {"-".join(contour.axes)} path): '
+            f'max {contour.max_error * 1e3:.6f} mm, RMS {contour.rms_error * 1e3:.6f} mm'
         )
     return '\n'.join(lines)

@@ -11,7 +11,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mill_analysis.metrics import contour_error, summarize_contour
 from mill_analysis.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
+from mill_analysis.report.plots import contour_planes
 from mill_analysis.report.text import feed_text
 from mill_analysis.run_record import read_run, record_topics
 from mill_bag.types import STRING, typestore
@@ -72,6 +74,50 @@ def test_report_command_writes_markdown_and_plots(foreign_bag, tmp_path) -> None
     for name in pngs:
         assert (out / name).stat().st_size > 10_000, name
         assert f']({name})' in text
+
+
+def test_report_prints_and_writes_the_contour_error_of_the_bag(foreign_bag, tmp_path) -> None:
+    path, made = foreign_bag('mcap')
+    rec = read_run(path).record
+    contour = contour_error(rec)
+    assert contour is not None and contour.axes == 'xyz'
+    # The path is a straight line: the contour error is the deviation across it.
+    dev = made['position'] - made['reference']
+    u = made['reference'][-1] - made['reference'][0]
+    u /= np.linalg.norm(u)
+    across = np.linalg.norm(dev - np.outer(dev @ u, u), axis=1)
+    inner = slice(100, 390)  # not at the path's ends, where its end point is nearer
+    np.testing.assert_allclose(contour.distance[inner], across[inner], rtol=1e-9)
+    assert np.all(across[inner] < np.linalg.norm(dev, axis=1)[inner])  # below |e|
+    summary = summarize_contour(rec, 0.1, contour)
+    assert summary is not None and summary.max_error > 1e-6
+    out = tmp_path / 'report'
+    proc = subprocess.run(
+        [
+            *(sys.executable, '-m', 'mill_analysis.report', str(path)),
+            *('--out', str(out), '--skip', '0.1', '--quiet'),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    line = (
+        'contour error (distance to the programmed x-y-z path): '
+        f'max {summary.max_error * 1e3:.6f} mm, RMS {summary.rms_error * 1e3:.6f} mm'
+    )
+    assert line in proc.stdout.splitlines()
+    row = f'| {path.name} | x-y-z | {summary.max_error * 1e6:.3f} | {summary.rms_error * 1e6:.3f} |'
+    assert row in (out / 'report.md').read_text().splitlines()
+    assert (out / 'contour.png').stat().st_size > 10_000
+
+
+def test_the_side_view_is_drawn_when_the_path_moves_in_z(foreign_bag) -> None:
+    path, _ = foreign_bag('mcap')
+    report = analyse(read_run(path), 'f', 0.1, 0.1, [60.0])
+    assert contour_planes(report) == [(0, 1), (1, 2)]  # z falls 0.4 mm over y's 1.2 mm
+    report.run.record['reference'][:, 2] = 0.02  # a flat path: the top view only
+    assert contour_planes(report) == [(0, 1)]
 
 
 def test_progress_reaches_the_end_of_every_phase(foreign_bag) -> None:

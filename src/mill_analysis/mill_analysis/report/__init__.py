@@ -8,6 +8,9 @@ Per run and axis, over t >= --skip (the start transient excluded):
 - tracking error e = measured position - reference: max |e|, RMS e, and the
   largest RMS of e over any window of --window seconds (a sustained error, where
   max |e| may be one sample);
+- contour error: the distance from each measured position to the programmed path (the
+  polyline of the reference positions; mill_analysis.metrics.contour_error), max and RMS,
+  and a plot of the path against the measured contour with that error magnified;
 - disturbance estimation error xi_hat - xi against the plant's ground truth;
 - spectrum of e and of xi_hat - xi (Hann window) and their amplitudes at --freqs
   (single-frequency DFT, so a tone between FFT bins is not under-read);
@@ -17,8 +20,8 @@ Per run and axis, over t >= --skip (the start transient excluded):
   received (the recorder's publish time; jitter = its standard deviation) and
   the plant's lockstep wait for commands from its /diagnostics status.
 
-max |e|, RMS e and the RMS of xi_hat - xi and of xi come from
-`mill_analysis.metrics.summarize` on a RunRecord built by
+max |e|, RMS e, the RMS of xi_hat - xi and of xi and the contour error come from
+`mill_analysis.metrics` (summarize, contour_error) on a RunRecord built by
 `mill_analysis.run_record.build_record`: the code the runner uses for the summary it
 prints, so both agree on the same run.
 

@@ -1,8 +1,9 @@
 """The numbers of a report: per run and axis metrics, error spectra, windowed RMS, loop timing.
 
 Pure numpy on a BagRun (mill_analysis.run_record): max |e|, RMS e and the RMS of
-xi_hat - xi and of xi come from `mill_analysis.metrics.summarize`, the code the
-runner prints its summary with; the rest is computed here over t >= skip.
+xi_hat - xi and of xi come from `mill_analysis.metrics.summarize`, the contour error from
+`mill_analysis.metrics.contour_error`, the code the runner prints its summary with; the rest
+is computed here over t >= skip.
 """
 
 from __future__ import annotations
@@ -15,7 +16,14 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from mill_common.signals import AXES
 
-from mill_analysis.metrics import AxisMetrics, summarize
+from mill_analysis.metrics import (
+    AxisMetrics,
+    Contour,
+    ContourMetrics,
+    contour_error,
+    summarize,
+    summarize_contour,
+)
 
 if TYPE_CHECKING:
     from mill_analysis.run_record import BagRun
@@ -99,6 +107,8 @@ class RunReport:
     loop: dict[str, float] = field(default_factory=dict)
     feed: dict[str, float] | None = None
     read_seconds: float = 0.0
+    contour: Contour | None = None  # per sample (the plots)
+    contour_summary: ContourMetrics | None = None  # over t >= skip
 
     @property
     def summary(self) -> list[AxisMetrics]:
@@ -149,6 +159,8 @@ def analyse(run: BagRun, label: str, skip: float, window: float, freqs: list[flo
         )
     report = RunReport(label, run, skip, window, freqs, axes)
     report.loop = loop_timing(run)
+    report.contour = contour_error(rec)
+    report.contour_summary = summarize_contour(rec, skip, report.contour)
     if run.feed_override:
         values = np.array([v for _, v in run.feed_override])
         report.feed = {

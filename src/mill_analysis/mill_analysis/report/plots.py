@@ -126,7 +126,13 @@ def figures(reports: list[RunReport]) -> list[Job]:
     ]
     axes = reports[0].run.axes
     if 'x' in axes and 'y' in axes:
-        jobs.append(Job('contour.png', 'x–y contour of the cut', partial(contour_figure, reports)))
+        jobs.append(
+            Job(
+                'contour.png',
+                'Programmed path, measured contour and contour error',
+                partial(contour_figure, reports),
+            )
+        )
     jobs.append(Job('error_spectrum.png', 'Error spectrum', partial(spectrum_figure, reports)))
     with_wall = [r for r in reports if r.run.state_wall_ns is not None]
     if with_wall:
@@ -284,49 +290,91 @@ def cutting_force_figure(reports: list[RunReport]) -> Figure:
 
 
 def contour_figure(reports: list[RunReport]) -> Figure:
-    """Per run: the x-y path against the reference, and its deviation magnified."""
-    fig, ax = _layout(2, len(reports), _run_columns_width(reports), 9.0)
+    """Per run (column): the path against the reference path and the contour error magnified,
+    in the x-y plane and, if the path moves in z, the side view (`planes`); then the contour
+    error and the tracking error |e| over time."""
+    planes = sorted({p for r in reports for p in contour_planes(r)})
+    fig, ax = _layout(
+        2 * len(planes) + 1, len(reports), _run_columns_width(reports), 8.0 * len(planes) + 3.0
+    )
     for c, r in enumerate(reports):
-        _draw_contour(ax[0, c], r)
-        _draw_contour_deviation(ax[1, c], r)
-        for a in ax[:, c]:
-            a.set_xlabel('x [mm]')
-            a.set_ylabel('y [mm]')
+        for row, (i, j) in enumerate(planes):
+            _draw_contour(ax[2 * row, c], r, i, j)
+            _draw_contour_deviation(ax[2 * row + 1, c], r, i, j)
+            for a in ax[2 * row : 2 * row + 2, c]:
+                a.set_xlabel(f'{AXES[i]} [mm]')
+                a.set_ylabel(f'{AXES[j]} [mm]')
+        _draw_contour_error(ax[-1, c], r)
+    fig.suptitle('Programmed path and measured contour')
     return fig
 
 
-def _draw_contour(a: Axes, r: RunReport) -> None:
-    """The measured x-y path over the reference path [mm], the whole run."""
+def contour_planes(r: RunReport) -> list[tuple[int, int]]:
+    """The views of the path: x-y (the part seen from above), and the side view along the
+    longer of its x and y extents when the reference moves in z by more than 1 % of that:
+    a plunge, a ramp or a 3-D contour, which the top view would hide."""
+    ref = r.run.record['reference']
+    extent = np.nanmax(ref, axis=0) - np.nanmin(ref, axis=0)
+    planes = [(0, 1)]
+    if 'z' in r.run.axes and extent[2] > 0.01 * max(extent[0], extent[1]):
+        planes.append((0, 2) if extent[0] >= extent[1] else (1, 2))
+    return planes
+
+
+def _draw_contour(a: Axes, r: RunReport, i: int, j: int) -> None:
+    """The measured path over the reference path [mm] in the plane (i, j), the whole run."""
     pos, ref = r.run.record['position'] * 1e3, r.run.record['reference'] * 1e3
-    a.plot(ref[:, 0], ref[:, 1], 'k--', lw=1.0, label='reference path')
-    a.plot(pos[:, 0], pos[:, 1], 'C0', lw=1.2, label='measured path')
-    a.set_title(f'{r.label}: x–y contour of the cut', loc='left')
+    a.plot(ref[:, i], ref[:, j], 'k--', lw=1.0, label='reference (programmed) path')
+    a.plot(pos[:, i], pos[:, j], 'C0', lw=1.2, label='measured contour')
+    a.set_title(f'{r.label}: {AXES[i]}–{AXES[j]} contour of the cut', loc='left')
     a.set_aspect('equal', adjustable='datalim')
     a.legend(loc='best')
 
 
-def _draw_contour_deviation(a: Axes, r: RunReport) -> None:
-    """The measured path with its deviation from the reference magnified (1, 2, 5 x 10^n)
-    to about 5 % of the path's extent."""
-    rec = r.run.record
-    x, y = rec['position'][:, 0], rec['position'][:, 1]
-    xr, yr = rec['reference'][:, 0], rec['reference'][:, 1]
+def _draw_contour_deviation(a: Axes, r: RunReport, i: int, j: int) -> None:
+    """The measured contour with its contour error (from the nearest point of the path)
+    magnified (1, 2, 5 x 10^n) to about 5 % of the path's extent, as a ballbar plot shows it."""
+    rec, c = r.run.record, r.contour
+    ref = rec['reference']
+    a.plot(ref[:, i] * 1e3, ref[:, j] * 1e3, color='0.6', lw=1.0, label='reference path')
+    if c is not None:
+        after = rec.t >= r.skip
+        near, pos = c.nearest[after], rec['position'][after]
+        extent = np.nanmax(np.nanmax(ref, axis=0) - np.nanmin(ref, axis=0))
+        peak = np.nanmax(c.distance[after]) if np.isfinite(c.distance[after]).any() else 0.0
+        gain = _nice(0.05 * extent / peak) if peak > 0 else 1.0
+        shown = near + gain * (pos - near)
+        a.plot(
+            shown[:, i] * 1e3,
+            shown[:, j] * 1e3,
+            'C3',
+            lw=0.8,
+            label=f'measured, contour error × {gain:g}',
+        )
+        a.set_title(f'{r.label}: contour error magnified × {gain:g} (t ≥ {r.skip:g} s)', loc='left')
+    a.set_aspect('equal', adjustable='datalim')
+    a.legend(loc='best')
+
+
+def _draw_contour_error(a: Axes, r: RunReport) -> None:
+    """The contour error and the tracking error |e| over time: their difference is the lag
+    along the path."""
+    rec, c = r.run.record, r.contour
+    if c is None:
+        return
+    cols = [AXES.index(x) for x in c.axes]
+    e = np.linalg.norm(rec.tracking_error[:, cols], axis=1)
     after = rec.t >= r.skip
-    dev = np.hypot(x - xr, y - yr)[after]
-    extent = max(np.nanmax(xr) - np.nanmin(xr), np.nanmax(yr) - np.nanmin(yr), 1e-9)
-    peak = np.nanmax(dev) if np.isfinite(dev).any() else 0.0
-    gain = _nice(0.05 * extent / peak) if peak > 0 else 1.0
-    a.plot(xr * 1e3, yr * 1e3, color='0.6', lw=1.0, label='reference path')
-    a.plot(
-        (xr + gain * (x - xr))[after] * 1e3,
-        (yr + gain * (y - yr))[after] * 1e3,
-        'C3',
-        lw=0.8,
-        label=f'measured, deviation × {gain:g}',
-    )
-    a.set_title(f'{r.label}: contour deviation magnified × {gain:g} (t ≥ {r.skip:g} s)', loc='left')
-    a.set_aspect('equal', adjustable='datalim')
-    a.legend(loc='best')
+    k, unit = _scale(e[after], 'm')
+    a.plot(*envelope(rec.t, e * k), color='0.5', lw=0.8, label='tracking error |e|')
+    a.plot(*envelope(rec.t, c.distance * k), 'C3', lw=0.8, label='contour error')
+    a.axvspan(0, r.skip, color='0.85', alpha=0.5, label=f'excluded (t < {r.skip:g} s)')
+    if np.isfinite(e[after]).any():
+        a.set_ylim(0, np.nanmax(e[after]) * k * 1.15)
+    a.set_title(f'{r.label}: contour error and tracking error', loc='left')
+    a.set_xlabel('time t [s]')
+    a.set_ylabel(f'error [{unit}]')
+    a.legend(loc='upper right')
 
 
 SPECTRA = ('tracking error e [µm]', 'ξ̂ − ξ [m/s²]')  # the columns of the spectrum figure

@@ -30,7 +30,7 @@ def text_table(reports: list[RunReport]) -> str:
         lines.append(
             f'== {r.label}: {r.run.bag.path} ({r.run.extent()}, T = {r.run.dt_ns / 1e6:g} ms)'
         )
-        lines.append(format_summary(r.summary, r.skip))
+        lines.append(format_summary(r.summary, r.skip, r.contour_summary))
         head = f'axis   max RMS_{r.window:g}s e [um]'
         for f in r.freqs:
             head += f'   |E({hz(f)})| [um]'
@@ -157,6 +157,23 @@ def markdown(reports: list[RunReport], figures: list[tuple[str, str]], argv: lis
                 f'| {r.label} | {a.axis} | {_um(m.max_error)} | {_um(m.rms_error)} '
                 f'| {_um(a.max_window_rms_error)} | {_f(m.rms_disturbance_error)} '
                 f'| {_f(a.max_disturbance_error)} | {_f(m.rms_disturbance)} |'
+            )
+    out += [
+        '',
+        '## Contour error',
+        '',
+        'The distance from each measured position to the programmed path (the polyline '
+        "through the reference positions, in the space of the run's axes): how far the cut "
+        "lies from the part's contour, whatever the lag along the path.",
+        '',
+        '| run | path | max contour error [µm] | RMS contour error [µm] |',
+        '|---|---|---|---|',
+    ]
+    for r in reports:
+        c = r.contour_summary
+        if c is not None:
+            out.append(
+                f'| {r.label} | {"-".join(c.axes)} | {_um(c.max_error)} | {_um(c.rms_error)} |'
             )
     out += [
         '',

@@ -27,7 +27,13 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_analysis.metrics import FORCE_CONTROL, RunRecord, format_summary, summarize
+from mill_analysis.metrics import (
+    FORCE_CONTROL,
+    RunRecord,
+    summarize,
+    summarize_contour,
+    summary_text,
+)
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
@@ -301,11 +307,10 @@ class AxisJob(Job[RunRecord]):
 
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float) -> str:
-        metrics = summarize(rec, skip)
         text = '\n'.join(
             [
-                format_summary(metrics, skip),
-                *against_prediction(self.scenario, metrics, float(rec.t[-1])),
+                summary_text(rec, skip),
+                *against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1])),
                 *rec.events,
             ]
         )
@@ -327,6 +332,7 @@ class AxisJob(Job[RunRecord]):
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         out: dict[str, Any] = {
             'metrics': [vars(m) for m in summarize(rec, skip)],
+            'contour_error': vars(c) if (c := summarize_contour(rec, skip)) else None,
             'events': rec.events,
         }
         if rec.force_control is not None:

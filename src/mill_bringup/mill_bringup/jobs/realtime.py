@@ -16,7 +16,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import RunRecord, format_summary, summarize
+from mill_analysis.metrics import RunRecord, summary_text
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
@@ -245,10 +245,9 @@ class RealtimeAxisJob(AxisJob):
         )
 
     def summary(self, rec: RunRecord, skip: float) -> str:
-        metrics = summarize(rec, skip)
         lines = [
-            format_summary(metrics, skip),
-            *against_prediction(self.scenario, metrics, float(rec.t[-1])),
+            summary_text(rec, skip),
+            *against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1])),
         ]
         lines.append(
             'axis   periods without a fresh command   in a row   state->command latency [ms]: '
