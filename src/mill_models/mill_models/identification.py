@@ -56,6 +56,7 @@ class FitSettings:
     holdout: float = 0.25  # share of the windows (the last ones) kept to check the fit
     max_gain_error: float = 0.02  # the 95 % interval of b must be within ±this × b
     delay_contrast: float = 2.0  # the second-best delay's residual must be this × the best
+    max_rejected: float = 0.2  # of the windows may fit far worse than the others
 
 
 @dataclass(frozen=True)
@@ -86,6 +87,7 @@ class AxisIdentification:
     gamma: Interval  # constant load, towards −axis [m/s²]
     resolution: float  # smallest position step seen [m]
     windows: int  # used for the fit
+    rejected: int  # left out of the fit: they fit far worse than the others
     held_out: int  # used to check it
     fit_rms: float  # residual of the fit [m]
     validation_rms: float  # residual on the held-out windows [m]
@@ -109,6 +111,7 @@ class AxisIdentification:
             fit_rms=self.fit_rms,
             validation_rms=self.validation_rms,
             windows=self.windows,
+            rejected=self.rejected,
             held_out=self.held_out,
         )
         return out
@@ -181,15 +184,11 @@ def identify_axis(
     if not (np.isfinite(x).all() and np.isfinite(u).all()):
         raise IdentificationError('the record has missing or non-finite samples')
     fit, held = split_windows(x, T, s)
-    results = []
-    for d in range(s.max_delay + 1):
-        A, y = _stack(x, u, T, fit, d)
-        theta, *_ = np.linalg.lstsq(A, y, rcond=None)
-        r = y - A @ theta
-        results.append((float(r @ r), theta, A, len(y)))
-    rss = [r[0] for r in results]
+    results = [_robust_fit(x, u, T, fit, d) for d in range(s.max_delay + 1)]
+    rss = [r.rss for r in results]
     d = int(np.argmin(rss))
-    best, theta, A, n = results[d]
+    chosen = results[d]
+    best, theta, A, n = chosen.rss, chosen.theta, chosen.A, chosen.n
     second = min(r for i, r in enumerate(rss) if i != d)
     if d == s.max_delay:
         raise IdentificationError(
@@ -201,6 +200,13 @@ def identify_axis(
             f'the delay is ambiguous ({d} and another fit within {s.delay_contrast:g}x): too '
             f'little excitation at high frequency (a shorter bit period)'
         )
+    if len(chosen.rejected) > s.max_rejected * len(fit):
+        raise IdentificationError(
+            f'the rigid model fits only {len(fit) - len(chosen.rejected)} of {len(fit)} '
+            f'stretches of motion (the others {OUTLIER:g}x worse than the median): compliance, '
+            f'backlash or a position-dependent load that this model does not have'
+        )
+    fit = [w for i, w in enumerate(fit) if i not in chosen.rejected]
     dof = n - 2 * len(fit) - len(NAMES)
     cov = (best / dof) * np.linalg.inv(A.T @ A)
     half = Z95 * np.sqrt(np.diag(cov))
@@ -214,13 +220,48 @@ def identify_axis(
         gamma,
         resolution=resolution_of(x),
         windows=len(fit),
+        rejected=len(chosen.rejected),
         held_out=len(held),
         fit_rms=math.sqrt(best / n),
-        validation_rms=_validation_rms(x, u, T, held, d, theta),
+        validation_rms=_validation_rms(x, u, T, fit, held, d, theta),
         delay_residuals=tuple(rss),
     )
     check_consistent(ident, s)
     return ident
+
+
+OUTLIER = 5.0  # a window whose residual is this many times the median one is left out
+
+
+@dataclass
+class _Fit:
+    rss: float
+    theta: np.ndarray
+    A: np.ndarray
+    n: int
+    rejected: set[int]  # indices of the windows left out
+
+
+def _window_rms(A: np.ndarray, y: np.ndarray, theta: np.ndarray, sizes: list[int]) -> np.ndarray:
+    r2 = (y - A @ theta) ** 2
+    ends = np.cumsum(sizes)
+    return np.sqrt(np.add.reduceat(r2, ends - np.asarray(sizes)) / np.asarray(sizes))
+
+
+def _robust_fit(x: np.ndarray, u: np.ndarray, T: float, windows: list[Window], d: int) -> _Fit:
+    """Least squares over the windows; then once more without the windows that fit far
+    worse than the median (a stick the smoothed speed hid, a bump in the guideway)."""
+    sizes = [w.stop - w.start for w in windows]
+    A, y = _stack(x, u, T, windows, d)
+    theta, *_ = np.linalg.lstsq(A, y, rcond=None)
+    per = _window_rms(A, y, theta, sizes)
+    rejected = {int(i) for i in np.flatnonzero(per > OUTLIER * np.median(per))}
+    if rejected:
+        kept = [w for i, w in enumerate(windows) if i not in rejected]
+        A, y = _stack(x, u, T, kept, d)
+        theta, *_ = np.linalg.lstsq(A, y, rcond=None)
+    r = y - A @ theta
+    return _Fit(float(r @ r), theta, A, len(y), rejected)
 
 
 def split_windows(x: np.ndarray, T: float, s: FitSettings) -> tuple[list[Window], list[Window]]:
@@ -241,12 +282,22 @@ def held_out_windows(m: AxisIdentification, x: np.ndarray, s: FitSettings) -> li
     return split_windows(np.asarray(x, float), m.sample_period, s)[1]
 
 
-def _validation_rms(x, u, T, held, d, theta) -> float:
+def _validation_rms(x, u, T, fit, held, d, theta) -> float:
+    """RMS residual on the held-out windows, leaving out those that fit as badly as the
+    windows the fit left out (OUTLIER times the fit windows' median)."""
     if not held:
         return math.nan
+    fit_sizes, sizes = [w.stop - w.start for w in fit], [w.stop - w.start for w in held]
+    A_fit, y_fit = _stack(x, u, T, fit, d)
+    typical = np.median(_window_rms(A_fit, y_fit, theta, fit_sizes))
     A, y = _stack(x, u, T, held, d)
-    r = y - A @ theta
-    return math.sqrt(float(r @ r) / len(y))
+    per = _window_rms(A, y, theta, sizes)
+    keep = per <= OUTLIER * typical
+    if not keep.any():
+        return float(np.sqrt(np.mean(per**2)))
+    return float(
+        np.sqrt(np.sum(per[keep] ** 2 * np.asarray(sizes)[keep]) / np.sum(np.asarray(sizes)[keep]))
+    )
 
 
 def check_consistent(m: AxisIdentification, s: FitSettings) -> None:

@@ -110,6 +110,7 @@ def _axis(entry: Any, T: float, where: str) -> AxisIdentification:
         Interval(v['gamma'], v['gamma_ci']),
         resolution=v['resolution'],
         windows=int(v['windows']),
+        rejected=int(v['rejected']),
         held_out=int(v['held_out']),
         fit_rms=v['fit_rms'],
         validation_rms=v['validation_rms'],

@@ -16,7 +16,7 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import RunRecord, summary_text
+from mill_analysis.metrics import RunRecord, summarize, summary_text
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
