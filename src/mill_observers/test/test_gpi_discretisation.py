@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import scipy.integrate
 from mill_common.parameters import ParameterError
+from mill_observers.delay import DelayCompensation
 from mill_observers.gpi import DISCRETISATIONS, GpiObserver
 
 B = 20.96  # x axis of Beltrán 2013 Table 1 [(m/s²)/(N·m)]
@@ -106,3 +107,18 @@ def test_an_unknown_discretisation_is_refused(value: object) -> None:
         GpiObserver.from_parameters(B, T, {'discretisation': value})
     assert info.value.name == 'gpi.discretisation'
     assert ('current, predictor, continuous' in str(info.value)) == isinstance(value, str)
+
+
+def test_with_a_command_delay_predictor_gives_the_same_as_current() -> None:
+    # The delay compensation runs the model ahead from the state after predict(), which
+    # both share (docs/papers.md says so).
+    loops = [
+        DelayCompensation(GpiObserver(B, T, discretisation=d), 1, T)
+        for d in ('current', 'predictor')
+    ]
+    for k in range(30):
+        y = 0.01 + 1e-4 * math.sin(0.3 * k)
+        ests = [loop.correct(y) for loop in loops]
+        assert ests[0] == ests[1]
+        for loop in loops:
+            loop.command(0.1 * math.cos(0.2 * k))
