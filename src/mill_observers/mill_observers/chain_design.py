@@ -145,3 +145,29 @@ class ChainObserver:
         disturbance = -self._b * hold_input  # at rest: 0 = b·u + ξ
         self._z[2] = disturbance * self._T * self._T  # scaled: z₂ = T²·ξ
         return disturbance
+
+
+def continuous_interval(
+    n: int, b: float, T: float, s_roots: Iterable[complex]
+) -> tuple[np.ndarray, ...]:
+    """The continuous observer ż = A z + B τ + ℓ (y − z₀) (Beltrán 2013 eq. (15), poles
+    s_i) integrated exactly over one period, in the scaled state: (Φ, Γ_u, Γ_y, Γ_d, Γ_c)
+    with, for the command u(k−1) held over the period (as the drive holds it) and the
+    position y(τ) = y(k−1) + d·τ + c·τ² over τ = t/T − (k−1) ∈ [0, 1],
+
+        z(k) = Φ z(k−1) + Γ_u u(k−1) + Γ_y y(k−1) + Γ_d d + Γ_c c.
+
+    In τ the gains are the coefficients of Π(σ − s_i·T), of order one, where the raw
+    β0 is about 8·10¹⁹: the (n + 4)-square exponential is well conditioned."""
+    import scipy.linalg  # only this discretisation needs it (about 20 MB)
+
+    ell = npoly.polyfromroots([complex(s) * T for s in s_roots]).real[-2::-1]  # ℓ₀ … ℓ_{n−1}
+    m = np.zeros((n + 4, n + 4))  # [z, u, y, y', c]: u and c constant, y'' = 2c
+    m[:n, :n] = np.eye(n, k=1)
+    m[:n, 0] -= ell
+    m[1, n] = b * T * T
+    m[:n, n + 1] = ell
+    m[n + 1, n + 2] = 1.0
+    m[n + 2, n + 3] = 2.0
+    phi = scipy.linalg.expm(m)
+    return phi[:n, :n], phi[:n, n], phi[:n, n + 1], phi[:n, n + 2], phi[:n, n + 3]

@@ -1,10 +1,23 @@
-"""GPI extended-state observer of Beltrán 2013, as a discrete current estimator (ROS-free).
+"""GPI extended-state observer of Beltrán 2013, sampled three ways (ROS-free).
 
-The paper's observer eq. (15) is continuous with β0 ≈ 8·10¹⁹; sampling it directly at
-1 kHz is unstable (papers README, "Numerical notes"). Instead the extended model eq. (14)
-is sampled exactly (zero-order hold on τ) and a discrete gain places the error poles at
-z_i = exp(s_i·T), with s_i the roots of eq. (18) (mill_observers.chain_design). Between
-samples the error then decays exactly as the paper's continuous design would.
+The paper's observer eq. (15) is continuous with β0 ≈ 8·10¹⁹; sampling it with the
+measured position held over the period is unstable at 1 kHz (papers README, "Numerical
+notes"). `discretisation` chooses how the sampled loop runs it:
+
+- `current` (the default): the extended model eq. (14) sampled exactly (zero-order hold on
+  τ) with a discrete gain placing the error poles at z_i = exp(s_i·T), s_i the roots of
+  eq. (18) (mill_observers.chain_design); the estimate at k uses y(k), x̂(k|k);
+- `predictor`: the same recursion, but the estimate at k is the one before y(k) comes in,
+  x̄(k|k−1) (the classic predictor estimator: one sample older information);
+- `continuous`: eq. (15) itself integrated exactly from sample to sample, driven by the
+  command as held (exactly what the plant gets) and the position between y(k−1) and y(k)
+  the parabola through y(k−2), y(k−1), y(k) (chain_design.continuous_interval): the
+  paper's continuous observer up to that interpolation, O(T³·x⁽³⁾) in position. A parabola
+  is exact for a constant disturbance; a straight line between two samples would leave
+  the estimate of one biased by about 3 % (the test learns_a_constant_disturbance).
+
+With a command delay N ≥ 1 the estimate returned is the model run ahead from x̂(k|k)
+(mill_observers.delay), so `predictor` then gives the same as `current`.
 """
 
 from __future__ import annotations
@@ -15,7 +28,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from mill_common.parameters import ParamSpec, positive, validate_all
+from mill_common.parameters import ParamSpec, one_of, positive, validate_all
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
@@ -23,10 +36,13 @@ from mill_observers.base import Observer
 from mill_observers.chain_design import (
     ChainDesign,
     ChainObserver,
+    advance,
     check_gain_and_period,
+    continuous_interval,
 )
 
 _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
+DISCRETISATIONS = ('current', 'predictor', 'continuous')
 
 
 class GpiObserver(ChainObserver, Observer):
@@ -56,6 +72,15 @@ class GpiObserver(ChainObserver, Observer):
             'real observer pole p_o of eq. (18), placed at s = −p_o [rad/s]',
             positive,
         ),
+        ParamSpec(
+            'discretisation',
+            'current',
+            'how the continuous observer of eq. (15) runs sampled: current (exactly sampled '
+            'model, discrete poles exp(s_i T), estimate after y(k)), predictor (the same, '
+            'estimate before y(k)) or continuous (eq. (15) integrated exactly over each period '
+            'with the held command and the position linear between samples)',
+            one_of(*DISCRETISATIONS),
+        ),
     )
 
     def __init__(
@@ -65,13 +90,20 @@ class GpiObserver(ChainObserver, Observer):
         omega_o: float = 700.0,
         zeta_o: float = 0.7071,
         pole_o: float = 700.0,
+        discretisation: str = 'current',
     ) -> None:
         self._b, self._T = check_gain_and_period(input_gain, sample_period)
         values = validate_all(
             self.PARAMETERS,
-            {'omega_o': omega_o, 'zeta_o': zeta_o, 'pole_o': pole_o},
+            {
+                'omega_o': omega_o,
+                'zeta_o': zeta_o,
+                'pole_o': pole_o,
+                'discretisation': discretisation,
+            },
             prefix=self.PREFIX + '.',
         )
+        self.discretisation: str = values['discretisation']
         self._omega_o: float = values['omega_o']
         self._zeta_o: float = values['zeta_o']
         self._pole_o: float = values['pole_o']
@@ -89,6 +121,13 @@ class GpiObserver(ChainObserver, Observer):
         self._inv_T2 = 1.0 / (T * T)
         self._z: list[float] = [0.0] * n
         self._initialised = False
+        self._interval: tuple[np.ndarray, ...] | None = None
+        if self.discretisation == 'continuous':
+            self._interval = continuous_interval(n, self._b, T, self.continuous_poles())
+        # continuous: the state, command and position the next period starts from
+        self._anchor: tuple[list[float], float, float, float | None] | None = None
+        self._y_last: float | None = None  # measured since the last predict()
+        self._y_start: float | None = None  # the position the period before started from
 
     @classmethod
     def from_parameters(
@@ -101,18 +140,22 @@ class GpiObserver(ChainObserver, Observer):
     # --- run time --------------------------------------------------------------------
 
     def correct(self, y: float) -> Estimate:
-        """Measurement update with position y [m]; returns x̂(k|k).
+        """Measurement update with position y [m]; returns x̂(k|k) (`predictor`: x̄(k|k−1)).
 
         The first call (or the first after reset()) sets position = y, the rest 0.
         A non-finite y raises ValueError and leaves the state untouched.
         """
         if not math.isfinite(y):
             raise ValueError(f'GpiObserver.correct: measured position is not finite: {y!r}')
+        self._y_last = float(y)
         z = self._z
         if not self._initialised:
             z[:] = [float(y), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
             self._initialised = True
+        elif self._interval is not None:
+            z = self._z = self._integrated(float(y))
         else:
+            before = self._estimate(z)
             r = y - z[0]
             m = self._m
             z[0] += m[0] * r
@@ -122,7 +165,24 @@ class GpiObserver(ChainObserver, Observer):
             z[4] += m[4] * r
             z[5] += m[5] * r
             z[6] += m[6] * r
+            if self.discretisation == 'predictor':
+                return before
+        return self._estimate(z)
+
+    def _estimate(self, z: Sequence[float]) -> Estimate:
         return Estimate(z[0], z[1] * self._inv_T, z[2] * self._inv_T2)
+
+    def _integrated(self, y: float) -> list[float]:
+        """`continuous`: eq. (15) over the period since the last predict(), to y(k)."""
+        assert self._interval is not None
+        phi, g_u, g_y, g_d, g_c = self._interval
+        # no predict() since the last correct(): a period of zero length, nothing to run
+        z0, u, y0, y_before = self._anchor or (self._z, 0.0, y, None)
+        self._anchor = None
+        # the parabola through y(k−2), y(k−1), y(k) (a line at the first period)
+        c = 0.0 if y_before is None else 0.5 * (y - 2.0 * y0 + y_before)
+        out = phi @ np.asarray(z0) + g_u * u + g_y * y0 + g_d * (y - y0 - c) + g_c * c
+        return [float(v) for v in out]
 
     def predict(self, u: float) -> None:
         """Time update x̄(k+1) = Ad·x̂(k|k) + Bd·u with u [N·m] held over the period.
@@ -134,9 +194,17 @@ class GpiObserver(ChainObserver, Observer):
             raise RuntimeError('GpiObserver.predict called before the first correct()')
         if not math.isfinite(u):
             raise ValueError(f'GpiObserver.predict: command is not finite: {u!r}')
-        z0, z1, z2, z3, z4, z5, z6 = self._z
+        if self._interval is not None:
+            # a period without a measurement (coast) starts from the model's position
+            y0 = self._y_last if self._y_last is not None else self._z[0]
+            self._anchor = (self._z, u, y0, self._y_start)
+            self._y_start, self._y_last = y0, None
+        self._z = self._step(self._z, u)
+
+    def _step(self, z: list[float], u: float) -> list[float]:
+        z0, z1, z2, z3, z4, z5, z6 = z
         # Scaled exact ZOH model: z⁺_i = Σ_{j≥i} z_j/(j−i)! + b·T²·[1/2, 1, 0, …]_i·u
-        self._z = [
+        return [
             z0 + z1 + z2 / 2.0 + z3 / 6.0 + z4 / 24.0 + z5 / 120.0 + z6 / 720.0 + self._g0 * u,
             z1 + z2 + z3 / 2.0 + z4 / 6.0 + z5 / 24.0 + z6 / 120.0 + self._g1 * u,
             z2 + z3 + z4 / 2.0 + z5 / 6.0 + z6 / 24.0,
@@ -152,17 +220,24 @@ class GpiObserver(ChainObserver, Observer):
         After predict() the state is x̄(k+1); this gives x̄(k+1+len(inputs)) with the model of
         eq. (14) — what a loop with that many samples of delay acts on.
         """
-        saved = self._z  # predict() builds a new list: the saved one stays untouched
-        for u in inputs:
-            self.predict(u)
         z = self._z
-        self._z = saved
-        return Estimate(z[0], z[1] * self._inv_T, z[2] * self._inv_T2)
+        for u in inputs:
+            z = self._step(z, u)
+        return self._estimate(z)
+
+    def elapse(self, u: float, periods: float) -> None:
+        """The period since the last predict() is `periods` longer (tick jitter)."""
+        super().elapse(u, periods)
+        if self._anchor is not None and math.isfinite(u):
+            # continuous: the model alone over the extra time, then eq. (15) over a period
+            z0, held, y0, y_before = self._anchor
+            self._anchor = (advance(z0, self._g0, self._g1, held, periods), held, y0, y_before)
 
     def reset(self) -> None:
         """Forget the state; the next correct() initialises from its measurement."""
         self._z = [0.0] * _N_STATES
         self._initialised = False
+        self._anchor, self._y_last, self._y_start = None, None, None
 
     # --- read-only views -------------------------------------------------------------
 

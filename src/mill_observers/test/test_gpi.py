@@ -222,7 +222,12 @@ def test_bad_sample_period_is_refused(T: float) -> None:
 
 def test_parameters_defaults_are_the_papers_values() -> None:
     defaults = {p.name: p.default for p in GpiObserver.PARAMETERS}
-    assert defaults == {'omega_o': 700.0, 'zeta_o': 0.7071, 'pole_o': 700.0}
+    assert defaults == {
+        'omega_o': 700.0,
+        'zeta_o': 0.7071,
+        'pole_o': 700.0,
+        'discretisation': 'current',
+    }
     assert GpiObserver.PREFIX == 'gpi'
     obs = GpiObserver.from_parameters(B, 1e-3, {'omega_o': 500})  # YAML int accepted
     assert np.min(np.abs(obs.continuous_poles())) == pytest.approx(500.0)
