@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, load
@@ -136,3 +137,12 @@ def load_scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Scenari
         if run is not scen:
             apply_overrides(run, args)
     return scen, runs
+
+
+def run_parameters(runs: dict[str, Scenario]) -> dict[str, dict[str, dict[str, Any]]]:
+    """Each run's validated node parameters (variant → node → name → value): what a paper
+    report names as the readings its figures rest on."""
+    return {
+        name: {node.name: run.parameters(node.name) for node in run.nodes}
+        for name, run in runs.items()
+    }
