@@ -577,7 +577,48 @@ REPORTS: dict[str, Callable[[Mapping[str, Any]], str]] = {
 }
 
 
-def report(paper: str, records: Mapping[str, Any]) -> str:
-    """The paper's metrics of every variant; '' for a scenario without a paper report."""
+# The parameters a variant's figures rest on, per paper (what the verdicts are a reading of).
+Parameters = Mapping[str, Mapping[str, Mapping[str, Any]]]  # variant → node → name → value
+
+
+def hatwesh_readings(parameters: Parameters) -> str:
+    """One line per variant: the readings of Hatwesh 2013 its law runs with."""
+    lines = []
+    for name, nodes in parameters.items():
+        p = nodes.get('x_controller', {})
+        law = p.get('controller')
+        if law == 'adaptive_pi':
+            load = p['adaptive_pi.load_term']
+            lines.append(
+                f'reading of {name}: RLS '
+                + ('with the load term c' if load else 'of eq. (12) as printed, no load term')
+                + f' (adaptive_pi.load_term), phase-margin rule {p["adaptive_pi.design_rule"]} '
+                f'(adaptive_pi.design_rule), φ_m {p["adaptive_pi.phase_margin"]:g}°, velocity '
+                f'{p["adaptive_pi.velocity_source"]} (adaptive_pi.velocity_source)'
+            )
+        elif law == 'machine_pi':
+            lines.append(
+                f'reading of {name}: Table 1 gains in {p["machine_pi.velocity_unit"]} '
+                f'(machine_pi.velocity_unit), velocity {p["machine_pi.velocity_source"]} '
+                '(machine_pi.velocity_source)'
+            )
+    return '\n'.join(lines)
+
+
+READINGS: dict[str, Callable[[Parameters], str]] = {
+    'hatwesh': hatwesh_readings,
+    'hatwesh_velocity': hatwesh_readings,
+}
+
+
+def report(paper: str, records: Mapping[str, Any], parameters: Parameters | None = None) -> str:
+    """The paper's metrics of every variant; '' for a scenario without a paper report.
+
+    parameters (variant → node → values): where given, the readings the figures rest on
+    come first."""
     fn = REPORTS.get(paper)
-    return fn(records) if fn else ''
+    if not fn:
+        return ''
+    reading = READINGS.get(paper)
+    head = reading(parameters) if reading and parameters else ''
+    return f'{head}\n{fn(records)}' if head else fn(records)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import Any
 
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
@@ -174,3 +175,12 @@ def load_scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Scenari
         if run is not scen:
             apply_overrides(run, args)
     return scen, runs
+
+
+def run_parameters(runs: dict[str, Scenario]) -> dict[str, dict[str, dict[str, Any]]]:
+    """Each run's validated node parameters (variant → node → name → value): what a paper
+    report names as the readings its figures rest on."""
+    return {
+        name: {node.name: run.parameters(node.name) for node in run.nodes}
+        for name, run in runs.items()
+    }

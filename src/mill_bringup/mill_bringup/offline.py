@@ -18,7 +18,7 @@ import time
 from typing import Any
 
 from mill_analysis import papers
-from mill_bringup.cli import add_scenario_arguments, load_scenario
+from mill_bringup.cli import add_scenario_arguments, load_scenario, run_parameters
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.scenario import ScenarioError
@@ -75,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     except ScenarioError as exc:
         print(f'offline_sim: error: {exc}', file=sys.stderr)
         return 2
-    text = papers.report(scen.paper, records)
+    text = papers.report(scen.paper, records, run_parameters(runs))
     if text:
         print(text)
     return 0

@@ -23,7 +23,9 @@ def test_every_job_kind_names_its_kind_of_record() -> None:
 def test_only_a_realtime_run_notes_that_its_verdicts_are_no_reproduction(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    monkeypatch.setattr(papers, 'report', lambda paper, recs: f'{paper}: {sorted(recs)}')
+    monkeypatch.setattr(
+        papers, 'report', lambda paper, recs, _params=None: f'{paper}: {sorted(recs)}'
+    )
     lockstep = job_for(scenario.load('maharof').variant('pi'))
     scen = scenario.load('maharof').variant('pi')
     set_timing(scen, 'realtime')

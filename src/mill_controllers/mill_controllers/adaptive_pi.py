@@ -15,17 +15,21 @@ Loop quantities:
     v* = ẋ_ref + k_x (x_ref − y)   (k_x = position_gain; 0 = pure velocity loop as in the paper).
 
 v is the backward difference of the measured position (velocity_source 'difference') or
-est.velocity ('estimate').
+est.velocity ('estimate'). The difference is the mean velocity of the last sample, half a
+sample late: it costs the machine PI 13° of phase margin (76° with a sampled velocity, 63°
+with the difference; `python -m mill_analysis.hatwesh_margins`). The suite's plants
+measure position only, so the Hatwesh scenarios use the difference (no velocity sensor).
 
 AdaptivePi: an RlsEstimator (mill_models.rls) identifies y(k) = a y(k−1) + Σ b_i u(k−i)
 from (v, u) each sample; from its FOPDT read-out K, τ, θ_d the PI is re-tuned by the
-phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"):
+phase-margin rule (reading of Hatwesh eq. (7)-(8) and "PI controller design"; both rules in
+mill_controllers.phase_margin, chosen by design_rule):
 
     K(s) = K_i (1 + τ s)/s      (eq. (8) with a = K_i, b = τ: the PI zero cancels the
                                  estimated plant pole, which fixes the one free parameter),
-    L(s) = K(s)·K e^{−θs}/(τ s + 1) = K_i K e^{−θs}/s,  θ = θ_d + T/2 (ZOH),
-    ∠L(jω_gc) = −π/2 − ω_gc θ = −π + φ_m  ⇒  ω_gc = (π/2 − φ_m)/θ,
-    |L(jω_gc)| = 1                       ⇒  K_i = ω_gc/K,  K_p = τ ω_gc/K.
+    'continuous' (default): L(s) = K_i K e^{−θs}/s, θ = θ_d + T/2 (the hold as a delay),
+        ω_gc = (π/2 − φ_m)/θ,  K_i = ω_gc/K,  K_p = τ ω_gc/K;
+    'discrete': the same conditions on the sampled loop L(z) = C(z) P(z), exactly.
 
 Until the estimator has had `warmup` updates and gives a usable model (0 < a < 1, i.e.
 0 < τ < ∞, and K > 0), the initial gains are used.
@@ -38,8 +42,8 @@ samples as the internal one, so both sources give the same commands (a test chec
 MachinePi: the fixed gains of Hatwesh Table 1, K_p = 1.5735, K_i = 5.4976 at 0.25 ms. The
 paper does not state their velocity unit. On the x axis of Table 1 (K_a K_t = 21.87 N·m/V,
 J = 2.8828e-3 kg·m², B = 1.4e-3 N·m·s) the sampled loop is stable with the error in motor
-rev/s (crossover 1.9e3 rad/s, phase margin 76° with the ZOH, 63° with a backward-difference
-velocity), and also in m/min or m/s of the table, but unstable in rad/s, rpm or mm/s
+rev/s (crossover 1.9e3 rad/s, phase margin 76° with a sampled velocity, 63° with the
+backward difference), and also in m/min or m/s of the table, but unstable in rad/s, rpm or mm/s
 (crossover beyond what 0.25 ms sampling allows). Motor rev/s (= table mm/s ÷ 12 mm pitch) is
 the default reading: a 300 Hz velocity-loop bandwidth, typical of such servo drives.
 """
@@ -65,6 +69,7 @@ from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEst
 from mill_models.rls import RLS_PARAMETERS, RlsEstimator
 
 from mill_controllers.base import AxisController
+from mill_controllers.phase_margin import DESIGN_RULES, design_pi
 
 # Hatwesh 2013 Table 1, x axis.
 HATWESH_PITCH = 0.012  # ball-screw pitch [m]
@@ -86,23 +91,6 @@ def unit_factor(unit: str, pitch: float) -> float:
         'm/s': 1.0,
         'm/min': 60.0,
     }[unit]
-
-
-def phase_margin_pi(model: FopdtEstimate, phase_margin: float, hold_delay: float) -> tuple:
-    """(K_p, K_i, ω_gc) of the phase-margin rule for K e^{−θs}/(τs + 1), θ = θ_d + hold_delay.
-
-    phase_margin in rad, in (0, π/2). K_p [u per y-unit], K_i [u per y-unit·s], ω_gc [rad/s].
-    """
-    theta = model.dead_time + hold_delay
-    if not (0.0 < phase_margin < 0.5 * math.pi):
-        raise ValueError(f'phase margin must be in (0, π/2) rad, got {phase_margin!r}')
-    if not (theta > 0.0 and model.gain > 0.0 and math.isfinite(model.time_constant)):
-        raise ValueError(f'no phase-margin design for {model!r} (θ = {theta!r})')
-    # Hatwesh 2013: ∠L(jω_gc) = −π + φ_m with L = K_i K e^{−θs}/s ⇒ ω_gc = (π/2 − φ_m)/θ
-    w_gc = (0.5 * math.pi - phase_margin) / theta
-    # Hatwesh 2013: |L(jω_gc)| = 1 ⇒ K_i = ω_gc/K; eq. (8) b = τ ⇒ K_p = K_i τ
-    k_i = w_gc / model.gain
-    return k_i * model.time_constant, k_i, w_gc
 
 
 def _common_specs(kp: float, ki: float, kp_text: str, ki_text: str) -> tuple[ParamSpec, ...]:
@@ -283,6 +271,13 @@ class AdaptivePi(_VelocityPi):
             in_range(1.0, 89.0),
         ),
         ParamSpec(
+            'design_rule',
+            'continuous',
+            "phase-margin rule: 'continuous' = ω_gc = (π/2 − φ_m)/θ with the hold as a T/2 "
+            "delay (the paper's s-domain eq. (8)-(10)); 'discrete' = exact on the sampled loop",
+            one_of(*DESIGN_RULES),
+        ),
+        ParamSpec(
             'model_source',
             'internal',
             "plant model for the design: 'internal' = the law's own RLS (the parameters "
@@ -308,10 +303,12 @@ class AdaptivePi(_VelocityPi):
         voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
         velocity_source: str = 'difference',
         phase_margin: float = 60.0,
+        design_rule: str = 'continuous',
         forgetting: float = 0.9995,
         initial_covariance: float = 1e4,
         covariance_limit: float = 1e8,
         input_taps: int = 2,
+        load_term: bool = True,
         a_bounds: tuple[float, float] | list[float] = (0.0, 0.99999),
         b_bounds: tuple[float, float] | list[float] = (-1.0, 1.0),
         warmup: int = 400,
@@ -327,10 +324,12 @@ class AdaptivePi(_VelocityPi):
                 'voltage_limit': voltage_limit,
                 'velocity_source': velocity_source,
                 'phase_margin': phase_margin,
+                'design_rule': design_rule,
                 'forgetting': forgetting,
                 'initial_covariance': initial_covariance,
                 'covariance_limit': covariance_limit,
                 'input_taps': input_taps,
+                'load_term': load_term,
                 'a_bounds': list(a_bounds),
                 'b_bounds': list(b_bounds),
                 'warmup': warmup,
@@ -342,20 +341,13 @@ class AdaptivePi(_VelocityPi):
         self._kp0, self._ki0 = v['k_p'], v['k_i']
         self._kp, self._ki = self._kp0, self._ki0
         self._phi_m = math.radians(v['phase_margin'])
+        self._rule = v['design_rule']
         self._warmup = v['warmup']
         self._w_gc = math.nan
         self._adapted = False
         self._external = v['model_source'] == 'observer'
         self._model: FopdtEstimate | None = None  # the model of the current design
-        self.rls = RlsEstimator(
-            self._T,
-            n_b=v['input_taps'],
-            forgetting=v['forgetting'],
-            initial_covariance=v['initial_covariance'],
-            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
-            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
-            covariance_limit=v['covariance_limit'],
-        )
+        self.rls = RlsEstimator.from_parameters(self._T, v)
 
     def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V]; identifies the plant from (v(k), u(k)) and re-tunes every sample."""
@@ -381,7 +373,7 @@ class AdaptivePi(_VelocityPi):
             return
         if not (0.0 < model.time_constant < math.inf and model.gain > 0.0):
             return  # no usable model (pole a = e^{−T/τ} outside (0, 1)): keep the last gains
-        self._kp, self._ki, self._w_gc = phase_margin_pi(model, self._phi_m, 0.5 * self._T)
+        self._kp, self._ki, self._w_gc = design_pi(self._rule, model, self._phi_m, self._T)
         self._adapted = True
 
     def reset(self) -> None:

@@ -13,6 +13,14 @@ With m = 1 this is eq. (11)'s FOPDT with zero dead time; with m > 1, the leading
 a dead time d tend to zero ("RLS estimation approaches to zero for unwanted parameters"),
 which is how the dead time is read off.
 
+Load term (`load_term`, on by default): y(k) = a y(k−1) + Σ b_i u(k−i) + c, h(k) ends with 1
+and θ with c. Eq. (12) as printed has no constant, so a constant load torque can only bias
+a and b. The paper's text allows one: "the disturbance ... [is] captured with different
+models as shown in [19]" (Lin & Lee: FOPDT processes with a class of deterministic
+disturbances), and a constant load is the zero-frequency member of that class. c is read
+out as the input that balances it, load = −c/Σ b_i [V] (load torque / (K_a K_t) on the drive);
+it is not projected. load_term false is eq. (12) as printed.
+
 Update (the standard form; eq. (13) prints a minus sign and a power ρ^(k−1)):
 
     ε(k) = y(k) − θ̂ᵀ(k−1) h(k)
@@ -34,10 +42,18 @@ FOPDT read-out (eq. (11): a = e^{−T_s/τ}, b = K(1 − a)):
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
-from mill_common.parameters import ParamSpec, in_range, number, positive, positive_int
+from mill_common.parameters import (
+    ParamSpec,
+    boolean,
+    in_range,
+    number,
+    positive,
+    positive_int,
+)
 from mill_common.signals import FopdtEstimate
 
 __all__ = ['RLS_PARAMETERS', 'RlsEstimator']
@@ -69,6 +85,13 @@ RLS_PARAMETERS: tuple[ParamSpec, ...] = (
         positive_int,
     ),
     ParamSpec(
+        'load_term',
+        True,
+        'RLS model with a constant (load) term c, y(k) = a y(k−1) + Σ b_i u(k−i) + c (the '
+        "reading of the paper's disturbance models); false = eq. (12) as printed, no c",
+        boolean,
+    ),
+    ParamSpec(
         'a_bounds',
         [0.0, 0.99999],
         'projection box of the RLS pole a = e^{−T/τ} [-]',
@@ -84,7 +107,7 @@ RLS_PARAMETERS: tuple[ParamSpec, ...] = (
 
 
 class RlsEstimator:
-    """θ = [a, b_1..b_m] of y(k) = a y(k−1) + Σ b_i u(k−i), with forgetting and bounds.
+    """θ = [a, b_1..b_m(, c)] of y(k) = a y(k−1) + Σ b_i u(k−i) (+ c), forgetting and bounds.
 
     Call update(y, u) once per sample with the new output y(k) and the input u(k) that will
     be applied from k on (it enters the regressor of later samples).
@@ -100,6 +123,7 @@ class RlsEstimator:
         a_bounds: tuple[float, float] = (0.0, 0.999999),
         b_bounds: tuple[float, float] = (-1e6, 1e6),
         covariance_limit: float = 1e8,
+        load_term: bool = False,
     ) -> None:
         if not (sample_period > 0 and math.isfinite(sample_period)):
             raise ValueError(f'sample_period must be > 0, got {sample_period!r}')
@@ -115,25 +139,43 @@ class RlsEstimator:
             raise ValueError(f'covariance_limit must be > 0, got {covariance_limit!r}')
         self._T = float(sample_period)
         self._m = n_b
+        self._c = bool(load_term)  # θ ends with the constant c, h(k) with 1
         self._lam = float(forgetting)
         self._p0 = float(initial_covariance)
-        self._lo = np.array([a_bounds[0], *[b_bounds[0]] * n_b], dtype=float)
-        self._hi = np.array([a_bounds[1], *[b_bounds[1]] * n_b], dtype=float)
+        c_box = [(-math.inf, math.inf)] if self._c else []
+        box = [a_bounds, *[b_bounds] * n_b, *c_box]
+        self._lo = np.array([lo for lo, _ in box], dtype=float)
+        self._hi = np.array([hi for _, hi in box], dtype=float)
         self._p_limit = float(covariance_limit)
+        n = len(box)
         if initial_theta is None:
-            theta0 = np.array([0.5 * (a_bounds[0] + a_bounds[1]), *[0.0] * n_b])
+            theta0 = np.zeros(n)
+            theta0[0] = 0.5 * (a_bounds[0] + a_bounds[1])
         else:
             theta0 = np.asarray(initial_theta, dtype=float)
-            if theta0.shape != (n_b + 1,):
-                raise ValueError(f'initial_theta must have {n_b + 1} entries')
+            if theta0.shape != (n,):
+                raise ValueError(f'initial_theta must have {n} entries')
         self._theta0 = np.clip(theta0, self._lo, self._hi)
         self.reset()
 
+    @classmethod
+    def from_parameters(cls, sample_period: float, v: Mapping[str, Any]) -> RlsEstimator:
+        """From validated RLS_PARAMETERS values (the one place their names meet the class)."""
+        return cls(
+            sample_period,
+            n_b=v['input_taps'],
+            forgetting=v['forgetting'],
+            initial_covariance=v['initial_covariance'],
+            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
+            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
+            covariance_limit=v['covariance_limit'],
+            load_term=v['load_term'],
+        )
+
     def reset(self) -> None:
         """Back to θ̂(0), P(0) = p0·I; the regressor history is forgotten."""
-        n = self._m + 1
         self._theta = self._theta0.copy()
-        self._p = self._p0 * np.eye(n)
+        self._p = self._p0 * np.eye(self._theta0.size)
         self._y_prev: float | None = None
         self._u_hist = np.zeros(self._m)  # u(k−1), …, u(k−m)
         self._updates = 0
@@ -147,8 +189,9 @@ class RlsEstimator:
             raise ValueError(f'RlsEstimator.update: non-finite sample y={y!r}, u={u!r}')
         eps = 0.0
         if self._y_prev is not None:
-            # Hatwesh 2013 eq. (12): h(k) = [y(k−1), u(k−1), …, u(k−m)] (sign made consistent)
-            h = np.concatenate(([self._y_prev], self._u_hist))
+            # Hatwesh 2013 eq. (12): h(k) = [y(k−1), u(k−1), …, u(k−m)] (sign made consistent),
+            # then 1 for the load term c
+            h = np.concatenate(([self._y_prev], self._u_hist, [1.0] if self._c else []))
             # Hatwesh 2013: ε(k) = y(k) − θ̂ᵀ(k−1) h(k)
             eps = float(y - self._theta @ h)
             ph = self._p @ h
@@ -178,7 +221,7 @@ class RlsEstimator:
 
     @property
     def theta(self) -> np.ndarray:
-        """[a, b_1, …, b_m] (a copy)."""
+        """[a, b_1, …, b_m] and, with the load term, c (a copy)."""
         return self._theta.copy()
 
     @property
@@ -192,7 +235,7 @@ class RlsEstimator:
     def fopdt(self) -> FopdtEstimate:
         """K, τ, θ_d of eq. (10)-(11) from θ̂ (see the module docstring)."""
         a = float(self._theta[0])
-        b = self._theta[1:]
+        b = self._theta[1 : 1 + self._m]
         b_sum = float(b.sum())
         # Hatwesh 2013 eq. (11): a = e^{−T_s/τ}, b = K (1 − a)
         gain = b_sum / (1.0 - a)
@@ -204,13 +247,21 @@ class RlsEstimator:
             d = 0.0
         return FopdtEstimate(gain, tau, d * self._T, d, self._updates)
 
+    def load(self) -> float:
+        """The input that balances the constant term, −c/Σ b_i [V] (0 without the term)."""
+        if not self._c:
+            return 0.0
+        b_sum = float(self._theta[1 : 1 + self._m].sum())
+        return -float(self._theta[-1]) / b_sum if b_sum != 0.0 else math.nan
+
     def diagnostics(self) -> dict[str, float]:
         """Convergence diagnostics: updates, last a-priori error, its forgetting-weighted RMS,
-        trace of P, and whether the last update hit a bound (1.0) or not (0.0)."""
+        trace of P, whether the last update hit a bound (1.0) or not (0.0), and the load."""
         return {
             'updates': float(self._updates),
             'last_error': self._last_error,
             'error_rms': math.sqrt(self._err_sq),
             'covariance_trace': float(np.trace(self._p)),
             'clipped': 1.0 if self._clipped else 0.0,
+            'load': self.load(),
         }

@@ -11,7 +11,9 @@ from mill_models.rls import RlsEstimator
 T = 0.25e-3
 
 
-def _simulate(est: RlsEstimator, a: float, b: list[float], n: int, noise: float, seed: int):
+def _simulate(
+    est: RlsEstimator, a: float, b: list[float], n: int, noise: float, seed: int, c: float = 0.0
+):
     rng = np.random.default_rng(seed)
     m = len(b)
     u_hist = [0.0] * m
@@ -22,7 +24,7 @@ def _simulate(est: RlsEstimator, a: float, b: list[float], n: int, noise: float,
         est.update(y_meas, u)
         # y(k+1) = a y(k) + Σ b_i u(k+1−i)
         u_hist = [u, *u_hist[:-1]]
-        y = a * y + sum(bi * ui for bi, ui in zip(b, u_hist, strict=True))
+        y = a * y + sum(bi * ui for bi, ui in zip(b, u_hist, strict=True)) + c
     return est
 
 
@@ -73,3 +75,35 @@ def test_rejects_bad_settings() -> None:
         RlsEstimator(T, n_b=0)
     with pytest.raises(ValueError):
         RlsEstimator(T).update(math.nan, 0.0)
+
+
+def test_load_term_identifies_a_constant_and_reads_it_out_as_an_input() -> None:
+    a, b, c = 0.95, [0.125, 0.125], -0.01  # a load worth −c/Σb = 0.04 of input
+    est = _simulate(
+        RlsEstimator(T, n_b=2, forgetting=1.0, initial_covariance=1e8, load_term=True),
+        a,
+        b,
+        2000,
+        0.0,
+        6,
+        c,
+    )
+    np.testing.assert_allclose(est.theta, [a, *b, c], atol=1e-9)
+    assert est.load() == pytest.approx(0.04, rel=1e-7)
+    assert est.diagnostics()['load'] == est.load()
+    assert est.fopdt().gain == pytest.approx(5.0, rel=1e-7)  # c does not enter K
+
+
+def test_without_the_load_term_a_constant_biases_the_model() -> None:
+    """Eq. (12) as printed: the same data give a wrong gain (the reason for load_term)."""
+    est = _simulate(
+        RlsEstimator(T, n_b=2, forgetting=1.0, initial_covariance=1e8),
+        0.95,
+        [0.125, 0.125],
+        2000,
+        0.0,
+        6,
+        -0.01,
+    )
+    assert est.load() == 0.0
+    assert abs(est.fopdt().gain / 5.0 - 1.0) > 0.05  # measured +9.9 %

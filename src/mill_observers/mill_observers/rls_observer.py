@@ -35,15 +35,7 @@ class RlsObserver(Observer):
     def __init__(self, sample_period: float, **values: Any) -> None:
         v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
         self._T = sample_period
-        self.rls = RlsEstimator(
-            sample_period,
-            n_b=v['input_taps'],
-            forgetting=v['forgetting'],
-            initial_covariance=v['initial_covariance'],
-            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
-            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
-            covariance_limit=v['covariance_limit'],
-        )
+        self.rls = RlsEstimator.from_parameters(sample_period, v)
         self._y: float | None = None
         self._v = 0.0
 

@@ -15,7 +15,7 @@ from mill_bag.errors import BagError
 from mill_common.executable import STOP_SIGNALS, interrupt_once, release_stop_signals
 
 from mill_analysis import papers
-from mill_bringup.cli import add_scenario_arguments, load_scenario
+from mill_bringup.cli import add_scenario_arguments, load_scenario, run_parameters
 from mill_bringup.jobs.base import Job
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.runner.options import RunError, RunOptions
@@ -141,10 +141,15 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
     )
 
 
-def paper_text(paper: str, jobs: dict[str, Job[Any]], records: dict[str, Any]) -> str:
+def paper_text(
+    paper: str,
+    jobs: dict[str, Job[Any]],
+    records: dict[str, Any],
+    parameters: papers.Parameters | None = None,
+) -> str:
     """The paper's metrics and verdicts of the variants' records, after what each kind of
-    job says of them (a realtime run is no reproduction)."""
-    text = papers.report(paper, records)
+    job says of them (a realtime run is no reproduction); parameters: run_parameters."""
+    text = papers.report(paper, records, parameters)
     notes = dict.fromkeys(job.PAPER_NOTE for job in jobs.values() if job.PAPER_NOTE)
     if text and notes:
         text = ''.join(f'{note}\n' for note in notes) + text
@@ -194,7 +199,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
         return 130
-    text = paper_text(scen.paper, jobs, records)
+    text = paper_text(scen.paper, jobs, records, run_parameters(runs))
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
