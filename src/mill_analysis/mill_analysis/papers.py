@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from mill_analysis.chavez_conde import chavez_conde
 from mill_analysis.force_record import ForceRecord
 from mill_analysis.metrics import RunRecord
 
@@ -206,61 +207,6 @@ def maharof(records: Mapping[str, RunRecord]) -> str:
             + ' / '.join(f'{-100 * c:+.1f} %' for c in cut)
             + ' — '
             + _verdict(all(c > 0 for c in cut))
-        )
-    return '\n'.join(lines)
-
-
-# --- Chávez-Conde -------------------------------------------------------------------------
-
-CHAVEZ_WINDOW = Window(0.0)
-# Variants with a torque limit the paper does not have (config/chavez_conde.yaml): shown,
-# but the verdict comes from the unlimited ones.
-CHAVEZ_LIMITED = '_limited'
-
-
-def tracking_metrics(rec: RunRecord, window: Window = CHAVEZ_WINDOW) -> tuple[float, float]:
-    """max |e| and RMS e of the x axis [mm] over the window."""
-    e = rec.tracking_error[window.mask(rec.t), X]
-    return float(np.max(np.abs(e))) * 1e3, _rms(e) * 1e3
-
-
-def chavez_conde(records: Mapping[str, RunRecord]) -> str:
-    lines = [
-        'Chávez-Conde, x axis, Bézier 0 -> 10 mm in 3 s with friction and cutting force '
-        '(torque: share of samples at the largest |tau|, RMS change per sample):',
-        f'{"controller":<22} {"max |e| [mm]":>14} {"RMS e [mm]":>12} {"max |tau| [N m]":>16} '
-        f'{"at max [%]":>11} {"RMS dtau [N m]":>15}',
-    ]
-    ours = {}
-    for name, rec in records.items():
-        peak, rms = ours[name] = tracking_metrics(rec)
-        u = rec['torque'][:, X]
-        u = u[np.isfinite(u)]  # the runner's record has no commands: offline only
-        top = at_top = chatter = math.nan
-        if u.size:
-            top = float(np.max(np.abs(u)))
-            at_top = float(np.mean(np.abs(u) >= top * (1 - 1e-9))) * 100
-            chatter = _rms(np.diff(u))
-        lines.append(
-            f'{name:<22} {peak:14.6f} {rms:12.6f} {top:16.4f} {at_top:11.2f} {chatter:15.6f}'
-        )
-    verdicts = {}
-    for name in ours:
-        sliding = name.replace('gpi', 'sliding_gpi', 1)
-        if name.startswith('gpi') and sliding in ours:
-            holds = ours[sliding][1] < ours[name][1] and ours[sliding][0] < ours[name][0]
-            verdicts[name] = holds
-            limited = name.endswith(CHAVEZ_LIMITED)
-            lines.append(
-                f'claim "the sliding-mode GPI reduces the tracking error" ({sliding} vs {name}'
-                + (', with a torque limit the paper does not have' if limited else '')
-                + f'): RMS e x{ours[sliding][1] / ours[name][1]:.2f}, max |e| '
-                f'x{ours[sliding][0] / ours[name][0]:.2f} — {_verdict(holds)}'
-            )
-    paper = [v for k, v in verdicts.items() if not k.endswith(CHAVEZ_LIMITED)]
-    if paper:
-        lines.append(
-            "verdict, from the runs without a torque limit (the paper's): " + _verdict(all(paper))
         )
     return '\n'.join(lines)
 

@@ -27,7 +27,12 @@ Readings:
   τ = −(1/b)·((α1 − (α2 − κ)κ) s + α0)/(s + α2 − κ)·y (+ feed-forward), and plant plus
   compensator have exactly the three designed roots.
 
-Discretisation (sample period T, torque held constant over each sample, zero-order hold):
+Discretisation (sample period T, torque held constant over each sample, zero-order hold).
+Parameter `discretisation`: 'zoh' (default) designs discrete gains k for the sampled loop;
+'continuous' runs the continuous law of the paper, gains α as printed, evaluated once per
+sample (the paper ran it inside a fixed-step 1 ms Simulink model): at a short T (0.1 ms on
+Chávez-Conde) it reproduces the continuous closed loop; at 1 ms the forward rectangle moves
+the roots (below). Both accumulate the integrals the same way:
 
 - ∫τ is accumulated exactly: ∫ over [t_{k−1}, t_k] of the held torque is (t_k − t_{k−1})
   τ_{k−1}, with τ_{k−1} the torque actually returned (after the torque limit). On the
@@ -57,6 +62,7 @@ from mill_common.parameters import (
     ParameterError,
     ParamSpec,
     non_negative,
+    one_of,
     positive,
     positive_or_inf,
     validate_all,
@@ -73,6 +79,14 @@ DAMPING_RATE_SPEC = ParamSpec(
     '0 leaves viscous friction to the disturbance (κ = 0.0025 on Chávez-Conde x, '
     '0.053 on Beltrán x, with c_t read as translational)',
     non_negative,
+)
+DISCRETISATIONS = ('zoh', 'continuous')
+DISCRETISATION_SPEC = ParamSpec(
+    'discretisation',
+    'zoh',
+    "'zoh': gains designed on the exactly sampled loop (roots exp(s T)); 'continuous': the "
+    "paper's continuous gains α evaluated each sample (for a short sample period)",
+    one_of(*DISCRETISATIONS),
 )
 TORQUE_LIMIT_SPEC = ParamSpec(
     'torque_limit',
@@ -158,6 +172,7 @@ class GpiController(AxisController):
             positive,
         ),
         DAMPING_RATE_SPEC,
+        DISCRETISATION_SPEC,
         TORQUE_LIMIT_SPEC,
     )
 
@@ -169,6 +184,7 @@ class GpiController(AxisController):
         zeta: float = 0.9,
         pole: float = 80.0,
         damping_rate: float = 0.0,
+        discretisation: str = 'zoh',
         torque_limit: float = DEFAULT_TORQUE_LIMIT,
     ) -> None:
         self._b, self._T = check_gain_and_period(input_gain, sample_period)
@@ -179,10 +195,12 @@ class GpiController(AxisController):
                 'zeta': zeta,
                 'pole': pole,
                 'damping_rate': damping_rate,
+                'discretisation': discretisation,
                 'torque_limit': torque_limit,
             },
             prefix=self.PREFIX + '.',
         )
+        self._discretisation: str = values['discretisation']
         self._omega_n: float = values['omega_n']
         self._zeta: float = values['zeta']
         self._pole: float = values['pole']
@@ -194,8 +212,14 @@ class GpiController(AxisController):
         w2 = self._omega_n**2
         self._alpha = (w2 * self._pole, w2 + zw * self._pole, zw + self._pole)
         self._roots = [*quadratic_roots(self._omega_n, self._zeta), complex(-self._pole)]
-        self._k = discrete_gpi_gains(self._kappa, self._T, self._roots)
+        self._k = self._gains(self._alpha)
         self.reset()
+
+    def _gains(self, alpha: tuple[float, float, float]) -> tuple[float, float, float]:
+        """The gains the law runs with: α itself, or the ZOH design for the roots."""
+        if self._discretisation == 'continuous':
+            return alpha
+        return discrete_gpi_gains(self._kappa, self._T, self._roots)
 
     @classmethod
     def from_parameters(
@@ -223,7 +247,8 @@ class GpiController(AxisController):
 
     @property
     def gains(self) -> tuple[float, float, float]:
-        """Discrete gains (k0, k1, k2) actually used (→ α as T → 0)."""
+        """Gains (k0, k1, k2) actually used: α ('continuous'), or the ZOH design (→ α as
+        T → 0)."""
         return self._k
 
     @property

@@ -10,8 +10,9 @@ The law. Expanding μσ̂ in eq. (17) with σ̂ of eq. (13),
 
 i.e. a GPI law whose error polynomial is (s² + α1 s + α0)(s + μ), α1 = 2ζω_n, α0 = ω_n²
 (paper: ζ = 0.9, ω_n = 80, μ = 15), plus the switching term −μγ sign(σ̂). The linear part
-uses the discrete pole-mapped gains of gpi_controller.discrete_gpi_gains for those three
-roots (exact roots z = exp(sT) of the sampled loop when γ = 0); σ̂ is eq. (13) as printed,
+runs the gains of gpi_controller for those three roots: the discrete pole-mapped ones
+(discretisation 'zoh': exact roots z = exp(sT) of the sampled loop when γ = 0) or the
+expanded continuous ones ('continuous'); σ̂ is eq. (13) as printed,
 σ̂ = (F̂ − Ḟ*) + α1 e + α0 ∫e, with the continuous α1, α0 and the same ∫e.
 
 sign/sat: with boundary_layer φ = 0 (default, the paper) the switching term is the exact
@@ -38,10 +39,9 @@ from mill_common.signals import ControlInputs
 
 from mill_controllers.gpi_controller import (
     DAMPING_RATE_SPEC,
+    DISCRETISATION_SPEC,
     TORQUE_LIMIT_SPEC,
     GpiController,
-    discrete_gpi_gains,
-    quadratic_roots,
 )
 from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
 
@@ -67,6 +67,7 @@ class SlidingGpiController(GpiController):
             non_negative,
         ),
         DAMPING_RATE_SPEC,
+        DISCRETISATION_SPEC,
         TORQUE_LIMIT_SPEC,
     )
 
@@ -80,6 +81,7 @@ class SlidingGpiController(GpiController):
         gamma: float = 10.0,
         boundary_layer: float = 0.0,
         damping_rate: float = 0.0,
+        discretisation: str = 'zoh',
         torque_limit: float = DEFAULT_TORQUE_LIMIT,
     ) -> None:
         # The GPI part with the real root at −μ: (s² + α1 s + α0)(s + μ).
@@ -90,6 +92,7 @@ class SlidingGpiController(GpiController):
             zeta=zeta,
             pole=mu,
             damping_rate=damping_rate,
+            discretisation=discretisation,
             torque_limit=torque_limit,
         )
         values = validate_all(
@@ -101,6 +104,7 @@ class SlidingGpiController(GpiController):
                 'gamma': gamma,
                 'boundary_layer': boundary_layer,
                 'damping_rate': damping_rate,
+                'discretisation': discretisation,
                 'torque_limit': torque_limit,
             },
             prefix=self.PREFIX + '.',
@@ -111,8 +115,6 @@ class SlidingGpiController(GpiController):
         # Chávez-Conde section 5: α1 = 2ζω_n, α0 = ω_n² (the surface eq. (13)-(15))
         self._a1 = 2.0 * self._zeta * self._omega_n
         self._a0 = self._omega_n**2
-        self._roots = [*quadratic_roots(self._omega_n, self._zeta), complex(-self._mu)]
-        self._k = discrete_gpi_gains(self._kappa, self._T, self._roots)
         self._sigma = 0.0
 
     @classmethod

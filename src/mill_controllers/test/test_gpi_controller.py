@@ -103,6 +103,14 @@ def test_gains_tend_to_the_continuous_alphas() -> None:
     assert fine.gains == pytest.approx(fine.alphas, rel=1e-3)
 
 
+def test_continuous_runs_the_printed_alphas_and_zoh_is_the_default() -> None:
+    cont = GpiController(B, T, damping_rate=KAPPA, discretisation='continuous')
+    assert cont.gains == cont.alphas == (512000.0, 17920.0, 224.0)
+    assert GpiController(B, T, damping_rate=KAPPA).gains != cont.alphas
+    with pytest.raises(ParameterError, match=r'gpi\.discretisation'):
+        GpiController(B, T, discretisation='tustin')
+
+
 def simulate(ctrl, force: float = 0.0, coulomb: float = 0.0, t_end: float = 3.5):
     """Chávez-Conde eq. (1) x axis, exactly sampled, Coulomb sign taken at the sample start."""
     a_p, g_p = plant_zoh()

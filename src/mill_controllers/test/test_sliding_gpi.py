@@ -48,6 +48,14 @@ def test_linear_part_has_the_roots_of_eq15_times_s_plus_mu() -> None:
     assert ctrl.surface_gains == (6400.0, pytest.approx(144.0))
 
 
+def test_continuous_gains_are_eq17_expanded() -> None:
+    ctrl = SlidingGpiController(B, T, discretisation='continuous')
+    # (s² + 144 s + 6400)(s + 15): μα0, α0 + μα1, α1 + μ
+    assert ctrl.gains == pytest.approx((96000.0, 8560.0, 159.0), rel=1e-12)
+    with pytest.raises(ParameterError, match=r'sliding_gpi\.discretisation'):
+        SlidingGpiController(B, T, discretisation='tustin')
+
+
 def test_switching_function() -> None:
     sign = SlidingGpiController(B, T)
     assert [sign.switch(s) for s in (-2.0, 0.0, 1e-12)] == [-1.0, 0.0, 1.0]

@@ -22,6 +22,13 @@ a model (mill_plant.models.base):
   exact for constant deceleration). Stiction is re-evaluated at the next piece, so the
   velocity reverses only once the net force exceeds breakaway the other way: no sign
   chatter at rest, for a dwell of at most one substep at a reversal.
+- reversal 'through' (instead of the default 'stop'): the piece is integrated again up to
+  the first crossing, that coordinate set to rest there, and the rest of the piece
+  integrated from it with the modes evaluated anew, so a net force far above breakaway
+  reverses the carriage at once. The dwell of 'stop' loses up to (net force)·h of momentum
+  per reversal: nothing for the usual laws, but a switching law that reverses the carriage
+  every sample (Chávez-Conde's sliding-mode GPI) is then dominated by it. 'through' takes
+  the general path (no scalar path below).
 
 Load change: at the first step whose start time is >= load_change_time, every axis gets
 add_load(load_change_mass[i]) before the step is integrated (once; all axes or none: the
@@ -54,6 +61,8 @@ Bool3 = tuple[bool, bool, bool]
 Float3 = tuple[float, float, float]
 _INF3 = (math.inf, math.inf, math.inf)
 _SPLIT_TOL = 1e-9  # switch instants this close (in substeps) to a boundary snap to it
+REVERSALS = ('stop', 'through')  # a coordinate whose velocity crosses zero (module docstring)
+_MAX_REVERSALS = 8  # per piece, with 'through'; past that, the rest of the piece stops
 
 
 @dataclass(frozen=True)
@@ -83,7 +92,10 @@ class AxisPlant:
         start_time: float = 0.0,
         load_change_time: float = math.inf,
         load_change_mass: Sequence[float] = (0.0, 0.0, 0.0),
+        reversal: str = 'stop',
     ) -> None:
+        if reversal not in REVERSALS:
+            raise ValueError(f'reversal must be one of {", ".join(REVERSALS)}, got {reversal!r}')
         if len(models) != 3:
             raise ValueError(f'models must have 3 entries (x, y, z), got {len(models)}')
         for i, model in enumerate(models):
@@ -114,6 +126,9 @@ class AxisPlant:
         self._load_time = float(load_change_time)
         self._load_mass = tuple(float(m) for m in load_change_mass)
         self._load_done = False
+        self._through = reversal == 'through'
+        self._theta = math.inf  # first crossing in the last _rk4 piece, as a fraction of it
+        self._crossing = 0  # ... and the axis that crossed
         self._n = tuple(m.N_DOF for m in self._models)
         self._fdof = tuple(m.FRICTION_DOF for m in self._models)
         self._delay = tuple(float(m.dead_time) for m in self._models)
@@ -139,7 +154,7 @@ class AxisPlant:
         self._vel_fn = tuple(m.velocity for m in self._models)
         rigid = [m for m in self._models if type(m) is RigidAxisModel]
         # Three rigid axes: the scalar path _step_rigid (module docstring).
-        self._rigid = len(rigid) == 3
+        self._rigid = len(rigid) == 3 and not self._through
         self._drive_fn = tuple(m.drive_force for m in rigid)
         self._acc_fn = tuple(m.acceleration for m in rigid)
 
@@ -281,7 +296,7 @@ class AxisPlant:
             a = t0 + k * h
             cuts = [s for s in switches if a + tol < s < a + h - tol]
             if not cuts:
-                states = self._rk4(states, a, h, self._inputs(uc, a + 0.5 * h), faulted)
+                states = self._piece(states, a, h, self._inputs(uc, a + 0.5 * h), faulted)
                 self._accept(a + h, states)
                 continue
             starts = [a]
@@ -291,7 +306,7 @@ class AxisPlant:
             ends = [*starts[1:], a + h]
             for start, end in zip(starts, ends, strict=True):
                 length = end - start
-                states = self._rk4(
+                states = self._piece(
                     states, start, length, self._inputs(uc, start + 0.5 * length), faulted
                 )
                 self._accept(end, states)
@@ -316,6 +331,26 @@ class AxisPlant:
     def _inputs(self, uc: list[float], t_mid: float) -> list[float]:
         """Input acting on each axis over a piece whose midpoint is t_mid."""
         return [self._delayed(i, t_mid) if self._delay[i] > 0.0 else uc[i] for i in range(3)]
+
+    def _piece(
+        self, y: list[State], t: float, h: float, uu: list[float], faulted: Bool3
+    ) -> list[State]:
+        """One piece of a substep: _rk4, or with reversal 'through' up to each crossing and on
+        from rest (module docstring)."""
+        out = self._rk4(y, t, h, uu, faulted)
+        if not self._through:
+            return out
+        for _ in range(_MAX_REVERSALS):
+            if self._theta >= 1.0:
+                return out
+            first, i = self._theta * h, self._crossing
+            out = self._rk4(y, t, first, uu, faulted)
+            j = self._fdof[i]
+            if j is not None:  # always: only a friction coordinate crosses
+                out[i][self._n[i] + j] = 0.0  # at rest at its crossing (θ is linear)
+            y, t, h = out, t + first, h - first
+            out = self._rk4(y, t, h, uu, faulted)
+        return out
 
     def _rk4(
         self, y1: list[State], t: float, h: float, uu: list[float], faulted: Bool3
@@ -363,6 +398,7 @@ class AxisPlant:
             rc(yc, sixth, k1c, k2c, k3c, k4c),
         ]
         # Stop a sliding coordinate whose velocity crossed zero (module docstring).
+        self._theta = math.inf
         for i, mode in enumerate((sa, sb, sc)):
             j = self._fdof[i]
             if j is None or mode == 0.0:
@@ -370,7 +406,11 @@ class AxisPlant:
             new = out[i]
             jv = self._n[i] + j
             if mode * new[jv] < 0.0:
-                new[j], new[jv] = _stop_at_crossing(y1[i][j], y1[i][jv], new[jv], h)
+                v = y1[i][jv]
+                theta = v / (v - new[jv])
+                if theta < self._theta:
+                    self._theta, self._crossing = theta, i
+                new[j], new[jv] = _stop_at_crossing(y1[i][j], v, new[jv], h)
         return out
 
     def _step_rigid(self, uc: list[float], faulted: Bool3, t0: float, dt: float) -> list[State]:

@@ -24,7 +24,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import AXES
 
-from mill_plant.axis_plant import AxisPlant
+from mill_plant.axis_plant import REVERSALS, AxisPlant
 from mill_plant.cutting import CuttingForceModel
 from mill_plant.drive_config import DRIVE_PARAMETERS, RECORDER_WINDOW
 from mill_plant.models.base import AxisModel
@@ -129,6 +129,14 @@ PLANT_PARAMETERS: tuple[ParamSpec, ...] = (
         True,
     ),
     ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, True),
+    ParamSpec(
+        'friction_reversal',
+        'stop',
+        "a carriage whose velocity crosses zero inside a substep: 'stop' there for the rest "
+        "of it; 'through': on from rest at once (for a law that reverses it every sample)",
+        one_of(*REVERSALS),
+        True,
+    ),
     ParamSpec('sensor_resolution', 0.0, 'encoder resolution [m]; 0 = ideal', non_negative, True),
     ParamSpec('cutting_model', 'kline', 'cutting force model', CUTTING_MODELS.check(), True),
     *_full_names(CUTTING_MODELS.parameter_specs(read_only=True)),
@@ -179,6 +187,7 @@ def build_plant(values: dict[str, Any]) -> AxisPlant:
         initial_position=tuple(values['initial_position']),
         max_input=tuple(values['max_torque']),
         substeps=values['substeps'],
+        reversal=values['friction_reversal'],
         load_change_time=values['load_change.time'] if _load_changes(values) else math.inf,
         load_change_mass=tuple(values['load_change.mass']),
     )
