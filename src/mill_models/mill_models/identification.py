@@ -48,7 +48,7 @@ class FitSettings:
     """How the record is cut into windows and what the fit must reach to be trusted."""
 
     max_delay: int = 5  # delays tried: 0 … max_delay samples
-    min_speed: float = 2e-3  # an axis moves when its smoothed speed exceeds this [m/s]
+    min_speed: float = 5e-3  # an axis moves when its smoothed speed exceeds this [m/s]
     trim: float = 0.005  # left out at each end of a stretch of motion [s]
     max_window: float = 0.3  # longer stretches are cut into windows of this length [s]
     min_window: float = 0.05  # shorter ones are not used [s]

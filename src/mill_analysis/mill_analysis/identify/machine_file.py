@@ -26,6 +26,7 @@ FIELDS = (
     'fit_rms',
     'validation_rms',
     'windows',
+    'rejected',
     'held_out',
 )
 

@@ -37,10 +37,13 @@ from mill_analysis.metrics import (
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
+from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.force_control import ForceFeedLoop
-from mill_trajectory.config import build_job
+from mill_trajectory.base import Trajectory
+from mill_trajectory.config import build_job, check_path_travel
 from mill_trajectory.feed_override import JobEnd
+from mill_trajectory.toolpath import Travel
 
 from mill_analysis import records
 from mill_bringup.axis_simulation import AxisSimulation, axis_delays, build_axis_loops, timing_of
@@ -58,6 +61,29 @@ JOINT_STATE = 'sensor_msgs/msg/JointState'
 WALL_CLOCK_NS = 10**18
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
+
+
+def check_following_band(scen: Scenario, path: Trajectory, tv: Mapping[str, Any]) -> None:
+    """ScenarioError if an axis, anywhere within its following-error limit of the path, could
+    leave the machine's travel (the trajectory's travel.min / travel.max): a controller trips
+    only beyond that limit, so the whole band must fit, as before an identify run."""
+    band = [0.0, 0.0, 0.0]
+    for node in scen.nodes_of(CONTROLLER):
+        values = scen.parameters(node.name)
+        band[axis_index(values['axis'])] = float(values['following_error_limit'])
+    if not any(math.isfinite(b) and b > 0.0 for b in band):
+        return
+    lo = [m + b for m, b in zip(tv['travel.min'], band, strict=True)]
+    hi = [m - b for m, b in zip(tv['travel.max'], band, strict=True)]
+    try:
+        check_path_travel(path, Travel(tuple(lo), tuple(hi)), tv['sample_period'])
+    except ValueError as exc:
+        limits = ', '.join(f'{a} {1e3 * b:g} mm' for a, b in zip(AXES, band, strict=True) if b)
+        raise ScenarioError(
+            f'scenario {scen.name}: an axis may leave the machine travel before its controller '
+            f'trips (following-error limits {limits}): {exc} (travel narrowed by the limits); '
+            'move the axes or lower the limits'
+        ) from None
 
 
 class AxisJob(Job[RunRecord]):
@@ -85,7 +111,9 @@ class AxisJob(Job[RunRecord]):
         pv = scen.parameters(self.plant)
         tv = scen.parameters(self.trajectory)
         self.dt_ns = period_ns(pv['sample_period'])
-        self.end_time = build_job(tv).end_time
+        job = build_job(tv)
+        self.end_time = job.end_time
+        check_following_band(scen, job.trajectory, tv)
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
         # Who publishes the states: the plant, or the driver the controllers are told of.

@@ -55,6 +55,14 @@ def parser() -> argparse.ArgumentParser:
         '--respawn just started again, at least as long as a start-up may take',
     )
     parser.add_argument(
+        '--startup-timeout',
+        type=float,
+        default=RunOptions.startup_timeout,
+        help='give up when the job has not made its first step this long after the start, '
+        'e.g. a driver (--external) that does not answer [s] (default %(default)g: start-up '
+        'can take a minute on a loaded machine)',
+    )
+    parser.add_argument(
         '--compare-offline',
         action='store_true',
         help='also run the offline simulator and print the largest differences',
@@ -131,6 +139,7 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
     return RunOptions(
         skip=args.skip,
         stall_timeout=args.stall_timeout,
+        startup_timeout=args.startup_timeout,
         quiet=args.quiet,
         domain_id=args.domain_id,
         compare_offline=args.compare_offline,

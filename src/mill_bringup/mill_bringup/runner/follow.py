@@ -43,7 +43,10 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
                 t_first, cpu_first = now, graph.cpu_by_process()
         if t_first is None:
             if now - t_start > options.startup_timeout:
-                raise RunError(f'no step within {options.startup_timeout:g} s of the start')
+                raise RunError(
+                    f'no step within {options.startup_timeout:g} s of the start'
+                    f'{_silent_external(session, job, options)}'
+                )
             continue
         limit = _stall_limit(session, options, now)
         if now - last_change > limit:
@@ -63,6 +66,22 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
         for name, used in graph.cpu_by_process().items()
     }
     return Timing(wall, cpu)
+
+
+def _silent_external(session: Session, job: Job[Any], options: RunOptions) -> str:
+    """What an external node (a driver started elsewhere) never published, if anything."""
+    silent = sorted(
+        topic
+        for topic, owner in job.owners().items()
+        if owner in options.external and session.monitor.count_publishers(topic) < 1
+    )
+    if not silent:
+        return ''
+    owners = sorted({job.owners()[t] for t in silent})
+    return (
+        f': nothing from {", ".join(owners)} (--external: it runs elsewhere) on '
+        f'{", ".join(silent)}; is it running, in ROS_DOMAIN_ID={session.domain_id}?'
+    )
 
 
 def _waiting(session: Session) -> str:

@@ -68,6 +68,15 @@ def _parser() -> OneLineParser:
         help='the job to predict (default slotting); its nodes are named '
         '<axis>_controller and <axis>_observer',
     )
+    p.add_argument(
+        '--param',
+        '-p',
+        action='append',
+        default=[],
+        metavar='NODE.NAME=VALUE',
+        help='override a parameter of the scenario predicted (as run_scenario -p), e.g. '
+        'plant.cutting_model=none for a job in the air; give the run the same',
+    )
     p.add_argument('--duration', type=_positive, help='predict only this much of the job [s]')
     p.add_argument('--skip', type=float, default=1.0, help='metrics over t >= SKIP [s]')
     p.add_argument(
@@ -202,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
         flush=True,
     )
     try:
-        pred = predict(args.scenario, str(out), model, delay, args.skip, args.duration)
+        pred = predict(args.scenario, str(out), model, delay, args.skip, args.duration, args.param)
     except (TuneError, ScenarioError) as exc:
         out.unlink()
         print(f'tune: error: {exc}', file=sys.stderr)

@@ -105,8 +105,9 @@ def margins(
     """Margins of the loop `rebuild()` builds (a fresh observer and loop per run)."""
     observer, loop = rebuild()
     uc, up = _respond(observer, loop, b, alpha, delay, T, at_input=True)
-    L = -np.fft.rfft(uc) / np.fft.rfft(up)
-    w = np.fft.rfftfreq(SAMPLES, T) * 2.0 * math.pi
+    # without ω = 0: the loop's integrators make L infinite there (and U_p zero)
+    L = -np.fft.rfft(uc)[1:] / np.fft.rfft(up)[1:]
+    w = np.fft.rfftfreq(SAMPLES, T)[1:] * 2.0 * math.pi
     mag = np.abs(L)
     phase = np.unwrap(np.angle(L))
     # the phase wraps from the loop's low-frequency −180° (double integrator) downwards

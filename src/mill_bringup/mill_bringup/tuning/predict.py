@@ -11,6 +11,7 @@ t >= skip is the prediction a verification run is compared with.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from mill_analysis.identify.machine_file import MachineModel
 from mill_analysis.metrics import summarize
@@ -76,9 +77,12 @@ def predict(
     delay: int,
     skip: float,
     duration: float | None = None,
+    overrides: Sequence[str] = (),
 ) -> Prediction:
     scen = load(scenario)
     apply_params_file(scen, params_file)
+    for text in overrides:
+        scen.add_override(text)
     plant = next(n.name for n in scen.nodes if n.kind.role == 'plant')
     for text in machine_overrides(scen, plant, model):
         scen.add_override(text)
@@ -96,4 +100,5 @@ def predict(
         {m.axis: m.rms_error for m in metrics},
         {m.axis: m.max_error for m in metrics},
         list(rec.events),
+        list(overrides),
     )

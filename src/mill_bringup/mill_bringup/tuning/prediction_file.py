@@ -27,6 +27,7 @@ class Prediction:
     rms: dict[str, float]  # [m]
     max: dict[str, float]  # [m]
     events: list[str]
+    overrides: list[str]  # -p given to the prediction (a run should be given the same)
 
 
 def prediction_path(params_file: str | Path) -> Path:
@@ -43,6 +44,7 @@ def write_prediction(path: Path, p: Prediction) -> None:
         'rms_error': p.rms,
         'max_error': p.max,
         'events': p.events,
+        'overrides': p.overrides,
     }
     path.write_text(
         '# What `tune` predicts this job tracks on the identified machine (offline run).\n'
@@ -91,7 +93,9 @@ def against_prediction(scen: Scenario, metrics: list[AxisMetrics], end: float) -
             cells.append(f'{m.axis} {1e6 * m.rms_error:.3g} / {1e6 * predicted:.3g} ({ratio:.2f}x)')
             if not ratio <= WORSE:
                 worse.append(m.axis)
-        lines.append(f'RMS e [µm] measured / predicted by tune ({path}): ' + ', '.join(cells))
+        given = ' '.join(f'-p {o}' for o in data.get('overrides') or [])
+        source = f'{path}, predicted with {given}' if given else path
+        lines.append(f'RMS e [µm] measured / predicted by tune ({source}): ' + ', '.join(cells))
         if worse:
             lines.append(
                 f'WARNING: {", ".join(worse)} tracked more than {WORSE:g}x worse than predicted: '
