@@ -128,6 +128,7 @@ class TimeScaledPath:
             s.position,
             (o * v[0], o * v[1], o * v[2]),
             (o * o * a[0] + slope * v[0], o * o * a[1] + slope * v[1], o * o * a[2] + slope * v[2]),
+            s.spindle,
         )
 
 
