@@ -36,7 +36,7 @@ def test_no_cutting_force_while_the_spindle_is_off(tmp_path: Path) -> None:
     assert set(spindle) == {1800.0, 0.0, -1800.0}
     # The force of sample k + 1 comes from the step k -> k + 1, with the spindle of sample k.
     force = np.abs(rec['force'][1:]).max(axis=1)
-    off, on = spindle[:-1] == 0.0, spindle[:-1] != 0.0
+    off = spindle[:-1] == 0.0
     assert off.sum() > 300 and force[off].max() == 0.0
     # Cutting: the two teeth's force, well above 0 over each revolution (1/30 s) where it runs.
     for sign in (1.0, -1.0):
