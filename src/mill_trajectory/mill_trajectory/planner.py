@@ -74,13 +74,14 @@ class Limits:
     jerk: Point  # [m/s³], inf = no limit
     tolerance: float  # [m], > 0
 
-    def scaled(self, override: float) -> Limits:
-        """Limits that a feed override up to `override` cannot push past (v·o, a·o², j·o³)."""
-        o = float(override)
+    def scaled(self, override: float, reserve: float = 0.0) -> Limits:
+        """Limits that a feed override up to `override` cannot push past (v·o, a·o², j·o³),
+        with a share `reserve` of acceleration and jerk left for the override's changes."""
+        o, keep = float(override), 1.0 - reserve
         return Limits(
             tuple(v / o for v in self.velocity),  # type: ignore[arg-type]
-            tuple(a / o**2 for a in self.acceleration),  # type: ignore[arg-type]
-            tuple(j / o**3 for j in self.jerk),  # type: ignore[arg-type]
+            tuple(keep * a / o**2 for a in self.acceleration),  # type: ignore[arg-type]
+            tuple(keep * j / o**3 for j in self.jerk),  # type: ignore[arg-type]
             self.tolerance,
         )
 
