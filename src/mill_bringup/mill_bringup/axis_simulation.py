@@ -23,6 +23,7 @@ from mill_observers.config import build_observer_loop
 from mill_observers.observer_loop import ObserverLoop
 from mill_plant.command_delay import CommandDelay
 from mill_plant.simulated_machine import SimulatedMachine
+from mill_plant.spindle import SpindleTrack
 from mill_trajectory.config import build_schedule
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
@@ -168,6 +169,8 @@ class AxisSimulation:
         self.clock_every = max(1, round(pv['clock_period'] * 1e9 / self.dt_ns))
         self.buffers = {i: ReferenceBuffer() for i in self.active}
         self.delay = CommandDelay(pv['command_delay'], len(self.active))
+        # spindle: reference: the speeds the plant node reads off the reference.
+        self.spindle = SpindleTrack() if pv['spindle'] == 'reference' else None
         self.job = job
         self.feed: AdaptiveFeed | None = None
         if job.force_controller:
@@ -194,6 +197,9 @@ class AxisSimulation:
             points = self.schedule.answer(ns)  # the plant's /clock tick
         if points is None:
             return
+        speeds = [s.spindle for s in points.samples]
+        if self.spindle is not None and None not in speeds:
+            self.spindle.offer(points.stamps(), speeds)  # type: ignore[arg-type]
         for at, sample in zip(points.stamps(), points.samples, strict=True):
             for i in self.active:
                 self.buffers[i].add(at, sample.axis(i))
@@ -231,6 +237,9 @@ class AxisSimulation:
             s['torque'][k, i] = u
             self.buffers[i].forget_before(ns)
         machine.write(self.delay(efforts))
+        if self.spindle is not None:  # as the plant node's write: the step k -> k + 1
+            machine.spindle(self.spindle.at(ns))
+            self.spindle.forget_before(ns)
         _, s['true_velocity'][k], s['true_disturbance'][k] = machine.truth()
         s['force'][k] = force
         clock.start()

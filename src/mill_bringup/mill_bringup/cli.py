@@ -7,7 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from mill_bringup.catalogue import CONTROLLER, OBSERVER, TRAJECTORY
+from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
 
 
@@ -93,7 +93,8 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
 
 
 def set_program(scen: Scenario, program: str) -> None:
-    """--program: every trajectory node runs this G-code file, from its job's start point."""
+    """--program: every trajectory node runs this G-code file, from its job's start point,
+    and the plant's cutting follows the program's spindle (spindle: reference)."""
     from mill_trajectory.config import build_job
 
     path = Path(program).resolve()
@@ -108,6 +109,9 @@ def set_program(scen: Scenario, program: str) -> None:
             build_job(scen.parameters(node.name))
         except ValueError as exc:
             raise ScenarioError(f'--program: {exc}') from None
+    for node in scen.nodes_of(PLANT):  # the program switches the spindle (M3/M4/M5)
+        if scen.parameters(node.name).get('spindle') is not None:
+            scen.add_override(f'{node.name}.spindle=reference')
 
 
 def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> None:

@@ -6,6 +6,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 
 AXES: tuple[str, ...] = ('x', 'y', 'z')
+# The reference's joint that carries the programmed spindle speed (signed rev/min: M3 > 0,
+# M4 < 0, off 0), on paths that program one (G-code).
+SPINDLE = 'spindle'
 
 
 def axis_index(axis: str) -> int:

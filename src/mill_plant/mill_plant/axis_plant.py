@@ -205,6 +205,11 @@ class AxisPlant:
         """True once the scheduled load change has been applied."""
         return self._load_done
 
+    @property
+    def cutting(self) -> CuttingForceModel:
+        """The cutting-force model the plant integrates with."""
+        return self._cutting
+
     def cutting_force(self) -> Force3:
         """Cutting force (F_cx, F_cy, F_cz) [N] at the current time and state."""
         return self._cutting.force(self._t, self.position, self.velocity)

@@ -7,6 +7,7 @@ ros2_control hardware interface offers `read()` and `write()` to the controller 
 - `read()` the measured position of every axis [m], now;
 - `write(efforts)` the input every axis holds from now on (zero-order hold), in the axis
   model's unit (N·m, or V for voltage-driven drives); NaN means: brake this axis;
+- `spindle(speed)` the spindle speed from now on, with `spindle: reference` (mill_plant.spindle);
 - `faults()` what is wrong, per axis (an amplifier fault, a limit switch), for /diagnostics;
 - `advance(dt)` moves a simulated machine's time on by dt with the held efforts. A real
   machine moves by itself: its backend does nothing here (`SIMULATED = False`), and it can
@@ -47,6 +48,10 @@ class DriveBackend(ABC):
 
     def advance(self, dt: float) -> None:  # noqa: B027 - a real machine moves by itself
         """Simulation: integrate dt seconds with the held efforts. Hardware: nothing."""
+
+    def spindle(self, speed: float) -> None:  # noqa: B027 - a machine without one
+        """Run the spindle at this speed [rev/min, signed; 0 stops it] from now on (the
+        drive's `spindle: reference`). A hardware backend switches its spindle here."""
 
     def faults(self) -> dict[str, str]:
         """What is wrong now, per axis ({} when all is well)."""

@@ -30,6 +30,7 @@ from mill_plant.drive_config import DRIVE_PARAMETERS, RECORDER_WINDOW
 from mill_plant.models.base import AxisModel
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.registry import AXIS_MODELS, CUTTING_MODELS
+from mill_plant.spindle import SpindleGate
 
 # The rigid model's parameters keep their plain names (mass, pitch, ...): Beltrán 2013
 # Table 1 by default; the other models' parameters live under their prefix.
@@ -180,10 +181,14 @@ def build_axis_model(values: dict[str, Any], axis: int) -> AxisModel:
 
 
 def build_plant(values: dict[str, Any]) -> AxisPlant:
-    """The plant: every axis its model (axis_model), all coupled through the cutting force."""
+    """The plant: every axis its model (axis_model), all coupled through the cutting force;
+    with `spindle: reference` the force passes a SpindleGate, closed until the spindle runs."""
+    cutting = build_cutting(values)
+    if values.get('spindle', 'on') == 'reference':
+        cutting = SpindleGate(cutting, running=False)
     return AxisPlant(
         [build_axis_model(values, i) for i in range(len(AXES))],
-        build_cutting(values),
+        cutting,
         initial_position=tuple(values['initial_position']),
         max_input=tuple(values['max_torque']),
         substeps=values['substeps'],

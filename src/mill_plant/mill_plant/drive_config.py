@@ -119,6 +119,18 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
         ),
     ),
     (
+        'spindle',
+        ParamSpec(
+            'spindle',
+            'on',
+            f"on: the machine's spindle always runs (a path that programs none); reference: "
+            f"it runs at the speed of the joint 'spindle' of {topics.REFERENCE} (G-code M3/M4/M5 "
+            'and S), sample by sample, and is off before the first; lockstep waits for it',
+            one_of('on', 'reference'),
+            True,
+        ),
+    ),
+    (
         'autostart',
         ParamSpec(
             'autostart',

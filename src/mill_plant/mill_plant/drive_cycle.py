@@ -6,10 +6,12 @@ reports; its cycle says when a period runs and what counts as late:
 - `LockstepCycle` (simulation only): the plant is the clock. It publishes /clock and the
   states of step k (stamp kT), waits for the command stamped k of every active axis, then
   integrates to k + 1 with each command N steps late (`command_delay`, as the offline
-  simulator). A step that stays unanswered is offered again every second (a restarted
-  node rejoins); a missing command is reported after `command_report_time`, naming the
-  axis, the topic and the node that should send it, and when commands return, with the
-  length of the silence; after `lockstep_timeout` the node ends with that message.
+  simulator); with `spindle: reference` it waits for the spindle speed of step k on
+  the reference too (mill_plant.spindle). A step that stays unanswered is offered again
+  every second (a restarted node rejoins); a missing command is reported after
+  `command_report_time`, naming the axis, the topic and the node that should send it,
+  and when commands return, with the length of the silence; after `lockstep_timeout`
+  the node ends with that message.
   With `recorder_window` W it also waits for the recorder: the states of step j go out only
   once step j − W has been acknowledged on mill/recorded, so that a busy recorder cannot
   lose samples (mill_bringup.recorded_steps).
@@ -72,6 +74,7 @@ class Drive(Protocol):
     next_status: float
 
     def publish_states(self, ns: int) -> list[float]: ...
+    def spindle_known(self, ns: int) -> bool: ...
     def write(self, ns: int, efforts: list[float]) -> None: ...
     def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
     def report_axis(self, axis: str, level: bytes, message: str) -> None: ...
@@ -180,8 +183,13 @@ class LockstepCycle(DriveCycle):
             )
         return None
 
+    def _whole(self) -> bool:
+        """Whether the step has all it needs: every command, and the spindle's speed."""
+        d = self.drive
+        return d.table.complete(self.stamp) and d.spindle_known(self.stamp)
+
     def command_taken(self) -> None:
-        if self.drive.table.complete(self.stamp) and self._recorder_caught_up():
+        if self._whole() and self._recorder_caught_up():
             self._advance()
 
     def _recorder_caught_up(self) -> bool:
@@ -192,7 +200,7 @@ class LockstepCycle(DriveCycle):
         self._recorder.acknowledged(from_stamp(msg.clock))
         d = self.drive
         started = d.active and self._watchdog.started
-        if started and d.table.complete(self.stamp) and self._recorder_caught_up():
+        if started and self._whole() and self._recorder_caught_up():
             self._advance()
 
     def _publish_step(self, again: bool = False) -> None:
@@ -236,7 +244,7 @@ class LockstepCycle(DriveCycle):
             d.active = True
             d.get_logger().info('all peers matched: starting lockstep')
             self._publish_step()
-        elif action is Action.OFFER_AGAIN and not d.table.complete(self.stamp):
+        elif action is Action.OFFER_AGAIN and not self._whole():
             self._publish_step(again=True)  # (a step waiting only for the recorder is whole)
         elif action is Action.PEERS_MISSING:
             d.end(3, 'peers never appeared: ' + '; '.join(d.missing_peers()))
@@ -261,6 +269,12 @@ class LockstepCycle(DriveCycle):
 
     def _timeout_message(self) -> str:
         d = self.drive
+        if d.table.complete(self.stamp) and not d.spindle_known(self.stamp):
+            return (
+                f'lockstep timeout: no spindle speed for t = {seconds(self.stamp):.3f} s '
+                f'(step {self.k}) on {topics.REFERENCE} after '
+                f'{d.params.values["lockstep_timeout"]:g} s (spindle: reference)'
+            )
         if d.table.complete(self.stamp):
             return (
                 f'lockstep timeout: step {self.k} waited '

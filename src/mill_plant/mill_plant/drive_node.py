@@ -15,6 +15,10 @@ unknown joint, no effort for the joint — is dropped, counted and reported (a r
 WARN `<node>: inputs` on /diagnostics naming the topic and the sender). A non-finite
 effort of the axis's joint from the owner brakes the axis for that period and is reported:
 it is the controller saying it has no valid command.
+
+With `spindle: reference` the drive also reads the spindle speed the reference carries
+(mill_plant.spindle) and gives it to the backend with the efforts of each sample; in
+lockstep a step then waits for it as for its commands.
 """
 
 from __future__ import annotations
@@ -28,7 +32,11 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
 from mill_common.checks import DropCounter, Rejected, StampCheck, joint_values, owner_check
-from mill_common.codec import decode_joint_state, encode_wrench_stamped
+from mill_common.codec import (
+    decode_joint_state,
+    decode_joint_trajectory,
+    encode_wrench_stamped,
+)
 from mill_common.diagnostics import Diagnostics
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
@@ -47,12 +55,14 @@ from rclpy.service import Service
 from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_plant.backend import DriveBackend
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_cycle import CYCLES, DriveCycle
 from mill_plant.ownership import Ownership
+from mill_plant.spindle import SpindleTrack, spindle_values
 
 MACHINE_AXES = ('x', 'y', 'z')
 
@@ -135,6 +145,19 @@ class DriveNode(LifecycleNode):
             )
             for a in self.axes
         }
+        self.spindle: SpindleTrack | None = None  # spindle: reference
+        self._reference_sub = None
+        if v['spindle'] == 'reference':
+            self.spindle = SpindleTrack()
+            self._reference_sub = take_serialized(
+                self,
+                JointTrajectory,
+                topics.REFERENCE,
+                decode_joint_trajectory,
+                self._on_reference,
+                DATA_QOS,
+                partial(self._drop, topics.REFERENCE),
+            )
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
         if self._release_service is None:
@@ -222,6 +245,25 @@ class DriveNode(LifecycleNode):
         self.table.offer(axis, ns, effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
 
+    def _on_reference(self, msg: Any) -> None:
+        """The spindle speeds of a reference message (spindle: reference)."""
+        if self.spindle is None:
+            return
+        speeds = spindle_values(msg.joint_names, msg.points)
+        if speeds is None:
+            problem = Rejected("no finite speed of the joint 'spindle' in every point")
+            self._drop(topics.REFERENCE, problem, msg.header.frame_id)
+            return
+        ns = from_stamp(msg.header.stamp)
+        stamps = [ns + from_stamp(p.time_from_start) for p in msg.points]
+        self.spindle.offer(stamps, speeds)
+        if self.cycle.GRID and self.active:
+            self.cycle.command_taken()  # the step may have waited only for this
+
+    def spindle_known(self, ns: int) -> bool:
+        """Whether the spindle of sample ns is known (always, without spindle: reference)."""
+        return self.spindle is None or self.spindle.known(ns)
+
     def _on_release(self, request: Trigger.Request, response: Trigger.Response) -> Any:
         """The operator's release of the stopped axes (mill_plant.command_table)."""
         released = self.cycle.release() if self.backend is not None else []
@@ -241,7 +283,7 @@ class DriveNode(LifecycleNode):
     def owner_of(self, axis: str) -> str:
         return self.owners[axis] or 'its controller'
 
-    def _drop(self, topic: str, problem: Rejected, sender: str) -> None:
+    def _drop(self, topic: str, problem: Rejected, sender: str = '') -> None:
         if self._drops.drop(topic, problem, time.monotonic()):
             text = (
                 f'dropped a message on {topic} from {sender or "an unnamed publisher"}: '
@@ -279,6 +321,9 @@ class DriveNode(LifecycleNode):
         assert self.backend is not None
         backend = self.backend
         backend.write(efforts)
+        if self.spindle is not None:  # with the efforts: what the step ns -> ns + T does
+            backend.spindle(self.spindle.at(ns))
+            self.spindle.forget_before(ns)
         # Skipped without listeners: publishing costs more than the whole plant step.
         if self._truth_pub is not None and self._truth_pub.get_subscription_count():
             truth = backend.truth()
@@ -314,6 +359,8 @@ class DriveNode(LifecycleNode):
     # -- watchdog, start-up, diagnostics -------------------------------------------------------
     def missing_peers(self) -> list[str]:
         missing = []
+        if self._reference_sub is not None and self._reference_sub.get_publisher_count() < 1:
+            missing.append(f'no publisher on {topics.REFERENCE} (spindle: reference)')
         need = self.params.values['min_subscribers']
         for axis, sub in self._command_subs.items():
             if sub.get_publisher_count() < 1:

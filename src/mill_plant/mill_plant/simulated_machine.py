@@ -18,6 +18,7 @@ from mill_common.signals import AXES
 from mill_plant.backend import DriveBackend, Vector3
 from mill_plant.config import build_plant
 from mill_plant.sensor import quantize
+from mill_plant.spindle import SpindleGate
 
 
 class SimulatedMachine(DriveBackend):
@@ -52,6 +53,13 @@ class SimulatedMachine(DriveBackend):
 
     def advance(self, dt: float) -> None:
         self.last_report = self.plant.step(tuple(self._held), dt)
+
+    def spindle(self, speed: float) -> None:
+        """No cutting force while the spindle stands (`spindle: reference`: the plant's
+        SpindleGate; with `on` it always runs)."""
+        gate = self.plant.cutting
+        if isinstance(gate, SpindleGate):
+            gate.running = speed != 0.0
 
     def input_units(self) -> dict[str, str]:
         return dict(self._units)

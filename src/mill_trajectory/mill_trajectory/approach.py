@@ -10,6 +10,7 @@ start point is refused with a message naming the distance, rather than moved bli
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 from mill_trajectory.base import Trajectory, TrajectorySample
@@ -44,7 +45,10 @@ class Approach(Trajectory):
         max_distance: float,
         axes: Sequence[int] = (0, 1, 2),
     ) -> None:
-        start = path.sample(0.0).position
+        first = path.sample(0.0)
+        start = first.position
+        # A path that programs the spindle starts it at its first point (at rest): off before.
+        self._spindle = None if first.spindle is None else 0.0
         here = list(start)
         for i in axes:
             here[i] = float(position[i])
@@ -66,5 +70,5 @@ class Approach(Trajectory):
 
     def sample(self, t: float) -> TrajectorySample:
         if self.move is not None and t < self.duration:
-            return self.move.sample(t)
+            return replace(self.move.sample(t), spindle=self._spindle)
         return self.path.sample(t - self.duration)

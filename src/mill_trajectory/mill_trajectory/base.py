@@ -18,11 +18,13 @@ from mill_common.signals import AxisReference
 
 @dataclass(frozen=True)
 class TrajectorySample:
-    """Reference of the three axes (x, y, z) at one instant [m, m/s, m/s^2]."""
+    """Reference of the three axes (x, y, z) at one instant [m, m/s, m/s^2], and the
+    programmed spindle speed [rev/min, signed; 0 off], None on a path that programs none."""
 
     position: tuple[float, float, float]
     velocity: tuple[float, float, float]
     acceleration: tuple[float, float, float]
+    spindle: float | None = None
 
     def axis(self, i: int) -> AxisReference:
         return AxisReference(self.position[i], self.velocity[i], self.acceleration[i])

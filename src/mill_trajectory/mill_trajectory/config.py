@@ -233,7 +233,7 @@ def build_job(values: dict[str, Any]) -> Job:
     path: Trajectory
     if cls is GcodeTrajectory:
         # Planned so that no feed override up to feed_override.max breaks a limit.
-        headroom = values['feed_override.max'] if values['feed_override.enabled'] else 1.0
+        headroom = values['feed_override.max'] if values['feed_override.enabled'] else None
         path = GcodeTrajectory.from_parameters(own, travel, headroom)
     else:
         path = cls.from_parameters(own)
@@ -266,6 +266,8 @@ def build_schedule(values: dict[str, Any], override: FeedOverride) -> tuple[Sche
     """What paces the node and which points it sends, with its end rule."""
     job = build_job(values)
     path, T = job.trajectory, values['sample_period']
+    # A planned path (G-code) limits how fast the override may change.
+    limit = path.override_limit if isinstance(path, GcodeTrajectory) else None
     enabled, paced = values['feed_override.enabled'], values['feed_override.lockstep']
     if paced and not enabled:
         raise ValueError('feed_override.lockstep needs feed_override.enabled')
@@ -273,18 +275,19 @@ def build_schedule(values: dict[str, Any], override: FeedOverride) -> tuple[Sche
         raise ValueError('feed_override is not available with timing realtime')
     if paced and not values['feed_override.period'] > 0:
         # The force job: samples are stamped by the override's sender (T need not be whole ns).
-        scaled = TimeScaledPath(path, T)
+        scaled = TimeScaledPath(path, T, limit=limit)
         return OverrideReference(scaled, override, T), JobProgress(job.end_time)
     dt_ns = period_ns(T)
     end = JobEnd.of(path.end_time, values['settle_time'], values['duration'], dt_ns)
     if paced:
-        periodic = PeriodicOverridePath(path, dt_ns, values['feed_override.period'], override, end)
+        period = values['feed_override.period']
+        periodic = PeriodicOverridePath(path, dt_ns, period, override, end, limit)
         reference = OverrideReference(periodic.scaled, override, T, periodic)
         return reference, JobProgress(job.end_time, periodic.scaled, dt_ns)
     preview = preview_samples(values, dt_ns)
     if values['timing'] == 'realtime':
         count = preview + math.ceil(values['publish_period'] * 1e9 / dt_ns) + 2
         return WallClockReference(path, dt_ns, count), JobProgress(job.end_time)
-    timed = TimeScaledPath(path, seconds(dt_ns), end) if enabled else None
+    timed = TimeScaledPath(path, seconds(dt_ns), end, limit) if enabled else None
     clocked = ClockedReference(path, dt_ns, preview, timed, override)
     return clocked, JobProgress(job.end_time, timed, dt_ns)

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 from mill_common.timebase import control_instant, job_steps, sample_index
 
 from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.override_limit import FollowedOverride, OverrideLimit
 
 
 @dataclass(frozen=True)
@@ -80,10 +81,23 @@ class JobEnd:
 
 
 class TimeScaledPath:
-    """A path sampled on its own time τ, which runs at the override's rate."""
+    """A path sampled on its own time τ, which runs at the override's rate.
 
-    def __init__(self, path: Trajectory, sample_period: float, end: JobEnd | None = None) -> None:
+    On a planned path (a G-code program: `limit`) the override in effect follows the offered
+    one within the limit of its rate and change (mill_trajectory.override_limit), so that the
+    reference keeps the planner's acceleration and jerk limits; a β-hold slope is then left
+    to the follower.
+    """
+
+    def __init__(
+        self,
+        path: Trajectory,
+        sample_period: float,
+        end: JobEnd | None = None,
+        limit: OverrideLimit | None = None,
+    ) -> None:
         self.path = path
+        self.followed = None if limit is None else FollowedOverride(limit)
         self._T = sample_period
         self._k = 0
         self._tau = 0.0
@@ -120,14 +134,20 @@ class TimeScaledPath:
         """
         s = self.path.sample(self._tau)
         self._find_end()
-        o = override
         self._k += 1
-        self._tau += o * self._T + 0.5 * slope * self._T * self._T
+        followed = self.followed
+        if followed is not None:
+            o, slope = followed.value, followed.rate  # at this sample's instant
+            self._tau += followed.step(override, self._T)
+        else:
+            o = override
+            self._tau += o * self._T + 0.5 * slope * self._T * self._T
         v, a = s.velocity, s.acceleration
         return TrajectorySample(
             s.position,
             (o * v[0], o * v[1], o * v[2]),
             (o * o * a[0] + slope * v[0], o * o * a[1] + slope * v[1], o * o * a[2] + slope * v[2]),
+            s.spindle,
         )
 
 
@@ -150,12 +170,13 @@ class PeriodicOverridePath:
         control_period: float,
         override: FeedOverride,
         end: JobEnd | None = None,
+        limit: OverrideLimit | None = None,
     ) -> None:
         if not control_period >= dt_ns * 1e-9:
             raise ValueError(
                 f'control period {control_period!r} s is shorter than the sample period'
             )
-        self.scaled = TimeScaledPath(path, dt_ns * 1e-9, end)
+        self.scaled = TimeScaledPath(path, dt_ns * 1e-9, end, limit)
         self.dt_ns = dt_ns
         self.period = float(control_period)
         self.override = override

@@ -3,10 +3,15 @@
 The subset (docs/user-guide.md, "G-code programs"): G0, G1, G2/G3 with I J K centres or R
 (helical with the third axis), G4 P dwell [s], G17/G18/G19 planes, G20/G21 units,
 G90/G91 distance modes, G54 (the one work coordinate system, offset by `work_offset`),
-G92 (shift it so the current point has the given coordinates), F in units per minute, S,
-M3/M4 (spindle on), M5 (off), M0 (stop at rest), M1 (optional stop: the switch is off, so
-ignored), M2/M30 (end: the rest of the file is not read), N line numbers, comments.
-Defaults at the start: G21 G90 G17 G54, spindle off, no feed.
+G92 (shift it so the current point has the given coordinates), F in units per minute,
+S [rev/min], M3/M4 (spindle on, clockwise / counter-clockwise), M5 (off), M0 (stop at
+rest), M1 (optional stop: the switch is off, so ignored), M2/M30 (end: the rest of the
+file is not read), N line numbers, comments.
+Defaults at the start: G21 G90 G17 G54, spindle off, no feed, no spindle speed.
+
+The spindle is a signed speed [rev/min]: S for M3, -S for M4, 0 off. Where it changes (M3,
+M4, M5, or a new S while it runs) the program has a `spindle` move: the axes come to rest,
+and the spindle takes its new speed there (a CNC waits for its spindle as well).
 
 Within a line the words act in this order: plane, units and distance mode, F (read in the
 units now in force, kept in m/s), S, M3/M4/M5, G4 or G92 or the motion, then M0/M1/M2/M30.
@@ -41,7 +46,8 @@ ARC_RADIUS_RELATIVE = 1e-3
 
 @dataclass(frozen=True)
 class Move:
-    """One step of the program. kind: rapid, line, arc, dwell or stop (come to rest)."""
+    """One step of the program. kind: rapid, line, arc, dwell, stop (come to rest) or
+    spindle (come to rest; the spindle changes to `spindle`)."""
 
     kind: str
     start: Point
@@ -52,7 +58,7 @@ class Move:
     plane: tuple[int, int, int] = (0, 1, 2)
     sweep: float = 0.0  # arc: signed angle about the normal [rad], > 0 counter-clockwise
     duration: float = 0.0  # dwell [s]
-    spindle: bool = False  # the spindle runs during this move
+    spindle: float = 0.0  # spindle speed during this move [rev/min], signed; 0 off
 
 
 @dataclass
@@ -64,7 +70,9 @@ class _State:
     plane: int = 17
     motion: int | None = None
     feed: float | None = None
-    spindle: bool = False
+    speed: float | None = None  # S [rev/min], once given
+    direction: int = 0  # 1 M3, -1 M4, 0 off
+    spindle: float = 0.0
     moves: list[Move] = field(default_factory=list)
 
 
@@ -134,13 +142,21 @@ def _run_line(state: _State, words: list[Word], line: Where) -> bool:
         if not f.value > 0.0:
             raise GcodeError(f.where, f'feed {f.text} must be > 0')
         state.feed = f.value / (60.0 * state.unit)  # units per minute -> m/s
-    if 'S' in values and values['S'].value < 0.0:
-        raise GcodeError(values['S'].where, f'spindle speed {values["S"].text} must be >= 0')
-    for code, _ in ms:
+    if 'S' in values:
+        if values['S'].value < 0.0:
+            raise GcodeError(values['S'].where, f'spindle speed {values["S"].text} must be >= 0')
+        state.speed = values['S'].value
+    for code, w in ms:
         if code in (3, 4):
-            state.spindle = True
+            if state.speed is None:
+                raise GcodeError(w.where, f'{w.text} needs a spindle speed: give S first')
+            state.direction = 1 if code == 3 else -1
         elif code == 5:
-            state.spindle = False
+            state.direction = 0
+    spindle = state.direction * (state.speed or 0.0)
+    if spindle != state.spindle:
+        state.spindle = spindle
+        state.moves.append(Move('spindle', state.here, state.here, line, spindle=spindle))
     if 4 in codes:
         _dwell(state, values, line)
     elif 92 in codes:

@@ -18,6 +18,7 @@ from mill_common.parameters import ParameterError, ParamSpec, number_list, posit
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.gcode import read_program
 from mill_trajectory.gcode_words import GcodeError
+from mill_trajectory.override_limit import RESERVE, OverrideLimit
 from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
 from mill_trajectory.toolpath import Travel, check_travel, pieces_of
 
@@ -89,22 +90,37 @@ class GcodeTrajectory(Trajectory):
         ),
     )
 
-    def __init__(self, planned: PlannedPath) -> None:
+    def __init__(self, planned: PlannedPath, override_limit: OverrideLimit | None = None) -> None:
         self.planned = planned
         self.end_time = planned.end_time
+        # How fast a feed override may change on it (None: no override, or no limit binds).
+        self.override_limit = override_limit
 
     @classmethod
     def from_parameters(
-        cls, values: Mapping[str, Any], travel: Travel = WIDE_TRAVEL, override_max: float = 1.0
+        cls,
+        values: Mapping[str, Any],
+        travel: Travel = WIDE_TRAVEL,
+        override_max: float | None = None,
     ) -> GcodeTrajectory:
-        """Read, check and plan; ParameterError('file', ...) with 'file:line:column: what'."""
+        """Read, check and plan; ParameterError('file', ...) with 'file:line:column: what'.
+
+        With a feed override (override_max: its maximum) the plan leaves the override room to
+        reach its maximum, and to change (mill_trajectory.override_limit)."""
         v = validate_all(cls.PARAMETERS, values)
-        limits = Limits(
+        machine = Limits(
             xyz(v['max_velocity']),
             xyz([a if a > 0 else math.inf for a in v['max_acceleration']]),
             xyz([j if j > 0 else math.inf for j in v['max_jerk']]),
             v['tolerance'],
-        ).scaled(max(override_max, 1.0))
+        )
+        limits, override_limit = machine, None
+        if override_max is not None:
+            o = max(override_max, 1.0)
+            limits = machine.scaled(o, RESERVE)
+            override_limit = OverrideLimit.of(
+                machine.velocity, machine.acceleration, machine.jerk, o
+            )
         try:
             moves = read_program(v['file'], xyz(v['start']), xyz(v['work_offset']))
             pieces, wheres = pieces_of(moves, limits.tolerance)
@@ -112,7 +128,7 @@ class GcodeTrajectory(Trajectory):
             planned = plan(pieces, limits)
         except (GcodeError, PlanError) as exc:
             raise ParameterError('file', v['file'], str(exc)) from None
-        return cls(planned)
+        return cls(planned, override_limit)
 
     def sample(self, t: float) -> TrajectorySample:
         return self.planned.sample(t)

@@ -29,6 +29,11 @@ piece by piece along the line (a junction of parallel pieces has no deviation). 
 and end are junctions with rest; an acceleration or jerk limit of inf is no limit (with
 both inf, the velocity steps at each corner, as the straight cuts of Beltrán 2013
 eq. (19)-(22), and pieces are not cut).
+
+The spindle (signed speed [rev/min], None: not programmed) is a piece's; it changes only at
+a rest (mill_trajectory.gcode), and rests of different spindles are not merged. A sample
+takes the spindle of the segment it is in, and in a transition that of the segment it
+leaves: the spindle changes when the axes have come to rest.
 """
 
 from __future__ import annotations
@@ -69,13 +74,14 @@ class Limits:
     jerk: Point  # [m/s³], inf = no limit
     tolerance: float  # [m], > 0
 
-    def scaled(self, override: float) -> Limits:
-        """Limits that a feed override up to `override` cannot push past (v·o, a·o², j·o³)."""
-        o = float(override)
+    def scaled(self, override: float, reserve: float = 0.0) -> Limits:
+        """Limits that a feed override up to `override` cannot push past (v·o, a·o², j·o³),
+        with a share `reserve` of acceleration and jerk left for the override's changes."""
+        o, keep = float(override), 1.0 - reserve
         return Limits(
             tuple(v / o for v in self.velocity),  # type: ignore[arg-type]
-            tuple(a / o**2 for a in self.acceleration),  # type: ignore[arg-type]
-            tuple(j / o**3 for j in self.jerk),  # type: ignore[arg-type]
+            tuple(keep * a / o**2 for a in self.acceleration),  # type: ignore[arg-type]
+            tuple(keep * j / o**3 for j in self.jerk),  # type: ignore[arg-type]
             self.tolerance,
         )
 
@@ -89,6 +95,7 @@ class Piece:
     speed: float = math.inf  # inf: as fast as the axes allow (a rapid)
     dwell: float = 0.0  # rest only
     rest: bool = False
+    spindle: float | None = None  # [rev/min], signed; None: not programmed
 
 
 def transition_times(dv: np.ndarray, limits: Limits) -> np.ndarray:
@@ -106,6 +113,7 @@ class _Segment:
     start: Point  # the sharp path's point when the segment starts
     velocity: Point
     duration: float  # on the sharp timeline [s]
+    spindle: float | None = None
 
 
 class PlannedPath(Trajectory):
@@ -135,10 +143,12 @@ class PlannedPath(Trajectory):
         return list(self._corners)
 
     def sample(self, t: float) -> TrajectorySample:
-        if t <= 0.0 or not self._segments:
-            return TrajectorySample(self.start_point, _ZERO, _ZERO)
-        if t >= self.end_time:
+        if not self._segments:
             return TrajectorySample(self.end_point, _ZERO, _ZERO)
+        if t <= 0.0:
+            return TrajectorySample(self.start_point, _ZERO, _ZERO, self._segments[0].spindle)
+        if t >= self.end_time:
+            return TrajectorySample(self.end_point, _ZERO, _ZERO, self._segments[-1].spindle)
         i = bisect.bisect_right(self._starts, t) - 1
         seg, t0 = self._segments[i], self._starts[i]
         before = self._corners[i]
@@ -150,7 +160,9 @@ class PlannedPath(Trajectory):
         tau = t - t0
         p, v = seg.start, seg.velocity
         # Beltrán 2013 eq. (19)-(22) between transitions: p(t) = p_i + v (t − t_i)
-        return TrajectorySample((p[0] + v[0] * tau, p[1] + v[1] * tau, p[2] + v[2] * tau), v, _ZERO)
+        return TrajectorySample(
+            (p[0] + v[0] * tau, p[1] + v[1] * tau, p[2] + v[2] * tau), v, _ZERO, seg.spindle
+        )
 
     def _blend(self, i: int, tau: float, T: float) -> TrajectorySample:
         """The transition into segment i, tau [s] after it began."""
@@ -166,7 +178,8 @@ class PlannedPath(Trajectory):
         )
         vel = tuple(va[k] + (vb[k] - va[k]) * s for k in range(3))
         acc = tuple((vb[k] - va[k]) * ds for k in range(3))
-        return TrajectorySample(pos, vel, acc)  # type: ignore[arg-type]
+        spindle = self._segments[i - 1].spindle  # of the segment it leaves
+        return TrajectorySample(pos, vel, acc, spindle)  # type: ignore[arg-type]
 
 
 class PlanError(ValueError):
@@ -194,7 +207,7 @@ def _split(p: Piece, base: float) -> list[Piece]:
         point = tuple(a + (b - a) * f / length for a, b in zip(p.start, p.end, strict=True))
         points.append(point)  # type: ignore[arg-type]
     points.append(p.end)
-    return [Piece(a, b, p.speed) for a, b in itertools.pairwise(points)]
+    return [Piece(a, b, p.speed, spindle=p.spindle) for a, b in itertools.pairwise(points)]
 
 
 def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
@@ -203,8 +216,10 @@ def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
     for p in pieces:
         if not p.rest and math.dist(p.start, p.end) <= ZERO_LENGTH:
             continue
-        if p.rest and chain and chain[-1].rest:
-            chain[-1] = Piece(p.start, p.end, dwell=chain[-1].dwell + p.dwell, rest=True)
+        if p.rest and chain and chain[-1].rest and chain[-1].spindle == p.spindle:
+            chain[-1] = Piece(
+                p.start, p.end, dwell=chain[-1].dwell + p.dwell, rest=True, spindle=p.spindle
+            )
             continue
         chain.append(p)
     if not chain:
@@ -214,7 +229,12 @@ def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
         chain = [q for p in chain for q in _split(p, limits.tolerance)]
     first, last = chain[0].start, chain[-1].end
     # Rest before and after the program: the start and end are junctions with rest.
-    chain = [Piece(first, first, rest=True), *chain, Piece(last, last, rest=True)]
+    s0, s1 = chain[0].spindle, chain[-1].spindle
+    chain = [
+        Piece(first, first, rest=True, spindle=s0),
+        *chain,
+        Piece(last, last, rest=True, spindle=s1),
+    ]
     moving = np.array([not p.rest for p in chain])
     length = np.array([math.dist(p.start, p.end) for p in chain])
     delta = np.array([np.subtract(p.end, p.start) for p in chain])
@@ -249,10 +269,10 @@ def _timeline(chain: list[Piece], u: np.ndarray, T: np.ndarray) -> PlannedPath:
             # At rest: the dwell plus the halves of the transitions into and out of it.
             after = corners[k + 1] if k + 1 < len(corners) else 0.0
             duration = p.dwell + 0.5 * corners[k] + 0.5 * after
-            segments.append(_Segment(p.start, _ZERO, duration))
+            segments.append(_Segment(p.start, _ZERO, duration, p.spindle))
             continue
         # As Beltrán 2013 eq. (19)-(22): duration = length/F, velocity (p_f − p_i)/duration.
         duration = math.dist(p.start, p.end) / float(u[k])
         v = tuple((b - a) / duration for a, b in zip(p.start, p.end, strict=True))
-        segments.append(_Segment(p.start, v, duration))  # type: ignore[arg-type]
+        segments.append(_Segment(p.start, v, duration, p.spindle))  # type: ignore[arg-type]
     return PlannedPath(segments, corners, chain[-1].end)

@@ -66,15 +66,15 @@ def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], lis
     pieces: list[Piece] = []
     wheres: list[Where] = []
     for m in moves:
-        if m.kind in ('dwell', 'stop'):
-            pieces.append(Piece(m.start, m.end, dwell=m.duration, rest=True))
+        if m.kind in ('dwell', 'stop', 'spindle'):
+            pieces.append(Piece(m.start, m.end, dwell=m.duration, rest=True, spindle=m.spindle))
             wheres.append(m.where)
             continue
         speed = math.inf if m.feed is None else m.feed
         here = m.start
         ends = arc_points(m, tolerance) if m.kind == 'arc' else [m.end]
         for p in ends:
-            pieces.append(Piece(here, p, speed))
+            pieces.append(Piece(here, p, speed, spindle=m.spindle))
             wheres.append(m.where)
             here = p
     return pieces, wheres

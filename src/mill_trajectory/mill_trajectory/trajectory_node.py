@@ -1,8 +1,10 @@
 """Trajectory node: the reference of all axes, ahead of the controllers.
 
 Publishes /mill/reference (trajectory_msgs/JointTrajectory: point i holds positions,
-velocities and accelerations of x, y, z at stamp + time_from_start) and the job's status
-on /diagnostics ("running" with progress, then "done" with its end_time). Which points go
+velocities and accelerations of x, y, z at stamp + time_from_start; a path that
+programs the spindle, G-code, adds the joint `spindle`, its position the speed [rev/min])
+and the job's status on /diagnostics ("running" with progress, then "done" with its
+end_time). Which points go
 out, and when, is decided by the ROS-free schedules of mill_trajectory.schedule, the ones
 the offline simulator uses too; this node takes what paces it, checks it and publishes:
 
@@ -46,7 +48,7 @@ from mill_common.ros import (
     take_serialized,
 )
 from mill_common.ros_params import NodeParameters
-from mill_common.signals import AXES
+from mill_common.signals import AXES, SPINDLE
 from mill_common.timebase import period_ns
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -184,11 +186,22 @@ class TrajectoryNode(Node):
     def _message(self, points: Points) -> bytes:
         """The JointTrajectory of these points, serialized (mill_common.codec)."""
         p = points.period_ns
-        rows = [
-            (s.position, s.velocity, s.acceleration, (), i * p)
-            for i, s in enumerate(points.samples)
-        ]
-        return encode_joint_trajectory(points.stamp_ns, self._name, AXES, rows)
+        samples = points.samples
+        if samples and samples[0].spindle is not None:
+            # A path that programs the spindle: its speed is the joint `spindle`'s position.
+            rows = [
+                (
+                    (*s.position, s.spindle or 0.0),
+                    (*s.velocity, 0.0),
+                    (*s.acceleration, 0.0),
+                    (),
+                    i * p,
+                )
+                for i, s in enumerate(samples)
+            ]
+            return encode_joint_trajectory(points.stamp_ns, self._name, (*AXES, SPINDLE), rows)
+        plain = [(s.position, s.velocity, s.acceleration, (), i * p) for i, s in enumerate(samples)]
+        return encode_joint_trajectory(points.stamp_ns, self._name, AXES, plain)
 
     def job_status(self, t: float) -> None:
         state = self.progress.update(t)

@@ -54,10 +54,23 @@ def test_arcs_ijk_and_r_agree() -> None:
 
 def test_planes_dwell_spindle_and_end() -> None:
     ms = moves('M3 S1000\nG18 G2 X10 Z0 I5 K0 F100\nG4 P0.5\nM5\nM0\nM30\nG1 X99\n')
-    assert [m.kind for m in ms] == ['arc', 'dwell', 'stop']
-    assert ms[0].plane == (2, 0, 1) and ms[0].spindle
-    assert ms[1].duration == 0.5
-    assert not ms[2].spindle  # M5 before M0
+    assert [m.kind for m in ms] == ['spindle', 'arc', 'dwell', 'spindle', 'stop']
+    assert ms[0].spindle == 1000.0 and ms[1].spindle == 1000.0
+    assert ms[1].plane == (2, 0, 1)
+    assert ms[2].duration == 0.5
+    assert ms[3].spindle == 0.0 and ms[4].spindle == 0.0  # M5 before M0
+
+
+def test_spindle_speed_direction_and_changes() -> None:
+    ms = moves('S500 M4\nG1 X1 F100\nS800\nG1 X2\nM3\nM3\nM5 S0\n')
+    assert [(m.kind, m.spindle) for m in ms] == [
+        ('spindle', -500.0),
+        ('line', -500.0),
+        ('spindle', -800.0),  # a new speed while it runs: a change, at rest
+        ('line', -800.0),
+        ('spindle', 800.0),  # M3 again: no change, no move
+        ('spindle', 0.0),
+    ]
 
 
 @pytest.mark.parametrize(
@@ -66,6 +79,7 @@ def test_planes_dwell_spindle_and_end() -> None:
         ('G1 X1 F100\nG1 X2 T1', 'part.ngc:2:7', "unsupported word 'T1'"),
         ('G0 X1\nG43 Z1', 'part.ngc:2:1', 'unsupported code G43'),
         ('M6', 'part.ngc:1:1', 'unsupported code M6'),
+        ('G1 X1 F100\nM3', 'part.ngc:2:1', 'M3 needs a spindle speed: give S first'),
         ('G1 X1.2.3 F100', 'part.ngc:1:5', "malformed number '1.2.3'"),
         ('G1 X F100', 'part.ngc:1:4', 'word X has no number'),
         ('G1 X1 F0', 'part.ngc:1:7', 'feed F0 must be > 0'),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -32,8 +33,13 @@ def test_slot_with_velocity_steps_is_the_yaml_program_sample_for_sample() -> Non
     steps = {'gcode.max_acceleration': [0.0] * 3, 'gcode.max_jerk': [0.0] * 3}
     path = build_job(_gcode(**steps)).trajectory
     assert path.end_time == yaml_path.end_time
+    spindles = set()
     for k in range(int(yaml_path.end_time * 1000) + 200):
-        assert path.sample(k * 1e-3) == yaml_path.sample(k * 1e-3), k
+        sample = path.sample(k * 1e-3)
+        assert replace(sample, spindle=None) == yaml_path.sample(k * 1e-3), k
+        spindles.add((k * 1e-3 < path.end_time, sample.spindle))
+    # S1800 M3 before the cut, M5 after it: the YAML path programs no spindle.
+    assert spindles == {(True, 1800.0), (False, 0.0)}
 
 
 def test_slot_with_machine_limits_is_smooth_and_close_to_the_paper() -> None:

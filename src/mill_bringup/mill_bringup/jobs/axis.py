@@ -379,6 +379,8 @@ class AxisJob(Job[RunRecord]):
 
     def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
+        if not np.isnan(rec['force']).all():  # recorded (--record): the plant's force too
+            out['cutting_force'] = max_difference(rec['force'], other['force'])
         if rec.force_control is not None and other.force_control is not None:
             a, b = rec.force_control, other.force_control
             for i, name in enumerate(FORCE_CONTROL[1:], 1):
