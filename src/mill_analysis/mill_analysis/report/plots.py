@@ -90,7 +90,7 @@ def log_envelope(f: np.ndarray, a: np.ndarray, bins: int = 1200) -> tuple[np.nda
 
 def plot_all(reports: list[RunReport], out: Path, workers: int = 1) -> list[tuple[str, str]]:
     """Draw every figure the runs allow into `out`; (file, caption) of each, in report order."""
-    _pyplot().rcParams.update(STYLE)
+    styled_pyplot()
     return render(figures(reports), out, workers)
 
 
@@ -159,6 +159,13 @@ def _pyplot() -> Any:
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def styled_pyplot() -> Any:
+    """matplotlib.pyplot with the report's style (also the README image's)."""
+    plt = _pyplot()
+    plt.rcParams.update(STYLE)
     return plt
 
 

@@ -55,16 +55,12 @@ def png_data_hash(path: Path) -> str | None:
 
 
 def write(root: Path) -> None:
-    import matplotlib
-
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
     from mill_analysis.report import plots
 
     rec = offline(SCENARIO)
     text = data_text(rec)
     (root / DATA).write_text(text, encoding='utf-8')
-    plt.rcParams.update(plots.STYLE)
+    plt = plots.styled_pyplot()
     fig = plots.axis_grid_figure(
         [SCENARIO],
         ['x', 'y', 'z'],

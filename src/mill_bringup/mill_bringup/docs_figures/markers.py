@@ -12,7 +12,7 @@ import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-MARKER = re.compile(r'<!-- fig ([A-Za-z0-9_.\-]+) -->')
+MARKER = re.compile(r'<!-- fig ([a-z][a-z0-9_.\-]*) -->')  # ids are lower case
 VALUE = re.compile(
     r'[−+-]?(?:\d+(?: \d{3})*(?:\.\d+)?(?:e[−+-]?\d+)?|inf)'  # a number
     r'|[A-Za-z]+'  # or a word

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mill_bringup.docs_figures import beltran, maharof, rubio
+from mill_bringup.docs_figures import beltran, hatwesh, maharof, rubio
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,9 @@ GROUPS = {
             beltran.discretisation_figures,
         ),
         Group('maharof', 'offline_sim maharof', maharof.figures),
+        Group(
+            'hatwesh_margins', 'python -m mill_controllers.hatwesh_margins', hatwesh.margin_figures
+        ),
         Group(
             'rubio',
             'offline_sim rubio; python -m mill_bringup.force_loop [--depth-profile ...]',
