@@ -57,7 +57,7 @@ def figures() -> dict[str, str]:
         out[f'adrc.xi_slow.{a}'] = f'{100 * slow[i]:.2f}'
     for a, f in zip(AXES, BELTRAN_MEAN_FORCE, strict=True):
         out[f'eq4.force.{a}'] = f'{f:.2f}'
-    out['eq4.K'] = f'{BELTRAN_K:.1f}'
+    out['eq4.k'] = f'{BELTRAN_K:.1f}'
     out['adrc.peak_feed_force'] = f'{adrc["force"][:, 1].max():.0f}'
     # pd_tool_depth: how far the depth runs away (depth - programmed = -e_z) [mm]
     rec = offline('beltran', 'pd_tool_depth')
