@@ -27,6 +27,7 @@ setup(
             'tune = mill_bringup.tuning.cli:main',
             'job_watch = mill_bringup.executables:job_watch',
             'mill_container = mill_bringup.executables:mill_container',
+            'docs_figures = mill_bringup.docs_figures.cli:main',
         ],
     },
 )

@@ -90,7 +90,7 @@ def log_envelope(f: np.ndarray, a: np.ndarray, bins: int = 1200) -> tuple[np.nda
 
 def plot_all(reports: list[RunReport], out: Path, workers: int = 1) -> list[tuple[str, str]]:
     """Draw every figure the runs allow into `out`; (file, caption) of each, in report order."""
-    _pyplot().rcParams.update(STYLE)
+    styled_pyplot()
     return render(figures(reports), out, workers)
 
 
@@ -162,6 +162,13 @@ def _pyplot() -> Any:
     return plt
 
 
+def styled_pyplot() -> Any:
+    """matplotlib.pyplot with the report's style (also the README image's)."""
+    plt = _pyplot()
+    plt.rcParams.update(STYLE)
+    return plt
+
+
 def _layout(
     rows: int, cols: int, width: float, height: float, **kwargs: Any
 ) -> tuple[Figure, np.ndarray]:
@@ -171,7 +178,7 @@ def _layout(
     )
 
 
-def _run_columns_width(reports: list[RunReport]) -> float:
+def _run_columns_width(reports: list[Any]) -> float:
     """Width of a figure with one column per run [in]."""
     return 5.2 * len(reports) + 1.0
 
@@ -180,15 +187,26 @@ def _run_columns_width(reports: list[RunReport]) -> float:
 
 
 def per_axis_figure(reports: list[RunReport], title: str, draw: Draw) -> Figure:
-    axes = reports[0].run.axes
-    fig, ax = _layout(
-        len(axes), len(reports), _run_columns_width(reports), 2.3 * len(axes) + 0.8, sharex='col'
+    return axis_grid_figure(
+        [r.label for r in reports],
+        reports[0].run.axes,
+        title,
+        lambda a, c, i: draw(a, reports[c], i),
     )
-    for c, r in enumerate(reports):
+
+
+def axis_grid_figure(
+    labels: list[str], axes: list[str], title: str, draw: Callable[[Axes, int, int], str]
+) -> Figure:
+    """One row per axis, one column per label; draw(a, column, axis index) -> y label."""
+    fig, ax = _layout(
+        len(axes), len(labels), _run_columns_width(labels), 2.3 * len(axes) + 0.8, sharex='col'
+    )
+    for c, label in enumerate(labels):
         for row, axis in enumerate(axes):
             a = ax[row, c]
-            ylabel = draw(a, r, AXES.index(axis))
-            a.set_title(f'{r.label}: {axis} axis', loc='left')
+            ylabel = draw(a, c, AXES.index(axis))
+            a.set_title(f'{label}: {axis} axis', loc='left')
             a.set_ylabel(ylabel)
             if row == len(axes) - 1:
                 a.set_xlabel('time t [s]')
@@ -206,11 +224,15 @@ def draw_position(a: Axes, r: RunReport, i: int) -> str:
 
 def draw_error(a: Axes, r: RunReport, i: int) -> str:
     rec = r.run.record
-    e = rec.tracking_error[:, i]
-    k, unit = _scale(e[rec.t >= r.skip], 'm')
-    a.plot(*envelope(rec.t, e * k), color='C3', lw=0.8, label='e = position − reference')
-    a.axvspan(0, r.skip, color='0.85', alpha=0.5, label=f'excluded (t < {r.skip:g} s)')
-    finite = e[rec.t >= r.skip]
+    return draw_tracking_error(a, rec.t, rec.tracking_error[:, i], r.skip)
+
+
+def draw_tracking_error(a: Axes, t: np.ndarray, e: np.ndarray, skip: float) -> str:
+    """e = position − reference [m] against t, scaled to µm or mm, t < skip greyed."""
+    k, unit = _scale(e[t >= skip], 'm')
+    a.plot(*envelope(t, e * k), color='C3', lw=0.8, label='e = position − reference')
+    a.axvspan(0, skip, color='0.85', alpha=0.5, label=f'excluded (t < {skip:g} s)')
+    finite = e[t >= skip]
     if np.isfinite(finite).any():
         lim = np.nanmax(np.abs(finite)) * k * 1.15
         a.set_ylim(-lim, lim)

@@ -1,0 +1,87 @@
+"""Beltrán 2013's figures (README.md, docs/papers.md): `offline_sim beltran` and the GPI
+observer's discretisations."""
+
+from __future__ import annotations
+
+import numpy as np
+from mill_analysis.metrics import summarize
+from mill_analysis.papers import (
+    BELTRAN_FIRST_CUT,
+    BELTRAN_K,
+    BELTRAN_MEAN_FORCE,
+    BELTRAN_WINDOW,
+    estimation_errors,
+)
+
+from mill_bringup.docs_figures.runs import offline, sig
+
+AXES = 'xyz'
+DISCRETISATIONS = ('predictor', 'continuous')  # besides the default, `current`
+
+
+def _errors(rec) -> tuple[list[float], list[float]]:
+    """max |e| and RMS e per axis over t >= 1 s [m]."""
+    metrics = summarize(rec, skip=BELTRAN_WINDOW.start)
+    return [m.max_error for m in metrics], [m.rms_error for m in metrics]
+
+
+def _first_cut_forces(rec) -> np.ndarray:
+    return rec['force'][BELTRAN_FIRST_CUT.mask(rec.t)].mean(axis=0)
+
+
+def figures() -> dict[str, str]:
+    """`offline_sim beltran`: the four variants."""
+    out: dict[str, str] = {}
+    rms: dict[str, list[float]] = {}
+    for variant in ('adrc', 'pd', 'adrc_tool_path', 'pd_tool_depth'):
+        rec = offline('beltran', variant)
+        peak, rms[variant] = _errors(rec)
+        for i, a in enumerate(AXES):
+            if variant in ('adrc', 'pd'):
+                out[f'{variant}.max.{a}'] = sig(peak[i] * 1e3)  # [mm]
+            # [µm] under compensation, [mm] without
+            out[f'{variant}.rms.{a}'] = sig(rms[variant][i] * (1e6 if 'adrc' in variant else 1e3))
+        for a, f in zip(AXES, _first_cut_forces(rec), strict=True):
+            out[f'{variant}.force.{a}'] = f'{f:.2f}'
+    for key in ('pd_tool_depth.rms.z', 'pd_tool_depth.force.x', 'pd_tool_depth.force.z'):
+        del out[key]  # not quoted
+    for i, a in enumerate(AXES):
+        out[f'ratio.{a}'] = f'{rms["pd"][i] / rms["adrc"][i]:.0f}'
+    adrc = offline('beltran', 'adrc')
+    whole, slow = estimation_errors(adrc)
+    for i, m in enumerate(summarize(adrc, skip=BELTRAN_WINDOW.start)):
+        a = AXES[i]
+        out[f'adrc.xi_error.{a}'] = f'{m.rms_disturbance_error:.3f}'  # [m/s²]
+        out[f'adrc.xi.{a}'] = f'{m.rms_disturbance:.3f}'
+        out[f'adrc.xi_whole.{a}'] = f'{100 * whole[i]:.0f}'  # [%]
+        out[f'adrc.xi_slow.{a}'] = f'{100 * slow[i]:.2f}'
+    for a, f in zip(AXES, BELTRAN_MEAN_FORCE, strict=True):
+        out[f'eq4.force.{a}'] = f'{f:.2f}'
+    out['eq4.k'] = f'{BELTRAN_K:.1f}'
+    out['adrc.peak_feed_force'] = f'{adrc["force"][:, 1].max():.0f}'
+    # pd_tool_depth: how far the depth runs away (depth - programmed = -e_z) [mm]
+    rec = offline('beltran', 'pd_tool_depth')
+    deeper = -rec.tracking_error[BELTRAN_WINDOW.mask(rec.t), 2] * 1e3
+    out['pd_tool_depth.deeper.max'] = f'{deeper.max():.1f}'
+    out['pd_tool_depth.deeper.end'] = f'{deeper[-1]:.1f}'
+    rec = offline('beltran', 'adrc_tool_path')
+    deeper = -rec.tracking_error[BELTRAN_WINDOW.mask(rec.t), 2] * 1e3
+    out['adrc_tool_path.deeper.min'] = sig(deeper.min(), 1)
+    out['adrc_tool_path.deeper.max'] = sig(deeper.max(), 1)
+    return out
+
+
+def discretisation_figures() -> dict[str, str]:
+    """`adrc` with every GPI observer sampled another way (`gpi.discretisation`)."""
+    out: dict[str, str] = {}
+    current = _errors(offline('beltran', 'adrc'))[1]
+    spread = [1.0, 1.0, 1.0]
+    for name in DISCRETISATIONS:
+        rec = offline('beltran', 'adrc', (f'*_observer.gpi.discretisation={name}',))
+        rms = _errors(rec)[1]
+        for i, a in enumerate(AXES):
+            out[f'{name}.rms.{a}'] = sig(rms[i] * 1e6)
+            spread[i] = max(spread[i], rms[i] / current[i], current[i] / rms[i])
+    out['spread.xy'] = f'{max(spread[:2]):.1f}'
+    out['spread.z'] = f'{spread[2]:.1f}'
+    return out

@@ -1,0 +1,53 @@
+"""Every figure of the docs: its id → the group (command) that prints it.
+
+A group runs what its figures need once (runs.py caches the offline runs) and returns
+{key: text}; the figure's id is `GROUP.KEY`. `command` is what a reader runs to see the
+same figures in context. A group that starts ROS processes is `system`: its check runs in
+the system phase of the tests.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from mill_bringup.docs_figures import beltran, hatwesh, maharof, rubio
+
+
+@dataclass(frozen=True)
+class Group:
+    name: str
+    command: str
+    figures: Callable[[], dict[str, str]]  # key -> the figure as the docs print it
+    system: bool = False  # needs ROS processes (run_scenario)
+
+
+GROUPS = {
+    g.name: g
+    for g in (
+        Group('beltran', 'offline_sim beltran', beltran.figures),
+        Group(
+            'beltran_discretisation',
+            "offline_sim beltran --variant adrc -p '*_observer.gpi.discretisation=NAME'",
+            beltran.discretisation_figures,
+        ),
+        Group('maharof', 'offline_sim maharof', maharof.figures),
+        Group(
+            'hatwesh_margins', 'python -m mill_controllers.hatwesh_margins', hatwesh.margin_figures
+        ),
+        Group(
+            'rubio',
+            'offline_sim rubio; python -m mill_bringup.force_loop [--depth-profile ...]',
+            rubio.figures,
+        ),
+    )
+}
+
+
+def compute(name: str) -> dict[str, str]:
+    """The figures of group `name`, by id."""
+    return {f'{name}.{k}': v for k, v in GROUPS[name].figures().items()}
+
+
+def group_of(figure_id: str) -> str:
+    return figure_id.split('.', 1)[0]

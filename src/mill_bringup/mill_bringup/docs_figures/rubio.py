@@ -1,0 +1,45 @@
+"""Rubio 2013's figures (docs/papers.md): `offline_sim rubio` and `python -m
+mill_bringup.force_loop` (the sweep over fixed β and the reordered depth profile)."""
+
+from __future__ import annotations
+
+from mill_models.force_process import ForceProcessModel
+
+from mill_bringup import force_loop
+from mill_bringup.docs_figures.runs import offline
+
+VARIANTS = ('zoh', 'beta_neg0.3', 'scheme1', 'scheme2')
+SWEEP = (-1.0, -0.7, -0.3, 0.0, 0.3, 1.0)  # the columns of the docs' table
+REORDERED = [0.0, 2.0, 2.0, 1.5, 4.0, 3.5, 6.0, 3.0, 8.0, 2.0]  # --depth-profile 0,2,2,1.5,...
+
+
+def joules(x: float) -> str:
+    """J_c [N²·s] in groups of three digits: 469 648."""
+    return f'{x:,.0f}'.replace(',', ' ')
+
+
+def percent(x: float) -> str:
+    return f'{100 * x:+.2f}'.replace('-', '−')
+
+
+def figures() -> dict[str, str]:
+    out: dict[str, str] = {}
+    zoh = offline('rubio', 'zoh').j_c
+    for variant in VARIANTS:
+        j_c = offline('rubio', variant).j_c
+        out[f'{variant}.j_c'] = joules(j_c)
+        if variant != 'zoh':
+            out[f'{variant}.vs_zoh'] = percent(j_c / zoh - 1)
+    for beta, j_c in zip(SWEEP, force_loop.sweep(SWEEP), strict=True):
+        out[f'sweep.{beta:g}'] = joules(j_c)
+    negative = force_loop.sweep([b / 10 for b in range(-10, 0)])
+    out['sweep.best_negative'] = f'{100 * (1 - min(negative) / zoh):.2f}'
+    model = ForceProcessModel(depth_profile=REORDERED)
+    cases = force_loop.paper_cases(model=model)
+    r_zoh = cases['ZOH (β = 0)'].j_c
+    for key, name in zip(VARIANTS, force_loop.PAPER_CASES, strict=True):
+        out[f'reordered.{key}.j_c'] = joules(cases[name].j_c)
+    out['reordered.scheme1.vs_zoh'] = percent(cases['scheme 1'].j_c / r_zoh - 1)
+    r_negative = force_loop.sweep([b / 10 for b in range(-10, 0)], model=model)
+    out['reordered.best_negative'] = f'{100 * (1 - min(r_negative) / r_zoh):.2f}'
+    return out
