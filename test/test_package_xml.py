@@ -40,6 +40,7 @@ PYTHON_KEYS = {
     'scipy': 'python3-scipy',
     'yaml': 'python3-yaml',
     'matplotlib': 'python3-matplotlib',
+    'PIL': 'python3-pil',
     'tqdm': 'python3-tqdm',
     'pytest': 'python3-pytest',
     'hypothesis': 'python3-hypothesis',

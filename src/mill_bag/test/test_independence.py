@@ -13,6 +13,7 @@ ALLOWED = {
     'mill_common.node_main',
     'mill_common.parameters',
     'mill_common.ros_params',
+    'mill_common.one_line_parser',
 }
 MODULES = sorted(Path(mill_bag.__file__).parent.glob('*.py'))
 

@@ -6,6 +6,7 @@ import pytest
 from mill_common.parameters import ParameterError
 from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
 from mill_controllers.cascade_pi import CascadePi
+from mill_controllers.excitation import ExcitationController
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.registry import CONTROLLERS, controller_class, make_controller
@@ -23,6 +24,7 @@ def test_registered_names() -> None:
         'cascade_pi': CascadePi,
         'adaptive_pi': AdaptivePi,
         'machine_pi': MachinePi,
+        'excitation': ExcitationController,
     } == dict(CONTROLLERS.items())
     assert controller_class('pd') is PdController
 

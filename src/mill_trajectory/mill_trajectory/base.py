@@ -7,8 +7,9 @@ from_parameters.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -45,3 +46,20 @@ class Trajectory(ABC):
     @abstractmethod
     def sample(self, t: float) -> TrajectorySample:
         """The reference at time t [s]."""
+
+    def bounds(self, step: float) -> tuple[Point, Point]:
+        """The smallest box (lowest, highest x, y, z) [m] holding the path from t = 0 to its
+        end, here from samples every `step` [s]; a path type that knows its shape says so
+        exactly and without sampling."""
+        steps = math.ceil(self.end_time / step) if math.isfinite(self.end_time) else 0
+        points = [self.sample(min(k * step, self.end_time)).position for k in range(steps + 1)]
+        return box(points)
+
+
+Point = tuple[float, float, float]
+
+
+def box(points: Iterable[Sequence[float]]) -> tuple[Point, Point]:
+    """Lowest and highest x, y, z of some points."""
+    xs, ys, zs = zip(*points, strict=True)
+    return (min(xs), min(ys), min(zs)), (max(xs), max(ys), max(zs))

@@ -26,7 +26,7 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.base import Point, Trajectory, TrajectorySample, box
 
 # Chávez-Conde section 5: r1 … r9.
 BEZIER_R = (12870, 91520, 288288, 524160, 600600, 443520, 205920, 54912, 6435)
@@ -110,3 +110,7 @@ class BezierRestToRest(Trajectory):
         vel = tuple(s * dpsi / duration for s in self._span)
         acc = tuple(s * ddpsi / duration**2 for s in self._span)
         return TrajectorySample(pos, vel, acc)  # type: ignore[arg-type]
+
+    def bounds(self, step: float) -> tuple[Point, Point]:
+        # the blend rises monotonically from 0 to 1: the path stays between its ends
+        return box([self.sample(self.t1).position, self.sample(self.t2).position])

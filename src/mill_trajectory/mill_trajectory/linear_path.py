@@ -16,7 +16,7 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.base import Point, Trajectory, TrajectorySample, box
 
 # The paper's job: x = -0.075 m on the first cut (the reading that makes the
 # path continuous; eq. (19) prints +0.075), 80 mm in +y, then 80 mm in +x,
@@ -98,3 +98,6 @@ class LinearPath(Trajectory):
         # Beltrán 2013 eq. (19)-(22): p(t) = (p_f - p_i)/(t_f - t_i) (t - t_i) + p_i.
         pos = (p0[0] + v[0] * tau, p0[1] + v[1] * tau, p0[2] + v[2] * tau)
         return TrajectorySample(pos, v, zero)
+
+    def bounds(self, step: float) -> tuple[Point, Point]:
+        return box(self.points)  # straight segments between the waypoints

@@ -43,7 +43,7 @@ from typing import Any
 
 from mill_common.parameters import ParameterError, ParamSpec, number_list, validate_all
 
-from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.base import Trajectory, TrajectorySample, box
 from mill_trajectory.bezier import BezierRestToRest
 
 Point = tuple[float, float, float]
@@ -244,3 +244,7 @@ class ProgramTrajectory(Trajectory):
             pos = (p0[0] + v[0] * tau, p0[1] + v[1] * tau, p0[2] + v[2] * tau)
             return TrajectorySample(pos, v, _ZERO)
         return TrajectorySample(p0, _ZERO, _ZERO)
+
+    def bounds(self, step: float) -> tuple[Point, Point]:
+        # linear moves, monotone Bézier blends and dwells all stay between their ends
+        return box([self.start, *(p for piece in self._pieces for p in (piece.p0, piece.p1))])

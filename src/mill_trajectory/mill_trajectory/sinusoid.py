@@ -21,7 +21,7 @@ from typing import Any
 
 from mill_common.parameters import ParamSpec, non_negative, number_list, positive
 
-from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.base import Point, Trajectory, TrajectorySample
 
 MAHAROF_AMPLITUDE = (0.01, 0.0, 0.0)
 MAHAROF_FREQUENCY = (0.5, 0.5, 0.5)
@@ -98,3 +98,13 @@ class Sinusoid(Trajectory):
             vel.append(a * w * co if moving else 0.0)
             acc.append(-a * w * w * s if moving else 0.0)
         return TrajectorySample(tuple(pos), tuple(vel), tuple(acc))  # type: ignore[arg-type]
+
+    def bounds(self, step: float) -> tuple[Point, Point]:
+        # the box of the whole sine (a run shorter than a period may not reach it)
+        reach = [
+            abs(a) if w > 0.0 else 0.0 for a, w in zip(self.amplitude, self.omega, strict=True)
+        ]
+        held = self.sample(self.start_time).position  # a sine of frequency 0 holds its phase
+        lo = tuple(c - r if r else h for c, r, h in zip(self.center, reach, held, strict=True))
+        hi = tuple(c + r if r else h for c, r, h in zip(self.center, reach, held, strict=True))
+        return lo, hi  # type: ignore[return-value]

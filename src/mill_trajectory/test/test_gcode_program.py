@@ -55,7 +55,7 @@ def test_slot_with_machine_limits_is_smooth_and_close_to_the_paper() -> None:
 def test_a_program_outside_the_travel_is_refused_naming_the_line(tmp_path: Path) -> None:
     with pytest.raises(ParameterError, match=r'slotting\.ngc:7:1: move outside the machine'):
         build_job(_gcode(**{'travel.max': [0.0, 0.0, 0.0]}))
-    with pytest.raises(ValueError, match=r'leaves the machine travel at t = .* y = '):
+    with pytest.raises(ValueError, match=r'leaves the machine travel: y = '):
         build_job(load('slotting').parameters('trajectory') | {'travel.min': [-1, -0.1, -1]})
 
 
