@@ -94,7 +94,7 @@ def test_an_axis_near_the_end_of_its_travel_is_refused(ros_env, tmp_path: Path) 
     )
     assert proc.returncode == 1  # refused before any node starts
     lines = proc.stderr.strip().splitlines()
-    assert len(lines) == 1 and 'may leave the machine travel' in lines[0], proc.stderr
+    assert len(lines) == 1 and 'axis x may leave the machine travel' in lines[0], proc.stderr
     assert 'Traceback' not in proc.stderr
 
 

@@ -132,3 +132,20 @@ def test_a_new_machine_is_identified_tuned_and_tracks_as_predicted(m: Machine, t
     check_model(m, path)
     check_tracking(m, path, 0.001, None, air=False)  # the slotting job as the paper cuts it
     check_tracking(m, path, 0.004, 1, air=True)  # a drive at 250 Hz, one sample late
+
+
+@pytest.mark.parametrize(
+    ('travel', 'says'),
+    [
+        ('trajectory.travel.min=[-0.078,-1.0,-1.0]', 'axis x may leave the machine travel'),
+        ('trajectory.travel.max=[1.0,-0.1,1.0]', 'axis y may leave the machine travel'),
+    ],
+)
+def test_an_axis_near_the_end_of_its_travel_is_refused(travel: str, says: str) -> None:
+    scen = scenario.load('identify')
+    scen.add_override(travel)
+    with pytest.raises(scenario.ScenarioError, match=says):
+        job_for(scen)
+    scen = scenario.load('identify')
+    scen.add_override('trajectory.travel.min=[-0.081,-1.0,-1.0]')  # 6 mm: room for 2 + 3 mm
+    job_for(scen)

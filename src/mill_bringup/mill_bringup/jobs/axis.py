@@ -41,9 +41,8 @@ from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
 from mill_controllers.force_control import ForceFeedLoop
 from mill_trajectory.base import Trajectory
-from mill_trajectory.config import build_job, check_path_travel
+from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
-from mill_trajectory.toolpath import Travel
 
 from mill_analysis import records
 from mill_bringup.axis_simulation import AxisSimulation, axis_delays, build_axis_loops, timing_of
@@ -71,19 +70,20 @@ def check_following_band(scen: Scenario, path: Trajectory, tv: Mapping[str, Any]
     for node in scen.nodes_of(CONTROLLER):
         values = scen.parameters(node.name)
         band[axis_index(values['axis'])] = float(values['following_error_limit'])
-    if not any(math.isfinite(b) and b > 0.0 for b in band):
-        return
-    lo = [m + b for m, b in zip(tv['travel.min'], band, strict=True)]
-    hi = [m - b for m, b in zip(tv['travel.max'], band, strict=True)]
-    try:
-        check_path_travel(path, Travel(tuple(lo), tuple(hi)), tv['sample_period'])
-    except ValueError as exc:
-        limits = ', '.join(f'{a} {1e3 * b:g} mm' for a, b in zip(AXES, band, strict=True) if b)
-        raise ScenarioError(
-            f'scenario {scen.name}: an axis may leave the machine travel before its controller '
-            f'trips (following-error limits {limits}): {exc} (travel narrowed by the limits); '
-            'move the axes or lower the limits'
-        ) from None
+    lo, hi = path.bounds(tv['sample_period'])
+    for i, axis in enumerate(AXES):
+        b = band[i] if math.isfinite(band[i]) else 0.0
+        for edge, sign, end, side in (
+            (lo[i], -1.0, tv['travel.min'][i], 'min'),
+            (hi[i], 1.0, tv['travel.max'][i], 'max'),
+        ):
+            if sign * (edge + sign * b - end) > 0.0:
+                raise ScenarioError(
+                    f'scenario {scen.name}: axis {axis} may leave the machine travel before '
+                    f'its controller trips: its path reaches {edge:.6g} m and its '
+                    f'following-error limit is {1e3 * b:g} mm, beyond travel.{side} {end:g} m; '
+                    'move the axis or lower the limit'
+                )
 
 
 class AxisJob(Job[RunRecord]):
