@@ -4,7 +4,8 @@
 # package and system tests that start real ROS 2 processes (on loopback, in
 # private domains). Extra arguments go to pytest (both runs).
 #
-# The unit tests run on every core (pytest-xdist); the system tests one after the other,
+# The unit tests run on every core (pytest-xdist; tests marked xdist_group share one worker,
+# so that the offline runs they cache are made once); the system tests one after the other,
 # since each starts a whole graph of processes that shares the machine's cores.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -16,5 +17,5 @@ cd "$root"
 pytest_part() {  # exit code 5: none of the chosen tests is of this part
     "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
 }
-pytest_part -m 'not system' -n auto "$@"
+pytest_part -m 'not system' -n auto --dist loadgroup "$@"
 pytest_part -m system "$@"

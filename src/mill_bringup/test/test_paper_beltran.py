@@ -9,7 +9,6 @@ compensated errors 2-4 times larger and fails them. Physics checks give their ow
 
 from __future__ import annotations
 
-import functools
 import math
 
 import numpy as np
@@ -22,8 +21,7 @@ from mill_analysis.papers import (
     beltran,
     estimation_errors,
 )
-from mill_bringup.jobs.base import simulate
-from mill_bringup.jobs.registry import job_for
+from mill_bringup.docs_figures.runs import offline
 from mill_models.axis_data import BELTRAN_TABLE1
 
 from mill_bringup import scenario
@@ -32,17 +30,17 @@ PINNED = 1e-3  # numerics: see the module docstring
 OMEGA_C = 12.0  # the paper's ω_c [rad/s]: PD stiffness m_e ω_c²
 
 
-@functools.cache
+# The runs are the docs' figures' (cached per process; one xdist group shares them).
+pytestmark = pytest.mark.xdist_group('beltran')
+
+
 def record(variant: str):
-    return simulate(job_for(scenario.load('beltran').variant(variant)))
+    return offline('beltran', variant)
 
 
-@functools.cache
 def discretised(discretisation: str):
     """`adrc` with every GPI observer sampled another way (gpi.discretisation)."""
-    run = scenario.load('beltran').variant('adrc')
-    run.add_override(f'*_observer.gpi.discretisation={discretisation}')
-    return simulate(job_for(run))
+    return offline('beltran', 'adrc', (f'*_observer.gpi.discretisation={discretisation}',))
 
 
 def rms_errors(variant: str) -> dict[str, float]:
