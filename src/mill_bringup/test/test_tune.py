@@ -108,3 +108,11 @@ def test_the_parameter_file_holds_the_design_and_the_run_is_set_beside_the_predi
     lines = against_prediction(scen, metrics, pred['end'])
     assert '(3.00x)' in lines[0] and lines[1].startswith('WARNING: x, y, z tracked')
     assert 'not compared' in against_prediction(scen, metrics, pred['end'] / 2)[0]
+
+
+def test_an_observer_whose_loop_has_too_little_margin_is_refused(tmp_path, capsys) -> None:
+    # Beltrán's degree-4 GPI observer at the rule's bandwidth: about 8° of phase margin
+    path = write(tmp_path, x=axis())
+    line = refused(capsys, [str(path), '--observer', 'gpi'])
+    assert 'phase margin of' in line and 'below 20°' in line
+    assert not (tmp_path / 'tuned.yaml').exists()

@@ -23,7 +23,14 @@ from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
 from mill_bringup.scenario import ScenarioError, load
-from mill_bringup.tuning.design import AxisTuning, TuneError, design_axis
+from mill_bringup.tuning.design import (
+    MIN_PHASE_MARGIN,
+    AxisTuning,
+    TuneError,
+    controller_values,
+    design_axis,
+    observer_values,
+)
 from mill_bringup.tuning.margins import Margins, UnstableLoop, margins
 from mill_bringup.tuning.params_file import write_params
 from mill_bringup.tuning.predict import predict
@@ -54,6 +61,19 @@ def _parser() -> OneLineParser:
         '--delay',
         type=int,
         help='command delay [samples] (default: as identified; needed at another sample period)',
+    )
+    p.add_argument(
+        '--observer',
+        choices=('eso', 'gpi'),
+        default='eso',
+        help='eso (degree 0, the default) or gpi (Beltrán eq. (13)-(18), degree 4) at the '
+        "rule's bandwidth",
+    )
+    p.add_argument(
+        '--min-phase-margin',
+        type=float,
+        default=MIN_PHASE_MARGIN,
+        help='refuse a design whose loop has less [deg] (default %(default)g)',
     )
     p.add_argument('--torque-limit', type=_positive, default=5.0, help='[N·m] (default 5)')
     p.add_argument(
@@ -94,24 +114,28 @@ def _margins_at(
     T: float,
     delay: int,
     m: AxisIdentification,
+    observer: str,
     omega_o: float,
     omega_c: float,
 ) -> Margins:
+    """The margins of the loop the nodes would build with these bandwidths."""
     scen = load(scenario)
-    for text in (
-        f'*.sample_period={T!r}',
-        '*.design_period=0.0',
-        f'*.command_delay={delay}',
-        f'{axis}_controller.controller=adrc',
-        f'{axis}_controller.input_gain={m.b.value!r}',
-        f'{axis}_controller.pd.omega_c={omega_c!r}',
-        f'{axis}_controller.pd.zeta_c=0.7071',
-        f'{axis}_observer.observer=eso',
-        f'{axis}_observer.input_gain={m.b.value!r}',
-        f'{axis}_observer.eso.omega_o={omega_o!r}',
-        f'{axis}_observer.eso.degree=0',
-    ):
+    for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
         scen.add_override(text)
+    node = f'{axis}_controller'
+    for name, value in {
+        'controller': 'adrc',
+        'input_gain': m.b.value,
+        **controller_values(omega_c),
+    }.items():
+        scen.overrides.setdefault(node, {})[name] = value
+    node = f'{axis}_observer'
+    for name, value in {
+        'observer': observer,
+        'input_gain': m.b.value,
+        **observer_values(observer, omega_o),
+    }.items():
+        scen.overrides.setdefault(node, {})[name] = value
     cv, ov = scen.parameters(f'{axis}_controller'), scen.parameters(f'{axis}_observer')
     return margins(
         lambda: (build_observer_loop(ov), build_loop(cv)), m.b.value, m.alpha.value, delay, T
@@ -183,7 +207,9 @@ def main(argv: list[str] | None = None) -> int:
                 T,
                 delay,
                 args.torque_limit,
-                partial(_margins_at, args.scenario, a, T, delay, m),
+                partial(_margins_at, args.scenario, a, T, delay, m, args.observer),
+                args.observer,
+                args.min_phase_margin,
             )
             for a, m in model.axes.items()
         }

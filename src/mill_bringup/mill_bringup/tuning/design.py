@@ -29,6 +29,22 @@ ZETA_C = 0.7071  # damping of the tracking-error poles, as the papers' and the r
 NOISE_SHARE = 0.01  # of the torque limit, RMS
 TORQUE_SHARE = 0.5  # of the torque limit that friction and load may take
 NOISE_STEP = 0.8  # ω_o is lowered by this factor until the noise fits
+MIN_PHASE_MARGIN = 20.0  # [deg] below it the design is refused (--min-phase-margin)
+
+
+def observer_values(kind: str, omega_o: float) -> dict[str, object]:
+    """The observer's own parameters at bandwidth ω_o: the ESO of degree 0 (every pole at
+    −ω_o), or Beltrán's GPI observer (eq. (18) with ω_o = p_o, ζ_o = 0.7071, as the paper)."""
+    if kind == 'eso':
+        return {'eso.omega_o': omega_o, 'eso.degree': 0}
+    if kind == 'gpi':
+        return {'gpi.omega_o': omega_o, 'gpi.zeta_o': ZETA_C, 'gpi.pole_o': omega_o}
+    raise TuneError(f'unknown observer {kind!r} (eso or gpi)')
+
+
+def controller_values(omega_c: float) -> dict[str, object]:
+    """The ADRC law's own parameters at bandwidth ω_c (Beltrán 2013 eq. (12))."""
+    return {'pd.omega_c': omega_c, 'pd.zeta_c': ZETA_C}
 
 
 class TuneError(ValueError):
@@ -43,6 +59,7 @@ class AxisTuning:
     margins: Margins
     torque_noise: float  # RMS command from the encoder's quantization [N·m]
     limited_by: str  # 'rate and delay' or 'encoder'
+    observer_kind: str = 'eso'
 
     def controller(
         self, m: AxisIdentification, delay: int, torque_limit: float, following_error_limit: float
@@ -51,19 +68,17 @@ class AxisTuning:
             'controller': 'adrc',
             'input_gain': m.b.value,
             'command_delay': delay,
-            'pd.omega_c': self.omega_c,
-            'pd.zeta_c': ZETA_C,
+            **controller_values(self.omega_c),
             'pd.torque_limit': torque_limit,
             'following_error_limit': following_error_limit,
         }
 
     def observer(self, m: AxisIdentification, delay: int) -> dict[str, object]:
         return {
-            'observer': 'eso',
+            'observer': self.observer_kind,
             'input_gain': m.b.value,
             'command_delay': delay,
-            'eso.omega_o': self.omega_o,
-            'eso.degree': 0,
+            **observer_values(self.observer_kind, self.omega_o),
             'hold_torque': m.gamma.value / m.b.value,
         }
 
@@ -84,6 +99,8 @@ def design_axis(
     delay: int,
     torque_limit: float,
     margins_at: Callable[[float, float], Margins],
+    observer_kind: str = 'eso',
+    min_phase_margin: float = MIN_PHASE_MARGIN,
 ) -> AxisTuning:
     """margins_at(ω_o, ω_c): the margins of the loop built with those bandwidths."""
     check_torque(axis, m, torque_limit)
@@ -94,9 +111,14 @@ def design_axis(
         found = margins_at(omega_o, omega_o * rule.omega_c / rule.omega_o)
         noise = found.noise_gain * quantization
         if noise <= NOISE_SHARE * torque_limit:
-            return AxisTuning(
-                axis, omega_o, omega_o * rule.omega_c / rule.omega_o, found, noise, limited_by
-            )
+            if found.phase < min_phase_margin:
+                raise TuneError(
+                    f'{axis}: with the {observer_kind} observer the loop as built has a phase '
+                    f'margin of {found.phase:.0f}° (below {min_phase_margin:g}°): '
+                    f'{found.text()}; use the eso observer'
+                )
+            omega_c = omega_o * rule.omega_c / rule.omega_o
+            return AxisTuning(axis, omega_o, omega_c, found, noise, limited_by, observer_kind)
         omega_o, limited_by = omega_o * NOISE_STEP, 'encoder'
     raise TuneError(
         f'{axis}: the encoder ({1e6 * m.resolution:.3g} µm) moves the command by more than '
