@@ -9,13 +9,11 @@ is written (exit 1); bad options and unreadable bags one line (exit 2 / 1).
 
 from __future__ import annotations
 
-import argparse
-import math
 import sys
 from pathlib import Path
 
 from mill_bag.errors import BagError
-from mill_common.one_line_parser import OneLineParser
+from mill_common.one_line_parser import OneLineParser, positive
 from mill_models.identification import FitSettings
 
 from mill_analysis.identify import machine_file
@@ -23,16 +21,6 @@ from mill_analysis.identify.fit_record import identify_record
 from mill_analysis.identify.plot import plot
 from mill_analysis.identify.table import table
 from mill_analysis.run_record import read_run
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f'{text!r} must be > 0')
-    return value
 
 
 def _parser() -> OneLineParser:
@@ -51,7 +39,7 @@ def _parser() -> OneLineParser:
     p.add_argument(
         '--max-delay', type=int, default=5, help='largest delay tried [samples] (default 5)'
     )
-    p.add_argument('--pitch', type=_positive, help='screw pitch [m/rev]: also print forces in N')
+    p.add_argument('--pitch', type=positive, help='screw pitch [m/rev]: also print forces in N')
     return p
 
 

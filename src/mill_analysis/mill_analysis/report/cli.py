@@ -24,7 +24,7 @@ import time
 from pathlib import Path
 
 from mill_bag.errors import BagError
-from mill_common.one_line_parser import OneLineParser
+from mill_common.one_line_parser import OneLineParser, non_negative, positive
 
 from mill_analysis.report.kinds import ReportOptions, kind_of
 
@@ -37,26 +37,6 @@ def _freqs(text: str) -> list[float]:
     if not values or any(not (math.isfinite(v) and v > 0) for v in values):
         raise argparse.ArgumentTypeError(f'--freqs {text!r}: frequencies must be > 0')
     return values
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f'{text!r} must be > 0')
-    return value
-
-
-def _non_negative(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not (math.isfinite(value) and value >= 0):
-        raise argparse.ArgumentTypeError(f'{text!r} must be >= 0')
-    return value
 
 
 def labels_for(paths: list[Path]) -> list[str]:
@@ -83,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument('bags', nargs='+', type=Path, metavar='BAG', help='bag directory or .mcap')
     parser.add_argument('--out', type=Path, help='output directory (default: BAG/../report)')
     parser.add_argument(
-        '--skip', type=_non_negative, default=1.0, help='metrics over t >= SKIP [s] (default 1)'
+        '--skip', type=non_negative, default=1.0, help='metrics over t >= SKIP [s] (default 1)'
     )
     parser.add_argument(
         '--freqs',
@@ -93,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         '--window',
-        type=_positive,
+        type=positive,
         default=0.1,
         help='window of the largest windowed RMS tracking error [s] (default 0.1)',
     )

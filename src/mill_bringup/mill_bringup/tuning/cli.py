@@ -10,14 +10,13 @@ cannot be tuned gets one line and no file (exit 1); bad options one line (exit 2
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from functools import partial
 from pathlib import Path
 
 from mill_analysis.identify.machine_file import MachineFileError, MachineModel, read
-from mill_common.one_line_parser import OneLineParser
+from mill_common.one_line_parser import OneLineParser, positive
 from mill_controllers.config import build_loop
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
@@ -37,16 +36,6 @@ from mill_bringup.tuning.predict import predict
 from mill_bringup.tuning.prediction_file import Prediction, prediction_path, write_prediction
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f'{text!r} must be > 0')
-    return value
-
-
 def _parser() -> OneLineParser:
     p = OneLineParser(
         prog='tune',
@@ -56,7 +45,7 @@ def _parser() -> OneLineParser:
         'on the identified machine.',
     )
     p.add_argument('machine', help='machine model written by identify')
-    p.add_argument('--sample-period', type=_positive, help='[s] (default: as identified)')
+    p.add_argument('--sample-period', type=positive, help='[s] (default: as identified)')
     p.add_argument(
         '--delay',
         type=int,
@@ -75,10 +64,10 @@ def _parser() -> OneLineParser:
         default=MIN_PHASE_MARGIN,
         help='refuse a design whose loop has less [deg] (default %(default)g)',
     )
-    p.add_argument('--torque-limit', type=_positive, default=5.0, help='[N·m] (default 5)')
+    p.add_argument('--torque-limit', type=positive, default=5.0, help='[N·m] (default 5)')
     p.add_argument(
         '--following-error-limit',
-        type=_positive,
+        type=positive,
         default=0.001,
         help='trip threshold [m] (default 0.001)',
     )
@@ -97,7 +86,7 @@ def _parser() -> OneLineParser:
         help='override a parameter of the scenario predicted (as run_scenario -p), e.g. '
         'plant.cutting_model=none for a job in the air; give the run the same',
     )
-    p.add_argument('--duration', type=_positive, help='predict only this much of the job [s]')
+    p.add_argument('--duration', type=positive, help='predict only this much of the job [s]')
     p.add_argument('--skip', type=float, default=1.0, help='metrics over t >= SKIP [s]')
     p.add_argument(
         '--output',
