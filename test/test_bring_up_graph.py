@@ -20,18 +20,11 @@ import pytest
 import yaml
 
 from test.conftest import run_scenario
-from test.test_realtime_driver import CARRIAGE, LEAD, MASS
+from test.test_realtime_driver import LEAD, MASS
+from test.test_realtime_driver import MACHINE as DRIVER_MACHINE
 
 # the real-machine issue's machine without its process load (no cutting while identifying)
-MACHINE = [
-    f'plant.mass={[CARRIAGE[a] for a in "xyz"]!r}',
-    f'plant.screw_inertia={[(MASS[a] - CARRIAGE[a]) * LEAD**2 for a in "xyz"]!r}',
-    'plant.cart_damping=[10.0,10.0,10.0]',
-    'plant.screw_damping=[0.0,0.0,0.0]',
-    'plant.coulomb_friction=[60.0,60.0,60.0]',
-    'plant.sensor_resolution=1e-6',
-    'plant.gravity=true',
-]
+MACHINE = [m for m in DRIVER_MACHINE if not m.startswith(('plant.cutting_model', 'plant.load.'))]
 ARGS = [a for text in MACHINE for a in ('-p', text)] + ['--delay', '1', '--layout', 'single']
 
 
