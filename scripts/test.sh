@@ -16,5 +16,5 @@ cd "$root"
 pytest_part() {  # exit code 5: none of the chosen tests is of this part
     "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
 }
-pytest_part -m 'not system' -n auto "$@"
+pytest_part -m 'not system' -n auto --dist loadgroup "$@"  # xdist_group: shared runs
 pytest_part -m system "$@"

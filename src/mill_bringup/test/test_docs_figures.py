@@ -17,7 +17,13 @@ from mill_bringup.docs_figures.cli import documents, main
 from mill_bringup.docs_figures.registry import GROUPS, compute, group_of
 
 REPO = Path(__file__).resolve().parents[3]
-OFFLINE = sorted(name for name, g in GROUPS.items() if not g.system)
+# Each group's check runs on one xdist worker with the paper tests that share its runs
+# (their module's xdist_group; scripts/test.sh passes --dist loadgroup).
+OFFLINE = [
+    pytest.param(name, marks=pytest.mark.xdist_group(name))
+    for name, g in sorted(GROUPS.items())
+    if not g.system
+]
 
 
 def quoted() -> dict[str, list[markers.Figure]]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mill_bringup.docs_figures import beltran, hatwesh, maharof, rubio
+from mill_bringup.docs_figures import beltran, chavez_conde, hatwesh, maharof, rubio
 
 
 @dataclass(frozen=True)
@@ -30,6 +30,13 @@ GROUPS = {
             'beltran_discretisation',
             "offline_sim beltran --variant adrc -p '*_observer.gpi.discretisation=NAME'",
             beltran.discretisation_figures,
+        ),
+        Group('chavez_conde', 'offline_sim chavez_conde --skip 0', chavez_conde.figures),
+        Group(
+            'chavez_conde_probes',
+            "offline_sim chavez_conde --skip 0 --variant sliding_gpi -p '*.sample_period=0.00005'"
+            ' (and the other overrides docs/papers.md names)',
+            chavez_conde.probe_figures,
         ),
         Group('maharof', 'offline_sim maharof', maharof.figures),
         Group(
