@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mill_bringup.docs_figures import beltran, chavez_conde, hatwesh, maharof, rubio
+from mill_bringup.docs_figures import adaptive_feed, beltran, chavez_conde, hatwesh, maharof, rubio
 
 
 @dataclass(frozen=True)
@@ -41,6 +41,23 @@ GROUPS = {
         Group('maharof', 'offline_sim maharof', maharof.figures),
         Group(
             'hatwesh_margins', 'python -m mill_controllers.hatwesh_margins', hatwesh.margin_figures
+        ),
+        Group(
+            'hatwesh_velocity',
+            'offline_sim hatwesh_velocity --skip 0 [-p x_controller.adaptive_pi.load_term=false'
+            ' | -p x_controller.adaptive_pi.design_rule=discrete]',
+            hatwesh.velocity_figures,
+        ),
+        Group(
+            'hatwesh',
+            'offline_sim hatwesh --skip 0 [--variant adaptive_pi'
+            ' -p x_controller.adaptive_pi.phase_margin=25.0]',
+            hatwesh.move_figures,
+        ),
+        Group(
+            'adaptive_feed',
+            'offline_sim slotting_adaptive_feed [-p force_controller.force_process.immersion=1.8]',
+            adaptive_feed.figures,
         ),
         Group(
             'rubio',
