@@ -11,7 +11,7 @@ from mill_analysis.metrics import FORCE_CONTROL
 
 from mill_bringup import scenario
 from mill_bringup.docs_figures.runs import offline
-from mill_bringup.jobs.axis import depth_stretches
+from mill_bringup.jobs.axis import AxisJob, depth_stretches
 from mill_bringup.jobs.registry import job_for
 
 NAME = 'slotting_adaptive_feed'
@@ -37,6 +37,7 @@ def figures() -> dict[str, str]:
     out['override.mean'] = f'{override.mean():.3f}'
     out['override.max'] = f'{override.max():.3f}'
     job = job_for(scenario.load(NAME))  # its length at override 1 (the programmed feed)
+    assert isinstance(job, AxisJob)
     dt = job.dt_ns * 1e-9
     out['programmed.end'] = f'{(job.samples - 1) * dt:.3f}'
     out['programmed.path'] = f'{(job.samples - 1 - job.end.settle_samples) * dt:.3f}'
