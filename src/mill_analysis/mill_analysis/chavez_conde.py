@@ -53,6 +53,16 @@ def _verdict(holds: bool) -> str:
     return 'agrees' if holds else 'DISAGREES'
 
 
+def reduces(gpi: tuple[float, float], sliding: tuple[float, float]) -> str:
+    """The verdict on "the sliding-mode GPI reduces the tracking error": (max, RMS) each."""
+    return _verdict(sliding[1] < gpi[1] and sliding[0] < gpi[0])
+
+
+def chatters(ratio: float) -> str:
+    """The verdict on "the discontinuity brings a high frequency" (RMS Δτ ratio)."""
+    return _verdict(ratio >= CHATTER_FACTOR)
+
+
 def chavez_conde(records: Mapping[str, RunRecord]) -> str:
     lines = [
         'Chávez-Conde, x axis, Bézier 0 -> 10 mm in 3 s with friction and cutting force '
@@ -77,19 +87,18 @@ def chavez_conde(records: Mapping[str, RunRecord]) -> str:
         lines.append(
             f'claim "the sliding-mode GPI reduces the tracking error" ({sliding} vs {gpi}, '
             f'{setting}): RMS e x{rs / rg:.2f}, max |e| x{ps / pg:.2f} — '
-            + _verdict(rs < rg and ps < pg)
+            + reduces(ours[gpi], ours[sliding])
         )
     if set(PAPER) <= ours.keys():
-        (pg, rg), (ps, rs) = ours[PAPER[0]], ours[PAPER[1]]
         ratio = torque[PAPER[1]][2] / torque[PAPER[0]][2]
         if math.isfinite(ratio):
             lines.append(
                 'claim "the discontinuity brings a high frequency" (RMS dtau per sample, '
                 f'sliding_gpi / gpi, holds if >= {CHATTER_FACTOR:g}): x{ratio:.0f} — '
-                + _verdict(ratio >= CHATTER_FACTOR)
+                + chatters(ratio)
             )
         lines.append(
             "verdict in the paper's setting (gpi vs sliding_gpi: the Fig. 2 force, continuous "
-            'laws, rigid x axis, no torque limit): ' + _verdict(rs < rg and ps < pg)
+            'laws, rigid x axis, no torque limit): ' + reduces(ours[PAPER[0]], ours[PAPER[1]])
         )
     return '\n'.join(lines)

@@ -401,6 +401,25 @@ HV_CLAIMS = (
 )
 
 
+def hv_verdicts(ours: Mapping[str, Mapping[str, PhaseMetrics]]) -> tuple[bool, ...]:
+    """Whether each of HV_CLAIMS holds, from the phases of machine_pi, adaptive_pi and
+    adaptive_pi_pm25."""
+    mach, ada, pm25 = ours['machine_pi'], ours['adaptive_pi'], ours['adaptive_pi_pm25']
+    n, a, b = 'nominal', 'after inertia', 'under load'
+
+    def ratio(m: Mapping[str, PhaseMetrics], top: str, bottom: str) -> float:
+        return m[top].iae / m[bottom].iae
+
+    return (
+        pm25[n].overshoot > ada[n].overshoot and pm25[n].settling_time > ada[n].settling_time,
+        ada[n].overshoot <= mach[n].overshoot
+        and ada[n].settling_time <= mach[n].settling_time
+        and ada[n].iae <= mach[n].iae,
+        ratio(ada, a, n) <= ratio(mach, a, n),
+        ratio(ada, b, a) <= ratio(mach, b, a),
+    )
+
+
 def hatwesh_velocity(records: Mapping[str, RunRecord]) -> str:
     lines = [
         'Hatwesh 2013, velocity loop of the x drive alone: steps of ±10 mm/s of the velocity '
@@ -441,14 +460,7 @@ def hatwesh_velocity(records: Mapping[str, RunRecord]) -> str:
         def ratio(m: dict[str, PhaseMetrics], top: str, bottom: str) -> float:
             return m[top].iae / m[bottom].iae
 
-        verdicts = (
-            pm25[n].overshoot > ada[n].overshoot and pm25[n].settling_time > ada[n].settling_time,
-            ada[n].overshoot <= mach[n].overshoot
-            and ada[n].settling_time <= mach[n].settling_time
-            and ada[n].iae <= mach[n].iae,
-            ratio(ada, a, n) <= ratio(mach, a, n),
-            ratio(ada, b, a) <= ratio(mach, b, a),
-        )
+        verdicts = hv_verdicts(ours)
         details = (
             f'overshoot {pm25[n].overshoot:.1f} % against {ada[n].overshoot:.1f} %, settling '
             f'{pm25[n].settling_time * 1e3:.2f} ms against {ada[n].settling_time * 1e3:.2f} ms',

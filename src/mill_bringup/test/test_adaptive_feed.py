@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from mill_analysis.metrics import FORCE_CONTROL, RunRecord
+from mill_bringup.docs_figures.runs import offline
 from mill_bringup.jobs.axis import AxisJob, depth_stretches
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
@@ -21,6 +22,7 @@ from mill_bringup import scenario
 NAME = 'slotting_adaptive_feed'
 COL = {name: i for i, name in enumerate(FORCE_CONTROL)}
 # 1 mm of the deep cut, then the job holds for settle_time: a short job that ends by its path
+pytestmark = pytest.mark.xdist_group('adaptive_feed')
 SHORT = ('trajectory.program.segments=["linear -0.075 -0.104 -0.005 0.003"]',)
 
 
@@ -33,8 +35,8 @@ def load(*overrides: str) -> scenario.Scenario:
 
 @pytest.fixture(scope='module')
 def whole() -> tuple[AxisJob, RunRecord]:
-    job = job_for(load())
-    return job, simulate(job)
+    # the run the docs' check (group adaptive_feed, same xdist worker) also uses
+    return job_for(load()), offline(NAME)
 
 
 def test_the_job_ends_settle_time_after_its_path_ends() -> None:

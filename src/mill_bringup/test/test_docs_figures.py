@@ -14,10 +14,16 @@ from pathlib import Path
 import pytest
 from mill_bringup.docs_figures import image, markers
 from mill_bringup.docs_figures.cli import documents, main
-from mill_bringup.docs_figures.registry import GROUPS, compute, group_of
+from mill_bringup.docs_figures.registry import GROUPS, MEASURED, compute, group_of
 
 REPO = Path(__file__).resolve().parents[3]
-OFFLINE = sorted(name for name, g in GROUPS.items() if not g.system)
+# Each group's check runs on one xdist worker with the paper tests that share its runs
+# (their module's xdist_group; scripts/test.sh passes --dist loadgroup).
+OFFLINE = [
+    pytest.param(name, marks=pytest.mark.xdist_group(name))
+    for name, g in sorted(GROUPS.items())
+    if not g.system
+]
 
 
 def quoted() -> dict[str, list[markers.Figure]]:
@@ -93,3 +99,10 @@ def test_the_readme_image_is_drawn_from_the_current_run() -> None:
     assert image.data_text(image.offline(image.SCENARIO)) == committed
     # ... and the PNG was drawn from that digest (the hash image.py writes into it).
     assert image.png_data_hash(REPO / image.IMAGE) == hashlib.sha256(committed.encode()).hexdigest()
+
+
+def test_the_timings_left_out_of_the_check_are_still_in_the_docs() -> None:
+    """registry.MEASURED names each machine-dependent figure the check leaves out; a phrase
+    that left its document means the list is stale."""
+    missing = [m for m in MEASURED if m.text not in (REPO / m.document).read_text('utf-8')]
+    assert missing == []

@@ -26,18 +26,20 @@ from mill_analysis.papers import (
     velocity_steps,
 )
 from mill_bringup.cli import run_parameters
-from mill_bringup.jobs.base import simulate
+from mill_bringup.docs_figures.runs import offline
 from mill_bringup.jobs.registry import job_for
 
 from mill_bringup import scenario
 
 NAME = 'hatwesh_velocity'
+# The docs' check of these figures (test_docs_figures.py, group hatwesh_velocity) runs on the
+# same pytest-xdist worker (--dist loadgroup) and shares these runs (docs_figures.runs).
+pytestmark = pytest.mark.xdist_group(NAME)
 
 
 @pytest.fixture(scope='module')
 def records() -> dict[str, RunRecord]:
-    scen = scenario.load(NAME)
-    return {name: simulate(job_for(scen.variant(name))) for name in scen.variants}
+    return {name: offline(NAME, name) for name in scenario.load(NAME).variants}
 
 
 def test_the_report_knows_where_the_scenario_changes_the_plant() -> None:
@@ -161,9 +163,7 @@ def test_phase_figures_are_those_of_the_docs(records, variant: str, phase: str) 
 
 @pytest.mark.parametrize(('override', 'variant'), list(READING_DOCS))
 def test_the_other_readings_figures_are_those_of_the_docs(override: str, variant: str) -> None:
-    scen = scenario.load(NAME).variant(variant)
-    scen.add_override(f'x_controller.{override}')
-    rec = simulate(job_for(scen))
+    rec = offline(NAME, variant, (f'x_controller.{override}',))
     for phase, row in READING_DOCS[override, variant].items():
         assert_row(phase_metrics(rec, *HV_PHASES[phase], HV_BAND), row)
 

@@ -41,10 +41,6 @@ def test_step_disturbance_estimated_within_5_percent_in_30_ms(axis):
     assert rel.max() <= 0.05
 
 
-def variant_record(name: str, variant: str):
-    return simulate(job_for(scenario.load(name).variant(variant)))
-
-
 def test_every_scenario_and_variant_loads() -> None:
     for name in (
         'slotting',
@@ -62,12 +58,14 @@ def test_every_scenario_and_variant_loads() -> None:
                 v.parameters(node.name)  # every value valid
 
 
+@pytest.mark.xdist_group('hatwesh')  # shares its runs with the docs' check of that group
 def test_hatwesh_adaptive_pi_loses_less_than_the_machine_pi_after_the_inertia_step() -> None:
     from mill_analysis.papers import HATWESH_BAND, HATWESH_MOVES, move_metrics
+    from mill_bringup.docs_figures.runs import offline
 
     ratio = {}
     for variant in ('machine_pi', 'adaptive_pi'):
-        rec = variant_record('hatwesh', variant)
+        rec = offline('hatwesh', variant)
         m = {k: move_metrics(rec, *v, HATWESH_BAND) for k, v in HATWESH_MOVES.items()}
         ratio[variant] = m['after'].iae / m['before'].iae
     # docs/papers.md, "The position move" (`offline_sim hatwesh --skip 0`), printed to 0.001:

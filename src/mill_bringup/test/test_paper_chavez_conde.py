@@ -7,22 +7,21 @@ by 1 % moves every one of them by more).
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
 import pytest
 from mill_analysis.chavez_conde import chavez_conde, tracking_metrics
-from mill_bringup.jobs.base import simulate
-from mill_bringup.jobs.registry import job_for
+from mill_bringup.docs_figures.runs import offline
 
 from mill_bringup import scenario
 
 PINNED = 1e-3
+# The docs' check of these figures (test_docs_figures.py, group chavez_conde) runs on the
+# same pytest-xdist worker (--dist loadgroup), so the runs are shared, not repeated.
+pytestmark = pytest.mark.xdist_group('chavez_conde')
 
 
-@functools.cache
 def record(variant: str):
-    return simulate(job_for(scenario.load('chavez_conde').variant(variant)))
+    return offline('chavez_conde', variant)
 
 
 def test_the_papers_setting_is_the_default() -> None:

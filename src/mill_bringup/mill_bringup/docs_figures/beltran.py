@@ -12,10 +12,13 @@ from mill_analysis.papers import (
     BELTRAN_WINDOW,
     estimation_errors,
 )
+from mill_models.axis_data import BELTRAN_TABLE1
 
+from mill_bringup import scenario
 from mill_bringup.docs_figures.runs import offline, sig
 
 AXES = 'xyz'
+FEED = 0.003  # [m/s] the programmed feed of both cuts
 DISCRETISATIONS = ('predictor', 'continuous')  # besides the default, `current`
 
 
@@ -55,6 +58,13 @@ def figures() -> dict[str, str]:
         out[f'adrc.xi.{a}'] = f'{m.rms_disturbance:.3f}'
         out[f'adrc.xi_whole.{a}'] = f'{100 * whole[i]:.0f}'  # [%]
         out[f'adrc.xi_slow.{a}'] = f'{100 * slow[i]:.2f}'
+    # the PD law's static lag behind the mean feed force of the first cut (along +y, 3 mm/s):
+    # e_y = -(F_y + c_e v)/(m_e ω_c²), by that formula from the pd run's force
+    y = BELTRAN_TABLE1['y']
+    omega_c = scenario.load('beltran').variant('pd').parameters('y_controller')['pd.omega_c']
+    f_y = _first_cut_forces(offline('beltran', 'pd'))[1]
+    lag = -(f_y + y.effective_damping * FEED) / (y.effective_mass * omega_c**2)
+    out['pd.lag.y'] = sig(lag * 1e3)  # [mm]
     for a, f in zip(AXES, BELTRAN_MEAN_FORCE, strict=True):
         out[f'eq4.force.{a}'] = f'{f:.2f}'
     out['eq4.k'] = f'{BELTRAN_K:.1f}'
@@ -84,4 +94,39 @@ def discretisation_figures() -> dict[str, str]:
             spread[i] = max(spread[i], rms[i] / current[i], current[i] / rms[i])
     out['spread.xy'] = f'{max(spread[:2]):.1f}'
     out['spread.z'] = f'{spread[2]:.1f}'
+    return out
+
+
+STEP_TIME = 1.0  # [s] a 100 N step force on one axis of the main job
+
+
+def step_figures() -> dict[str, str]:
+    """`offline_sim slotting -p plant.cutting_model=step -p plant.step.force=[...]` (as
+    test_offline_paper_claims.py): when ξ̂ stays within 5 % of ξ after the step, and the
+    peak of ξ̂'s change in steps of ξ's."""
+    out: dict[str, str] = {}
+    peaks = []
+    for i, a in enumerate(AXES):
+        force = [0.0, 0.0, 0.0]
+        force[i] = 100.0
+        rec = offline(
+            'slotting',
+            '',
+            (
+                'plant.cutting_model=step',
+                f'plant.step.force={force}',
+                f'plant.step.start_time={STEP_TIME}',
+                'trajectory.duration=1.2',
+            ),
+        )
+        t, xi, xi_hat = rec.t, rec['true_disturbance'][:, i], rec['estimate_disturbance'][:, i]
+        after = t > STEP_TIME
+        outside = np.flatnonzero(np.abs(xi_hat[after] - xi[after]) > 0.05 * np.abs(xi[after]))
+        out[f'step.{a}'] = f'{(t[after][outside[-1] + 1] - STEP_TIME) * 1e3:.1f}'  # [ms]
+        before = xi[(t > STEP_TIME - 0.05) & (t < STEP_TIME)].mean()
+        size = xi[after].mean() - before
+        peaks.append(float(np.max((xi_hat[after] - before) / size)))
+    times = [float(out[f'step.{a}']) for a in AXES]
+    out['step.min'], out['step.max'] = f'{min(times):.0f}', f'{max(times):.0f}'
+    out['step.peak'] = f'{np.mean(peaks):.1f}'
     return out

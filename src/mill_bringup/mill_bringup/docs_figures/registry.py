@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mill_bringup.docs_figures import beltran, hatwesh, maharof, rubio
+from mill_bringup.docs_figures import adaptive_feed, beltran, chavez_conde, hatwesh, maharof, rubio
 
 
 @dataclass(frozen=True)
@@ -31,9 +31,39 @@ GROUPS = {
             "offline_sim beltran --variant adrc -p '*_observer.gpi.discretisation=NAME'",
             beltran.discretisation_figures,
         ),
+        Group(
+            'beltran_step',
+            "offline_sim slotting -p plant.cutting_model=step -p 'plant.step.force=[100.0,0.0,0.0]'"
+            ' -p plant.step.start_time=1.0 -p trajectory.duration=1.2 (and y, z)',
+            beltran.step_figures,
+        ),
+        Group('chavez_conde', 'offline_sim chavez_conde --skip 0', chavez_conde.figures),
+        Group(
+            'chavez_conde_probes',
+            "offline_sim chavez_conde --skip 0 --variant sliding_gpi -p '*.sample_period=0.00005'"
+            ' (and the other overrides docs/papers.md names)',
+            chavez_conde.probe_figures,
+        ),
         Group('maharof', 'offline_sim maharof', maharof.figures),
         Group(
             'hatwesh_margins', 'python -m mill_controllers.hatwesh_margins', hatwesh.margin_figures
+        ),
+        Group(
+            'hatwesh_velocity',
+            'offline_sim hatwesh_velocity --skip 0 [-p x_controller.adaptive_pi.load_term=false'
+            ' | -p x_controller.adaptive_pi.design_rule=discrete]',
+            hatwesh.velocity_figures,
+        ),
+        Group(
+            'hatwesh',
+            'offline_sim hatwesh --skip 0 [--variant adaptive_pi'
+            ' -p x_controller.adaptive_pi.phase_margin=25.0]',
+            hatwesh.move_figures,
+        ),
+        Group(
+            'adaptive_feed',
+            'offline_sim slotting_adaptive_feed [-p force_controller.force_process.immersion=1.8]',
+            adaptive_feed.figures,
         ),
         Group(
             'rubio',
@@ -51,3 +81,29 @@ def compute(name: str) -> dict[str, str]:
 
 def group_of(figure_id: str) -> str:
     return figure_id.split('.', 1)[0]
+
+
+@dataclass(frozen=True)
+class Measured:
+    """Figures the check leaves out on purpose: timings (wall time, steps/s, memory), which
+    depend on the machine. The docs state the command and the machine or date beside them;
+    `text` is a phrase of the document that must stay there (a test), so this list and the
+    docs cannot drift apart."""
+
+    document: str
+    text: str
+    how: str
+
+
+MEASURED = (
+    Measured(
+        'README.md',
+        '## How fast it runs',
+        'the whole section: `benchmark commissioning ...` on the 2-core machine, 3 December 2026',
+    ),
+    Measured('docs/papers.md', '`offline_sim beltran` (about 10 s of CPU per variant)', 'CPU'),
+    Measured('docs/papers.md', '(a minute; the torque columns', 'wall time'),
+    Measured('docs/papers.md', '`offline_sim maharof` (3.4 s per configuration)', 'wall time'),
+    Measured('docs/papers.md', '74 s at 0.1 ms sampling (541 steps/s)', 'wall time, steps/s'),
+    Measured('docs/architecture.md', 'CPU per group', 'CPU of each group of this check'),
+)

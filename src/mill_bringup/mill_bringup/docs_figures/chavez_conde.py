@@ -1,0 +1,109 @@
+"""Chávez-Conde's figures (docs/papers.md): `offline_sim chavez_conde --skip 0`, the
+constants of the paper's setting computed from the scenario's parameters, and the probes
+the text quotes (another sampling, no force, the default friction reversal)."""
+
+from __future__ import annotations
+
+import math
+
+from mill_analysis.chavez_conde import chatters, reduces, torque_metrics, tracking_metrics
+from mill_controllers.gpi_controller import GpiController
+from mill_controllers.sliding_gpi import SlidingGpiController
+
+from mill_bringup import scenario
+from mill_bringup.docs_figures.runs import offline, sig
+
+NAME = 'chavez_conde'
+X = 0
+FINE = '*.sample_period=0.00005'  # the probes at 0.05 ms
+
+
+def law_values(params: dict, prefix: str) -> dict:
+    return {k.removeprefix(prefix + '.'): v for k, v in params.items() if k.startswith(prefix)}
+
+
+def figures() -> dict[str, str]:
+    """The table (every variant) and the ratios and constants the claims quote."""
+    out: dict[str, str] = {}
+    ours = {}
+    for variant in scenario.load(NAME).variants:
+        rec = offline(NAME, variant)
+        peak, rms = ours[variant] = tracking_metrics(rec)
+        top, at_top, chatter = torque_metrics(rec)
+        out[f'{variant}.max_e'] = sig(peak)  # [mm]
+        out[f'{variant}.rms_e'] = sig(rms)
+        out[f'{variant}.max_tau'] = sig(top)  # [N m]
+        out[f'{variant}.rms_dtau'] = sig(chatter, 3)
+        if variant == 'gpi':
+            chatter_gpi = chatter
+        if variant == 'sliding_gpi':
+            out['sliding_gpi.chatter_ratio'] = f'{chatter / chatter_gpi:.2g}'.replace('e+0', 'e')
+            out['verdict.chatter'] = chatters(chatter / chatter_gpi)
+        if variant.endswith('_limited') and variant.startswith('sliding'):
+            out[f'{variant}.at_max'] = f'{at_top:.0f}'  # [% of samples]
+    for suffix in ('', '_zoh', '_flexible'):
+        out[f'verdict{suffix}'] = reduces(ours['gpi' + suffix], ours['sliding_gpi' + suffix])
+    for suffix in ('', '_zoh'):
+        (pg, rg), (ps, rs) = ours['gpi' + suffix], ours['sliding_gpi' + suffix]
+        out[f'ratio{suffix}.rms'] = f'{rs / rg:.2f}'
+        out[f'ratio{suffix}.max'] = f'{ps / pg:.2f}' if ps < pg else f'{ps / pg:.1f}'
+    out.update(constants())
+    return out
+
+
+def constants() -> dict[str, str]:
+    """η1, the mean force, the laws' steady errors under it: from the parameters."""
+    scen = scenario.load(NAME)
+    plant, law = scen.parameters('plant'), scen.parameters('x_controller')
+    a = plant['pitch'][X] / (2 * math.pi)  # [m/rad]
+    eta1 = plant['mass'][X] + plant['screw_inertia'][X] / a**2
+    eta2 = plant['cart_damping'][X] + plant['screw_damping'][X]
+    literal = plant['cart_damping'][X] + plant['screw_damping'][X] / a**2
+    teeth, rpm = plant['kline.teeth'], plant['kline.spindle_speed']
+    feed = plant['kline.program_feed_rate'] * 60.0 / (rpm * teeth)  # [m/tooth]
+    depth = plant['kline.workpiece_top'] - plant['kline.program'][2]
+    force = 0.5 * plant['kline.specific_energy'] * depth * feed
+    b, T = law['input_gain'], scen.parameters('plant')['sample_period']
+    gpi = GpiController.from_parameters(b, T, law_values(law, 'gpi'))
+    sliding = SlidingGpiController.from_parameters(b, T, law_values(law, 'sliding_gpi'))
+    a0, _, a2 = gpi.alphas
+    kappa = law['gpi.damping_rate']
+    s0 = sliding.surface_gains[0]
+    mu_gamma = law['sliding_gpi.mu'] * law['sliding_gpi.gamma']
+    return {
+        'eta1': f'{eta1:.2f}',
+        'eta2': f'{eta2:g}',
+        'eta2_literal': f'{literal:.2g}'.replace('e+0', 'e'),
+        'kappa': f'{kappa:.5g}',
+        'force.mean': f'{force:.1f}',
+        'force.hz': f'{rpm / 60 * teeth:.0f}',
+        'force.tooth_ms': f'{60e3 / (rpm * teeth):.1f}',
+        'gpi.a2_minus_kappa': f'{a2 - kappa:.0f}',
+        'gpi.a0': f'{a0:.0f}',
+        'gpi.steady_e': sig((a2 - kappa) * force / (eta1 * a0) * 1e3, 3),  # [mm]
+        'sliding.a0': f'{s0:.0f}',
+        'sliding.steady_e': sig(force / (eta1 * s0) * 1e3, 3),
+        'sliding.mu_gamma': f'{mu_gamma:g}',
+        'sliding.switching': f'{mu_gamma / b:.0f}',  # [N m]
+        'sliding.zoh_kick': f'{mu_gamma * 1e-3:.2f}',  # [m/s per 1 ms sample]
+    }
+
+
+def probe_figures() -> dict[str, str]:
+    """The sliding law sampled at 0.05 ms, without the force and with the plant's default
+    handling of a reversal; the GPI law on the flexible axis at the 1 ms ZOH."""
+    out: dict[str, str] = {}
+    peak, rms = tracking_metrics(offline(NAME, 'sliding_gpi', (FINE,)))
+    out['sliding_fine.max_e'], out['sliding_fine.rms_e'] = sig(peak, 3), sig(rms, 3)
+    peak, rms = tracking_metrics(offline(NAME, 'sliding_gpi', ('plant.cutting_model=none',)))
+    out['sliding_no_force.max_e'], out['sliding_no_force.rms_e'] = sig(peak, 3), sig(rms, 2)
+    stop = offline(NAME, 'sliding_gpi', (FINE, 'plant.friction_reversal=stop'))
+    out['sliding_fine_stop.max_e'] = sig(tracking_metrics(stop)[0], 2)
+    zoh = (
+        'x_controller.gpi.discretisation=zoh',
+        '*.sample_period=0.001',
+        '*.design_period=0.001',
+        'plant.substeps=20',
+    )
+    out['gpi_flexible_zoh.max_e'] = sig(tracking_metrics(offline(NAME, 'gpi_flexible', zoh))[0], 2)
+    return out
