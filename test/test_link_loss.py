@@ -264,11 +264,11 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
     for axis in AXES:
         assert f'axis {axis}: fresh commands: released' in plant_log, axis
         # Re-armed where it stood, not thrown at the reference (y's is 15 mm and more away
-        # by now): within the window in which the loop would take the reference up again.
-        # x and z do not move; y moves a little (docs/reliability.md: the observer restarts
-        # with the load and friction it estimated while the axis moved).
+        # by now), and not by what its observer learnt while moving (it restarts from
+        # hold_torque): x and z do not move, y 4-41 µm in five runs (0.6-2.5 mm when the
+        # observer restarted from its estimate under way).
         later = [x for _, s, x in seen['state'][axis] if s > reset_at[0]]
-        assert later and max(abs(x - stood[axis]) for x in later) <= 0.005 / 2, axis
+        assert later and max(abs(x - stood[axis]) for x in later) <= 0.5e-3, axis
     trips = re.findall(r'FAILED: (\w)_controller: .*no state for', said)
     assert sorted(set(trips)) == list(AXES), said[-3000:]
     assert 'following-error trip' not in said, said[-3000:]  # none before the cut, none after

@@ -18,11 +18,8 @@ declared here, with defaults an observer overrides only where it differs:
   after the last correct() (published within status(), joined by the controller);
 - status(): internal quantities worth publishing each sample (none by default);
 - reset(): forget the past (nothing to forget by default);
-- holding_input(est) / preload(u): an observer with the model ẍ = b·u + ξ says which
-  input holds the axis at rest against its estimated disturbance (the command a braked
-  axis is taken to get, so that the estimate of a weight survives a brake), and can start
-  from the disturbance a known holding input balances (a vertical axis's weight); others
-  do neither.
+- preload(u): an observer with the model ẍ = b·u + ξ can start from the disturbance a
+  known holding input balances (a vertical axis's weight: hold_torque); others cannot.
 """
 
 from __future__ import annotations
@@ -71,10 +68,6 @@ class Observer(ABC):
 
     def reset(self) -> None:  # noqa: B027 (a default that does nothing is intended)
         """Start afresh, as just built."""
-
-    def holding_input(self, est: Estimate) -> float:
-        """The input that holds the axis at rest against the estimated disturbance."""
-        return 0.0
 
     def preload(self, hold_input: float) -> float | None:
         """After the first correct(): take the disturbance to be the one that `hold_input`

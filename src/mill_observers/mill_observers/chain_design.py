@@ -19,7 +19,6 @@ from collections.abc import Iterable
 
 import numpy as np
 from mill_common.parameters import ParameterError, positive
-from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
 
@@ -134,10 +133,6 @@ class ChainObserver:
         """Run the model on for a fraction of a period (a tick early or late) with u held."""
         if self._initialised and math.isfinite(u):
             self._z = advance(self._z, self._g0, self._g1, u, periods)
-
-    def holding_input(self, est: Estimate) -> float:
-        # ẍ = b·u + ξ = 0 at rest: u = −ξ/b
-        return -est.disturbance / self._b
 
     def preload(self, hold_input: float) -> float | None:
         if not (self._initialised and math.isfinite(hold_input)):

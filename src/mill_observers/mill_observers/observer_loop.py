@@ -8,9 +8,11 @@ so a distributed run equals the offline one by construction. At the sample of y(
    delay (mill_observers.delay) the model is fed u(k − 1 − N), and periods whose state
    never arrived (`missed`, real time) are run through with the command held then. A
    brake request (NaN) holds the axis and tells nothing of its dynamics: the observer
-   stands still, and when commands return it restarts at rest where the axis is, with the
-   disturbance it had estimated, so a vertical axis's weight is known when the brake lets
-   go;
+   stands still, and when commands return it restarts at rest where the axis is, from
+   `hold_torque` as at a start: what it estimated while the axis moved (friction in the
+   direction it went, a load that acts while cutting) does not act on an axis at rest, and
+   applied on release it would throw the axis (millimetres, in test_link_loss); a vertical
+   axis's weight is what `hold_torque` gives (tune writes it for every axis);
 2. the measurement update with y(k): the estimate for the period the next command acts in;
    the first one starts from `hold_torque`, the input known to hold the axis (its weight);
 3. after a run-time switch the estimate continues the old observer's (EstimateBlend).
@@ -65,7 +67,7 @@ class ObserverLoop:
             return self._last
         hold = self._hold_torque if not self.started else None
         if self._braked and last is not None:  # released: start again at rest, here
-            hold = self.observer.holding_input(last)
+            hold = self._hold_torque
             self._comp.restart()
             self._braked, self.started = False, False
         if acted is not None and self.started:

@@ -63,12 +63,11 @@ def test_the_estimation_error_obeys_the_designed_characteristic_polynomial(degre
         assert np.all(residual <= 1e-8 * scale), (k, residual / scale)
 
 
-def test_holding_input_and_preload_describe_an_axis_at_rest() -> None:
+def test_preload_takes_the_disturbance_a_holding_input_balances() -> None:
     obs = ExtendedStateObserver(B, T, 200.0)
     obs.correct(0.1)
     assert obs.preload(0.5) == pytest.approx(-B * 0.5)
-    est = obs.predicted([])
-    assert obs.holding_input(est) == pytest.approx(0.5)
+    assert obs.predicted([]).disturbance == pytest.approx(-B * 0.5)
 
 
 def test_a_fraction_of_a_period_runs_the_model_on_by_that_time() -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from mill_common.signals import Estimate
 from mill_observers.base import Observer
 from mill_observers.observer_loop import ObserverLoop
@@ -62,6 +63,24 @@ def test_a_braked_axis_keeps_its_disturbance_estimate() -> None:
     for _ in range(500):  # the axis held by its brake: the commands are brake requests
         est = loop.step(0.0, float('nan'))
     assert abs(est.disturbance + B * 0.05) < 1e-9 * B
+
+
+def test_a_released_axis_restarts_from_its_hold_torque_not_from_what_it_learnt_moving() -> None:
+    from mill_observers.eso import ExtendedStateObserver
+
+    B, T = 20.0, 1e-3
+    loop = ObserverLoop(ExtendedStateObserver(B, T, 200.0), 1, T, 0.0, hold_torque=0.05)
+    loop.step(0.0, None)
+    x = v = 0.0
+    for _ in range(2000):  # moving against 3 m/s² of friction and load, at 0.2 N·m
+        est = loop.step(x, 0.2)
+        a = B * 0.2 - 3.0
+        x, v = x + v * T + 0.5 * a * T * T, v + a * T
+    assert est.disturbance == pytest.approx(-3.0, abs=0.05)
+    for _ in range(50):  # stopped and braked
+        loop.step(x, float('nan'))
+    est = loop.step(x, 0.1)  # released: at rest, the weight the hold torque balances
+    assert est.velocity == 0.0 and est.disturbance == pytest.approx(-B * 0.05)
 
 
 def test_tick_jitter_is_run_through_when_the_stamps_tell_it() -> None:
