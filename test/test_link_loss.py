@@ -160,6 +160,10 @@ def run_with_cut(
         hosts.link(up=True)
         back = time.time_ns()
         if after is not None:
+            time.sleep(1.0)  # the states are back and every controller has tripped
+            if runner.poll() is not None:  # say why, rather than wait for its services
+                finish(runner, lines, timeout=60)
+                raise AssertionError('the runner ended during the cut:\n' + ''.join(lines[-30:]))
             after()
         code = finish(runner, lines, timeout=600)
         time.sleep(1.0)  # the drive goes on alone: its states after the job, too
@@ -248,7 +252,6 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
     reset_at: list[int] = []
 
     def reset() -> None:
-        time.sleep(1.0)  # the states are back and every controller has tripped
         script = tmp_path / 'reset.py'
         script.write_text(RESET)
         with open(reset_log, 'w') as log:
