@@ -42,10 +42,10 @@ def tool(name: str, *args: str, env: dict[str, str]) -> subprocess.CompletedProc
 @pytest.mark.system
 def test_identify_tune_and_verify_through_the_graph(ros_env, tmp_path: Path) -> None:
     run = tmp_path / 'identify'
-    # 20 s of the identify job: enough for b within 2 % (the friction figures are the
+    # 12 s of the identify job: enough for b within 2 % (the friction figures are the
     # offline test's, at the full 40 s)
     proc = run_scenario(
-        ros_env, 'identify', *ARGS, '--duration', '20', '--record', '--quiet', '--output', str(run)
+        ros_env, 'identify', *ARGS, '--duration', '12', '--record', '--quiet', '--output', str(run)
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     found = tool('identify', str(run / 'bag'), '--pitch', '0.003175', env=ros_env)
@@ -55,7 +55,7 @@ def test_identify_tune_and_verify_through_the_graph(ros_env, tmp_path: Path) -> 
         assert model[axis]['delay'] == 1
         assert model[axis]['b'] == pytest.approx(1 / (LEAD * MASS[axis]), rel=0.02)
     assert (run / 'identify.png').stat().st_size > 10_000
-    tuned = tool('tune', str(run / 'machine.yaml'), '--duration', '5', env=ros_env)
+    tuned = tool('tune', str(run / 'machine.yaml'), '--duration', '3', env=ros_env)
     assert tuned.returncode == 0, tuned.stderr
     assert 'phase margin' in tuned.stdout
     verify = run_scenario(
@@ -65,7 +65,7 @@ def test_identify_tune_and_verify_through_the_graph(ros_env, tmp_path: Path) -> 
         '--params-file',
         str(run / 'tuned.yaml'),
         '--duration',
-        '5',
+        '3',
         '--quiet',
         '--output',
         str(tmp_path / 'verify'),

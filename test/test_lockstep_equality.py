@@ -82,6 +82,9 @@ def test_paper_scenario_runs_equal_offline(ros_env, tmp_path, name, variant, dur
         [
             *(sys.executable, '-m', 'mill_bringup.runner', name, '--variant', variant),
             *('--duration', str(duration), '--compare-offline', '--quiet', '--output', str(out)),
+            # every node in one process, still talking over topics: the eight-process graph
+            # is the first test's and the layouts' (a 4401-sample run took 17 s in eight)
+            *('--layout', 'single'),
         ],
         env=ros_env,
         capture_output=True,
