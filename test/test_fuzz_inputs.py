@@ -354,6 +354,7 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
 
     # The job ran to its end with every node alive: no node exited, and the summary exists.
     assert 'exited with code' not in text, text[-3000:]
+    assert (out / 'summary.json').exists(), f'no summary (exit {code}):\n' + text[-3000:]
     summary = json.loads((out / 'summary.json').read_text())
     assert sum(sent.values()) >= MESSAGES, sent  # the stream went out at least once whole
     assert set(sent) == set(OWNERS), sent
