@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import faulthandler
 import os
 import signal
 import sys
@@ -84,6 +85,11 @@ EXECUTORS = ('single', 'events')
 # enough that the look (tens of µs) costs little, few enough that DDS events wait little.
 DRAIN_BUDGET = 200
 EVENTS_BETWEEN_CHECKS = 32  # executor events handled between two looks at the loop's end
+# A node process whose teardown takes longer than this ends at once: once seen in CI, an
+# observer spun for 24 min inside rclpy's Node.destroy_node after SIGTERM, slowing every
+# run after it. Teardown (acknowledgements up to 1 s per node, then destroying) takes well
+# under a second on a quiet machine.
+TEARDOWN_LIMIT = 15.0
 
 
 def make_executor() -> Executor:
@@ -325,6 +331,8 @@ def run_nodes(
         # A second SIGINT (ros2 launch forwards one after the terminal's) or launch's
         # SIGTERM must not break the teardown.
         ignore_stop_signals()
+        if own_process:
+            _end_if_teardown_hangs()
         if ended in _wakers:
             _wakers.remove(ended)
         with contextlib.suppress(Exception):
@@ -347,6 +355,13 @@ def run_nodes(
     if own_process:
         end_process(code)
     return code
+
+
+def _end_if_teardown_hangs() -> None:
+    """End the process with code 1, the Python stacks printed, if its teardown is not over
+    in TEARDOWN_LIMIT. faulthandler's watchdog is a C thread: it fires even while a call
+    into rclpy holds the interpreter."""
+    faulthandler.dump_traceback_later(TEARDOWN_LIMIT, exit=True, file=sys.stderr)
 
 
 def _schedule(nodes: Sequence[Node]) -> None:
