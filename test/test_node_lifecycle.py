@@ -77,7 +77,10 @@ def test_ctrl_c_ends_a_running_graph_before_launch_escalates(start_node) -> None
             executor.spin_once(timeout_sec=0.05)
             return len(states) > 50  # the lockstep job runs
 
-        assert wait_until(stepping, 300), 'the job never started'
+        if not wait_until(stepping, 300):
+            ends = {name: node.stop() for name, node in nodes.items()}
+            lines = [f'{n}: exit {code}: {err[-600:]}' for n, (code, _out, err) in ends.items()]
+            raise AssertionError('the job never started:\n' + '\n'.join(lines))
     t0 = time.monotonic()
     for node in nodes.values():  # the terminal's SIGINT, then the one launch forwards
         node.proc.send_signal(signal.SIGINT)

@@ -655,8 +655,8 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
         text=True,
         timeout=600,
     )
-    assert (out / 'summary.json').exists(), f'no summary (exit {proc.returncode}):\n' + (
-        proc.stderr[-3000:]
+    assert (out / 'summary.json').exists(), (
+        f'no summary (exit {proc.returncode}):\n' + (proc.stderr[-3000:])
     )
     summary = json.loads((out / 'summary.json').read_text())
     missing = summary['missing_samples']

@@ -82,26 +82,62 @@ def test_a_driver_on_the_other_clock_is_refused_in_one_line() -> None:
         realtime.check(Source({'mill/x/state': 10**9}))
 
 
-def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
-    import time
+class Clock:
+    """The runner's system clock, moved by hand."""
 
+    def __init__(self) -> None:
+        self.ns = 1_767_000_000 * 10**9
+
+    def __call__(self) -> int:
+        return self.ns
+
+
+S = 10**9
+
+
+def _silent_job(clock: Clock):
     job = _realtime_slotting()
-    now = time.time_ns()
-    job.start_ns = now - 10 * 10**9
-    fresh = {f'mill/{a}/state': now for a in 'xyz'}
-    job.check(Source(fresh, arrived=fresh))
+    job.clock_ns = clock
+    job.start_ns = clock.ns - 10 * S
+    return job
+
+
+def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
+    clock = Clock()
+    job = _silent_job(clock)
+    last = {f'mill/{a}/state': clock.ns for a in 'xyz'}
+    # The runner looks every 50 ms; x and z keep coming, y stops: found after 3 s, not before.
     with pytest.raises(scenario.ScenarioError, match=r'went silent: nothing on mill/y/state'):
-        job.check(Source(fresh, arrived={**fresh, 'mill/y/state': now - 4 * 10**9}))
-    # a runner that was stopped 4 s takes the states queued meanwhile: old stamps, arriving
-    # now, are no silence of the drive
-    old = {topic: now - 4 * 10**9 for topic in fresh}
-    job.check(Source(old, arrived=fresh))
-    # ... nor, right after the runner's own stall, the states it has not taken yet
-    job = _realtime_slotting()
-    job.start_ns = now - 10 * 10**9
+        for _ in range(200):
+            job.check(Source(last, arrived=last))
+            clock.ns += S // 20
+            last = {**last, 'mill/x/state': clock.ns, 'mill/z/state': clock.ns}
+    assert 3 * S < clock.ns - last['mill/y/state'] <= 3 * S + S // 10
+
+
+def test_a_runner_that_went_without_the_cpu_does_not_call_the_drive_silent() -> None:
+    clock = Clock()
+    job = _silent_job(clock)
+    fresh = {f'mill/{a}/state': clock.ns for a in 'xyz'}
     job.check(Source(fresh, arrived=fresh))
-    job._checked_ns -= 4 * 10**9  # the runner was stopped 4 s since its last look
-    job.check(Source(old, arrived=old))
+    clock.ns += 4 * S  # the runner was stopped 4 s
+    # the states it has not taken yet are no silence of the drive ...
+    job.check(Source(fresh, arrived=fresh))
+    # ... nor those queued meanwhile that it takes now, with old stamps
+    arrived = {topic: clock.ns for topic in fresh}
+    job.check(Source(fresh, arrived=arrived))
+
+
+def test_a_drive_silent_while_the_runner_stalls_again_and_again_is_found() -> None:
+    clock = Clock()
+    job = _silent_job(clock)
+    fresh = {f'mill/{a}/state': clock.ns for a in 'xyz'}
+    # Stalls of 1.5 s with a look between them: each counts as 1 s of silence.
+    with pytest.raises(scenario.ScenarioError, match=r'went silent: nothing on mill/x/state'):
+        for _ in range(10):
+            job.check(Source(fresh, arrived=fresh))
+            clock.ns += 3 * S // 2
+    assert clock.ns - fresh['mill/x/state'] == 6 * S  # the fourth look: 4 × 1 s counted
 
 
 def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:

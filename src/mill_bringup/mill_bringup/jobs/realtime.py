@@ -77,7 +77,8 @@ class RealtimeAxisJob(AxisJob):
             )
         self.start_ns: int | None = None
         self._checked_ns = -1  # when `check` last looked (system clock)
-        self._awake_ns = -1  # when the runner last came back from going without the CPU
+        self._quiet_ns: dict[str, int] = {}  # per axis: time awake without a state
+        self.clock_ns = time.time_ns  # the system clock the arrivals are taken on
         self.drive: dict[str, str] = {}
         self._source: MessageSource | None = None
         self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
@@ -149,16 +150,19 @@ class RealtimeAxisJob(AxisJob):
             )
         if self.start_ns is None or ns < 0:
             return
-        now = time.time_ns()
+        now = self.clock_ns()
         # Silence counts from when the runner last took a state, not from the state's stamp,
-        # and not across a time the runner itself went without the CPU (or was stopped): it
-        # takes the states queued meanwhile when it resumes; they are no silence of the drive.
-        if self._checked_ns >= 0 and now - self._checked_ns > RUNNER_STALL_NS:
-            self._awake_ns = now
+        # and only the time the runner was awake: of a gap between two checks longer than
+        # RUNNER_STALL_NS (it went without the CPU, or was stopped) only that much counts, as
+        # it takes the states queued meanwhile when it resumes. Stalls do not restart the
+        # count either: a drive gone while the runner stalls again and again is still found.
+        awake = min(now - self._checked_ns, RUNNER_STALL_NS) if self._checked_ns >= 0 else 0
         self._checked_ns = now
         for axis in self.axes:
             arrivals = source.arrival_ns(topics.state(axis))
-            quiet = now - max(arrivals[-1] if arrivals else -1, self.start_ns, self._awake_ns)
+            since = now - max(arrivals[-1] if arrivals else -1, self.start_ns)
+            quiet = min(since, self._quiet_ns.get(axis, 0) + awake)
+            self._quiet_ns[axis] = quiet
             if quiet > DRIVE_SILENCE_NS:
                 raise ScenarioError(
                     f'the drive went silent: nothing on {topics.state(axis)} from '
