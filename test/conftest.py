@@ -30,16 +30,38 @@ def _next_domain() -> str:
 
 
 @pytest.fixture
-def ros_env(monkeypatch: pytest.MonkeyPatch) -> dict[str, str]:
+def ros_env(monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, str]]:
     """Environment of this test's ROS processes: loopback only, a private domain.
 
-    Also applied to the test process itself, for tests that talk to the nodes.
+    Also applied to the test process itself, for tests that talk to the nodes. What the
+    test started and left running is killed afterwards, so that it cannot slow the tests
+    after it (a process found is named on stderr).
     """
     env = ros_environment(os.environ, domain_id=_next_domain())
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     for key in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE', 'RMW_IMPLEMENTATION'):
         monkeypatch.setenv(key, env[key])
-    return env
+    yield env
+    for pid, cmd in _left_in_domain(env['ROS_DOMAIN_ID']):
+        print(f'killed a process the test left running: {pid} {cmd}', file=sys.stderr)
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+
+
+def _left_in_domain(domain: str) -> list[tuple[int, str]]:
+    """Processes of this machine, other than this one, with ROS_DOMAIN_ID=domain."""
+    found = []
+    wanted = f'ROS_DOMAIN_ID={domain}'.encode()
+    for entry in Path('/proc').iterdir():
+        if not entry.name.isdigit() or int(entry.name) == os.getpid():
+            continue
+        try:
+            if wanted in (entry / 'environ').read_bytes().split(b'\0'):
+                cmd = (entry / 'cmdline').read_bytes().replace(b'\0', b' ').decode()
+                found.append((int(entry.name), cmd[:200]))
+        except OSError:
+            continue
+    return found
 
 
 class NodeProcess:

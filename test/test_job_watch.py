@@ -77,5 +77,12 @@ def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path) -> None:
         for p in procs.values():
             if p.poll() is None:
                 p.terminate()
-        for p in procs.values():
-            p.communicate(timeout=30)
+        hung = []
+        for name, p in procs.items():
+            try:
+                p.communicate(timeout=30)
+            except subprocess.TimeoutExpired:  # none is left to slow the tests after this one
+                p.kill()
+                p.communicate()
+                hung.append(name)
+        assert not hung, f'still running 30 s after SIGTERM: {hung}'
