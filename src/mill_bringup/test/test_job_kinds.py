@@ -115,6 +115,17 @@ def test_a_drive_gone_silent_ends_a_realtime_job() -> None:
     assert 3 * S < clock.ns - last['mill/y/state'] <= 3 * S + S // 10
 
 
+def test_a_drive_never_heard_from_ends_a_realtime_job() -> None:
+    clock = Clock()
+    job = _silent_job(clock)
+    job.start_ns = clock.ns
+    with pytest.raises(scenario.ScenarioError, match=r'no state from the drive: nothing on mill/x'):
+        for _ in range(200):
+            job.check(Source({}, arrived={}))
+            clock.ns += S // 20
+    assert 3 * S < clock.ns - job.start_ns <= 3 * S + S // 10
+
+
 def test_a_runner_that_went_without_the_cpu_does_not_call_the_drive_silent() -> None:
     clock = Clock()
     job = _silent_job(clock)

@@ -148,7 +148,7 @@ class RealtimeAxisJob(AxisJob):
                 f'{self.state_owner} stamps its states on sim time (a lockstep plant, '
                 f'{seconds(ns):.3f} s) but the job runs in realtime: run both in one timing'
             )
-        if self.start_ns is None or ns < 0:
+        if self.start_ns is None:  # no state at all since the start is silence too
             return
         now = self.clock_ns()
         # Silence counts from when the runner last took a state, not from the state's stamp,
@@ -163,6 +163,12 @@ class RealtimeAxisJob(AxisJob):
             since = now - max(arrivals[-1] if arrivals else -1, self.start_ns)
             quiet = min(since, self._quiet_ns.get(axis, 0) + awake)
             self._quiet_ns[axis] = quiet
+            if quiet > DRIVE_SILENCE_NS and not arrivals:
+                raise ScenarioError(
+                    f'no state from the drive: nothing on {topics.state(axis)} from '
+                    f'{self.state_owner} in {quiet / 1e9:.1f} s since the job started: the '
+                    'runner does not hear the drive'
+                )
             if quiet > DRIVE_SILENCE_NS:
                 raise ScenarioError(
                     f'the drive went silent: nothing on {topics.state(axis)} from '
@@ -251,8 +257,9 @@ class RealtimeAxisJob(AxisJob):
     def summary(self, rec: RunRecord, skip: float) -> str:
         lines = [
             summary_text(rec, skip),
-            *against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1])),
         ]
+        if len(rec.t):  # none: the drive's states never reached the runner
+            lines += against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1]))
         lines.append(
             'axis   periods without a fresh command   in a row   state->command latency [ms]: '
             f'median    p99     max   (from {self.figures_source()})'
