@@ -96,6 +96,8 @@ class Monitor(Node):
         namespace: str = topics.ROOT,
         remappings: Sequence[str] = (),
         timed: Iterable[str] = (),
+        late: Iterable[str] = (),
+        late_after: Iterable[str] = (),
     ) -> None:
         rules = [
             arg for rule in remappings if not rule.startswith('__ns:=') for arg in ('-r', rule)
@@ -105,6 +107,12 @@ class Monitor(Node):
         )
         self.raw = Received()
         self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
+        # Subscribed to only once a message arrived on each topic of `late_after`
+        # (subscribe_late): a node that waits for its readers then waits for this monitor to
+        # hear those topics (a realtime job's trajectory, for the drive's states).
+        self._late = set(late)
+        self._late_after = list(late_after)
+        self._held: list[tuple[str, str, Callable[[bytes], None]]] = []
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
         self.steps = record.steps if record is not None else None
@@ -134,6 +142,8 @@ class Monitor(Node):
             self.recorder.subscribe(topics.CLOCK, CLOCK, RECORD_QOS)
             diag_qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
             self.recorder.subscribe(topics.DIAGNOSTICS, DIAGNOSTIC_ARRAY, diag_qos)
+        if self._held:
+            self._late_timer = self.create_timer(0.05, self.subscribe_late)
 
     def _keep(self, topic: str, msgtype: str) -> None:
         store = self.raw.setdefault(topic, [])
@@ -170,7 +180,19 @@ class Monitor(Node):
                 for action in actions:
                     action(data)
 
-        self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
+        if topic in self._late:
+            self._held.append((topic, msgtype, on_msg))
+        else:
+            self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
+
+    def subscribe_late(self) -> None:
+        """Subscribe to the late topics once every `late_after` topic has a message."""
+        if not self._held or not all(self.raw.get(t) for t in self._late_after):
+            return
+        for topic, msgtype, on_msg in self._held:
+            self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
+        self._held = []
+        self.destroy_timer(self._late_timer)
 
     def finish_recording(self, samples: int) -> None:
         """The job's samples are done: the plant may take one more step, then waits for

@@ -134,6 +134,11 @@ class Job(ABC, Generic[R]):
         """Topics whose messages' arrival times the monitor keeps (latency)."""
         return set()
 
+    def late_topics(self) -> tuple[set[str], list[str]]:
+        """Topics the monitor subscribes to only once it has a message of each of the
+        second (mill_bringup.monitor.Monitor, late); none by default."""
+        return set(), []
+
     def sim_time_stamps(self) -> bool:
         """Whether the graph runs on sim time (the bag's log time is then the stamp)."""
         return True

@@ -96,6 +96,7 @@ class Session:
         self._stop = install_stop_handlers()
         try:
             rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
+            late, late_after = job.late_topics()
             self._monitor = Monitor(
                 job.monitor_topics(),
                 record,
@@ -103,6 +104,8 @@ class Session:
                 namespace=job.scenario.namespace,
                 remappings=job.scenario.remappings(),
                 timed=job.timed_topics(),
+                late=late,
+                late_after=late_after,
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)
