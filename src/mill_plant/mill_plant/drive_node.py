@@ -9,12 +9,10 @@ topics, `activate` starts applying commands, `deactivate` brakes every axis; wit
 (the wall clock, zero-order hold; an axis is stopped after `brake_after` late periods or
 on a motion the drive does not allow, and released only by a re-arm or `~/release`).
 
-Every command must come from the axis's owner (header.frame_id, `command_owners`) and answer
-a state of this drive; anything else — another sender, a stamp that answers no state, an
-unknown joint, no effort for the joint — is dropped, counted and reported (a rate-limited
-WARN `<node>: inputs` on /diagnostics naming the topic and the sender). A non-finite
-effort of the axis's joint from the owner brakes the axis for that period and is reported:
-it is the controller saying it has no valid command.
+What command it takes, from whom, is its intake's decision (mill_plant.command_intake); a
+command it drops is counted and reported (a rate-limited WARN `<node>: inputs` on
+/diagnostics naming the topic and the sender), a brake request (a non-finite effort from the
+owner) once when it starts, and once when valid commands return.
 
 With `spindle: reference` the drive also reads the spindle speed the reference carries
 (mill_plant.spindle) and gives it to the backend with the efforts of each sample; in
@@ -31,7 +29,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
-from mill_common.checks import DropCounter, Rejected, StampCheck, joint_values, owner_check
+from mill_common.checks import DropCounter, Rejected
 from mill_common.codec import (
     decode_joint_state,
     decode_joint_trajectory,
@@ -59,6 +57,7 @@ from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_plant.backend import DriveBackend
+from mill_plant.command_intake import Accepted, CommandIntake
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_cycle import CYCLES, DriveCycle
 from mill_plant.ownership import Ownership
@@ -89,7 +88,6 @@ class DriveNode(LifecycleNode):
         self._drops = DropCounter()
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
-        self._brake_requested: set[str] = set()  # axes whose last command was not finite
         self._release_service: Service | None = None
         self._wall_start = time.monotonic()
         self.next_status = 0.0
@@ -121,9 +119,8 @@ class DriveNode(LifecycleNode):
         self.ownership = Ownership(self, self.owners)
         self.table = CommandTable(self.axes, v['brake_after'])
         grid = self.dt_ns if self.cycle.GRID else None
-        self._stamps = {a: StampCheck(grid) for a in self.axes}
+        self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self._faults = dict.fromkeys(self.axes, 0)
-        self._nonfinite = dict.fromkeys(self.axes, 0)
         self._saturations = dict.fromkeys(self.axes, 0)
         self._state_pubs = {
             a: data_publisher(self, JointState, topics.state(a), DATA_QOS) for a in self.axes
@@ -207,42 +204,25 @@ class DriveNode(LifecycleNode):
     def _on_command(self, axis: str, msg: JointState) -> None:
         if self.backend is None or (self.cycle.GRID and not self.active):
             return
-        topic = topics.joint_command(axis)
+        topic, sender = topics.joint_command(axis), msg.header.frame_id
         ns = from_stamp(msg.header.stamp)
-        problem = owner_check(msg.header.frame_id, self.owners[axis])
-        sender = msg.header.frame_id or '(unnamed)'
-        owned = self.ownership
-        if problem is not None and owned is not None and owned.message_from(topic, sender):
-            self._foreign_named(topic, sender)
-        problem = problem or self._stamps[axis].check(ns) or self.cycle.expected(ns)
-        if problem is not None:
-            if self.table.by_axis[axis].stamp == ns and problem.reason.startswith('stamp'):
-                return  # a repeat of an answered step (after a re-offer): harmless
-            self._drop(topic, problem, msg.header.frame_id)
+        got = self.intake.take(axis, ns, sender, msg.name, msg.effort)
+        if got is None:
+            return  # a repeat of an answered step: harmless
+        if not isinstance(got, Accepted):
+            named = sender or '(unnamed)'
+            owned = self.ownership
+            if got.foreign and owned is not None and owned.message_from(topic, named):
+                self._foreign_named(topic, named)
+            self._drop(topic, got.problem, sender)
             return
-        if self.table.by_axis[axis].stamp == ns:
-            return  # the owner answered this step again (a re-offered step)
-        value = joint_values(msg.name, {'effort': msg.effort}, axis, ('effort',))
-        if isinstance(value, Rejected) and not value.non_finite:
-            self._drop(topic, value, msg.header.frame_id)  # no joint, no effort: malformed
-            return
-        if isinstance(value, Rejected):
-            # From the owner, for the step it must answer: no valid command, so brake. Said
-            # once when it starts (a tripped controller asks for it every sample).
-            self._nonfinite[axis] += 1
-            if axis not in self._brake_requested:
-                self._brake_requested.add(axis)
-                self.report_axis(
-                    axis, DiagnosticStatus.ERROR, f'invalid command ({value.reason}): braked'
-                )
-            effort = math.nan
-        else:
-            effort = value[0]
-            if axis in self._brake_requested:
-                self._brake_requested.discard(axis)
-                self.report_axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
-        self._stamps[axis].accept(ns)
-        self.table.offer(axis, ns, effort, self.cycle.arrival_ns())
+        if got.brake_request:
+            self.report_axis(
+                axis, DiagnosticStatus.ERROR, f'invalid command ({got.brake_request}): braked'
+            )
+        elif got.released:
+            self.report_axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
+        self.table.offer(axis, ns, got.effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
 
     def _on_reference(self, msg: Any) -> None:
@@ -409,7 +389,7 @@ class DriveNode(LifecycleNode):
         for axis in self.axes:
             values[f'{axis}.faults'] = self._faults[axis]
             values[f'{axis}.saturations'] = self._saturations[axis]
-            values[f'{axis}.invalid_commands'] = self._nonfinite[axis]
+            values[f'{axis}.invalid_commands'] = self.intake.invalid_commands[axis]
         faults = self.backend.faults() if self.backend is not None else {}
         for axis, text in faults.items():
             values[f'{axis}.fault'] = text
