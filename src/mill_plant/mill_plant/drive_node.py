@@ -59,6 +59,7 @@ from mill_common import topics
 from mill_plant.backend import DriveBackend
 from mill_plant.command_intake import Accepted, CommandIntake
 from mill_plant.command_table import CommandTable
+from mill_plant.drive_counts import DriveCounts
 from mill_plant.drive_cycle import CYCLES, DriveCycle
 from mill_plant.ownership import Ownership
 from mill_plant.spindle import SpindleTrack, spindle_values
@@ -120,8 +121,7 @@ class DriveNode(LifecycleNode):
         self.table = CommandTable(self.axes, v['brake_after'])
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
-        self._faults = dict.fromkeys(self.axes, 0)
-        self._saturations = dict.fromkeys(self.axes, 0)
+        self.counts = DriveCounts(self.axes)
         self._state_pubs = {
             a: data_publisher(self, JointState, topics.state(a), DATA_QOS) for a in self.axes
         }
@@ -321,20 +321,13 @@ class DriveNode(LifecycleNode):
         backend = self.backend
         backend.advance(dt)
         report = backend.last_report
-        if report is None:
-            return
-        for axis in self.axes:
-            i = MACHINE_AXES.index(axis)
-            if report.faulted[i] and axis not in held:
-                self._faults[axis] += 1
-                if self._faults[axis] == 1:
-                    self.get_logger().error(
-                        f'axis {axis} braked {self.cycle.when(ns)}: no finite command '
-                        f'on {topics.joint_command(axis)} to apply'
-                    )
-                    self.publish_status(force=True, message=f'axis {axis} braked')
-            if report.saturated[i]:
-                self._saturations[axis] += 1
+        first = self.counts.step(report, MACHINE_AXES, held) if report is not None else []
+        for axis in first:  # braked for the first time
+            self.get_logger().error(
+                f'axis {axis} braked {self.cycle.when(ns)}: no finite command '
+                f'on {topics.joint_command(axis)} to apply'
+            )
+            self.publish_status(force=True, message=f'axis {axis} braked')
 
     # -- watchdog, start-up, diagnostics -------------------------------------------------------
     def missing_peers(self) -> list[str]:
@@ -385,17 +378,12 @@ class DriveNode(LifecycleNode):
             'dropped': self._drops.total,
             **self.cycle.status_values(),
         }
-        given, level = level, DiagnosticStatus.OK
-        for axis in self.axes:
-            values[f'{axis}.faults'] = self._faults[axis]
-            values[f'{axis}.saturations'] = self._saturations[axis]
-            values[f'{axis}.invalid_commands'] = self.intake.invalid_commands[axis]
         faults = self.backend.faults() if self.backend is not None else {}
-        for axis, text in faults.items():
-            values[f'{axis}.fault'] = text
+        values.update(self.counts.values(self.intake.invalid_commands, faults))
+        if message is None:  # the running status: ERROR while the machine reports a fault
+            level = DiagnosticStatus.ERROR if faults else DiagnosticStatus.OK
+        elif level is None:
             level = DiagnosticStatus.ERROR
-        if message is not None:
-            level = given if given is not None else DiagnosticStatus.ERROR
         text = message or ('running' if self.active else 'waiting')
         statuses = [self.diagnostics.status(level, self.cycle.STATUS, text, values)]
         foreign = self.ownership.status(self.diagnostics) if self.ownership is not None else None
