@@ -51,6 +51,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from mill_common import topics
 from mill_plant.command_delay import CommandDelay
 from mill_plant.command_table import CommandTable
+from mill_plant.drive_reports import DriveReports
 from mill_plant.motion_guard import MotionGuard
 
 # How a stopped axis is released, said with every stop.
@@ -71,16 +72,12 @@ class Drive(Protocol):
     dt: float
     dt_ns: int
     active: bool
-    next_status: float
+    reports: DriveReports  # its axis events and its status
 
     def publish_states(self, ns: int) -> list[float]: ...
     def spindle_known(self, ns: int) -> bool: ...
     def write(self, ns: int, efforts: list[float]) -> None: ...
     def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
-    def report_axis(self, axis: str, level: bytes, message: str) -> None: ...
-    def publish_status(
-        self, force: bool = False, message: str | None = None, level: bytes | None = None
-    ) -> None: ...
     def owner_of(self, axis: str) -> str: ...
     def missing_peers(self) -> list[str]: ...
     def end(self, code: int, message: str) -> None: ...
@@ -222,7 +219,7 @@ class LockstepCycle(DriveCycle):
         if self._missing:  # the step waited this long: the outage's length
             waited = self._watchdog.waited(now)
             for axis in self._missing if self.k > 1 else ():  # not the start-up's wait
-                d.report_axis(
+                d.reports.axis(
                     axis,
                     DiagnosticStatus.OK,
                     f'commands arriving again after {waited:.2f} s of silence',
@@ -230,7 +227,7 @@ class LockstepCycle(DriveCycle):
             self._missing.clear()
         self._watchdog.progressed(now)
         if self.k % max(1, round(1.0 / d.dt)) == 0:
-            d.publish_status(force=True)
+            d.reports.status(force=True)
         self._publish_step()
 
     def watch(self, now: float) -> None:
@@ -265,7 +262,7 @@ class LockstepCycle(DriveCycle):
                         # (discovery); the lockstep timeout ends a start that never comes.
                         d.get_logger().info(message + ' (start-up)')
                     else:
-                        d.report_axis(axis, DiagnosticStatus.WARN, message)
+                        d.reports.axis(axis, DiagnosticStatus.WARN, message)
 
     def _timeout_message(self) -> str:
         d = self.drive
@@ -368,14 +365,14 @@ class RealtimeCycle(DriveCycle):
                     f'{1e3 * moved:.3f} mm from where it stood at the last one',
                 )
             for axis in tick.returned:
-                d.report_axis(
+                d.reports.axis(
                     axis,
                     DiagnosticStatus.ERROR,
                     f'commands arriving, but stopped ({d.table.by_axis[axis].stopped}): '
                     f'braked until re-armed ({REARM})',
                 )
             for axis in tick.resumed:
-                d.report_axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
+                d.reports.axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
         else:
             efforts = [math.nan] * len(d.axes)
         d.write(ns, efforts)
@@ -405,17 +402,17 @@ class RealtimeCycle(DriveCycle):
 
     def _stopped(self, axis: str, reason: str) -> None:
         self.stops[axis] += 1
-        self.drive.report_axis(
+        self.drive.reports.axis(
             axis, DiagnosticStatus.ERROR, f'stopped: {reason}; braked until re-armed ({REARM})'
         )
-        self.drive.publish_status(force=True)
+        self.drive.reports.status(force=True)
 
     def release(self) -> list[str]:
         """The operator's release (~/release): the stopped axes, now released."""
         d = self.drive
         released = [a for a in d.axes if d.table.release(a)]
         for axis in released:
-            d.report_axis(
+            d.reports.axis(
                 axis,
                 DiagnosticStatus.OK,
                 'released by ~/release: braked until its next fresh command',
@@ -426,7 +423,7 @@ class RealtimeCycle(DriveCycle):
         d = self.drive
         if not d.active:
             return
-        if self.overruns > self._overruns_reported and now >= d.next_status:
+        if self.overruns > self._overruns_reported and now >= d.reports.next_status:
             late = self.overruns - self._overruns_reported
             self._overruns_reported = self.overruns
             text = (
@@ -435,7 +432,7 @@ class RealtimeCycle(DriveCycle):
                 'compose the nodes (run_scenario --layout single)'
             )
             d.get_logger().warning(text)
-            d.publish_status(force=True, message=text, level=DiagnosticStatus.WARN)
+            d.reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
         now_ns = time.time_ns()
         report_time = d.params.values['command_report_time']
         for axis, c in d.table.by_axis.items():
@@ -449,7 +446,7 @@ class RealtimeCycle(DriveCycle):
                     # Start-up: no command yet (discovery); the axis holds until one comes.
                     d.get_logger().info(message + ' yet (start-up)')
                 else:
-                    d.report_axis(axis, DiagnosticStatus.WARN, message)
+                    d.reports.axis(axis, DiagnosticStatus.WARN, message)
             elif quiet < report_time and axis in self._missing:
                 self._missing.discard(axis)
 

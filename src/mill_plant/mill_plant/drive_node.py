@@ -12,7 +12,9 @@ on a motion the drive does not allow, and released only by a re-arm or `~/releas
 What command it takes, from whom, is its intake's decision (mill_plant.command_intake); a
 command it drops is counted and reported (a rate-limited WARN `<node>: inputs` on
 /diagnostics naming the topic and the sender), a brake request (a non-finite effort from the
-owner) once when it starts, and once when valid commands return.
+owner) once when it starts, and once when valid commands return. What it says on
+/diagnostics and in its log is its reports' (mill_plant.drive_reports); the topics it
+makes at configure are mill_plant.drive_topics.
 
 With `spindle: reference` the drive also reads the spindle speed the reference carries
 (mill_plant.spindle) and gives it to the backend with the efforts of each sample; in
@@ -24,27 +26,15 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Collection, Sequence
-from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import WrenchStamped
-from mill_common.checks import DropCounter, Rejected
-from mill_common.codec import (
-    decode_joint_state,
-    decode_joint_trajectory,
-    encode_wrench_stamped,
-)
+from mill_common.checks import Rejected
+from mill_common.codec import encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParamSpec
-from mill_common.ros import (
-    DATA_QOS,
-    data_publisher,
-    from_stamp,
-    joint_state_bytes,
-    take_serialized,
-)
+from mill_common.ros import from_stamp, joint_state_bytes
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -53,7 +43,6 @@ from rclpy.service import Service
 from rclpy.timer import Timer
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
-from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
 from mill_plant.backend import DriveBackend
@@ -61,6 +50,8 @@ from mill_plant.command_intake import Accepted, CommandIntake
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_counts import DriveCounts
 from mill_plant.drive_cycle import CYCLES, DriveCycle
+from mill_plant.drive_reports import DriveReports
+from mill_plant.drive_topics import DriveTopics
 from mill_plant.ownership import Ownership
 from mill_plant.spindle import SpindleTrack, spindle_values
 
@@ -86,12 +77,10 @@ class DriveNode(LifecycleNode):
         self.dt = seconds(self.dt_ns)
         self.cycle: DriveCycle = CYCLES[v['timing']](self)
         self.active = False
-        self._drops = DropCounter()
+        self.reports = DriveReports(self)
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
         self._release_service: Service | None = None
-        self._wall_start = time.monotonic()
-        self.next_status = 0.0
         self.get_logger().info(
             f'drive {name}: timing {v["timing"]}, T = {self.dt * 1e3:g} ms; '
             + ('configuring by itself' if v['autostart'] else 'waiting for configure')
@@ -122,39 +111,13 @@ class DriveNode(LifecycleNode):
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
-        self._state_pubs = {
-            a: data_publisher(self, JointState, topics.state(a), DATA_QOS) for a in self.axes
-        }
         self.diagnostics = Diagnostics(self)
-        self._truth_pub = self._force_pub = None
-        if backend.SIMULATED:
-            self._truth_pub = data_publisher(self, JointState, topics.GROUND_TRUTH, DATA_QOS)
-            self._force_pub = data_publisher(self, WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
-        self._command_subs = {
-            a: take_serialized(
-                self,
-                JointState,
-                topics.joint_command(a),
-                decode_joint_state,
-                partial(self._on_command, a),
-                DATA_QOS,
-                partial(self._drop, topics.joint_command(a)),
-            )
-            for a in self.axes
-        }
-        self.spindle: SpindleTrack | None = None  # spindle: reference
-        self._reference_sub = None
-        if v['spindle'] == 'reference':
-            self.spindle = SpindleTrack()
-            self._reference_sub = take_serialized(
-                self,
-                JointTrajectory,
-                topics.REFERENCE,
-                decode_joint_trajectory,
-                self._on_reference,
-                DATA_QOS,
-                partial(self._drop, topics.REFERENCE),
-            )
+        # spindle: reference
+        self.spindle = SpindleTrack() if v['spindle'] == 'reference' else None
+        on_reference = self._on_reference if self.spindle is not None else None
+        self.io = DriveTopics(
+            self, self.axes, backend.SIMULATED, self._on_command, on_reference, self.reports.drop
+        )
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
         if self._release_service is None:
@@ -213,15 +176,15 @@ class DriveNode(LifecycleNode):
             named = sender or '(unnamed)'
             owned = self.ownership
             if got.foreign and owned is not None and owned.message_from(topic, named):
-                self._foreign_named(topic, named)
-            self._drop(topic, got.problem, sender)
+                self.reports.foreign(topic, named)
+            self.reports.drop(topic, got.problem, sender)
             return
         if got.brake_request:
-            self.report_axis(
+            self.reports.axis(
                 axis, DiagnosticStatus.ERROR, f'invalid command ({got.brake_request}): braked'
             )
         elif got.released:
-            self.report_axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
+            self.reports.axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
         self.table.offer(axis, ns, got.effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
 
@@ -232,7 +195,7 @@ class DriveNode(LifecycleNode):
         speeds = spindle_values(msg.joint_names, msg.points)
         if speeds is None:
             problem = Rejected("no finite speed of the joint 'spindle' in every point")
-            self._drop(topics.REFERENCE, problem, msg.header.frame_id)
+            self.reports.drop(topics.REFERENCE, problem, msg.header.frame_id)
             return
         ns = from_stamp(msg.header.stamp)
         stamps = [ns + from_stamp(p.time_from_start) for p in msg.points]
@@ -263,37 +226,22 @@ class DriveNode(LifecycleNode):
     def owner_of(self, axis: str) -> str:
         return self.owners[axis] or 'its controller'
 
-    def _drop(self, topic: str, problem: Rejected, sender: str = '') -> None:
-        if self._drops.drop(topic, problem, time.monotonic()):
-            text = (
-                f'dropped a message on {topic} from {sender or "an unnamed publisher"}: '
-                f'{problem.reason} ({self._drops.counts[topic]} so far)'
-            )
-            self.get_logger().warning(text)
-            counts = dict(self._drops.counts)
-            status = self.diagnostics.status(DiagnosticStatus.WARN, 'inputs', text, counts)
-            self.diagnostics.publish(self.cycle.stamp_now(), [status])
-
-    def _foreign_named(self, topic: str, who: str) -> None:
-        self.get_logger().error(f'foreign publisher {who} on {topic}: its messages are ignored')
-        self.publish_status(force=True)
-
     # -- one period: states out, efforts in ------------------------------------------------
     def publish_states(self, ns: int) -> list[float]:
         """Read and publish the positions of sample ns; returns them."""
         assert self.backend is not None
         name = self._name
         positions = self.backend.read()
+        publishers = self.io.states
         for axis, y in zip(self.axes, positions, strict=True):
-            self._state_pubs[axis].publish(
-                joint_state_bytes(ns, (axis,), position=(y,), sender=name)
-            )
+            publishers[axis].publish(joint_state_bytes(ns, (axis,), position=(y,), sender=name))
         # The cutting force of sample ns depends on its state, not on its commands: sent
         # with the states, a force controller can answer within the sample.
-        if self._force_pub is not None and self._force_pub.get_subscription_count():
+        force_pub = self.io.force
+        if force_pub is not None and force_pub.get_subscription_count():
             force = self.backend.cutting_force()
             if force is not None:
-                self._force_pub.publish(encode_wrench_stamped(ns, 'tool', force))
+                force_pub.publish(encode_wrench_stamped(ns, 'tool', force))
         return positions
 
     def write(self, ns: int, efforts: list[float]) -> None:
@@ -305,10 +253,11 @@ class DriveNode(LifecycleNode):
             backend.spindle(self.spindle.at(ns))
             self.spindle.forget_before(ns)
         # Skipped without listeners: publishing costs more than the whole plant step.
-        if self._truth_pub is not None and self._truth_pub.get_subscription_count():
+        truth_pub = self.io.truth
+        if truth_pub is not None and truth_pub.get_subscription_count():
             truth = backend.truth()
             if truth is not None:
-                self._truth_pub.publish(joint_state_bytes(ns, MACHINE_AXES, *truth))
+                truth_pub.publish(joint_state_bytes(ns, MACHINE_AXES, *truth))
 
     def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None:
         """Let dt seconds pass with the efforts written (a simulated machine integrates;
@@ -327,66 +276,15 @@ class DriveNode(LifecycleNode):
                 f'axis {axis} braked {self.cycle.when(ns)}: no finite command '
                 f'on {topics.joint_command(axis)} to apply'
             )
-            self.publish_status(force=True, message=f'axis {axis} braked')
+            self.reports.status(force=True, message=f'axis {axis} braked')
 
-    # -- watchdog, start-up, diagnostics -------------------------------------------------------
+    # -- watchdog, start-up ------------------------------------------------------------------
     def missing_peers(self) -> list[str]:
-        missing = []
-        if self._reference_sub is not None and self._reference_sub.get_publisher_count() < 1:
-            missing.append(f'no publisher on {topics.REFERENCE} (spindle: reference)')
-        need = self.params.values['min_subscribers']
-        for axis, sub in self._command_subs.items():
-            if sub.get_publisher_count() < 1:
-                missing.append(f'no publisher on {topics.joint_command(axis)}')
-            have = self._state_pubs[axis].get_subscription_count()
-            if have < need:
-                missing.append(f'{have}/{need} subscribers on {topics.state(axis)}')
-        return missing
+        return self.io.missing_peers(self.params.values['min_subscribers'])
 
     def _watchdog(self) -> None:
         if self.backend is None:
             return
         now = time.monotonic()
         self.cycle.watch(now)
-        if now >= self.next_status:
-            if self.ownership is not None:  # publishers on our topics other than their owners
-                for topic, who in self.ownership.look():
-                    self._foreign_named(topic, who)
-            self.publish_status()
-
-    def report_axis(self, axis: str, level: bytes, message: str) -> None:
-        """The status `<node>: <axis> axis`, and the log."""
-        values = {'step': self.cycle.k}
-        stamp = self.cycle.stamp_now()
-        self.diagnostics.report(stamp, level, f'{axis} axis', f'axis {axis}: {message}', values)
-
-    def publish_status(
-        self, force: bool = False, message: str | None = None, level: bytes | None = None
-    ) -> None:
-        """The drive's status; `message` (a fault, ERROR unless `level` says otherwise) is
-        published at once, the running status once a second."""
-        now = time.monotonic()
-        if not force and now < self.next_status:
-            return
-        self.next_status = now + 1.0
-        k = self.cycle.k
-        values: dict[str, object] = {
-            'step': k,
-            'time': seconds(k * self.dt_ns),
-            'wall_s': now - self._wall_start,
-            'active': self.active,
-            'dropped': self._drops.total,
-            **self.cycle.status_values(),
-        }
-        faults = self.backend.faults() if self.backend is not None else {}
-        values.update(self.counts.values(self.intake.invalid_commands, faults))
-        if message is None:  # the running status: ERROR while the machine reports a fault
-            level = DiagnosticStatus.ERROR if faults else DiagnosticStatus.OK
-        elif level is None:
-            level = DiagnosticStatus.ERROR
-        text = message or ('running' if self.active else 'waiting')
-        statuses = [self.diagnostics.status(level, self.cycle.STATUS, text, values)]
-        foreign = self.ownership.status(self.diagnostics) if self.ownership is not None else None
-        if foreign is not None:
-            statuses.append(foreign)
-        self.diagnostics.publish(self.cycle.stamp_now(), statuses)
+        self.reports.periodic(now)
