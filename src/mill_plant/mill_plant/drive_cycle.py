@@ -143,12 +143,15 @@ class LockstepCycle(DriveCycle):
     TIMING = 'lockstep'
     STATUS = topics.DRIVE_STATUSES[0]
     GRID = True
+    _clock_pub: Any = None  # made by the first configure, taken again after a cleanup
+    _recorded_sub: Any = None
 
     def configure(self) -> None:
         d = self.drive
         v = d.params.values
         self._delay = CommandDelay(v['command_delay'], len(d.axes))
-        self._clock_pub = d.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
+        if self._clock_pub is None:
+            self._clock_pub = d.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
         self._clock_every = max(1, round(v['clock_period'] * 1e9 / d.dt_ns))
         self._watchdog = LockstepWatchdog(
             time.monotonic(),
@@ -160,8 +163,10 @@ class LockstepCycle(DriveCycle):
         self._last_publish = time.monotonic()
         self._missing: set[str] = set()  # axes reported missing
         self._recorder = RecorderGate(v['recorder_window'], d.dt)
-        if self._recorder.window:
-            d.create_subscription(ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS)
+        if self._recorder.window and self._recorded_sub is None:
+            self._recorded_sub = d.create_subscription(
+                ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS
+            )
 
     def activate(self) -> None:
         self.allowed = True  # stepping starts once the peers are matched (see watch)

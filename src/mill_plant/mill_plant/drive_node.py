@@ -81,6 +81,7 @@ class DriveNode(LifecycleNode):
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
         self._release_service: Service | None = None
+        self._made: tuple[Diagnostics, DriveTopics] | None = None  # by the first configure
         self.get_logger().info(
             f'drive {name}: timing {v["timing"]}, T = {self.dt * 1e3:g} ms; '
             + ('configuring by itself' if v['autostart'] else 'waiting for configure')
@@ -111,13 +112,20 @@ class DriveNode(LifecycleNode):
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
-        self.diagnostics = Diagnostics(self)
         # spindle: reference
         self.spindle = SpindleTrack() if v['spindle'] == 'reference' else None
-        on_reference = self._on_reference if self.spindle is not None else None
-        self.io = DriveTopics(
-            self, self.axes, backend.SIMULATED, self._on_command, on_reference, self.reports.drop
-        )
+        if self._made is None:  # once: a configure after a cleanup takes the same topics again
+            on_reference = self._on_reference if self.spindle is not None else None
+            io = DriveTopics(
+                self,
+                self.axes,
+                backend.SIMULATED,
+                self._on_command,
+                on_reference,
+                self.reports.drop,
+            )
+            self._made = (Diagnostics(self), io)
+        self.diagnostics, self.io = self._made
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
         if self._release_service is None:
