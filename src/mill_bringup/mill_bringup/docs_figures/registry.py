@@ -11,7 +11,15 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from mill_bringup.docs_figures import adaptive_feed, beltran, chavez_conde, hatwesh, maharof, rubio
+from mill_bringup.docs_figures import (
+    adaptive_feed,
+    beltran,
+    beltran_model,
+    chavez_conde,
+    hatwesh,
+    maharof,
+    rubio,
+)
 
 
 @dataclass(frozen=True)
@@ -30,6 +38,11 @@ GROUPS = {
             'beltran_discretisation',
             "offline_sim beltran --variant adrc -p '*_observer.gpi.discretisation=NAME'",
             beltran.discretisation_figures,
+        ),
+        Group(
+            'beltran_model',
+            'docs_figures --group beltran_model (the model and the cores, no run)',
+            beltran_model.figures,
         ),
         Group(
             'beltran_step',
