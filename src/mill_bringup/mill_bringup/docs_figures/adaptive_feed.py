@@ -36,6 +36,8 @@ def figures() -> dict[str, str]:
     out['override.min'] = f'{override.min():.3f}'
     out['override.mean'] = f'{override.mean():.3f}'
     out['override.max'] = f'{override.max():.3f}'
+    for j, t in enumerate(rows[:4, FORCE_CONTROL.index('t')]):  # the first control instants
+        out[f'instant.{j}'] = f'{round((t - rec.t[0]) / (rec.t[1] - rec.t[0]))}'  # [sample]
     job = job_for(scenario.load(NAME))  # its length at override 1 (the programmed feed)
     assert isinstance(job, AxisJob)
     dt = job.dt_ns * 1e-9

@@ -6,20 +6,18 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from mill_analysis.chavez_conde import chatters, reduces, torque_metrics, tracking_metrics
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.sliding_gpi import SlidingGpiController
+from mill_plant.config import build_axis_model
 
 from mill_bringup import scenario
-from mill_bringup.docs_figures.runs import offline, sig
+from mill_bringup.docs_figures.runs import law_values, offline, sig
 
 NAME = 'chavez_conde'
 X = 0
 FINE = '*.sample_period=0.00005'  # the probes at 0.05 ms
-
-
-def law_values(params: dict, prefix: str) -> dict:
-    return {k.removeprefix(prefix + '.'): v for k, v in params.items() if k.startswith(prefix)}
 
 
 def figures() -> dict[str, str]:
@@ -48,7 +46,20 @@ def figures() -> dict[str, str]:
         out[f'ratio{suffix}.rms'] = f'{rs / rg:.2f}'
         out[f'ratio{suffix}.max'] = f'{ps / pg:.2f}' if ps < pg else f'{ps / pg:.1f}'
     out.update(constants())
+    out['flexible.mode_hz'] = f'{flexible_modes()[-1]:.0f}'
     return out
+
+
+def flexible_modes() -> list[float]:
+    """The flexible x axis's modes [Hz], ascending: the eigenvalues of its equations
+    linearised while the carriage slides (friction then a constant)."""
+    model = build_axis_model(scenario.load(NAME).variant('gpi_flexible').parameters('plant'), X)
+    n = len(model.initial_state(0.0))
+    rest = np.asarray(model.derivative([0.0] * n, 0.0, 0.0, 1.0))
+    jacobian = np.column_stack(
+        [np.asarray(model.derivative(list(np.eye(n)[j]), 0.0, 0.0, 1.0)) - rest for j in range(n)]
+    )
+    return sorted(w / (2 * math.pi) for w in np.linalg.eigvals(jacobian).imag if w > 0)
 
 
 def constants() -> dict[str, str]:

@@ -28,6 +28,7 @@ from mill_controllers import hatwesh_margins as hm
 
 def margin_figures() -> dict[str, str]:
     out: dict[str, str] = {}
+    gains: dict[str, float] = {}  # K_p by figure key
     for velocity in hm.VELOCITIES:
         w, pm = hm.margin(hm.series(hm.machine_pi(), hm.plant(velocity)))
         out[f'machine_pi.{velocity}.crossover'] = f'{w:.0f}'
@@ -38,9 +39,19 @@ def margin_figures() -> dict[str, str]:
                 kp, ki, w_gc = design_pi(rule, model, math.radians(phi), hm.T)
                 w, pm = hm.margin(hm.series(hm.pi(kp, ki), hm.plant(velocity)))
                 key = f'{velocity}.{phi}.{rule}'
+                gains[key] = kp
                 out[f'{key}.w_gc'] = f'{w_gc:.0f}'
                 out[f'{key}.k_p'] = f'{kp:.2f}'
                 out[f'{key}.margin'] = 'unstable' if math.isnan(w) else f'{pm:.1f}'
+    # the machine PI: its loop in Hz, and the phase the backward difference costs it [°]
+    w, pm = hm.margin(hm.series(hm.machine_pi(), hm.plant('difference')))
+    out['machine_pi.difference.crossover_hz'] = f'{w / (2 * math.pi):.0f}'
+    pm_sampled = hm.margin(hm.series(hm.machine_pi(), hm.plant('sampled')))[1]
+    out['machine_pi.difference.cost'] = f'{pm_sampled - pm:.0f}'
+    # the discrete rule's K_p over the continuous rule's (the hold's magnitude)
+    for phi in (25, 60):
+        ratio = gains[f'difference.{phi}.discrete'] / gains[f'difference.{phi}.continuous']
+        out[f'difference.{phi}.k_p_ratio'] = f'{ratio:.2f}'
     return out
 
 
@@ -62,7 +73,7 @@ def _phases(variant: str, override: str = '') -> dict[str, PhaseMetrics]:
 def velocity_figures() -> dict[str, str]:
     """`offline_sim hatwesh_velocity --skip 0`: the table, the load response and, per
     reading, the claims' verdicts and the figures they rest on."""
-    out: dict[str, str] = {}
+    out: dict[str, str] = {'band': f'{HV_BAND * HV_STEP * 1e3:g}'}  # [mm/s]
     for variant in ('machine_pi', 'adaptive_pi', 'adaptive_pi_pm25'):
         for phase, m in _phases(variant).items():
             key = f'{variant}.{PHASES[phase]}'

@@ -3,6 +3,7 @@ mill_bringup.force_loop` (the sweep over fixed β and the reordered depth profil
 
 from __future__ import annotations
 
+import numpy as np
 from mill_models.force_process import ForceProcessModel
 
 from mill_bringup import force_loop
@@ -11,6 +12,7 @@ from mill_bringup.docs_figures.runs import offline
 VARIANTS = ('zoh', 'beta_neg0.3', 'scheme1', 'scheme2')
 SWEEP = (-1.0, -0.7, -0.3, 0.0, 0.3, 1.0)  # the columns of the docs' table
 REORDERED = [0.0, 2.0, 2.0, 1.5, 4.0, 3.5, 6.0, 3.0, 8.0, 2.0]  # --depth-profile 0,2,2,1.5,...
+ONE_STEP = {'up': [0.0, 2.0, 5.0, 3.0], 'down': [0.0, 3.0, 5.0, 2.0]}  # a single depth step
 
 
 def joules(x: float) -> str:
@@ -42,4 +44,8 @@ def figures() -> dict[str, str]:
     out['reordered.scheme1.vs_zoh'] = percent(cases['scheme 1'].j_c / r_zoh - 1)
     r_negative = force_loop.sweep([b / 10 for b in range(-10, 0)], model=model)
     out['reordered.best_negative'] = f'{100 * (1 - min(r_negative) / r_zoh):.2f}'
+    out['scheme2.beta_max'] = f'{np.abs(offline("rubio", "scheme2").beta).max():g}'
+    for key, profile in ONE_STEP.items():  # β = −0.5 against the ZOH [% worse]
+        neg, zoh_j_c = force_loop.sweep([-0.5, 0.0], model=ForceProcessModel(depth_profile=profile))
+        out[f'one_step.{key}.beta_neg0.5'] = f'{100 * (neg / zoh_j_c - 1):.2f}'
     return out

@@ -21,6 +21,13 @@ def offline(name: str, variant: str = '', overrides: tuple[str, ...] = ()) -> An
     return simulate(job_for(run))
 
 
+def law_values(params: dict[str, Any], prefix: str) -> dict[str, Any]:
+    """A node's parameters of one law or observer (`prefix.NAME`), by NAME."""
+    return {
+        k.removeprefix(prefix + '.'): v for k, v in params.items() if k.startswith(prefix + '.')
+    }
+
+
 def sig(x: float, digits: int = 4) -> str:
     """x to `digits` significant digits, never in exponent form above 1 (1257, not 1.257e+03)."""
     if not math.isfinite(x):
