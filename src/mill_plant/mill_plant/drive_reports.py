@@ -11,7 +11,7 @@
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import DropCounter, Rejected
@@ -23,14 +23,25 @@ from mill_plant.command_intake import CommandIntake
 from mill_plant.drive_counts import DriveCounts
 from mill_plant.ownership import Ownership
 
-if TYPE_CHECKING:  # for the annotation only: mill_plant.drive_cycle imports this module
-    from mill_plant.drive_cycle import DriveCycle
+
+class Clocked(Protocol):
+    """What the reports read of the drive's timing (mill_plant.drive_cycle.DriveCycle, which
+    imports this module)."""
+
+    STATUS: ClassVar[str]
+    k: int
+
+    def stamp_now(self) -> int: ...
+
+    def status_values(self) -> dict[str, object]: ...
 
 
 class Reported(Protocol):
     """What the reports read of the drive front end (mill_plant.drive_node.DriveNode)."""
 
-    cycle: DriveCycle
+    @property
+    def cycle(self) -> Clocked: ...
+
     diagnostics: Diagnostics
     backend: DriveBackend | None
     counts: DriveCounts
