@@ -96,9 +96,10 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
     offline = simulate(job)
     assert summary['samples'] == len(offline.t) == job.samples != nominal
     assert summary['missing_samples'] == {}
-    # the same cores on the same floats: bit-equal (1e-9 m allows nothing but rounding)
-    assert summary['offline_max_difference'] <= 1e-9
+    # the same cores on the same floats: bit-equal on every quantity, as docs/papers.md says
+    assert summary['offline_max_difference'] == 0.0
     assert set(summary['differences']) >= {'tracking_error', 'force_control.override'}
+    assert set(summary['differences'].values()) == {0.0}
     # its bag: `report` finds the job's length from the "done" status, and the overrides
     run = read_run(tmp_path / 'bag')
     assert run.n == job.samples and run.job_end_source == 'job status on /diagnostics'
