@@ -14,6 +14,8 @@ In lockstep it also acknowledges, on mill/recorded, after each write of the bag,
 step whose stepped topics the bag's file holds whole, and the plant waits for that
 (mill_bringup.recorded_steps): nothing is lost, and a SIGKILL of the runner costs at most the
 plant's `recorder_window` steps.
+Without a bag it acknowledges the steps it has heard whole, every ACK_PERIOD: a runner
+short of CPU slows the job down instead of losing samples of its record.
 In realtime nothing waits for it: its subscriptions keep all (RECORD_QOS), so that a runner
 short of CPU loses nothing that reached it, and the job counts the samples missing from the
 drive's sequence (the run's summary, the bag's notes).
@@ -52,6 +54,9 @@ from mill_common import topics
 # steps are acknowledged after each write, at most recorder_window steps per period go out
 # (docs/reliability.md, "Recording through a crash").
 FLUSH_PERIOD = 0.25
+# [s] between two acknowledgements of a run without a bag: often enough that the clock node,
+# recorder_window steps ahead at most, never waits on a runner that keeps up.
+ACK_PERIOD = 0.05
 
 
 class _AcknowledgingRecorder(TopicRecorder):
@@ -74,8 +79,6 @@ class RecordOptions:
     compression: str = 'zstd'
     flush_period: float = FLUSH_PERIOD
     notes: Mapping[str, str] = field(default_factory=dict)  # the bag's custom_data
-    # A lockstep run's handshake: the steps recorded whole are acknowledged on mill/recorded.
-    steps: RecordedSteps | None = None
 
 
 def _own_topics(namespace: str) -> str:
@@ -98,6 +101,7 @@ class Monitor(Node):
         timed: Iterable[str] = (),
         late: Iterable[str] = (),
         late_after: Iterable[str] = (),
+        steps: RecordedSteps | None = None,
     ) -> None:
         rules = [
             arg for rule in remappings if not rule.startswith('__ns:=') for arg in ('-r', rule)
@@ -115,9 +119,13 @@ class Monitor(Node):
         self._held: list[tuple[str, str, Callable[[bytes], None]]] = []
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
-        self.steps = record.steps if record is not None else None
+        # A lockstep run's handshake: the steps heard whole (recording: written whole to the
+        # bag) are acknowledged on mill/recorded, and the clock node waits for that.
+        self.steps = steps if steps is None or record is not None else steps.only(kept)
         if self.steps is not None:
             self._ack_pub = self.create_publisher(ClockMsg, topics.RECORDED, LATCHED_QOS)
+            if record is None:  # nothing to write first: what is heard is acknowledged
+                self.create_timer(ACK_PERIOD, self._written)
         if record is not None:
             self.recorder = _AcknowledgingRecorder(
                 self,
@@ -196,15 +204,18 @@ class Monitor(Node):
 
     def finish_recording(self, samples: int) -> None:
         """The job's samples are done: the plant may take one more step, then waits for
-        the bag to hold everything up to it (a lockstep run's handshake; else nothing)."""
-        if self.steps is None or self.recorder is None:
+        the runner (and its bag) to hold everything up to it (a lockstep run's handshake;
+        else nothing)."""
+        if self.steps is None:
             return
-        self.recorder.flush()  # what it holds is written: the freeze may acknowledge it
+        if self.recorder is not None:
+            self.recorder.flush()  # what it holds is written: the freeze may acknowledge it
         if (through := self.steps.freeze(samples)) is not None:
             self._ack_pub.publish(encode_clock(through))
 
     def _written(self) -> None:
-        """The bag's file holds what was heard so far: acknowledge the steps it holds whole."""
+        """The bag's file (without a bag: the monitor) holds what was heard so far:
+        acknowledge the steps it holds whole."""
         if self.steps is not None and (through := self.steps.written()) is not None:
             self._ack_pub.publish(encode_clock(through))
 

@@ -18,7 +18,7 @@ controllers now also wait for the runner as a reader, mill_bringup.jobs.axis.)
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 
 from mill_common.timebase import sample_index, sample_stamp_ns
 
@@ -38,6 +38,12 @@ class RecordedSteps:
         self._window = window
         self._sent = -1  # the newest sample acknowledged
         self._frozen_at: int | None = None  # where the plant stops, once the job is done
+
+    def only(self, kept: Iterable[str]) -> RecordedSteps:
+        """The same handshake over the stepped topics among `kept` (a runner without a bag
+        hears only the topics it keeps)."""
+        lags = {t: lag for t, lag in self._lags.items() if t in set(kept)}
+        return RecordedSteps(lags, self._period_s, self._window)
 
     def stepped(self, topic: str) -> bool:
         return topic in self._lags

@@ -65,6 +65,15 @@ def test_commands_never_heard_hold_the_plant_at_the_window() -> None:
     assert stopped == 8 and acks == [] and s.behind() == [COMMAND]
 
 
+def test_a_runner_without_a_bag_waits_only_for_the_topics_it_keeps() -> None:
+    """Unrecorded, the runner keeps no ground truth (say): the handshake over what it keeps
+    lets the plant run to the end; over every stepped topic it would hold it at the window."""
+    s = steps(window=8).only([STATE, COMMAND, 'mill/x/estimate'])
+    assert s.stepped(STATE) and s.stepped(COMMAND) and not s.stepped(TRUTH)
+    stopped, acks = run(s, 8, steps_per_write=1)
+    assert stopped == 100 and acks[-1] == 99
+
+
 def test_only_what_was_written_is_acknowledged_so_the_plant_stays_a_window_ahead_of_the_file():
     s = steps(window=8)
     stopped, acks = run(s, 8, steps_per_write=3, last=40)

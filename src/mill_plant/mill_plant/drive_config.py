@@ -31,9 +31,10 @@ def _owners(value: Any) -> str | None:
 RECORDER_WINDOW = ParamSpec(
     'recorder_window',
     0,
-    'lockstep: steps the plant may run ahead of the newest step the recorder has '
-    f'acknowledged on {topics.RECORDED}, so that a bag misses nothing however busy the '
-    'machine (run_scenario --record sets it); 0: do not wait for a recorder',
+    'lockstep: steps the plant may run ahead of the newest step the recorder (or '
+    f'run_scenario) has acknowledged on {topics.RECORDED}, so that neither a bag nor a '
+    "run's record misses a step however busy the machine (run_scenario sets it); 0: do "
+    'not wait for a recorder',
     non_negative_int,
     True,
 )

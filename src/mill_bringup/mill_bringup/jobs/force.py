@@ -122,7 +122,7 @@ class ForceJob(Job[ForceRecord]):
         plant = self.scenario.overrides.setdefault(self.plant, {})
         if monitored:
             plant.setdefault('min_subscribers', 2)
-        if recorded:  # the force process waits for the recorder too: a bag misses nothing
+        if monitored:  # the force process waits for the runner too (as AxisJob's plant)
             plant.setdefault('recorder_window', RECORDER_WINDOW)
 
     def recorded_steps(self) -> RecordedSteps | None:

@@ -90,7 +90,6 @@ class Session:
                     **records.bag_notes(job.RECORD),
                     **records.owners_note(job.owners(), job.scenario.namespace),
                 },
-                steps=job.recorded_steps(),
             )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
         self._stop = install_stop_handlers()
@@ -106,6 +105,7 @@ class Session:
                 timed=job.timed_topics(),
                 late=late,
                 late_after=late_after,
+                steps=job.recorded_steps(),
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)
