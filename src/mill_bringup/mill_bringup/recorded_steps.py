@@ -42,7 +42,8 @@ class RecordedSteps:
     def only(self, kept: Iterable[str]) -> RecordedSteps:
         """The same handshake over the stepped topics among `kept` (a runner without a bag
         hears only the topics it keeps)."""
-        lags = {t: lag for t, lag in self._lags.items() if t in set(kept)}
+        keep = set(kept)
+        lags = {t: lag for t, lag in self._lags.items() if t in keep}
         return RecordedSteps(lags, self._period_s, self._window)
 
     def stepped(self, topic: str) -> bool:
