@@ -376,30 +376,38 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
             '',
             'bag directory to create (default rosbag2_YYYY_MM_DD-HH_MM_SS); never overwritten',
             text,
-            True,
+            read_only=True,
         ),
         ParamSpec(
             'topics',
             [],
             'topics to record (empty and no regex: all topics)',
             StringList('topic names'),
-            True,
+            read_only=True,
         ),
-        ParamSpec('regex', '', 'also record topics matching this regular expression', _regex, True),
-        ParamSpec('compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), True),
+        ParamSpec(
+            'regex',
+            '',
+            'also record topics matching this regular expression',
+            _regex,
+            read_only=True,
+        ),
+        ParamSpec(
+            'compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), read_only=True
+        ),
         ParamSpec(
             'flush_period',
             0.5,
             'write buffered messages to the file this often [s]; a hard kill loses at most this',
             in_range(0.05, 1.0),
-            True,
+            read_only=True,
         ),
         ParamSpec(
             'max_message_bytes',
             MAX_MESSAGE_BYTES,
             'a message with more serialized bytes is dropped and counted (mill_bag.intake)',
             WholeAtLeast(1024),
-            True,
+            read_only=True,
         ),
     ]
     return [(s.name, s) for s in specs]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import difflib
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol
 
 Check = Callable[[Any], 'str | None']
@@ -57,7 +57,8 @@ class ParamSpec:
     default: Any
     description: str
     check: Check = no_check
-    read_only: bool = False
+    read_only: bool = field(default=False, kw_only=True)
+    unit: str = field(default='', kw_only=True)  # also in the description, as `[unit]`
 
 
 class Plugin(Protocol):
@@ -364,6 +365,17 @@ def validate_all(
     return out
 
 
+def check_gain_and_period(input_gain: float, sample_period: float) -> tuple[float, float]:
+    """(b, T) as floats, or ParameterError naming the bad one."""
+    b = float(input_gain)
+    if not math.isfinite(b) or b == 0.0:
+        raise ParameterError('input_gain', input_gain, 'must be finite and non-zero')
+    reason = positive(sample_period)
+    if reason:
+        raise ParameterError('sample_period', sample_period, reason)
+    return b, float(sample_period)
+
+
 def input_watch_specs() -> list[tuple[str, ParamSpec]]:
     """How long a node's inputs may be silent (mill_common.input_guard)."""
     return [
@@ -418,7 +430,7 @@ _REALTIME_SPECS: tuple[tuple[str, ParamSpec], ...] = (
             'scheduler); with it the memory is locked and the garbage collector frozen. The '
             'highest of the nodes of a process counts',
             _priority,
-            True,
+            read_only=True,
         ),
     ),
     (
@@ -428,7 +440,7 @@ _REALTIME_SPECS: tuple[tuple[str, ParamSpec], ...] = (
             [],
             "CPUs this node's process may run on ([]: any); the nodes of a process together",
             _Cpus(),
-            True,
+            read_only=True,
         ),
     ),
 )
@@ -444,7 +456,10 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
     from mill_common.signals import AXES
 
     return [
-        ('axis', ParamSpec('axis', 'x', 'machine axis this node serves', one_of(*AXES), True)),
+        (
+            'axis',
+            ParamSpec('axis', 'x', 'machine axis this node serves', one_of(*AXES), read_only=True),
+        ),
         (
             'input_gain',
             ParamSpec(
@@ -457,7 +472,9 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
         ),
         (
             'sample_period',
-            ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+            ParamSpec(
+                'sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), read_only=True
+            ),
         ),
         (
             'design_period',
@@ -468,7 +485,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 'the node refuses to start rather than run them (0: gains for any period, as '
                 'the tuning rule gives)',
                 non_negative,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -480,7 +497,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 'the clock); realtime: act on the newest state, the reference interpolated at '
                 'its stamp, nothing stale queued',
                 one_of('lockstep', 'realtime'),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -491,7 +508,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 'the node whose states this node accepts (header.frame_id); states from any '
                 'other node are dropped and reported',
                 text,
-                True,
+                read_only=True,
             ),
         ),
         *input_watch_specs(),
@@ -517,7 +534,7 @@ def axis_node_specs() -> list[tuple[str, ParamSpec]]:
                 'and estimates the state N samples ahead, the controller aims at the reference '
                 'N samples ahead',
                 non_negative_int,
-                True,
+                read_only=True,
             ),
         ),
     ]

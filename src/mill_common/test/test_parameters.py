@@ -130,7 +130,7 @@ def test_descriptors_carry_type_range_and_constraint() -> None:
     assert (r.from_value, r.to_value, r.step) == (0.0, math.inf, 0.0)
     assert not d.integer_range
 
-    d = descriptor(ParamSpec('taps', 2, 'taps', positive_int, True))
+    d = descriptor(ParamSpec('taps', 2, 'taps', positive_int, read_only=True))
     (r,) = d.integer_range
     assert (r.from_value, r.to_value, r.step) == (1, INT64_MAX, 1)
     assert d.type == ParameterType.PARAMETER_INTEGER and d.read_only

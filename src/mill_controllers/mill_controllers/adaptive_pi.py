@@ -52,7 +52,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 from mill_common.parameters import (
     ParameterError,
@@ -119,6 +119,9 @@ def _common_specs(kp: float, ki: float, kp_text: str, ki_text: str) -> tuple[Par
     )
 
 
+V = TypeVar('V', bound='_VelocityPi')
+
+
 class _VelocityPi(AxisController):
     """Incremental PI on the table velocity; subclasses supply the gains."""
 
@@ -141,12 +144,12 @@ class _VelocityPi(AxisController):
 
     @classmethod
     def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> AxisController:
+        cls: type[V], input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> V:
         """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
         v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
         # Each subclass's constructor takes (input_gain, sample_period, **its parameters).
-        build: Callable[..., AxisController] = cls
+        build: Callable[..., V] = cls
         return build(input_gain, sample_period, **v)
 
     def _measure(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:

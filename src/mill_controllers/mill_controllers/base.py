@@ -17,32 +17,38 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
-from mill_common.parameters import ParamSpec
+from mill_common.declared import Configured
+from mill_common.parameters import check_gain_and_period
 from mill_common.signals import ControlInputs
+
+__all__ = ['AxisController', 'check_gain_and_period']
+
+C = TypeVar('C', bound='AxisController')
 
 # The inputs every law gets (fields of ControlInputs joined by stamp).
 BASE_INPUTS: tuple[str, ...] = ('position', 'estimate', 'reference')
 
 
-class AxisController(ABC):
-    """One axis: measured position, reference and observer estimate in, command out."""
+class AxisController(Configured, ABC):
+    """One axis: measured position, reference and observer estimate in, command out.
 
-    PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+    A law is built as `Law(input_gain, sample_period, params)`, params its PARAMS set.
+    """
+
     OUTPUT_UNIT: ClassVar[str] = 'N·m'  # motor torque; 'V' for an amplifier voltage
 
     @classmethod
-    @abstractmethod
     def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> AxisController:
+        cls: type[C], input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> C:
         """Build from values named without the prefix (missing names take defaults).
 
         input_gain: b of the nominal model x'' = b u + ξ [m/s² per N·m]; sample_period T
         [s]. Raises ParameterError naming a bad parameter.
         """
+        return cls(input_gain, sample_period, cls.PARAMS.from_values(values))  # type: ignore[call-arg]
 
     @abstractmethod
     def compute(self, inputs: ControlInputs) -> float:
@@ -64,5 +70,5 @@ class AxisController(ABC):
         """Internal quantities of the last sample, name → value (published if any)."""
         return {}
 
-    def reset(self) -> None:  # noqa: B027 (a default that does nothing is intended)
+    def reset(self) -> None:
         """Start afresh, as just built (a law without memory has nothing to do)."""

@@ -55,7 +55,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 '',
                 'the node whose estimates this controller accepts; "" = <axis>_observer',
                 text,
-                True,
+                read_only=True,
             ),
         )
     )
@@ -67,7 +67,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'trajectory',
                 'the node whose reference this controller accepts',
                 text,
-                True,
+                read_only=True,
             ),
         )
     )
@@ -96,7 +96,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'takes the reference up again once it comes within half the following-error '
                 'limit; 0: off',
                 non_negative_int,
-                True,
+                read_only=True,
             ),
         )
     )

@@ -29,7 +29,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import ControlInputs
 
-from mill_controllers.pd_law import AdrcController
+from mill_controllers.pd_law import AdrcController, PdGains
 
 
 class ExcitationController(AdrcController):
@@ -90,7 +90,11 @@ class ExcitationController(AdrcController):
         seed: int = 1,
         torque_limit: float = 5.0,
     ) -> None:
-        super().__init__(input_gain, sample_period, omega_c, zeta_c, torque_limit)
+        super().__init__(
+            input_gain,
+            sample_period,
+            PdGains(omega_c=omega_c, zeta_c=zeta_c, torque_limit=torque_limit),
+        )
         self.amplitude = acceleration / abs(input_gain)  # [N·m]
         if self.amplitude >= torque_limit:
             raise ParameterError(

@@ -104,7 +104,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'fixed',
                 'force law: fixed (one β), scheme1 or scheme2 (Rubio 2013 multi-model)',
                 FORCE_CONTROLLERS.check(),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -118,16 +118,20 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 10.0,
                 'programmed feed of the path [mm/s]: override 1 means this feed',
                 positive,
-                True,
+                read_only=True,
             ),
         ),
         (
             'override.min',
-            ParamSpec('min', 0.0, 'smallest feed override sent [-]', _override_bound, True),
+            ParamSpec(
+                'min', 0.0, 'smallest feed override sent [-]', _override_bound, read_only=True
+            ),
         ),
         (
             'override.max',
-            ParamSpec('max', 2.0, 'largest feed override sent [-]', _override_bound, True),
+            ParamSpec(
+                'max', 2.0, 'largest feed override sent [-]', _override_bound, read_only=True
+            ),
         ),
         (
             'force_component',
@@ -137,7 +141,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'what of /mill/cutting_force is the controlled force: the resultant |F| '
                 'or one component',
                 one_of(*FORCE_COMPONENTS),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -149,7 +153,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'heard since the last instant (Rubio 2013 F_p: the peak force of each '
                 'revolution), or the sample at the instant',
                 one_of('peak', 'sample'),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -161,7 +165,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'control instant (Rubio 2013: a known function of time); position = the '
                 "tool's depth below workpiece_top, from the measured z (/mill/z/state)",
                 one_of(*DEPTH_SOURCES),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -171,7 +175,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 0.0,
                 'z of the workpiece top surface [m] (depth_source position: a_dc = top − z)',
                 number,
-                True,
+                read_only=True,
             ),
         ),
         *input_watch_specs(),

@@ -59,7 +59,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 from mill_common.parameters import (
-    ParameterError,
     ParamSpec,
     non_negative,
     one_of,
@@ -69,7 +68,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import AxisReference, ControlInputs
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import AxisController, check_gain_and_period
 from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
 
 DAMPING_RATE_SPEC = ParamSpec(
@@ -94,17 +93,6 @@ TORQUE_LIMIT_SPEC = ParamSpec(
     'torque command saturation ±limit [N·m]; .inf disables it (the paper has none)',
     positive_or_inf,
 )
-
-
-def check_gain_and_period(input_gain: float, sample_period: float) -> tuple[float, float]:
-    """(b, T) as floats, or ParameterError naming the bad one."""
-    b = float(input_gain)
-    if not math.isfinite(b) or b == 0.0:
-        raise ParameterError('input_gain', input_gain, 'must be finite and non-zero')
-    reason = positive(sample_period)
-    if reason:
-        raise ParameterError('sample_period', sample_period, reason)
-    return b, float(sample_period)
 
 
 def quadratic_roots(omega_n: float, zeta: float) -> list[complex]:

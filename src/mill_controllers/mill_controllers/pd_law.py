@@ -13,20 +13,14 @@ NaN or a clipped-garbage torque that would look like a valid command.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import (
-    ParameterError,
-    ParamSpec,
-    non_negative,
-    positive,
-    positive_or_inf,
-    validate_all,
-)
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import ParameterError, non_negative, positive, positive_or_inf
 from mill_common.signals import ControlInputs
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import AxisController, check_gain_and_period
 
 # 5 N·m: about the peak torque of the ~0.75 kW AC servo that drives a small mill's ball
 # screw. The paper's cut needs well under 1 N·m with the realistic cutting-energy reading,
@@ -35,70 +29,47 @@ from mill_controllers.base import AxisController
 DEFAULT_TORQUE_LIMIT = 5.0
 
 
+@dataclass(frozen=True)
+class PdGains(ParamSet):
+    """The law's parameters, eq. (12) and the saturation."""
+
+    PREFIX: ClassVar[str] = 'pd'
+    omega_c: float = param(
+        12.0,
+        'natural frequency ω_c of the tracking-error dynamics, eq. (12)',
+        non_negative,
+        unit='rad/s',
+        rule='omega_c',
+    )
+    zeta_c: float = param(
+        0.7071, 'damping ratio ζ_c of the tracking-error dynamics, eq. (12)', positive, unit='-'
+    )
+    torque_limit: float = param(
+        DEFAULT_TORQUE_LIMIT,
+        'torque command saturation ±limit; .inf disables it (the paper has none)',
+        positive_or_inf,
+        unit='N·m',
+    )
+
+
 class _PdLaw(AxisController):
     """Beltrán 2013 eq. (9) for one axis; subclasses choose whether ξ̂ is compensated."""
 
-    PREFIX: ClassVar[str] = 'pd'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_c',
-            12.0,
-            'natural frequency ω_c of the tracking-error dynamics, eq. (12) [rad/s]; 0 = the '
-            'tuning rule for the sample period and command delay (mill_models.loop_tuning)',
-            non_negative,
-        ),
-        ParamSpec(
-            'zeta_c',
-            0.7071,
-            'damping ratio ζ_c of the tracking-error dynamics, eq. (12) [-]',
-            positive,
-        ),
-        ParamSpec(
-            'torque_limit',
-            DEFAULT_TORQUE_LIMIT,
-            'torque command saturation ±limit [N·m]; .inf disables it (the paper has none)',
-            positive_or_inf,
-        ),
-    )
+    PARAMS: ClassVar[type[PdGains]] = PdGains
     COMPENSATE: ClassVar[bool] = True
 
     def __init__(
-        self,
-        input_gain: float,
-        sample_period: float,
-        omega_c: float = 12.0,
-        zeta_c: float = 0.7071,
-        torque_limit: float = DEFAULT_TORQUE_LIMIT,
+        self, input_gain: float, sample_period: float, params: PdGains = PdGains()
     ) -> None:
-        b = float(input_gain)
-        if not math.isfinite(b) or b == 0.0:
-            raise ParameterError('input_gain', input_gain, 'must be finite and non-zero')
-        reason = positive(sample_period)
-        if reason:
-            raise ParameterError('sample_period', sample_period, reason)
-        values = validate_all(
-            self.PARAMETERS,
-            {'omega_c': omega_c, 'zeta_c': zeta_c, 'torque_limit': torque_limit},
-            prefix=self.PREFIX + '.',
-        )
-        if values['omega_c'] == 0.0:
+        self._b, self._T = check_gain_and_period(input_gain, sample_period)
+        if params.omega_c == 0.0:
             raise ParameterError('pd.omega_c', 0.0, 'the tuning rule is resolved by the node')
-        self._b = b
-        self._T = float(sample_period)  # unused by the continuous law; kept for the node
-        self._omega_c: float = values['omega_c']
-        self._zeta_c: float = values['zeta_c']
-        self._limit: float = values['torque_limit']
+        self._omega_c = params.omega_c
+        self._zeta_c = params.zeta_c
+        self._limit = params.torque_limit
         # Beltrán 2013 eq. (11)-(12), misprint fixed: p_d(s) = s² + 2 ζ_c ω_c s + ω_c²
         self._alpha1 = 2.0 * self._zeta_c * self._omega_c
         self._alpha0 = self._omega_c * self._omega_c
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> _PdLaw:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     @property
     def alpha0(self) -> float:

@@ -9,7 +9,7 @@ import pytest
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
-from mill_controllers.pd_law import AdrcController, PdController
+from mill_controllers.pd_law import AdrcController, PdController, PdGains
 
 B = 20.96  # [(m/s²)/(N·m)], the x axis of Beltrán 2013 Table 1
 
@@ -32,7 +32,7 @@ def _closed_loop_matrix(ctrl: AxisController, xi: float, ref: AxisReference) -> 
 
 @pytest.mark.parametrize(('omega', 'zeta'), [(12.0, 0.7071), (30.0, 0.3), (5.0, 0.95)])
 def test_closed_loop_poles_are_the_designed_ones(omega: float, zeta: float) -> None:
-    ctrl = AdrcController(B, 1e-3, omega_c=omega, zeta_c=zeta, torque_limit=math.inf)
+    ctrl = AdrcController(B, 1e-3, PdGains(omega_c=omega, zeta_c=zeta, torque_limit=math.inf))
     ref = AxisReference(0.02, 0.003, 0.1)
     xi = -3.6
     a = _closed_loop_matrix(ctrl, xi, ref)
@@ -54,8 +54,8 @@ def test_gains_fix_the_eq12_misprint() -> None:
 
 def test_pd_variant_ignores_the_disturbance_estimate() -> None:
     ref = AxisReference(0.0, 0.0, 0.0)
-    pd = PdController(B, 1e-3, torque_limit=math.inf)
-    adrc = AdrcController(B, 1e-3, torque_limit=math.inf)
+    pd = PdController(B, 1e-3, PdGains(torque_limit=math.inf))
+    adrc = AdrcController(B, 1e-3, PdGains(torque_limit=math.inf))
     est0 = Estimate(0.001, 0.002, 0.0)
     est1 = Estimate(0.001, 0.002, 5.0)
     assert pd.compute(ControlInputs(0.0, 0.001, ref, est1)) == pd.compute(
@@ -76,7 +76,7 @@ def test_pd_variant_ignores_the_disturbance_estimate() -> None:
 
 def test_pd_leaves_the_static_error_xi_over_omega_squared() -> None:
     # The uncompensated law has the steady error e = ξ/α0 (the paper's figs. 5-7 effect).
-    pd = PdController(B, 1e-3, torque_limit=math.inf)
+    pd = PdController(B, 1e-3, PdGains(torque_limit=math.inf))
     ref = AxisReference(0.0, 0.0, 0.0)
     xi = -3.6
     e = xi / pd.alpha0
@@ -85,7 +85,7 @@ def test_pd_leaves_the_static_error_xi_over_omega_squared() -> None:
 
 
 def test_output_is_clipped() -> None:
-    ctrl = AdrcController(B, 1e-3, torque_limit=0.5)
+    ctrl = AdrcController(B, 1e-3, PdGains(torque_limit=0.5))
     ref = AxisReference(0.0, 0.0, 0.0)
     assert ctrl.compute(ControlInputs(0.0, -1.0, ref, Estimate(-1.0, 0.0, 0.0))) == 0.5
     assert ctrl.compute(ControlInputs(0.0, 1.0, ref, Estimate(1.0, 0.0, 0.0))) == -0.5
@@ -136,13 +136,13 @@ def test_bad_parameters_raise_naming_them(name: str, value: float) -> None:
         AdrcController.from_parameters(B, 1e-3, {name: value})
     assert info.value.name == f'pd.{name}'
     with pytest.raises(ParameterError, match=f'pd.{name}'):
-        PdController(B, 1e-3, **{name: value})
+        PdController(B, 1e-3, PdGains(**{name: value}))
 
 
 def test_infinite_gains_are_refused_but_infinite_limit_is_not() -> None:
     with pytest.raises(ParameterError, match=r'pd\.omega_c'):
-        AdrcController(B, 1e-3, omega_c=math.inf)
-    AdrcController(B, 1e-3, torque_limit=math.inf)
+        AdrcController(B, 1e-3, PdGains(omega_c=math.inf))
+    AdrcController(B, 1e-3, PdGains(torque_limit=math.inf))
 
 
 @pytest.mark.parametrize('b', [0.0, math.nan, -math.inf])

@@ -18,18 +18,7 @@ import math
 from collections.abc import Iterable
 
 import numpy as np
-from mill_common.parameters import ParameterError, positive
 from numpy.polynomial import polynomial as npoly
-
-
-def check_gain_and_period(input_gain: float, sample_period: float) -> tuple[float, float]:
-    b = float(input_gain)
-    if not math.isfinite(b) or b == 0.0:
-        raise ParameterError('input_gain', input_gain, 'must be finite and non-zero')
-    reason = positive(sample_period)
-    if reason:
-        raise ParameterError('sample_period', sample_period, reason)
-    return b, float(sample_period)
 
 
 def _expm1_complex(s: complex) -> complex:

@@ -59,7 +59,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 '',
                 'the node whose commands this observer accepts; "" = <axis>_controller',
                 text,
-                True,
+                read_only=True,
             ),
         )
     )

@@ -20,7 +20,14 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
-from mill_common.parameters import ParameterError, ParamSpec, in_range, non_negative, validate_all
+from mill_common.parameters import (
+    ParameterError,
+    ParamSpec,
+    check_gain_and_period,
+    in_range,
+    non_negative,
+    validate_all,
+)
 from mill_common.signals import Estimate
 from mill_models.loop_tuning import loop_tuning
 
@@ -29,7 +36,6 @@ from mill_observers.chain_design import (
     ChainDesign,
     ChainObserver,
     advance,
-    check_gain_and_period,
 )
 
 

@@ -28,7 +28,13 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
-from mill_common.parameters import ParamSpec, one_of, positive, validate_all
+from mill_common.parameters import (
+    ParamSpec,
+    check_gain_and_period,
+    one_of,
+    positive,
+    validate_all,
+)
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
@@ -37,7 +43,6 @@ from mill_observers.chain_design import (
     ChainDesign,
     ChainObserver,
     advance,
-    check_gain_and_period,
     continuous_interval,
 )
 

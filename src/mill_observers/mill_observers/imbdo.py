@@ -69,7 +69,7 @@ def plant_specs() -> tuple[ParamSpec, ...]:
             MAHAROF_A,
             'gain A of the nominal model A/(s² + B s + C), eq. (1) [mm/(V·s²)]',
             positive,
-            True,  # read-only, as it has always been (see docs/contract.md)
+            read_only=True,  # read-only, as it has always been (see docs/contract.md)
         ),
         ParamSpec(
             'plant_damping',
@@ -147,7 +147,7 @@ class Imbdo(Observer):
             'cut-off frequency f_c of the Q filter ω_c^n/(s + ω_c)^n, ω_c = 2π f_c, '
             'eq. (3) and fig. 5 [Hz]',
             positive,
-            True,  # read-only, as it has always been (see docs/contract.md)
+            read_only=True,  # read-only, as it has always been (see docs/contract.md)
         ),
         ParamSpec(
             'q_order',

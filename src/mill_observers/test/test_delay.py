@@ -6,7 +6,7 @@ import math
 
 import pytest
 from mill_common.signals import AxisReference, ControlInputs
-from mill_controllers.pd_law import AdrcController
+from mill_controllers.pd_law import AdrcController, PdGains
 from mill_observers.delay import DelayCompensation
 from mill_observers.gpi import GpiObserver
 from mill_observers.imbdo import Imbdo
@@ -19,7 +19,7 @@ def run(delay: int, compensate: bool, steps: int = 3000) -> list[float]:
     """A double integrator x'' = b u + 1 m/s² under ADRC, the command applied `delay` late."""
     observer = GpiObserver(B, T, omega_o=700.0, zeta_o=0.7071, pole_o=700.0)
     comp = DelayCompensation(observer, delay if compensate else 0, T)
-    law = AdrcController(B, T, torque_limit=math.inf)
+    law = AdrcController(B, T, PdGains(torque_limit=math.inf))
     x = v = 0.0
     queue = [0.0] * delay
     out = []

@@ -82,64 +82,70 @@ PLANT_PARAMETERS: tuple[ParamSpec, ...] = (
         [10.0] * 3,
         "drive input limit per axis, in the axis model's input unit [N m or V]; .inf = none",
         number_list(3, positive_or_inf),
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'initial_position',
         [-0.075, -0.105, -0.005],
         'axis positions at t = 0 [m]',
         number_list(3),
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'axis_model',
         ['rigid'] * 3,
         'dynamic model per axis x, y, z: ' + ', '.join(AXIS_MODELS),
         _axis_models,
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'gravity',
         False,
         'the weight of the carried mass acts on the vertical z axis (Chávez-Conde eq. 3)',
         boolean,
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'load_change.time',
         0.0,
         'time of a step change of the carried mass (workpiece or fixture) [s]',
         non_negative,
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'load_change.mass',
         [0.0, 0.0, 0.0],
         'mass added per axis x, y, z at load_change.time [kg]; all 0 = no change',
         number_list(3),
-        True,
+        read_only=True,
     ),
-    ParamSpec('axes', list(AXES), 'axes under control; the others are braked', _axes, True),
-    ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+    ParamSpec(
+        'axes', list(AXES), 'axes under control; the others are braked', _axes, read_only=True
+    ),
+    ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), read_only=True),
     ParamSpec(
         'clock_period',
         0.01,
         'sim time between /clock messages [s] (a multiple of sample_period); every '
         'node with use_sim_time wakes for each one',
         in_range(1e-6, 10.0),
-        True,
+        read_only=True,
     ),
-    ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, True),
+    ParamSpec('substeps', 4, 'RK4 substeps per sample', positive_int, read_only=True),
     ParamSpec(
         'friction_reversal',
         'stop',
         "a carriage whose velocity crosses zero inside a substep: 'stop' there for the rest "
         "of it; 'through': on from rest at once (for a law that reverses it every sample)",
         one_of(*REVERSALS),
-        True,
+        read_only=True,
     ),
-    ParamSpec('sensor_resolution', 0.0, 'encoder resolution [m]; 0 = ideal', non_negative, True),
-    ParamSpec('cutting_model', 'kline', 'cutting force model', CUTTING_MODELS.check(), True),
+    ParamSpec(
+        'sensor_resolution', 0.0, 'encoder resolution [m]; 0 = ideal', non_negative, read_only=True
+    ),
+    ParamSpec(
+        'cutting_model', 'kline', 'cutting force model', CUTTING_MODELS.check(), read_only=True
+    ),
     *_full_names(CUTTING_MODELS.parameter_specs(read_only=True)),
     *_full_names(AXIS_MODELS.parameter_specs(read_only=True, exclude=('rigid',))),
     ParamSpec(
@@ -214,7 +220,7 @@ FORCE_PROCESS_PARAMETERS: tuple[ParamSpec, ...] = (
         'x',
         'axis whose reference velocity [m/s] is the feed command',
         one_of(*AXES),
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'feed_limits',
@@ -222,14 +228,14 @@ FORCE_PROCESS_PARAMETERS: tuple[ParamSpec, ...] = (
         "the drive's feed range [lowest, highest] [mm/s]: the reconstructed "
         'command is clamped to it',
         _feed_limits,
-        True,
+        read_only=True,
     ),
     ParamSpec(
         'trace_intervals',
         32,
         'grid intervals per sample of the force published on /mill/cutting_force/trace',
         positive_int,
-        True,
+        read_only=True,
     ),
     LOCKSTEP_TIMEOUT,
     STARTUP_TIMEOUT,

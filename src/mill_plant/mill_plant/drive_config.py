@@ -36,7 +36,7 @@ RECORDER_WINDOW = ParamSpec(
     "run's record misses a step however busy the machine (run_scenario sets it); 0: do "
     'not wait for a recorder',
     non_negative_int,
-    True,
+    read_only=True,
 )
 
 
@@ -51,7 +51,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'realtime: it advances on the wall clock at the sample rate and applies the newest '
             'command it holds (zero-order hold), as a drive does',
             one_of(*TIMINGS),
-            True,
+            read_only=True,
         ),
     ),
     (
@@ -62,7 +62,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
             'any other node are ignored and reported; "" accepts any',
             _owners,
-            True,
+            read_only=True,
         ),
     ),
     (
@@ -74,7 +74,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'applies it from (a transport delay; the first N steps get zero input); realtime '
             'has one sample by nature and ignores it',
             non_negative_int,
-            True,
+            read_only=True,
         ),
     ),
     ('recorder_window', RECORDER_WINDOW),
@@ -128,7 +128,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             f"it runs at the speed of the joint 'spindle' of {topics.REFERENCE} (G-code M3/M4/M5 "
             'and S), sample by sample, and is off before the first; lockstep waits for it',
             one_of('on', 'reference'),
-            True,
+            read_only=True,
         ),
     ),
     (
@@ -139,7 +139,7 @@ DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
             'configure and activate by itself (lockstep: once its peers are matched); false: '
             'wait for the lifecycle transitions configure and activate',
             boolean,
-            True,
+            read_only=True,
         ),
     ),
 )

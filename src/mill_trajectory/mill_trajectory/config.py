@@ -57,7 +57,9 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
         ),
         (
             'sample_period',
-            ParamSpec('sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), True),
+            ParamSpec(
+                'sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), read_only=True
+            ),
         ),
         (
             'preview_time',
@@ -86,7 +88,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'moving to its start (approach.*), and publish the reference on the system '
                 'clock every publish_period',
                 one_of('lockstep', 'realtime'),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -96,7 +98,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 ['x', 'y', 'z'],
                 'realtime: the axes whose states start the job',
                 _axes,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -108,7 +110,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'per axis (the controllers); run_scenario adds its monitor, so that the record '
                 'has the job from its start',
                 non_negative_int,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -119,7 +121,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'realtime: wall time between reference messages [s]; each covers preview_time '
                 'ahead',
                 in_range(1e-4, 1.0),
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -130,7 +132,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'realtime: peak speed of the move from where the axes stand to the start point '
                 '[m/s]',
                 positive,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -141,7 +143,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'realtime: refuse to start when an axis stands further than this from the start '
                 'point [m]',
                 non_negative,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -152,7 +154,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'follow /mill/feed_override: the path speed is scaled by the latest override '
                 '(the reference is then sent for one clock period at a time)',
                 boolean,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -164,7 +166,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 '(one point, with the override ramp of a β-hold) instead of answering /clock; '
                 'for a force controller in lockstep with its plant',
                 boolean,
-                True,
+                read_only=True,
             ),
         ),
         (
@@ -178,7 +180,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 'after each j T_c, which sets the reference from that sample up to the next '
                 'control instant (a force controller on a faster axis job)',
                 non_negative,
-                True,
+                read_only=True,
             ),
         ),
         (
