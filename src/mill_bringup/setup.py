@@ -28,6 +28,7 @@ setup(
             'job_watch = mill_bringup.executables:job_watch',
             'mill_container = mill_bringup.executables:mill_container',
             'docs_figures = mill_bringup.docs_figures.cli:main',
+            'docs_params = mill_bringup.docs_params:main',
         ],
     },
 )
