@@ -8,7 +8,7 @@ import math
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mill_common.ros import DATA_QOS, joint_state, to_stamp
+from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
@@ -32,8 +32,7 @@ def test_override_scales_the_speed_and_bad_values_are_clamped_or_held(start_node
     warnings: list[str] = []
 
     def on_reference(msg: JointTrajectory) -> None:
-        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        refs[ns] = msg.points[-1].velocities[1]
+        refs[from_stamp(msg.header.stamp)] = msg.points[-1].velocities[1]
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
         warnings.extend(s.message for s in msg.status if s.level == DiagnosticStatus.WARN)

@@ -24,7 +24,7 @@ from mill_analysis.report.kinds import ForceRecords, kind_of
 from mill_analysis.run_record import read_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
-from mill_common.ros import DATA_QOS, to_stamp
+from mill_common.ros import DATA_QOS, from_stamp, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs
 from sensor_msgs.msg import JointState
@@ -165,8 +165,7 @@ def test_nan_force_is_held_and_overrides_are_clamped(start_node) -> None:
     warnings: list[str] = []
 
     def on_override(msg: JointState) -> None:
-        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        overrides[ns] = (msg.position[0], msg.velocity[0])
+        overrides[from_stamp(msg.header.stamp)] = (msg.position[0], msg.velocity[0])
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
         warnings.extend(s.message for s in msg.status if s.level == DiagnosticStatus.WARN)

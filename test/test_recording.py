@@ -33,7 +33,7 @@ from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover
 from mill_bringup.jobs.base import RECORDER_WINDOW
-from mill_common.ros import DATA_QOS, joint_state, to_stamp
+from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -104,7 +104,7 @@ def both_readers(bag: Path) -> tuple[Counter, Counter, dict[str, list[int]]]:
             stamp = getattr(getattr(decoded, 'header', None), 'stamp', None)
             stamp = decoded.clock if channel.topic == topics.CLOCK else stamp
             if stamp is not None:
-                ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+                ns = from_stamp(stamp)
                 ks.setdefault(channel.topic, []).append(ns // T_NS)
                 assert message.log_time == ns  # sim time: the bag time is the stamp
     return by_rosbags, by_mcap, ks

@@ -13,6 +13,7 @@ from __future__ import annotations
 import struct
 
 from mill_common.codec import CodecError, JointStateData, decode_joint_state
+from mill_common.timebase import stamp_ns
 
 
 def cdr_stamp_ns(data: bytes) -> int | None:
@@ -23,8 +24,7 @@ def cdr_stamp_ns(data: bytes) -> int | None:
     """
     if len(data) < 12 or data[0] != 0 or data[1] > 1:
         return None
-    sec, nanosec = struct.unpack_from('<iI' if data[1] else '>iI', data, 4)
-    return sec * 1_000_000_000 + nanosec
+    return stamp_ns(*struct.unpack_from('<iI' if data[1] else '>iI', data, 4))
 
 
 def joint_state_cdr(data: bytes) -> JointStateData | None:
