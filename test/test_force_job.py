@@ -31,7 +31,7 @@ from sensor_msgs.msg import JointState
 
 from mill_bringup import scenario
 from mill_common import topics
-from test.conftest import busy_cores, ros_node, wait_until
+from test.conftest import busy_cores, ros_node, spin_until
 
 T = 60.0 / 715.0
 
@@ -175,31 +175,25 @@ def test_nan_force_is_held_and_overrides_are_clamped(start_node) -> None:
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, on_diagnostics, 100)
         force = node.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
 
-        def spin_until(predicate, timeout: float = 30.0) -> bool:
-            def step() -> bool:
-                executor.spin_once(timeout_sec=0.01)
-                return predicate()
-
-            return wait_until(step, timeout, step=0.0)
-
         assert spin_until(
+            executor,
             lambda: (
                 force.get_subscription_count() > 0
                 and node.count_publishers(topics.FEED_OVERRIDE) > 0
             ),
             60,
         ), 'force controller never matched'
-        spin_until(lambda: False, 0.5)
+        spin_until(executor, lambda: False, 0.5)
 
         def sample(k: int, value: float) -> tuple[float, float]:
             ns = sample_stamp_ns(k, T)
             force.publish(_force(ns, value))
-            assert spin_until(lambda: ns in overrides), f'no override for sample {k}'
+            assert spin_until(executor, lambda: ns in overrides), f'no override for sample {k}'
             return overrides[ns]
 
         forces = [0.0, 600.0, math.nan, 1200.0, 1500.0]
         got = [sample(k, f) for k, f in enumerate(forces)]
-        assert spin_until(lambda: any('non-finite force' in w for w in warnings))
+        assert spin_until(executor, lambda: any('non-finite force' in w for w in warnings))
         assert any('outside [0, 0.3]' in w for w in warnings), warnings
     assert ctrl.alive()
     # The same samples through the same loop offline, with the NaN replaced by 600 N.

@@ -34,14 +34,13 @@ from mill_bag.reader import open_bag
 from mill_bag.recover import recover
 from mill_bringup.jobs.base import RECORDER_WINDOW
 from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from mill_analysis import records
 from mill_common import topics
-from test.conftest import busy_cores, run_scenario, start_scenario, wait_until
+from test.conftest import busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
@@ -457,24 +456,6 @@ def test_a_sigkill_of_the_runner_loses_at_most_a_window_of_steps_and_its_last_wr
 RECORDED = tuple(Q(t) for t in (topics.state('x'), topics.CUTTING_FORCE, topics.CLOCK))
 
 
-@contextlib.contextmanager
-def ros_node(name: str) -> Iterator[Node]:
-    """A node of the test process in its own context (environment from ros_env)."""
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node(name, context=context)
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        try:
-            yield node
-        finally:
-            executor.shutdown()
-            node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
-
-
 class FakePlant:
     """Publishes what the plant would: state and force every step (stamp k T), /clock every 10."""
 
@@ -529,7 +510,7 @@ def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
     bag = tmp_path / 'bag'
     recorder = start_recorder(start_node, bag)
     n = 600
-    with ros_node('fake_plant') as node:
+    with ros_node('fake_plant') as (node, _executor):
         plant = FakePlant(node)
         assert wait_until(plant.matched, 60), 'the recorder never subscribed'
         for k in range(n):
@@ -553,7 +534,7 @@ def test_sigkill_loses_at_most_the_last_second(start_node, tmp_path):
     bag = tmp_path / 'bag'
     recorder = start_recorder(start_node, bag)
     kill_at, n = 2000, 3000  # about 2.5 s of publishing, then SIGKILL, then more
-    with ros_node('fake_plant') as node:
+    with ros_node('fake_plant') as (node, _executor):
         plant = FakePlant(node)
         assert wait_until(plant.matched, 60), 'the recorder never subscribed'
         for k in range(n):
