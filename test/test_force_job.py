@@ -31,7 +31,7 @@ from sensor_msgs.msg import JointState
 
 from mill_bringup import scenario
 from mill_common import topics
-from test.conftest import busy_cores, ros_node, spin_until
+from test.conftest import busy_cores, ros_node, run_scenario, spin_until
 
 T = 60.0 / 715.0
 
@@ -40,14 +40,9 @@ T = 60.0 / 715.0
 @pytest.mark.parametrize('name', ['beta_neg0.3', 'scheme1'])
 def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: str) -> None:
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', name),
-            *('--compare-offline', '--quiet', '--output', str(out)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
+    proc = run_scenario(
+        ros_env,
+        *('rubio', '--variant', name, '--compare-offline', '--quiet', '--output', str(out)),
         timeout=300,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -76,16 +71,10 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
     equals the offline twin's."""
     segments = 'trajectory.program.segments=["linear -0.075 -0.104 -0.005 0.003"]'
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting_adaptive_feed'),
-            *('-p', segments, '--compare-offline', '--quiet', '--output', str(out)),
-            *('--record', str(tmp_path / 'bag')),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        ros_env,
+        *('slotting_adaptive_feed', '-p', segments, '--compare-offline', '--quiet'),
+        *('--output', str(out), '--record', str(tmp_path / 'bag')),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'summary.json').read_text())
@@ -115,15 +104,10 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path, busy: int)
     machine slows the run down and its bag misses nothing."""
     out, bag = tmp_path / 'run', tmp_path / 'bag'
     with busy_cores(busy):
-        proc = subprocess.run(
-            [
-                *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
-                *('--quiet', '--output', str(out), '--record', str(bag)),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env,
+            *('rubio', '--variant', 'scheme1', '--quiet', '--output', str(out)),
+            *('--record', str(bag)),
         )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'scheme1' / 'summary.json').read_text())

@@ -269,15 +269,9 @@ def processes_mentioning(text: str) -> list[int]:
 def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_path, sig):
     run_dir = tmp_path / 'run'
     bag = run_dir / 'bag'
-    proc = subprocess.Popen(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '30'),
-            *('--record', '--quiet', '--output', str(run_dir)),
-        ],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+    proc = start_scenario(
+        ros_env,
+        *('slotting', '--duration', '30', '--record', '--quiet', '--output', str(run_dir)),
     )
     try:
         # stepping, and the first flushes are on disk
@@ -580,15 +574,8 @@ def test_recorder_refuses_an_existing_output_with_one_line(start_node, tmp_path)
 def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
     bag = tmp_path / 'bag'
     bag.mkdir()
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--record', str(bag)),
-            *('--output', str(tmp_path / 'run')),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=120,
+    proc = run_scenario(
+        ros_env, 'slotting', '--record', str(bag), '--output', str(tmp_path / 'run'), timeout=120
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 1 and len(lines) == 1, proc.stderr
@@ -622,19 +609,11 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
     from mill_analysis.report.kinds import ReportOptions, kind_of
 
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'mill_bringup.runner',
-            'commissioning',
-            *('--timing', 'realtime', '--tuning', 'rule', '-p', '*.sample_period=0.01'),
-            *('--duration', '2', '--record', '--quiet', '--output', str(out)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        ros_env,
+        'commissioning',
+        *('--timing', 'realtime', '--tuning', 'rule', '-p', '*.sample_period=0.01'),
+        *('--duration', '2', '--record', '--quiet', '--output', str(out)),
     )
     assert (out / 'summary.json').exists(), (
         f'no summary (exit {proc.returncode}):\n' + (proc.stderr[-3000:])
