@@ -123,6 +123,17 @@ def wait_until(predicate, timeout: float, step: float = 0.05) -> bool:
     return predicate()
 
 
+def spin_until(executor, predicate, timeout: float = 30.0) -> bool:
+    """Spin `executor` 10 ms at a time until `predicate` holds (checked after each spin);
+    whether it did within `timeout` s."""
+
+    def step() -> bool:
+        executor.spin_once(timeout_sec=0.01)
+        return predicate()
+
+    return wait_until(step, timeout, step=0.0)
+
+
 @contextlib.contextmanager
 def ros_node(name: str) -> Iterator:
     """A node of the test process in its own context (environment from ros_env)."""

@@ -10,8 +10,6 @@ reach the node. `-p NODE:NAME:=VALUE` is the form that overrides a file.
 from __future__ import annotations
 
 import math
-import subprocess
-import sys
 
 import pytest
 from mill_common.ros import DATA_QOS, joint_state
@@ -19,7 +17,7 @@ from mill_common.signals import FopdtEstimate
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from test.conftest import ParameterClient, ros_node, wait_until
+from test.conftest import ParameterClient, ros_node, run_scenario, wait_until
 
 PLANT = ('mill_plant.plant_node', 'plant_node', 'plant')
 CONTROLLER = ('mill_controllers.axis_controller_node', 'axis_controller_node', 'x_controller')
@@ -291,14 +289,9 @@ def test_descriptors_show_types_ranges_and_constraints(start_node) -> None:
 @pytest.mark.system
 def test_run_scenario_refuses_an_unknown_override_before_anything_starts(ros_env, tmp_path):
     run_dir = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting'),
-            *('-p', 'x_controller.pd.omega=3.0', '--output', str(run_dir)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
+    proc = run_scenario(
+        ros_env,
+        *('slotting', '-p', 'x_controller.pd.omega=3.0', '--output', str(run_dir)),
         timeout=120,
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]

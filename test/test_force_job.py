@@ -24,14 +24,14 @@ from mill_analysis.report.kinds import ForceRecords, kind_of
 from mill_analysis.run_record import read_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
-from mill_common.ros import DATA_QOS, to_stamp
+from mill_common.ros import DATA_QOS, from_stamp, to_stamp
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import ForceFeedLoop, parameter_specs
 from sensor_msgs.msg import JointState
 
 from mill_bringup import scenario
 from mill_common import topics
-from test.conftest import busy_cores, ros_node, wait_until
+from test.conftest import busy_cores, ros_node, run_scenario, spin_until
 
 T = 60.0 / 715.0
 
@@ -40,14 +40,9 @@ T = 60.0 / 715.0
 @pytest.mark.parametrize('name', ['beta_neg0.3', 'scheme1'])
 def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: str) -> None:
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', name),
-            *('--compare-offline', '--quiet', '--output', str(out)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
+    proc = run_scenario(
+        ros_env,
+        *('rubio', '--variant', name, '--compare-offline', '--quiet', '--output', str(out)),
         timeout=300,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -76,16 +71,10 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
     equals the offline twin's."""
     segments = 'trajectory.program.segments=["linear -0.075 -0.104 -0.005 0.003"]'
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting_adaptive_feed'),
-            *('-p', segments, '--compare-offline', '--quiet', '--output', str(out)),
-            *('--record', str(tmp_path / 'bag')),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        ros_env,
+        *('slotting_adaptive_feed', '-p', segments, '--compare-offline', '--quiet'),
+        *('--output', str(out), '--record', str(tmp_path / 'bag')),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'summary.json').read_text())
@@ -115,15 +104,10 @@ def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path, busy: int)
     machine slows the run down and its bag misses nothing."""
     out, bag = tmp_path / 'run', tmp_path / 'bag'
     with busy_cores(busy):
-        proc = subprocess.run(
-            [
-                *(sys.executable, '-m', 'mill_bringup.runner', 'rubio', '--variant', 'scheme1'),
-                *('--quiet', '--output', str(out), '--record', str(bag)),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env,
+            *('rubio', '--variant', 'scheme1', '--quiet', '--output', str(out)),
+            *('--record', str(bag)),
         )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'scheme1' / 'summary.json').read_text())
@@ -165,8 +149,7 @@ def test_nan_force_is_held_and_overrides_are_clamped(start_node) -> None:
     warnings: list[str] = []
 
     def on_override(msg: JointState) -> None:
-        ns = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        overrides[ns] = (msg.position[0], msg.velocity[0])
+        overrides[from_stamp(msg.header.stamp)] = (msg.position[0], msg.velocity[0])
 
     def on_diagnostics(msg: DiagnosticArray) -> None:
         warnings.extend(s.message for s in msg.status if s.level == DiagnosticStatus.WARN)
@@ -176,31 +159,25 @@ def test_nan_force_is_held_and_overrides_are_clamped(start_node) -> None:
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, on_diagnostics, 100)
         force = node.create_publisher(WrenchStamped, topics.CUTTING_FORCE, DATA_QOS)
 
-        def spin_until(predicate, timeout: float = 30.0) -> bool:
-            def step() -> bool:
-                executor.spin_once(timeout_sec=0.01)
-                return predicate()
-
-            return wait_until(step, timeout, step=0.0)
-
         assert spin_until(
+            executor,
             lambda: (
                 force.get_subscription_count() > 0
                 and node.count_publishers(topics.FEED_OVERRIDE) > 0
             ),
             60,
         ), 'force controller never matched'
-        spin_until(lambda: False, 0.5)
+        spin_until(executor, lambda: False, 0.5)
 
         def sample(k: int, value: float) -> tuple[float, float]:
             ns = sample_stamp_ns(k, T)
             force.publish(_force(ns, value))
-            assert spin_until(lambda: ns in overrides), f'no override for sample {k}'
+            assert spin_until(executor, lambda: ns in overrides), f'no override for sample {k}'
             return overrides[ns]
 
         forces = [0.0, 600.0, math.nan, 1200.0, 1500.0]
         got = [sample(k, f) for k, f in enumerate(forces)]
-        assert spin_until(lambda: any('non-finite force' in w for w in warnings))
+        assert spin_until(executor, lambda: any('non-finite force' in w for w in warnings))
         assert any('outside [0, 0.3]' in w for w in warnings), warnings
     assert ctrl.alive()
     # The same samples through the same loop offline, with the NaN replaced by 600 N.

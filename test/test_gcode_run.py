@@ -4,11 +4,11 @@ as G-code, and a part whose spindle is off for part of the cut (the cutting forc
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from test.conftest import run_scenario
 
 CONFIG = Path(__file__).resolve().parents[1] / 'config'
 # The slot's tool 5 mm deep in the work: 1 mm cut, 1 mm with the spindle off, 1 mm cut.
@@ -16,13 +16,8 @@ PART = 'G21 G90 G17\nS1800 M3\nG1 Y-104 F180\nM5\nG1 Y-103\nM3\nG1 Y-102\nM30\n'
 
 
 def _run(env: dict[str, str], out: Path, *args: str) -> dict:
-    runner = [sys.executable, '-m', 'mill_bringup.runner', 'slotting']
-    proc = subprocess.run(
-        [*runner, *args, '--compare-offline', '--quiet', '--output', str(out)],
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        env, 'slotting', *args, '--compare-offline', '--quiet', '--output', str(out)
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return json.loads((out / 'summary.json').read_text())

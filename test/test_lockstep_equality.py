@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 
 from mill_bringup import scenario
+from test.conftest import run_scenario
 from test.dds_sniffer import DdsSniffer
 
 
@@ -16,23 +15,10 @@ from test.dds_sniffer import DdsSniffer
 def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
     out = tmp_path / 'run'
     with DdsSniffer() as sniffer:
-        proc = subprocess.run(
-            [
-                sys.executable,
-                '-m',
-                'mill_bringup.runner',
-                'slotting',
-                '--duration',
-                '5',
-                '--compare-offline',
-                '--quiet',
-                '--output',
-                str(out),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env,
+            *('slotting', '--duration', '5', '--compare-offline', '--quiet'),
+            *('--output', str(out)),
         )
     assert proc.returncode == 0, proc.stderr[-3000:]
     # DDS stayed on loopback: not one RTPS packet through any other interface (the host's
@@ -80,17 +66,13 @@ PAPER_RUNS = [
 def test_paper_scenario_runs_equal_offline(ros_env, tmp_path, name, variant, duration, samples):
     assert variant in scenario.load(name).variants
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', name, '--variant', variant),
-            *('--duration', str(duration), '--compare-offline', '--quiet', '--output', str(out)),
-            # every node in one process, still talking over topics: the eight-process graph
-            # is the first test's and the layouts' (a 4401-sample run took 17 s in eight)
-            *('--layout', 'single'),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
+    proc = run_scenario(
+        ros_env,
+        *(name, '--variant', variant),
+        *('--duration', str(duration), '--compare-offline', '--quiet', '--output', str(out)),
+        # every node in one process, still talking over topics: the eight-process graph
+        # is the first test's and the layouts' (a 4401-sample run took 17 s in eight)
+        *('--layout', 'single'),
         timeout=900,
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -112,25 +94,10 @@ LAYOUT_RUNS = [
 @pytest.mark.parametrize(('layout', 'processes'), LAYOUT_RUNS)
 def test_layouts_run_equals_offline_simulation(ros_env, tmp_path, layout, processes):
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'mill_bringup.runner',
-            'slotting',
-            '--duration',
-            '0.3',
-            '--layout',
-            layout,
-            '--compare-offline',
-            '--quiet',
-            '--output',
-            str(out),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        ros_env,
+        *('slotting', '--duration', '0.3', '--layout', layout, '--compare-offline', '--quiet'),
+        *('--output', str(out)),
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     summary = json.loads((out / 'summary.json').read_text())
@@ -145,13 +112,7 @@ def test_layouts_run_equals_offline_simulation(ros_env, tmp_path, layout, proces
 
 
 def test_bad_layout_is_refused_in_one_line(ros_env, tmp_path):
-    proc = subprocess.run(
-        [sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--layout', 'pairs'],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    proc = run_scenario(ros_env, 'slotting', '--layout', 'pairs', timeout=120)
     assert proc.returncode == 1
     assert proc.stderr == (
         "run_scenario: error: layout must be one of processes, per_axis, single, got 'pairs'\n"

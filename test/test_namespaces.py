@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import re
 import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -22,16 +21,17 @@ from mill_analysis.run_record import read_run
 from mill_bag.reader import open_bag
 
 from mill_common import topics
+from test.conftest import start_scenario
 
 DURATION = '0.3'
 SAMPLES = 301  # t = 0 .. 0.3 s at 1 kHz
 
 
 def _runner(ros_env: dict[str, str], out: Path, *args: str) -> subprocess.Popen[str]:
-    cmd = [sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', DURATION]
-    cmd += ['--compare-offline', '--quiet', '--output', str(out), *args]
-    return subprocess.Popen(
-        cmd, env=ros_env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    return start_scenario(
+        ros_env,
+        *('slotting', '--duration', DURATION, '--compare-offline', '--quiet'),
+        *('--output', str(out), *args),
     )
 
 

@@ -40,6 +40,7 @@ from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 
 from mill_bringup import scenario
+from test.conftest import run_scenario
 
 LAYOUT = 'single'
 # SCHED_FIFO for the graph and the driver, as docs/hardware-driver.md says to run a machine:
@@ -221,18 +222,12 @@ def test_a_driver_from_the_contract_alone_tracks_the_slotting_path(ros_env, tmp_
     )
     out = tmp_path / 'run'
     try:
-        proc = subprocess.run(
-            [
-                *(sys.executable, '-m', 'mill_bringup.runner', 'slotting'),
-                *('--timing', 'realtime', '--external', 'plant', '--duration', '4'),
-                *('--layout', LAYOUT, '--realtime-priority', str(PRIORITY)),
-                *(arg for text in TOLD for arg in ('-p', text)),
-                *('--output', str(out), '--quiet'),
-            ],
-            env=ros_env,
-            capture_output=True,
-            text=True,
-            timeout=600,
+        proc = run_scenario(
+            ros_env,
+            *('slotting', '--timing', 'realtime', '--external', 'plant', '--duration', '4'),
+            *('--layout', LAYOUT, '--realtime-priority', str(PRIORITY)),
+            *(arg for text in TOLD for arg in ('-p', text)),
+            *('--output', str(out), '--quiet'),
         )
     finally:
         driver.terminate()

@@ -33,15 +33,14 @@ from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover
 from mill_bringup.jobs.base import RECORDER_WINDOW
-from mill_common.ros import DATA_QOS, joint_state, to_stamp
-from rclpy.executors import SingleThreadedExecutor
+from mill_common.ros import DATA_QOS, from_stamp, joint_state, to_stamp
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
 from mill_analysis import records
 from mill_common import topics
-from test.conftest import busy_cores, run_scenario, start_scenario, wait_until
+from test.conftest import busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
@@ -104,7 +103,7 @@ def both_readers(bag: Path) -> tuple[Counter, Counter, dict[str, list[int]]]:
             stamp = getattr(getattr(decoded, 'header', None), 'stamp', None)
             stamp = decoded.clock if channel.topic == topics.CLOCK else stamp
             if stamp is not None:
-                ns = stamp.sec * 1_000_000_000 + stamp.nanosec
+                ns = from_stamp(stamp)
                 ks.setdefault(channel.topic, []).append(ns // T_NS)
                 assert message.log_time == ns  # sim time: the bag time is the stamp
     return by_rosbags, by_mcap, ks
@@ -270,15 +269,9 @@ def processes_mentioning(text: str) -> list[int]:
 def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_path, sig):
     run_dir = tmp_path / 'run'
     bag = run_dir / 'bag'
-    proc = subprocess.Popen(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '30'),
-            *('--record', '--quiet', '--output', str(run_dir)),
-        ],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
+    proc = start_scenario(
+        ros_env,
+        *('slotting', '--duration', '30', '--record', '--quiet', '--output', str(run_dir)),
     )
     try:
         # stepping, and the first flushes are on disk
@@ -457,24 +450,6 @@ def test_a_sigkill_of_the_runner_loses_at_most_a_window_of_steps_and_its_last_wr
 RECORDED = tuple(Q(t) for t in (topics.state('x'), topics.CUTTING_FORCE, topics.CLOCK))
 
 
-@contextlib.contextmanager
-def ros_node(name: str) -> Iterator[Node]:
-    """A node of the test process in its own context (environment from ros_env)."""
-    context = rclpy.Context()
-    rclpy.init(context=context)
-    try:
-        node = rclpy.create_node(name, context=context)
-        executor = SingleThreadedExecutor(context=context)
-        executor.add_node(node)
-        try:
-            yield node
-        finally:
-            executor.shutdown()
-            node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)
-
-
 class FakePlant:
     """Publishes what the plant would: state and force every step (stamp k T), /clock every 10."""
 
@@ -529,7 +504,7 @@ def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
     bag = tmp_path / 'bag'
     recorder = start_recorder(start_node, bag)
     n = 600
-    with ros_node('fake_plant') as node:
+    with ros_node('fake_plant') as (node, _executor):
         plant = FakePlant(node)
         assert wait_until(plant.matched, 60), 'the recorder never subscribed'
         for k in range(n):
@@ -553,7 +528,7 @@ def test_sigkill_loses_at_most_the_last_second(start_node, tmp_path):
     bag = tmp_path / 'bag'
     recorder = start_recorder(start_node, bag)
     kill_at, n = 2000, 3000  # about 2.5 s of publishing, then SIGKILL, then more
-    with ros_node('fake_plant') as node:
+    with ros_node('fake_plant') as (node, _executor):
         plant = FakePlant(node)
         assert wait_until(plant.matched, 60), 'the recorder never subscribed'
         for k in range(n):
@@ -599,15 +574,8 @@ def test_recorder_refuses_an_existing_output_with_one_line(start_node, tmp_path)
 def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
     bag = tmp_path / 'bag'
     bag.mkdir()
-    proc = subprocess.run(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--record', str(bag)),
-            *('--output', str(tmp_path / 'run')),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=120,
+    proc = run_scenario(
+        ros_env, 'slotting', '--record', str(bag), '--output', str(tmp_path / 'run'), timeout=120
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
     assert proc.returncode == 1 and len(lines) == 1, proc.stderr
@@ -641,19 +609,11 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
     from mill_analysis.report.kinds import ReportOptions, kind_of
 
     out = tmp_path / 'run'
-    proc = subprocess.run(
-        [
-            sys.executable,
-            '-m',
-            'mill_bringup.runner',
-            'commissioning',
-            *('--timing', 'realtime', '--tuning', 'rule', '-p', '*.sample_period=0.01'),
-            *('--duration', '2', '--record', '--quiet', '--output', str(out)),
-        ],
-        env=ros_env,
-        capture_output=True,
-        text=True,
-        timeout=600,
+    proc = run_scenario(
+        ros_env,
+        'commissioning',
+        *('--timing', 'realtime', '--tuning', 'rule', '-p', '*.sample_period=0.01'),
+        *('--duration', '2', '--record', '--quiet', '--output', str(out)),
     )
     assert (out / 'summary.json').exists(), (
         f'no summary (exit {proc.returncode}):\n' + (proc.stderr[-3000:])

@@ -12,9 +12,10 @@ import os
 import re
 import signal
 import subprocess
-import sys
 
 import pytest
+
+from test.conftest import start_scenario
 
 
 def run_and_kill(ros_env, tmp_path, victim: str) -> tuple[int, str, dict]:
@@ -24,15 +25,9 @@ def run_and_kill(ros_env, tmp_path, victim: str) -> tuple[int, str, dict]:
     comes 5 s later, and a 3 s run may be over by then (about 500 steps/s here).
     """
     out = tmp_path / 'run'
-    proc = subprocess.Popen(
-        [
-            *(sys.executable, '-m', 'mill_bringup.runner', 'slotting', '--duration', '3'),
-            *('--compare-offline', '--respawn', '--output', str(out)),
-        ],
-        env=ros_env,
-        stderr=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        text=True,
+    proc = start_scenario(
+        ros_env,
+        *('slotting', '--duration', '3', '--compare-offline', '--respawn', '--output', str(out)),
     )
     killed = False
     lines = []

@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import math
 import subprocess
-import sys
 from collections.abc import Iterator
 
 import pytest
@@ -20,7 +19,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from test.conftest import ParameterClient, ros_node, wait_until
+from test.conftest import ParameterClient, ros_node, start_scenario, wait_until
 
 # Every sample of a run: a job of 1 s at 4 kHz runs faster than real time, and this node
 # must not lose a command it has not taken yet while the machine is busy.
@@ -90,13 +89,7 @@ class RunningJob:
 
 @contextlib.contextmanager
 def running_job(ros_env, *runner_args: str) -> Iterator[RunningJob]:
-    runner = subprocess.Popen(
-        [sys.executable, '-m', 'mill_bringup.runner', *runner_args, '--quiet'],
-        env=ros_env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    runner = start_scenario(ros_env, *runner_args, '--quiet')
     try:
         with ros_node('switch_tester') as (node, executor):
             job = RunningJob(runner, node, executor)

@@ -24,7 +24,7 @@ from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_bag.types import DIAGNOSTIC_ARRAY, decode
-from mill_common.timebase import sample_stamp_ns
+from mill_common.timebase import sample_stamp_ns, time_ns
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 
@@ -113,10 +113,6 @@ FORCE_TOPICS = {
 }
 
 
-def _ns(stamp: object) -> int:
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)  # type: ignore[attr-defined]
-
-
 def record_from_messages(
     raw: Mapping[str, Sequence[bytes]],
     n: int,
@@ -141,13 +137,13 @@ def record_from_messages(
     for topic, msgtype in FORCE_TOPICS.items():
         for data in raw.get(topic, ()):
             msg = decode(msgtype, data)
-            ns = _ns(msg.header.stamp)
+            ns = time_ns(msg.header.stamp)
             k = index.get(ns)
             if topic == topics.CUTTING_FORCE_TRACE:
                 if k is not None:
                     seen[topic].add(k)
                 for p in msg.points:
-                    at = ns + _ns(p.time_from_start)
+                    at = ns + time_ns(p.time_from_start)
                     if at <= end_ns:
                         trace.append((at, float(p.positions[0])))
                 continue

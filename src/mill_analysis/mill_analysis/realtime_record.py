@@ -30,6 +30,7 @@ from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.types import decode
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, AxisReference
+from mill_common.timebase import time_ns
 from mill_common.timing import Realtime
 
 from mill_analysis.metrics import SIGNALS, RunRecord
@@ -40,12 +41,8 @@ JOINT_STATE = 'sensor_msgs/msg/JointState'
 JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 
 
-def _ns(stamp: Any) -> int:
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
-
-
 def _by_stamp(messages: Sequence[Any]) -> dict[int, Any]:
-    return {_ns(msg.header.stamp): msg for msg in messages}
+    return {time_ns(msg.header.stamp): msg for msg in messages}
 
 
 def _taken(
@@ -58,7 +55,7 @@ def _taken(
     out: dict[str, list[Any]] = {t: [] for t in raw}
     for topic, data in arrival_order(raw, list(raw)):
         msg = decode(JOINT_TRAJECTORY if topic == topics.REFERENCE else JOINT_STATE, data)
-        ns = _ns(msg.header.stamp)
+        ns = time_ns(msg.header.stamp)
         problem = intake.problem(topic, ns, msg.header.frame_id)
         if problem is not None:
             intake.drop(topic, problem)
@@ -97,10 +94,10 @@ def realtime_record(
     sig = rec.signals
     refs = {a: ReferenceBuffer() for a in axes}
     for msg in taken.get(topics.REFERENCE, ()):
-        base = _ns(msg.header.stamp)
+        base = time_ns(msg.header.stamp)
         names = list(msg.joint_names)
         for p in msg.points:
-            at = base + _ns(p.time_from_start)
+            at = base + time_ns(p.time_from_start)
             for a in axes:
                 if a in names:
                     j = names.index(a)

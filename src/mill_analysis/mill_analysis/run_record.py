@@ -36,7 +36,7 @@ from mill_bag.types import (
 )
 from mill_common.checks import Rejected, joint_values, point_values
 from mill_common.signals import AXES
-from mill_common.timebase import job_steps
+from mill_common.timebase import job_steps, time_ns
 from mill_common.timing import Lockstep
 
 from mill_analysis import records
@@ -61,10 +61,6 @@ def record_topics(axes: Sequence[str]) -> dict[str, str]:
     out[topic_names.GROUND_TRUTH] = JOINT_STATE
     out[topic_names.CUTTING_FORCE] = WRENCH_STAMPED
     return out
-
-
-def _ns(time_msg: Any) -> int:
-    return time_msg.sec * 1_000_000_000 + time_msg.nanosec
 
 
 def build_record(
@@ -163,7 +159,7 @@ def build_record(
         # all points checked before any is used, as the controllers do
         values = []
         for point in msg.points:
-            offset = _ns(point.time_from_start)
+            offset = time_ns(point.time_from_start)
             if offset % dt_ns:
                 return Rejected(f'a point at {offset} ns is off the grid')
             arrays = {
@@ -208,7 +204,7 @@ def build_record(
         handler = handlers.get(topic)
         if handler is None:
             continue
-        ns = _ns(msg.header.stamp)
+        ns = time_ns(msg.header.stamp)
         problem = intake.problem(topic, ns, msg.header.frame_id)
         if problem is None:
             try:

@@ -12,6 +12,7 @@ from builtin_interfaces.msg import Duration
 from mill_analysis.record_checks import Drops, drop_lines
 from mill_analysis.run_record import build_record
 from mill_common.checks import Rejected
+from mill_common.timebase import time_ns
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
@@ -97,7 +98,7 @@ def test_far_ahead_states_with_the_owners_name_are_left_out_with_their_reason() 
 
 
 def _k(msg) -> int:
-    return (msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec) // T
+    return time_ns(msg.header.stamp) // T
 
 
 def test_foreign_senders_and_stamps_in_the_past_are_left_out() -> None:

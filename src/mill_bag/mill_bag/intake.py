@@ -34,6 +34,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+from mill_common.timebase import stamp_ns
+
 MAX_MESSAGE_BYTES = 16 << 20
 MAX_LEAD_NS = 3600 * 1_000_000_000
 UNKNOWN_TYPE = 'unknown type'
@@ -76,7 +78,7 @@ class Intake:
             return Rejected('invalid stamp', f'nanosec {nanosec}')
         if not self.sim_time:
             return received_ns
-        ns = sec * 1_000_000_000 + nanosec
+        ns = stamp_ns(sec, nanosec)
         latest = self.latest_ns
         if latest is not None and ns > latest + MAX_LEAD_NS:
             return Rejected('stamp ahead', f'{ns / 1e9:.9f} s, newest {latest / 1e9:.9f} s')

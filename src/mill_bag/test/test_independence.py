@@ -1,5 +1,6 @@
-"""mill_bag knows nothing of mill: no mill package but mill_common's generic node helpers, and
-no mill topic name in its code."""
+"""mill_bag knows nothing of mill: no mill package but mill_common's generic node helpers, its
+ROS-free codec (the nodes' CDR reader, which the bag's JointState reader is) and time base (a
+stamp in ns), and no mill topic name in its code."""
 
 from __future__ import annotations
 
@@ -9,9 +10,11 @@ from pathlib import Path
 import mill_bag
 
 ALLOWED = {
+    'mill_common.codec',
     'mill_common.executable',
     'mill_common.node_main',
     'mill_common.parameters',
+    'mill_common.timebase',
     'mill_common.ros_params',
     'mill_common.one_line_parser',
 }

@@ -32,6 +32,7 @@ from typing import Any
 from mill_common.codec import encode_clock, encode_joint_state, encode_joint_trajectory
 from mill_common.env import apply_to_current_process
 from mill_common.ros import DATA_QOS
+from mill_common.timebase import stamp_ns
 
 from mill_bench.pingpong import serve
 
@@ -53,8 +54,7 @@ def topic(axis: str, name: str) -> str:
 
 
 def stamp(data: bytes) -> int:
-    sec, nanosec = _STAMP.unpack_from(data, 4)
-    return sec * 1_000_000_000 + nanosec
+    return stamp_ns(*_STAMP.unpack_from(data, 4))
 
 
 def _node(role: str, steps: int, listener: bool) -> int:

@@ -367,8 +367,12 @@ def _get_header(data: bytes, bo: _Order) -> tuple[Header, int]:
     return Header(Time(sec, nanosec), frame_id), o
 
 
-def decode_joint_state(data: bytes) -> JointStateData:
-    """sensor_msgs/JointState from its CDR bytes; CodecError if they are not one."""
+def decode_joint_state(data: bytes, whole: bool = False) -> JointStateData:
+    """sensor_msgs/JointState from its CDR bytes; CodecError if they are not one.
+
+    whole: the bytes are the message and no more (a bag's message, which rosbags reads so),
+    so more than the final alignment padding after it is a CodecError too.
+    """
     for layout in _READ_LAYOUTS.get(len(data), ()):  # a shape seen before: one struct call
         msg = layout.read(data)
         if msg is not None:
@@ -382,6 +386,8 @@ def decode_joint_state(data: bytes) -> JointStateData:
         effort, o = _get_doubles(data, o, bo)
     except struct.error:
         raise CodecError(f'JointState cut short ({len(data)} bytes)') from None
+    if whole and o < len(data) - 3:
+        raise CodecError(f'{len(data) - o} bytes after the JointState')
     if o == len(data) and bo is _LE and _read_layouts < _MAX_LAYOUTS:
         _keep_read_layout(header.frame_id, name, position, velocity, effort, data)
     return JointStateData(header, name, position, velocity, effort)

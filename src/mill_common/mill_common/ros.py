@@ -22,6 +22,7 @@ from mill_common.intra_process import data_mute as data_mute  # for the nodes
 from mill_common.intra_process import data_publisher as data_publisher  # for the nodes
 from mill_common.intra_process import data_subscription
 from mill_common.intra_process import data_unsubscribe as data_unsubscribe  # for the nodes
+from mill_common.timebase import time_ns
 
 # Lockstep data must not be lost, and a slow listener (recorder, monitor) must
 # not lose samples while it catches up: reliable, deep history.
@@ -56,13 +57,8 @@ def to_stamp(ns: int) -> Time:
     return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
 
-def from_stamp(stamp: Time) -> int:
-    return stamp.sec * 1_000_000_000 + stamp.nanosec
-
-
-def from_duration(duration) -> int:
-    """builtin_interfaces/Duration in nanoseconds."""
-    return duration.sec * 1_000_000_000 + duration.nanosec
+# builtin_interfaces/Time and Duration in nanoseconds: the one conversion, ROS-free
+from_stamp = from_duration = time_ns
 
 
 def joint_state(

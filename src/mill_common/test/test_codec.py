@@ -307,6 +307,16 @@ def test_corrupted_messages_decode_or_raise_codec_error(data) -> None:
         decode(bytes(raw))
 
 
+def test_a_whole_message_may_end_in_its_padding_only() -> None:
+    # rclpy ignores bytes after a message; a bag's message is its bytes (rosbags refuses more)
+    good = encode_joint_state(5, 'plant', ['x'], [1.0])
+    for extra in (b'', b'\x00' * 3, b'\x00' * 4):
+        assert decode_joint_state(good + extra).position == (1.0,)
+    assert decode_joint_state(good + b'\x00' * 3, whole=True).position == (1.0,)
+    with pytest.raises(CodecError, match='4 bytes after the JointState'):
+        decode_joint_state(good + b'\x00' * 4, whole=True)
+
+
 def test_a_nul_in_a_string_cannot_be_encoded() -> None:
     with pytest.raises(CodecError, match='NUL'):
         encode_joint_state(0, 'pl\x00ant', ['x'])
