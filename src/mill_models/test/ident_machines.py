@@ -196,10 +196,13 @@ def _slide(
 # tests' friction scaled up so that it shows).
 BELTRAN_X = Machine(motor_mass=94.4, coulomb=20.0, viscous=10.0)
 M1 = Machine(motor_mass=94.4, coulomb=70.0, static=120.0, stribeck_speed=2e-3, viscous=25.0)
+# the screw's nut with a 15 µm gap to the table, a stiff damped contact (2e8 N/m, ζ ≈ 0.5),
+# the guides' friction on the table, measured on the table (a linear scale)
 M3_X = Machine(
     motor_mass=76.9,
     table_mass=17.5,
-    stiffness=2e7,
+    stiffness=2e8,
+    damping=2.0 * 0.5 * math.sqrt(2e8 * 76.9 * 17.5 / 94.4),
     backlash=15e-6,
     coulomb=30.0,
     viscous=10.0,
