@@ -80,7 +80,7 @@ class StribeckFriction:
         return out
 
 
-def _curve(v: np.ndarray, fc: float, fs: float, vs: float, sigma: float) -> np.ndarray:
+def _curve(v: np.ndarray, fc: float, fs: float | np.ndarray, vs: float, sigma: float) -> np.ndarray:
     # Stribeck curve, Olsson et al. 1998 §2 (δ = 2): F = Fc + (Fs − Fc)·e^(−(v/vs)²) + σ·v
     return np.sign(v) * (fc + (fs - fc) * np.exp(-((v / vs) ** 2))) + sigma * v
 
@@ -144,7 +144,7 @@ def estimate_friction(
         axis=1,
     )
     total = cost.sum(axis=2)
-    i_best, j_best = np.unravel_index(int(np.argmin(total)), total.shape)
+    i_best, j_best = (int(i) for i in np.unravel_index(int(np.argmin(total)), total.shape))
     # the stops resampled (bootstrap): how far the best grid point moves
     rng = np.random.default_rng(0)
     picks = rng.integers(0, n_seg, size=(s.resamples, n_seg))
