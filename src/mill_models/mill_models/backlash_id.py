@@ -98,7 +98,7 @@ def lost_motion(
     )
     resolution = max(_resolution(table), _resolution(motor))
     half = max(half, resolution)  # the medians are of quantised differences
-    present = width - half > 2.0 * resolution
+    present = bool(width - half > 2.0 * resolution)
     n = min(len(plus), len(minus))
     reason = (
         f'{1e6 * width:.3g} µm of backlash at reversals (motor − table, {n} reversals)'
@@ -186,10 +186,10 @@ def estimate_backlash(
     width = Interval(float(gaps[best]), max(step, gaps[best] - lo, hi - gaps[best]))
     share = float(shares[int(np.argmin(cost[best].sum(axis=1)))])
     small = s.min_gap * m.resolution
-    present = lo > 0.0 and width.value >= small
+    present = bool(lo > 0.0 and width.value >= small)
     reason = (
-        f'{1e6 * width.value:.3g} µm of backlash at reversals (± {1e6 * width.half_width:.2g}; '
-        f'{n_seg} torque reversals)'
+        f'{1e6 * width.value:.3g} µm of backlash at reversals (± {1e6 * width.half_width:.2g} '
+        f'µm, {n_seg} torque reversals)'
         if present
         else f'no backlash: the gap fitted to {n_seg} torque reversals is '
         f'{1e6 * width.value:.2g} ± {1e6 * width.half_width:.2g} µm'

@@ -331,7 +331,7 @@ def analyse(resp: FrequencyResponse, settings: FrfSettings | None = None) -> Frf
     else:
         why = (
             f'a resonance at {hz:.3g} Hz, ζ ≈ {cand.zeta.value:.2g}, that a rigid model cannot '
-            f'describe (two-mass χ² {chi_f:.3g} vs rigid {chi_r:.3g})'
+            f'describe'
         )
         chosen = cand
     return FrfAnalysis(resp, band, len(w), b_rigid, delay_rigid, chi_r, chosen, cand, why, exc_band)
