@@ -183,7 +183,7 @@ def estimate_backlash(
     boot = np.argmin(per_gap[:, picks].sum(axis=2), axis=0)
     lo, hi = np.quantile(gaps[boot], [0.025, 0.975])
     step = 0.5 * (gaps[1] - gaps[0])
-    width = Interval(float(gaps[best]), max(step, gaps[best] - lo, hi - gaps[best]))
+    width = Interval(float(gaps[best]), float(max(step, gaps[best] - lo, hi - gaps[best])))
     share = float(shares[int(np.argmin(cost[best].sum(axis=1)))])
     small = s.min_gap * m.resolution
     present = bool(lo > 0.0 and width.value >= small)

@@ -92,7 +92,16 @@ def _structure(m: AxisModel | None) -> dict[str, Any]:
     if m.response is not None and m.response.bins:
         out['frequency_band'] = list(m.response.band)
         out['excitation_band'] = list(m.response.excitation_band)
-    return out
+    return {k: _plain(v) for k, v in out.items()}
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars as Python numbers (safe_dump writes only those)."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value.item() if hasattr(value, 'item') else value
 
 
 def read(path: Path) -> MachineModel:
