@@ -15,6 +15,11 @@ Rules (checked by test/test_import_graph.py):
 Modules:
 
 - axis_data: the rigid ball-screw axis of Beltrán 2013 (Table 1, m_e, c_e, b).
+- identification: the rigid axis fitted to a record (b, friction, load, delay).
+- frequency_response: an axis's response from its record, its resonances, a two-mass model.
+- friction_id: breakaway and Stribeck friction from the record's stops.
+- backlash_id: backlash from two encoders or from the table's alone.
+- axis_model: which of these models a record supports, and why.
 - force_process: Rubio 2013 eq. (1)-(3), the feed → peak-force process and its exact
   simulation under affine inputs.
 - holds: the β fractional-order hold of Rubio 2013 eq. (4)-(6) (input reconstruction,

@@ -57,6 +57,7 @@ class FitSettings:
     max_gain_error: float = 0.02  # the 95 % interval of b must be within ±this × b
     delay_contrast: float = 2.0  # the second-best delay's residual must be this × the best
     max_rejected: float = 0.2  # of the windows may fit far worse than the others
+    max_noise: float = 3.0  # the fit's RMS residual may be this × the measurement's noise
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,7 @@ class AxisIdentification:
     fit_rms: float  # residual of the fit [m]
     validation_rms: float  # residual on the held-out windows [m]
     delay_residuals: tuple[float, ...] = field(default=())  # per delay 0 … max_delay [m²]
+    noise: float = math.nan  # the measurement's own noise, RMS (noise_floor) [m]
 
     def torque(self, name: str) -> Interval:
         """A friction or load term as the motor torque that balances it [N·m, N·m·s/m]."""
@@ -167,6 +169,20 @@ def _stack(x, u, T, windows, d):
     return np.vstack([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
 
 
+def noise_floor(x: np.ndarray) -> float:
+    """The position measurement's own noise, RMS [m]: the encoder's quantization q/√12,
+    unless the noise of the third differences is well above it (a smooth motion has hardly
+    any: white noise of variance s² gives Δ³ of variance 20·s²; taken robustly, the median
+    absolute deviation ×1.4826). Quantization alone is not white when the axis moves slowly,
+    which raises the Δ³ estimate somewhat: below twice q/√12 it is not taken."""
+    q = resolution_of(x) / math.sqrt(12.0)  # uniform quantization error: q/√12
+    d3 = np.diff(np.asarray(x, float), 3)
+    if d3.size < 10:
+        return q
+    spread = 1.4826 * float(np.median(np.abs(d3 - np.median(d3)))) / math.sqrt(20.0)
+    return spread if spread > 2.0 * q else q
+
+
 def resolution_of(x: np.ndarray) -> float:
     steps = np.abs(np.diff(x))
     steps = steps[steps > 1e-12]
@@ -225,6 +241,7 @@ def identify_axis(
         fit_rms=math.sqrt(best / n),
         validation_rms=_validation_rms(x, u, T, fit, held, d, theta),
         delay_residuals=tuple(rss),
+        noise=noise_floor(x),
     )
     check_consistent(ident, s)
     return ident
@@ -313,7 +330,18 @@ def check_consistent(m: AxisIdentification, s: FitSettings) -> None:
             f'too little excitation: b = {b.text()} m/s² per N·m, an interval wider than '
             f'±{100 * s.max_gain_error:g} %: a larger excitation.acceleration or a longer run'
         )
+    if math.isfinite(m.noise) and m.fit_rms > s.max_noise * m.noise:
+        # A rigid axis leaves only the encoder's noise (docs/bring-up.md: 0.285 µm for a 1 µm
+        # encoder); far more is an effect the model does not have, whatever it predicts.
+        raise IdentificationError(
+            f'the rigid model leaves {1e6 * m.fit_rms:.3g} µm RMS, {m.fit_rms / m.noise:.3g}x '
+            f"the measurement's noise ({1e6 * m.noise:.2g} µm): an effect it does not have "
+            f'(compliance, backlash, a position-dependent load)'
+        )
     if m.alpha.value + m.alpha.half_width < 0.0:
+        # Negative beyond its interval. (A negative value within its interval, on a fit down
+        # to the noise, is zero damping measured; on a worse fit the check above refused it:
+        # issue 32's compliant axis gave −16.8 N·s/m with an interval reaching past zero.)
         raise IdentificationError(
             f'viscous friction α = {m.alpha.text()} 1/s is negative: an unstable model, '
             f'which no rigid axis is (something else drives this axis)'

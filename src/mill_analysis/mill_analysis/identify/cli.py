@@ -1,10 +1,13 @@
 """`identify BAG`: the model of every axis from a recorded identify run, its table and plot.
 
 Reads the positions and commands of a bag (`run_scenario identify --record`, or any bag of
-the mill topics with enough motion), fits each axis (mill_models.identification), prints the
-table, plots model against measurement on held-out data and writes the machine model that
-`tune` reads. Any axis the record cannot identify gets one line saying why and no model file
-is written (exit 1); bad options and unreadable bags one line (exit 2 / 1).
+the mill topics with enough motion), chooses each axis's model (mill_models.axis_model: the
+rigid fit, its frequency response, backlash, low-speed friction), prints the tables, plots
+model against measurement on held-out data and writes the machine model that `tune` reads.
+Every axis says which model it got and why. An axis whose record shows a resonance gets the
+two-mass model (written to the file, which `tune` then refuses: it designs for rigid axes
+only); any axis the record cannot give a model gets one line saying why and no model file is
+written (exit 1); bad options and unreadable bags one line (exit 2 / 1).
 """
 
 from __future__ import annotations
@@ -14,12 +17,13 @@ from pathlib import Path
 
 from mill_bag.errors import BagError
 from mill_common.one_line_parser import OneLineParser, positive
+from mill_models.axis_model import NONE, RIGID, StructureSettings
 from mill_models.identification import FitSettings
 
 from mill_analysis.identify import machine_file
-from mill_analysis.identify.fit_record import identify_record
+from mill_analysis.identify.fit_record import structure_record
 from mill_analysis.identify.plot import plot
-from mill_analysis.identify.table import table
+from mill_analysis.identify.table import structure_table, table
 from mill_analysis.run_record import read_run
 
 
@@ -28,8 +32,10 @@ def _parser() -> OneLineParser:
         prog='identify',
         description='Identify each axis of a recorded run (run_scenario identify --record): '
         "input gain b, viscous and Coulomb friction, constant load and delay of x'' = "
-        "b·u(t − d·T) − α·x' − β·sign(x') − γ, with 95 %% intervals; the table, a plot of "
-        'model against held-out measurement, and the machine model file that tune reads.',
+        "b·u(t − d·T) − α·x' − β·sign(x') − γ, with 95 %% intervals, or the two-mass model "
+        'when the frequency response shows a resonance; breakaway and Stribeck friction and '
+        'backlash; which model each axis got and why; the tables, a plot of model against '
+        'held-out measurement, and the machine model file that tune reads.',
     )
     p.add_argument('bag', help='bag directory or .mcap file')
     p.add_argument('--output', '-o', type=Path, help='machine model (default: BAG/../machine.yaml)')
@@ -59,21 +65,41 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     rec = run.record
     T = run.dt_ns * 1e-9
-    fits, failed = identify_record(rec, T, axes, args.skip, FitSettings(max_delay=args.max_delay))
+    settings = StructureSettings(fit=FitSettings(max_delay=args.max_delay))
+    structures = structure_record(rec, T, axes, args.skip, settings)
+    chosen = {a: m for a, (m, _, _) in structures.items()}
+    print(f'{args.bag}: {len(rec.t)} samples at T = {1e3 * T:g} ms, from t = {args.skip:g} s')
+    print(structure_table(chosen, args.pitch))
+    failed = [m.line(a) for a, m in chosen.items() if m.model == NONE]
     for line in failed:
         print(f'identify: {line}', file=sys.stderr)
     if failed:
         print('identify: no machine model written', file=sys.stderr)
         return 1
+    fits = {
+        a: (m.rigid, x, u)
+        for a, (m, x, u) in structures.items()
+        if m.model == RIGID and m.rigid is not None
+    }
     models = {a: f[0] for a, f in fits.items()}
     run_dir = Path(args.bag).resolve().parent
     out = args.output or run_dir / 'machine.yaml'
     picture = args.plot or run_dir / 'identify.png'
-    print(f'{args.bag}: {len(rec.t)} samples at T = {1e3 * T:g} ms, from t = {args.skip:g} s')
-    print(table(models, args.pitch))
-    machine_file.write(out, machine_file.MachineModel(T, models, str(args.bag)))
-    plot(picture, fits)
-    print(f'machine model: {out}\nplot: {picture}\nnext: tune {out} (docs/bring-up.md)')
+    if models:
+        print(table(models, args.pitch))
+    machine_file.write(out, machine_file.MachineModel(T, models, str(args.bag), chosen))
+    if fits:
+        plot(picture, fits)
+        print(f'plot: {picture}')
+    print(f'machine model: {out}')
+    others = [a for a in chosen if a not in models]
+    if others:
+        print(
+            f'tune designs for rigid axes only: {", ".join(others)} need a design for their '
+            f'{", ".join(sorted({chosen[a].model for a in others}))} model'
+        )
+    else:
+        print(f'next: tune {out} (docs/bring-up.md)')
     return 0
 
 

@@ -3,18 +3,27 @@
 One entry per axis with the model of mill_models.identification (b, α, β, γ with their 95 %
 half-widths, the delay in samples) and the sample period it was identified at. A file that
 is not such a model is refused with one line (MachineFileError).
+
+Each axis also says which model its record supports and why (mill_models.axis_model):
+`model` (rigid, two_mass), `reason` (one line), and what was seen: `two_mass` (b, mass
+ratio m2/m1, ω_r, ζ with half-widths, resonance and anti-resonance in Hz, delay [s]),
+`stribeck` (Coulomb and static friction as accelerations, Stribeck speed [m/s]),
+`backlash` (width [m]) and `frequency_band` (the band the response was fitted over [Hz])
+and `excitation_band` (what the excitation covered [Hz]). `read` gives the rigid models and
+refuses an axis whose chosen model is not rigid: `tune` designs for rigid axes only.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 from mill_common.signals import AXES
+from mill_models.axis_model import RIGID, AxisModel
 from mill_models.identification import NAMES, AxisIdentification, Interval
 
 VERSION = 1
@@ -40,6 +49,7 @@ class MachineModel:
     sample_period: float  # [s]
     axes: dict[str, AxisIdentification]
     source: str = ''  # the bag it was identified from
+    structure: dict[str, AxisModel] = field(default_factory=dict)  # the model chosen, and why
 
 
 def write(path: Path, model: MachineModel) -> None:
@@ -47,7 +57,13 @@ def write(path: Path, model: MachineModel) -> None:
         'mill_machine_model': VERSION,
         'source': model.source,
         'sample_period': model.sample_period,
-        'axes': {a: _axis_dict(m) for a, m in model.axes.items()},
+        'axes': {
+            a: {
+                **(_axis_dict(model.axes[a]) if a in model.axes else {}),
+                **_structure(model.structure.get(a)),
+            }
+            for a in [*model.axes, *(a for a in model.structure if a not in model.axes)]
+        },
     }
     header = (
         '# The identified model of each axis (identify; docs/bring-up.md):\n'
@@ -61,6 +77,31 @@ def _axis_dict(m: AxisIdentification) -> dict[str, float | int]:
     d = m.as_dict()
     d.pop('sample_period')
     return d
+
+
+def _structure(m: AxisModel | None) -> dict[str, Any]:
+    if m is None:
+        return {}
+    out: dict[str, Any] = {'model': m.model, 'reason': m.reason}
+    if m.two_mass is not None:
+        out['two_mass'] = m.two_mass.as_dict()
+    if m.friction is not None:
+        out['stribeck'] = m.friction.as_dict()
+    if m.backlash is not None:
+        out['backlash'] = m.backlash.as_dict()
+    if m.response is not None and m.response.bins:
+        out['frequency_band'] = list(m.response.band)
+        out['excitation_band'] = list(m.response.excitation_band)
+    return {k: _plain(v) for k, v in out.items()}
+
+
+def _plain(value: Any) -> Any:
+    """numpy scalars as Python numbers (safe_dump writes only those)."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value.item() if hasattr(value, 'item') else value
 
 
 def read(path: Path) -> MachineModel:
@@ -96,6 +137,12 @@ def _number(value: Any, where: str) -> float:
 def _axis(entry: Any, T: float, where: str) -> AxisIdentification:
     if not isinstance(entry, Mapping):
         raise MachineFileError(f'{where}: not a mapping')
+    chosen = entry.get('model', RIGID)
+    if chosen != RIGID:
+        raise MachineFileError(
+            f'{where}: a {chosen} model ({entry.get("reason", "?")}): tune designs for rigid '
+            f'axes only'
+        )
     missing = [f for f in FIELDS if f not in entry]
     if missing:
         raise MachineFileError(f'{where}: missing {", ".join(missing)}')
