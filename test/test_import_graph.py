@@ -31,7 +31,12 @@ import pytest
 SRC = Path(__file__).resolve().parents[1] / 'src'
 ROLE_PACKAGES = ('mill_plant', 'mill_controllers', 'mill_observers', 'mill_trajectory')
 MODELS = 'mill_models'
-ROS_FREE_COMMON = ('mill_common.signals', 'mill_common.parameters', 'mill_common.timebase')
+ROS_FREE_COMMON = (
+    'mill_common.signals',
+    'mill_common.parameters',
+    'mill_common.declared',
+    'mill_common.timebase',
+)
 MODELS_MAY_USE = ('numpy', 'scipy')
 ANALYSIS, BRINGUP, BENCH = 'mill_analysis', 'mill_bringup', 'mill_bench'
 

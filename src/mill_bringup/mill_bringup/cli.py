@@ -7,6 +7,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from mill_common.declared import Configured, ParamSet
+
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
 
@@ -131,23 +133,58 @@ def set_timing(scen: Scenario, timing: str | None, delay: int | None = None) -> 
                 scen.add_override(f'{node.name}.command_delay={delay}')
 
 
-RULE_LAWS = ('adrc', 'pd')  # the laws the tuning rule tunes (mill_models.loop_tuning)
+def declared(cls: type[Configured]) -> type[ParamSet]:
+    """A core's parameter set, if it is the one its parameters come from (same PREFIX);
+    a class that still writes PREFIX and PARAMETERS itself beside an inherited PARAMS
+    (excitation under the adrc law's) declares none here."""
+    return cls.PARAMS if cls.PARAMS.PREFIX == cls.PREFIX else ParamSet
+
+
+def rule_laws() -> tuple[str, ...]:
+    """The laws the tuning rule tunes (mill_models.loop_tuning): those whose parameters
+    declare a rule quantity (a field whose 0 stands for the rule's value)."""
+    from mill_controllers.registry import CONTROLLERS
+
+    return tuple(name for name, cls in CONTROLLERS.items() if declared(cls).rule_fields())
+
+
+def rule_observer() -> str:
+    """The observer the tuning rule pairs with the laws: the first registered one whose
+    parameters declare the rule's observer bandwidth (eso)."""
+    from mill_observers.registry import OBSERVERS
+
+    return next(
+        name for name, cls in OBSERVERS.items() if 'omega_o' in declared(cls).rule_fields().values()
+    )
+
+
+def _rule_overrides(node: str, params: type[ParamSet]) -> list[str]:
+    """Every rule field of a parameter set at 0 (the rule's value), by its full name."""
+    return [f'{node}.{params.full_name(name)}=0.0' for name in params.rule_fields()]
 
 
 def set_tuning(scen: Scenario) -> None:
-    """--tuning rule: every axis's observer the ESO, both at the rule's bandwidths."""
+    """--tuning rule: every axis's observer the rule's (eso), law and observer at the
+    rule's bandwidths."""
+    from mill_controllers.registry import CONTROLLERS
+    from mill_observers.registry import OBSERVERS
+
+    laws, observer = rule_laws(), rule_observer()
     for node in scen.nodes_of(CONTROLLER):
         law = scen.parameters(node.name)['controller']
-        if law not in RULE_LAWS:
+        if law not in laws:
             raise ScenarioError(
-                f'--tuning rule tunes the {" or ".join(RULE_LAWS)} law with the eso observer; '
+                f'--tuning rule tunes the {" or ".join(laws)} law with the {observer} observer; '
                 f'{node.name} runs {law}'
             )
-        scen.add_override(f'{node.name}.pd.omega_c=0.0')
+        for text in _rule_overrides(node.name, declared(CONTROLLERS.get(law))):
+            scen.add_override(text)
         scen.add_override(f'{node.name}.design_period=0.0')
     for node in scen.nodes_of(OBSERVER):
-        for text in ('observer=eso', 'eso.omega_o=0.0', 'design_period=0.0'):
-            scen.add_override(f'{node.name}.{text}')
+        scen.add_override(f'{node.name}.observer={observer}')
+        for text in _rule_overrides(node.name, declared(OBSERVERS.get(observer))):
+            scen.add_override(text)
+        scen.add_override(f'{node.name}.design_period=0.0')
 
 
 def set_duration(scen: Scenario, duration: float) -> None:

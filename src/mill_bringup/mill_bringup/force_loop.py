@@ -38,7 +38,7 @@ from mill_analysis.papers import rubio_claims
 from mill_common.one_line_parser import OneLineParser
 from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
-from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 from mill_plant.force_drive import DrivenForceProcess
@@ -321,7 +321,8 @@ def main(argv: Sequence[str] | None = None, out: Callable[[str], None] = print) 
     )
     args = parser.parse_args(argv)
     try:
-        model = ForceProcessModel(depth_profile=args.depth_profile)
+        given = {} if args.depth_profile is None else {'depth_profile': args.depth_profile}
+        model = ForceProcessModel(ForceProcessParams(**given))
     except ValueError as exc:
         parser.error(f'--depth-profile: {exc}')
     loop = {'override_min': -math.inf, 'override_max': math.inf} if args.unclamped else {}

@@ -17,9 +17,9 @@ from mill_bringup.force_loop import (
     simulate,
     sweep,
 )
-from mill_models.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel, ForceProcessParams
 
-CONSTANT = ForceProcessModel(depth_profile=[0.0, 2.0])
+CONSTANT = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0]))
 
 
 @pytest.fixture(scope='module')
@@ -140,7 +140,7 @@ REORDERED = [0.0, 2.0, 2.0, 1.5, 4.0, 3.5, 6.0, 3.0, 8.0, 2.0]  # our depths, an
 def test_whether_scheme1_beats_zoh_depends_on_the_depth_profile() -> None:
     """Ours: scheme 1 is 2.29 % better than ZOH; the same depths in another order: 1.85 %
     worse (docs/papers.md; figures to the printed 0.01 %)."""
-    model = ForceProcessModel(depth_profile=REORDERED)
+    model = ForceProcessModel(ForceProcessParams(depth_profile=REORDERED))
     zoh, s1 = run('fixed', 0.0, model=model).j_c, run('scheme1', model=model).j_c
     assert 100 * (s1 / zoh - 1) == pytest.approx(1.85, abs=0.005)
     ours = paper_cases()

@@ -9,7 +9,7 @@ import pytest
 from mill_common.parameters import ParameterError
 from mill_controllers.model_reference import ModelReferenceForceController
 from mill_controllers.multi_model import PAPER_BETAS, MultiModelScheme1, MultiModelScheme2
-from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.holds import HeldPlant
 
 MODEL = ForceProcessModel()
@@ -116,7 +116,7 @@ def test_sampled_index_cannot_rank_perfect_models() -> None:
     """Eq. (13) read at the sampling instants: every design tracks its own discrete model,
     so the tracking term is rounding noise for every candidate (our reason for the
     continuous reading)."""
-    model = ForceProcessModel(depth_profile=[0.0, 2.0])
+    model = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0]))
     only_tracking = {'weight_jump': 0.0, 'weight_tracking': 1.0, 'stop_after': 0}
     sampled = MultiModelScheme1(model, {**only_tracking, 'index_signal': 'sampled'}, LO, HI)
     cont = MultiModelScheme1(model, {**only_tracking, 'residence_samples': 1000}, LO, HI)

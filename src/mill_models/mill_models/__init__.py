@@ -8,7 +8,7 @@ Rules (checked by test/test_import_graph.py):
 
 - numpy and scipy only: never rclpy or a ROS message package;
 - of the mill packages, only mill_common's ROS-free modules (signals, parameters,
-  timebase);
+  declared, timebase);
 - each equation of a paper sits in one module, with its one-line
   ``# Paper year eq. (n): ...`` comment.
 
@@ -22,6 +22,7 @@ Modules:
 - axis_model: which of these models a record supports, and why.
 - force_process: Rubio 2013 eq. (1)-(3), the feed → peak-force process and its exact
   simulation under affine inputs.
+- harmonics: the check of a list of harmonic multiples (the harmonic force and the DFO).
 - holds: the β fractional-order hold of Rubio 2013 eq. (4)-(6) (input reconstruction,
   discretisation, a plant seen through the hold and a feed clamp) and the sample hold.
 - polynomials: polynomials in z, the Sylvester matrix and the Diophantine equation.

@@ -40,16 +40,16 @@ import bisect
 import itertools
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+from mill_common.declared import Configured, ParamSet, param
 from mill_common.parameters import (
     ParameterError,
-    ParamSpec,
     non_negative,
     positive,
     positive_int,
-    validate_all,
 )
 
 # (start time [s], axial depth of cut [mm]); our reading of Rubio 2013 fig. 3.
@@ -148,91 +148,61 @@ class AffineLti:
         return out
 
 
-class ForceProcessModel:
-    """Parameters and derived quantities of Rubio 2013 eq. (1)-(3) (no state)."""
+@dataclass(frozen=True)
+class ForceProcessParams(ParamSet):
+    """The process's parameters, Rubio 2013 §5 (and our reading of fig. 3)."""
 
     PREFIX: ClassVar[str] = 'force_process'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('spindle_speed', 715.0, 'spindle speed S_s [rpm] (Rubio 2013 §5)', positive),
-        ParamSpec(
-            'cutting_pressure',
-            1200.0,
-            'specific cutting pressure K_c [N/mm^2] (aluminium, Rubio 2013 §5)',
-            positive,
-        ),
-        ParamSpec('flutes', 4, 'number of teeth N_t of the cutter [-]', positive_int),
-        ParamSpec(
-            'immersion',
-            4.0,
-            'immersion function r(φ_st, φ_ex, N_t) [-] (r = 4, full immersion, §5)',
-            positive,
-        ),
-        ParamSpec(
-            'drive_time_constant',
-            0.1,
-            'CNC feed-drive time constant τ_m (printed τ_s in eq. (1), (6)) [s]',
-            positive,
-        ),
-        ParamSpec(
-            'process_time_constant',
-            0.0,
-            'cutting-process time constant τ_c [s]; 0 = 1/(N_t·S_s), the tooth period',
-            non_negative,
-        ),
-        ParamSpec(
-            'depth_profile',
-            flatten_profile(DEFAULT_DEPTH_PROFILE),
-            'axial depth of cut a_dc(t): flat [t0, a0, t1, a1, ...], start times [s] from 0, '
-            'depths [mm] > 0, piecewise constant (our reading of Rubio 2013 fig. 3)',
-            _depth_profile_check,
-        ),
+    spindle_speed: float = param(715.0, 'spindle speed S_s [rpm] (Rubio 2013 §5)', positive)
+    cutting_pressure: float = param(
+        1200.0,
+        'specific cutting pressure K_c [N/mm^2] (aluminium, Rubio 2013 §5)',
+        positive,
+    )
+    flutes: int = param(4, 'number of teeth N_t of the cutter', positive_int, unit='-')
+    immersion: float = param(
+        4.0, 'immersion function r(φ_st, φ_ex, N_t) [-] (r = 4, full immersion, §5)', positive
+    )
+    drive_time_constant: float = param(
+        0.1,
+        'CNC feed-drive time constant τ_m (printed τ_s in eq. (1), (6))',
+        positive,
+        unit='s',
+    )
+    process_time_constant: float = param(
+        0.0,
+        'cutting-process time constant τ_c [s]; 0 = 1/(N_t·S_s), the tooth period',
+        non_negative,
+    )
+    depth_profile: list[float] = param(
+        flatten_profile(DEFAULT_DEPTH_PROFILE),
+        'axial depth of cut a_dc(t): flat [t0, a0, t1, a1, ...], start times [s] from 0, '
+        'depths [mm] > 0, piecewise constant (our reading of Rubio 2013 fig. 3)',
+        _depth_profile_check,
     )
 
-    def __init__(
-        self,
-        spindle_speed: float = 715.0,
-        cutting_pressure: float = 1200.0,
-        flutes: int = 4,
-        immersion: float = 4.0,
-        drive_time_constant: float = 0.1,
-        process_time_constant: float = 0.0,
-        depth_profile: Sequence[float] | Sequence[tuple[float, float]] | None = None,
-    ) -> None:
-        if depth_profile is None:
-            flat = flatten_profile(DEFAULT_DEPTH_PROFILE)
-        elif depth_profile and isinstance(depth_profile[0], tuple | list):
-            flat = flatten_profile(depth_profile)  # type: ignore[arg-type]
-        else:
-            flat = [float(v) for v in depth_profile]  # type: ignore[arg-type]
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'spindle_speed': spindle_speed,
-                'cutting_pressure': cutting_pressure,
-                'flutes': flutes,
-                'immersion': immersion,
-                'drive_time_constant': drive_time_constant,
-                'process_time_constant': process_time_constant,
-                'depth_profile': flat,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self.spindle_speed_rpm: float = v['spindle_speed']
-        self.cutting_pressure: float = v['cutting_pressure']
-        self.flutes: int = v['flutes']
-        self.immersion: float = v['immersion']
-        self.tau_m: float = v['drive_time_constant']
-        tau_c = v['process_time_constant']
+
+class ForceProcessModel(Configured):
+    """Parameters and derived quantities of Rubio 2013 eq. (1)-(3) (no state)."""
+
+    PARAMS: ClassVar[type[ForceProcessParams]] = ForceProcessParams
+
+    def __init__(self, params: ForceProcessParams = ForceProcessParams()) -> None:
+        self.spindle_speed_rpm = params.spindle_speed
+        self.cutting_pressure = params.cutting_pressure
+        self.flutes = params.flutes
+        self.immersion = params.immersion
+        self.tau_m = params.drive_time_constant
+        tau_c = params.process_time_constant
         # Rubio 2013 §5: τ_c = 1/(N_t·S_s) (printed "1/(N_s S_c)")
-        self.tau_c: float = tau_c if tau_c > 0 else 1.0 / (self.flutes * self.spindle_speed_rev_s)
-        self._times = [float(t) for t in v['depth_profile'][0::2]]
-        self._depths = [float(d) for d in v['depth_profile'][1::2]]
+        self.tau_c = tau_c if tau_c > 0 else 1.0 / (self.flutes * self.spindle_speed_rev_s)
+        self._times = [float(t) for t in params.depth_profile[0::2]]
+        self._depths = [float(d) for d in params.depth_profile[1::2]]
 
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> ForceProcessModel:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(**v)
+        """Build from a mapping keyed by the parameters' names (missing names take defaults)."""
+        return cls(cls.PARAMS.from_values(values))
 
     # --- derived quantities ------------------------------------------------------------
 
@@ -291,7 +261,7 @@ class ForceProcessModel:
         return force / self.process_gain(depth)
 
 
-class ForceProcessPlant:
+class ForceProcessPlant(Configured):
     """Simulated cutting-force process: integrates eq. (1)-(2) exactly under affine inputs.
 
     step(u0, slope, duration) applies the feed command u(τ) = u0 + slope·τ [mm/s] for
@@ -299,8 +269,7 @@ class ForceProcessPlant:
     returns the force on a grid, split at the depth changes (each piece is smooth).
     """
 
-    PREFIX: ClassVar[str] = ForceProcessModel.PREFIX
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ForceProcessModel.PARAMETERS
+    PARAMS: ClassVar[type[ForceProcessParams]] = ForceProcessParams
 
     def __init__(self, model: ForceProcessModel | None = None) -> None:
         self.model = model or ForceProcessModel()

@@ -1,7 +1,7 @@
 """Recursive least squares with exponential forgetting, Hatwesh 2013 eq. (10)-(13) (ROS-free).
 
 Two role packages run this estimator: the adaptive PI (mill_controllers.adaptive_pi) with its
-own copy, and the rls observer (mill_observers.rls_observer); both take RLS_PARAMETERS.
+own copy, and the rls observer (mill_observers.rls_observer); both take RlsParams.
 
 Model (reading of eq. (11)-(12)): a first-order plant with an input delay line,
 
@@ -43,9 +43,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParamSpec,
     boolean,
@@ -56,7 +58,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import FopdtEstimate
 
-__all__ = ['RLS_PARAMETERS', 'RlsEstimator']
+__all__ = ['RLS_PARAMETERS', 'RlsEstimator', 'RlsParams']
 
 
 def _pair(value: object) -> str | None:
@@ -68,42 +70,44 @@ def _pair(value: object) -> str | None:
     return None if value[0] < value[1] else 'must have low < high'
 
 
-# Parameters of the estimator, shared by every user (adaptive_pi, the rls observer).
-RLS_PARAMETERS: tuple[ParamSpec, ...] = (
-    ParamSpec(
-        'forgetting',
+@dataclass(frozen=True)
+class RlsParams(ParamSet):
+    """The estimator's parameters, shared by every user: each declares them under its own
+    PREFIX by a subclass (the rls observer) or by RLS_PARAMETERS (adaptive_pi)."""
+
+    forgetting: float = param(
         0.9995,
-        'RLS forgetting factor λ (memory ≈ T/(1 − λ), 0.5 s at 0.25 ms) [-]',
+        'RLS forgetting factor λ (memory ≈ T/(1 − λ), 0.5 s at 0.25 ms)',
         in_range(0.9, 1.0),
-    ),
-    ParamSpec('initial_covariance', 1e4, 'RLS initial covariance P(0) = p0·I [-]', positive),
-    ParamSpec('covariance_limit', 1e8, 'RLS cap on trace(P) (wind-up guard) [-]', positive),
-    ParamSpec(
-        'input_taps',
+        unit='-',
+    )
+    initial_covariance: float = param(1e4, 'RLS initial covariance P(0) = p0·I', positive, unit='-')
+    covariance_limit: float = param(1e8, 'RLS cap on trace(P) (wind-up guard)', positive, unit='-')
+    input_taps: int = param(
         2,
-        'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 samples [-]',
+        'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 samples',
         positive_int,
-    ),
-    ParamSpec(
-        'load_term',
+        unit='-',
+    )
+    load_term: bool = param(
         True,
         'RLS model with a constant (load) term c, y(k) = a y(k−1) + Σ b_i u(k−i) + c (the '
         "reading of the paper's disturbance models); false = eq. (12) as printed, no c",
         boolean,
-    ),
-    ParamSpec(
-        'a_bounds',
-        [0.0, 0.99999],
-        'projection box of the RLS pole a = e^{−T/τ} [-]',
-        _pair,
-    ),
-    ParamSpec(
-        'b_bounds',
+    )
+    a_bounds: list[float] = param(
+        [0.0, 0.99999], 'projection box of the RLS pole a = e^{−T/τ}', _pair, unit='-'
+    )
+    b_bounds: list[float] = param(
         [-1.0, 1.0],
-        'projection box of each RLS input coefficient b_i [(m/s)/V per sample]',
+        'projection box of each RLS input coefficient b_i',
         _pair,
-    ),
-)
+        unit='(m/s)/V per sample',
+    )
+
+
+# The same parameters as specs, for a user that lists them among its own (adaptive_pi).
+RLS_PARAMETERS: tuple[ParamSpec, ...] = RlsParams.specs()
 
 
 class RlsEstimator:
@@ -159,18 +163,23 @@ class RlsEstimator:
         self.reset()
 
     @classmethod
-    def from_parameters(cls, sample_period: float, v: Mapping[str, Any]) -> RlsEstimator:
-        """From validated RLS_PARAMETERS values (the one place their names meet the class)."""
+    def from_params(cls, sample_period: float, p: RlsParams) -> RlsEstimator:
+        """From the declared parameters (the one place their names meet the class)."""
         return cls(
             sample_period,
-            n_b=v['input_taps'],
-            forgetting=v['forgetting'],
-            initial_covariance=v['initial_covariance'],
-            a_bounds=(v['a_bounds'][0], v['a_bounds'][1]),
-            b_bounds=(v['b_bounds'][0], v['b_bounds'][1]),
-            covariance_limit=v['covariance_limit'],
-            load_term=v['load_term'],
+            n_b=p.input_taps,
+            forgetting=p.forgetting,
+            initial_covariance=p.initial_covariance,
+            a_bounds=(p.a_bounds[0], p.a_bounds[1]),
+            b_bounds=(p.b_bounds[0], p.b_bounds[1]),
+            covariance_limit=p.covariance_limit,
+            load_term=p.load_term,
         )
+
+    @classmethod
+    def from_parameters(cls, sample_period: float, v: Mapping[str, Any]) -> RlsEstimator:
+        """From a user's values that include the RLS_PARAMETERS names (others are ignored)."""
+        return cls.from_params(sample_period, RlsParams.from_node_values(v))
 
     def reset(self) -> None:
         """Back to θ̂(0), P(0) = p0·I; the regressor history is forgotten."""

@@ -10,6 +10,7 @@ from mill_common.parameters import ParameterError
 from mill_models.force_process import (
     DEFAULT_DEPTH_PROFILE,
     ForceProcessModel,
+    ForceProcessParams,
     ForceProcessPlant,
 )
 from scipy.integrate import solve_ivp
@@ -50,7 +51,7 @@ def test_default_depth_profile_has_steps_up_and_down() -> None:
 )
 def test_bad_depth_profiles_are_refused(profile: list[float]) -> None:
     with pytest.raises(ParameterError, match='depth_profile'):
-        ForceProcessModel(depth_profile=profile)
+        ForceProcessModel(ForceProcessParams(depth_profile=profile))
 
 
 def test_from_parameters_takes_the_flat_profile() -> None:
@@ -72,7 +73,7 @@ def _ode_force(m: ForceProcessModel, x0, u0: float, slope: float, h: float, dept
 
 @pytest.mark.parametrize(('u0', 'slope'), [(5.0, 0.0), (3.0, 40.0), (8.0, -60.0)])
 def test_step_integrates_an_affine_feed_exactly(u0: float, slope: float) -> None:
-    m = ForceProcessModel(depth_profile=[0.0, 2.5])
+    m = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.5]))
     plant = ForceProcessPlant(m)
     plant.reset(4.0)
     x0 = plant.state
@@ -84,7 +85,7 @@ def test_step_integrates_an_affine_feed_exactly(u0: float, slope: float) -> None
 
 
 def test_constant_feed_settles_at_gain_times_feed() -> None:
-    m = ForceProcessModel(depth_profile=[0.0, 3.0])
+    m = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 3.0]))
     plant = ForceProcessPlant(m)
     for _ in range(200):
         plant.step(4.0, 0.0, m.sample_period)
@@ -93,7 +94,7 @@ def test_constant_feed_settles_at_gain_times_feed() -> None:
 
 
 def test_depth_step_jumps_the_force_and_splits_the_trace() -> None:
-    m = ForceProcessModel(depth_profile=[0.0, 2.0, 0.05, 4.0])
+    m = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0, 0.05, 4.0]))
     plant = ForceProcessPlant(m)
     plant.reset(5.0)
     before = plant.force

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 import scipy.signal
-from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.holds import (
     HeldPlant,
     SampleHold,
@@ -88,7 +88,7 @@ def test_plant_under_the_hold_reproduces_the_discrete_model(beta: float) -> None
     """The plant integrated with the β-hold reconstruction, sampled, equals H_β(z)."""
     rng = np.random.default_rng(4)
     u = rng.uniform(1.0, 9.0, 25)
-    model = ForceProcessModel(depth_profile=[0.0, 2.0])
+    model = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0]))
     plant = ForceProcessPlant(model)
     y = [plant.force]
     u_prev = 0.0
@@ -134,7 +134,7 @@ def test_clamped_pieces_stay_in_range_and_follow_the_ramp_inside(u0: float, slop
 @pytest.mark.parametrize('beta', [-0.5, 0.0, 1.0])
 def test_held_plant_applies_the_clamped_reconstruction(beta: float) -> None:
     """advance() = plant steps over the clamped β-reconstruction; the cost is ∫(F_p − F_pm)²."""
-    model = ForceProcessModel(depth_profile=[0.0, 2.0, 0.3, 3.0])
+    model = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0, 0.3, 3.0]))
     lo, hi = 0.0, 8.0
     held = HeldPlant(ForceProcessPlant(model), lo, hi)
     traced = HeldPlant(ForceProcessPlant(model), lo, hi)

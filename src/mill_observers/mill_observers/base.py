@@ -11,7 +11,8 @@ Each sample k the node calls, in this order:
 Every observer subclasses Observer; what the node and the offline simulator may rely on is
 declared here, with defaults an observer overrides only where it differs:
 
-- PREFIX, PARAMETERS: the parameter namespace and the parameters;
+- PARAMS: the parameters, one ParamSet (mill_common.declared), from which PREFIX and
+  PARAMETERS (the namespace and the specs) are derived;
 - DISTURBANCE_UNIT: the unit of Estimate.disturbance, an acceleration 'm/s²' (Beltrán
   2013 eq. (5)) or an input-equivalent voltage 'V';
 - PROVIDES_MODEL / model_estimate(): whether it identifies a plant model, and the model
@@ -26,29 +27,34 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
-from mill_common.parameters import ParamSpec
+from mill_common.declared import Configured
 from mill_common.signals import Estimate, FopdtEstimate
 
+Obs = TypeVar('Obs', bound='Observer')
 
-class Observer(ABC):
-    """One axis: position measurement in, position/velocity/disturbance estimate out."""
 
-    PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+class Observer(Configured, ABC):
+    """One axis: position measurement in, position/velocity/disturbance estimate out.
+
+    An observer is built as `Obs(input_gain, sample_period, params)`, params its PARAMS set.
+    """
+
     DISTURBANCE_UNIT: ClassVar[str] = 'm/s²'  # 'V' for an input-equivalent voltage
     PROVIDES_MODEL: ClassVar[bool] = False  # model_estimate() gives an identified model
 
     @classmethod
-    @abstractmethod
     def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> Observer:
+        cls: type[Obs], input_gain: float, sample_period: float, values: Mapping[str, Any]
+    ) -> Obs:
         """Build from values named without the prefix (missing names take defaults).
 
-        Raises ParameterError naming a bad parameter.
+        input_gain: b of the nominal model x'' = b u + ξ [m/s² per N·m] (unused by an
+        observer with a model of its own); sample_period T [s]. Raises ParameterError
+        naming a bad parameter.
         """
+        return cls(input_gain, sample_period, cls.PARAMS.from_values(values))  # type: ignore[call-arg]
 
     @abstractmethod
     def correct(self, y: float) -> Estimate:
@@ -66,7 +72,7 @@ class Observer(ABC):
         """Internal quantities of the last sample, name → value (published if any)."""
         return {}
 
-    def reset(self) -> None:  # noqa: B027 (a default that does nothing is intended)
+    def reset(self) -> None:
         """Start afresh, as just built."""
 
     def preload(self, hold_input: float) -> float | None:

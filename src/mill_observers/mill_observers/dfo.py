@@ -39,85 +39,61 @@ resonators do not know. With the cascade P/PI at T = 0.1 ms, ζ_h = 0.05 is stab
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParameterError,
-    ParamSpec,
-    in_range,
-    number_list,
-    positive,
-    positive_int,
-    validate_all,
-)
+from mill_common.declared import param
+from mill_common.parameters import ParameterError, in_range, positive, positive_int
 from mill_common.signals import Estimate
+from mill_models.harmonics import harmonic_multiples
 
 from mill_observers.base import Observer
-from mill_observers.imbdo import (
-    MAHAROF_A,
-    MAHAROF_B,
-    MAHAROF_C,
-    MM_PER_M,
-    check_period,
-    plant_specs,
-)
+from mill_observers.imbdo import MM_PER_M, MaharofPlant, check_period
 
 
-def _multiples(value: Any) -> str | None:
-    reason = number_list(each=positive)(value)
-    if reason:
-        return reason
-    if not value:
-        return 'must list at least one harmonic'
-    if len(set(value)) != len(value):
-        return 'must not repeat a harmonic'
-    return None
+@dataclass(frozen=True)
+class DfoParams(MaharofPlant):
+    """The nominal model, the harmonics and the observer's poles."""
 
-
-def dfo_specs() -> tuple[ParamSpec, ...]:
-    """The DFO's own parameters (also used by ImbdoDfo)."""
-    return (
-        ParamSpec(
-            'spindle_speed',
-            1560.0,
-            "spindle speed n; base harmonic f_0 = n/60·teeth (1560 rpm × 1 = the paper's "
-            '26 Hz) [rpm]',
-            positive,
-        ),
-        ParamSpec(
-            'teeth',
-            1,
-            'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
-            'flute count = tooth passing) [-]',
-            positive_int,
-        ),
-        ParamSpec(
-            'harmonics',
-            [1.0, 2.0, 3.0],
-            'multiples m_i of f_0 that get a resonator, eq. (5)-(7) (26/52/78 Hz) [-]',
-            _multiples,
-        ),
-        ParamSpec(
-            'omega_o',
-            2.0 * math.pi * 100.0,
-            'natural frequency ω_o of the (x, v) observer pole pair [rad/s]',
-            positive,
-        ),
-        ParamSpec(
-            'zeta_o',
-            0.7071,
-            'damping ratio ζ_o of the (x, v) observer pole pair [-]',
-            in_range(0.05, 0.999),
-        ),
-        ParamSpec(
-            'zeta_h',
-            0.05,
-            'damping ratio ζ_h of each resonator pole pair; estimation time constant '
-            '1/(ζ_h ω_i) [-]',
-            in_range(0.001, 0.999),
-        ),
+    PREFIX: ClassVar[str] = 'dfo'
+    spindle_speed: float = param(
+        1560.0,
+        "spindle speed n; base harmonic f_0 = n/60·teeth (1560 rpm × 1 = the paper's 26 Hz)",
+        positive,
+        unit='rpm',
+    )
+    teeth: int = param(
+        1,
+        'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
+        'flute count = tooth passing)',
+        positive_int,
+        unit='-',
+    )
+    harmonics: list[float] = param(
+        [1.0, 2.0, 3.0],
+        'multiples m_i of f_0 that get a resonator, eq. (5)-(7) (26/52/78 Hz)',
+        harmonic_multiples,
+        unit='-',
+    )
+    omega_o: float = param(
+        2.0 * math.pi * 100.0,
+        'natural frequency ω_o of the (x, v) observer pole pair',
+        positive,
+        unit='rad/s',
+    )
+    zeta_o: float = param(
+        0.7071,
+        'damping ratio ζ_o of the (x, v) observer pole pair',
+        in_range(0.05, 0.999),
+        unit='-',
+    )
+    zeta_h: float = param(
+        0.05,
+        'damping ratio ζ_h of each resonator pole pair; estimation time constant 1/(ζ_h ω_i)',
+        in_range(0.001, 0.999),
+        unit='-',
     )
 
 
@@ -128,56 +104,23 @@ class Dfo(Observer):
     predict(u [V]) with u the voltage actually applied over the next sample.
     """
 
-    PREFIX: ClassVar[str] = 'dfo'
+    PARAMS: ClassVar[type[DfoParams]] = DfoParams
     DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (*plant_specs(), *dfo_specs())
 
     def __init__(
-        self,
-        input_gain: float,
-        sample_period: float,
-        plant_gain: float = MAHAROF_A,
-        plant_damping: float = MAHAROF_B,
-        plant_stiffness: float = MAHAROF_C,
-        spindle_speed: float = 1560.0,
-        teeth: int = 1,
-        harmonics: Sequence[float] = (1.0, 2.0, 3.0),
-        omega_o: float = 2.0 * math.pi * 100.0,
-        zeta_o: float = 0.7071,
-        zeta_h: float = 0.05,
+        self, input_gain: float, sample_period: float, params: DfoParams = DfoParams()
     ) -> None:
         del input_gain  # voltage-input model: A, B, C are this observer's own parameters
         self._T = check_period(sample_period)
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'plant_gain': plant_gain,
-                'plant_damping': plant_damping,
-                'plant_stiffness': plant_stiffness,
-                'spindle_speed': spindle_speed,
-                'teeth': teeth,
-                'harmonics': list(harmonics),
-                'omega_o': omega_o,
-                'zeta_o': zeta_o,
-                'zeta_h': zeta_h,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._a, self._b, self._c = v['plant_gain'], v['plant_damping'], v['plant_stiffness']
-        self._teeth: int = v['teeth']
-        self._multiples = [float(m) for m in v['harmonics']]
-        self._omega_o, self._zeta_o, self._zeta_h = v['omega_o'], v['zeta_o'], v['zeta_h']
+        self._a, self._b, self._c = params.plant_gain, params.plant_damping, params.plant_stiffness
+        self._teeth = params.teeth
+        self._multiples = [float(m) for m in params.harmonics]
+        self._omega_o, self._zeta_o, self._zeta_h = params.omega_o, params.zeta_o, params.zeta_h
         self._n = 2 + 2 * len(self._multiples)
         self._x = np.zeros(self._n)
         self._y_prev = 0.0
         self._initialised = False
-        self._design(v['spindle_speed'])
-
-    @classmethod
-    def from_parameters(cls, input_gain: float, sample_period: float, values: Mapping[str, Any]):
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
+        self._design(params.spindle_speed)
 
     # --- design ----------------------------------------------------------------------
 

@@ -10,24 +10,20 @@ from half to twice the model's), where the paper's degree 4 allows about 0.8 to 
 (docs/realtime.md, "Tuning for a rate and a delay").
 
 `omega_o` 0 (the default) asks the node for the tuning rule's bandwidth at its sample
-period and command delay (mill_models.loop_tuning). Sampled exactly, gains placed as the
-GPI observer's (mill_observers.chain_design); a current estimator.
+period and command delay (mill_models.loop_tuning), times `bandwidth_factor`
+(EsoParams.tuned); an observer built alone takes the rule without delay. Sampled exactly,
+gains placed as the GPI observer's (mill_observers.chain_design); a current estimator.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any, ClassVar, TypeVar
 
-from mill_common.parameters import (
-    ParameterError,
-    ParamSpec,
-    check_gain_and_period,
-    in_range,
-    non_negative,
-    validate_all,
-)
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import check_gain_and_period, in_range, non_negative
 from mill_common.signals import Estimate
 from mill_models.loop_tuning import loop_tuning
 
@@ -38,6 +34,8 @@ from mill_observers.chain_design import (
     advance,
 )
 
+E = TypeVar('E', bound='EsoParams')
+
 
 def _degree(value: Any) -> str | None:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 4:
@@ -45,39 +43,48 @@ def _degree(value: Any) -> str | None:
     return None
 
 
-class ExtendedStateObserver(ChainObserver, Observer):
+@dataclass(frozen=True)
+class EsoParams(ParamSet):
+    """The bandwidth and the disturbance model's degree."""
+
     PREFIX: ClassVar[str] = 'eso'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_o',
-            0.0,
-            'observer bandwidth ω_o: every error pole at −ω_o [rad/s]; 0 = the tuning rule '
-            'for the sample period and command delay',
-            non_negative,
-        ),
-        ParamSpec(
-            'degree',
-            0,
-            'degree of the disturbance model: 0 a constant, 1 a ramp, … 4 (as the GPI '
-            'observer); higher follows faster changes, lower tolerates a wrong input gain',
-            _degree,
-        ),
-        ParamSpec(
-            'bandwidth_factor',
-            1.0,
-            'with omega_o 0: the tuning rule bandwidth times this factor [-]',
-            in_range(0.05, 4.0),
-        ),
+    omega_o: float = param(
+        0.0,
+        'observer bandwidth ω_o: every error pole at −ω_o',
+        non_negative,
+        unit='rad/s',
+        rule='omega_o',
+    )
+    degree: int = param(
+        0,
+        'degree of the disturbance model: 0 a constant, 1 a ramp, … 4 (as the GPI '
+        'observer); higher follows faster changes, lower tolerates a wrong input gain',
+        _degree,
+    )
+    bandwidth_factor: float = param(
+        1.0,
+        'with omega_o 0: the tuning rule bandwidth times this factor',
+        in_range(0.05, 4.0),
+        unit='-',
     )
 
+    def tuned(self: E, rule: Mapping[str, float]) -> E:
+        """The rule's bandwidth times bandwidth_factor where omega_o is 0."""
+        return super().tuned({**rule, 'omega_o': rule['omega_o'] * self.bandwidth_factor})
+
+
+class ExtendedStateObserver(ChainObserver, Observer):
+    PARAMS: ClassVar[type[EsoParams]] = EsoParams
+
     def __init__(
-        self, input_gain: float, sample_period: float, omega_o: float, degree: int = 0
+        self, input_gain: float, sample_period: float, params: EsoParams = EsoParams()
     ) -> None:
         self._b, self._T = check_gain_and_period(input_gain, sample_period)
-        if not (math.isfinite(omega_o) and omega_o > 0.0):
-            raise ParameterError('eso.omega_o', omega_o, 'must be > 0 when the observer is built')
-        self.omega_o = float(omega_o)
-        self.degree = int(degree)
+        if params.omega_o == 0.0:  # the rule; the node asks it for its own delay (config.py)
+            rule = loop_tuning(self._T, 0)
+            params = params.tuned({'omega_c': rule.omega_c, 'omega_o': rule.omega_o})
+        self.omega_o = params.omega_o
+        self.degree = params.degree
         n = self._n = self.degree + 3
         design = ChainDesign(n, self._b, self._T, [complex(-self.omega_o, 0.0)] * n)
         self._scale = design.scale
@@ -86,16 +93,6 @@ class ExtendedStateObserver(ChainObserver, Observer):
         self._g0, self._g1 = float(design.bd_s[0]), float(design.bd_s[1])
         self._z = [0.0] * n
         self._initialised = False
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> ExtendedStateObserver:
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        omega_o = v['omega_o']
-        if omega_o == 0.0:  # the rule; the node asks it for its own delay (config.py)
-            omega_o = loop_tuning(sample_period, 0).omega_o * v['bandwidth_factor']
-        return cls(input_gain, sample_period, omega_o, v['degree'])
 
     def correct(self, y: float) -> Estimate:
         if not math.isfinite(y):

@@ -24,17 +24,13 @@ from __future__ import annotations
 
 import cmath
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParamSpec,
-    check_gain_and_period,
-    one_of,
-    positive,
-    validate_all,
-)
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import check_gain_and_period, one_of, positive
 from mill_common.signals import Estimate
 from numpy.polynomial import polynomial as npoly
 
@@ -50,6 +46,33 @@ _N_STATES = 7  # [η1, η2, ξ1, ξ2, ξ3, ξ4, ξ5] of Beltrán 2013 eq. (14)
 DISCRETISATIONS = ('current', 'predictor', 'continuous')
 
 
+@dataclass(frozen=True)
+class GpiParams(ParamSet):
+    """The observer's poles, eq. (18), and how it runs sampled."""
+
+    PREFIX: ClassVar[str] = 'gpi'
+    omega_o: float = param(
+        700.0,
+        'natural frequency ω_o of the three observer pole pairs of eq. (18)',
+        positive,
+        unit='rad/s',
+    )
+    zeta_o: float = param(
+        0.7071, 'damping ratio ζ_o of the three observer pole pairs of eq. (18)', positive, unit='-'
+    )
+    pole_o: float = param(
+        700.0, 'real observer pole p_o of eq. (18), placed at s = −p_o', positive, unit='rad/s'
+    )
+    discretisation: str = param(
+        'current',
+        'how the continuous observer of eq. (15) runs sampled: current (exactly sampled '
+        'model, discrete poles exp(s_i T), estimate after y(k)), predictor (the same, '
+        'estimate before y(k)) or continuous (eq. (15) integrated exactly over each period '
+        'with the held command and the position linear between samples)',
+        one_of(*DISCRETISATIONS),
+    )
+
+
 class GpiObserver(ChainObserver, Observer):
     """Beltrán 2013 GPI observer for one axis ẍ = b·τ + ξ, ξ a 4th-degree Taylor polynomial.
 
@@ -57,61 +80,16 @@ class GpiObserver(ChainObserver, Observer):
     measured position. Call correct(y) then predict(u) each sample (see base.Observer).
     """
 
-    PREFIX: ClassVar[str] = 'gpi'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_o',
-            700.0,
-            'natural frequency ω_o of the three observer pole pairs of eq. (18) [rad/s]',
-            positive,
-        ),
-        ParamSpec(
-            'zeta_o',
-            0.7071,
-            'damping ratio ζ_o of the three observer pole pairs of eq. (18) [-]',
-            positive,
-        ),
-        ParamSpec(
-            'pole_o',
-            700.0,
-            'real observer pole p_o of eq. (18), placed at s = −p_o [rad/s]',
-            positive,
-        ),
-        ParamSpec(
-            'discretisation',
-            'current',
-            'how the continuous observer of eq. (15) runs sampled: current (exactly sampled '
-            'model, discrete poles exp(s_i T), estimate after y(k)), predictor (the same, '
-            'estimate before y(k)) or continuous (eq. (15) integrated exactly over each period '
-            'with the held command and the position linear between samples)',
-            one_of(*DISCRETISATIONS),
-        ),
-    )
+    PARAMS: ClassVar[type[GpiParams]] = GpiParams
 
     def __init__(
-        self,
-        input_gain: float,
-        sample_period: float,
-        omega_o: float = 700.0,
-        zeta_o: float = 0.7071,
-        pole_o: float = 700.0,
-        discretisation: str = 'current',
+        self, input_gain: float, sample_period: float, params: GpiParams = GpiParams()
     ) -> None:
         self._b, self._T = check_gain_and_period(input_gain, sample_period)
-        values = validate_all(
-            self.PARAMETERS,
-            {
-                'omega_o': omega_o,
-                'zeta_o': zeta_o,
-                'pole_o': pole_o,
-                'discretisation': discretisation,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self.discretisation: str = values['discretisation']
-        self._omega_o: float = values['omega_o']
-        self._zeta_o: float = values['zeta_o']
-        self._pole_o: float = values['pole_o']
+        self.discretisation = params.discretisation
+        self._omega_o = params.omega_o
+        self._zeta_o = params.zeta_o
+        self._pole_o = params.pole_o
 
         design = ChainDesign(_N_STATES, self._b, self._T, self.continuous_poles())
         self._scale, self._ad_s, self._bd_s = design.scale, design.ad_s, design.bd_s
@@ -133,14 +111,6 @@ class GpiObserver(ChainObserver, Observer):
         self._anchor: tuple[list[float], float, float, float | None] | None = None
         self._y_last: float | None = None  # measured since the last predict()
         self._y_start: float | None = None  # the position the period before started from
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> GpiObserver:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     # --- run time --------------------------------------------------------------------
 

@@ -36,18 +36,12 @@ inside the velocity loop: with the 1.2 ms plant dead time, the paper's gains and
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParameterError,
-    ParamSpec,
-    non_negative,
-    positive,
-    positive_or_inf,
-    validate_all,
-)
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import ParameterError, non_negative, positive, positive_or_inf
 from mill_common.signals import Estimate
 
 from mill_observers.base import Observer
@@ -61,28 +55,27 @@ MAHAROF_C = 193.3
 MAHAROF_DEAD_TIME = 0.0012
 
 
-def plant_specs() -> tuple[ParamSpec, ...]:
-    """The nominal-model parameters shared by the Maharof observers."""
-    return (
-        ParamSpec(
-            'plant_gain',
-            MAHAROF_A,
-            'gain A of the nominal model A/(s² + B s + C), eq. (1) [mm/(V·s²)]',
-            positive,
-            read_only=True,  # read-only, as it has always been (see docs/contract.md)
-        ),
-        ParamSpec(
-            'plant_damping',
-            MAHAROF_B,
-            'damping B of the nominal model A/(s² + B s + C), eq. (1) [1/s]',
-            non_negative,
-        ),
-        ParamSpec(
-            'plant_stiffness',
-            MAHAROF_C,
-            'stiffness C of the nominal model A/(s² + B s + C), eq. (1) [1/s²]',
-            non_negative,
-        ),
+@dataclass(frozen=True)
+class MaharofPlant(ParamSet):
+    """The nominal model A/(s² + B s + C) of eq. (1), shared by the Maharof observers."""
+
+    plant_gain: float = param(
+        MAHAROF_A,
+        'gain A of the nominal model A/(s² + B s + C), eq. (1)',
+        positive,
+        unit='mm/(V·s²)',
+    )
+    plant_damping: float = param(
+        MAHAROF_B,
+        'damping B of the nominal model A/(s² + B s + C), eq. (1)',
+        non_negative,
+        unit='1/s',
+    )
+    plant_stiffness: float = param(
+        MAHAROF_C,
+        'stiffness C of the nominal model A/(s² + B s + C), eq. (1)',
+        non_negative,
+        unit='1/s²',
     )
 
 
@@ -129,6 +122,32 @@ class _DiscreteSs:
         self.x = self.ad @ self.x + self.bd * w
 
 
+@dataclass(frozen=True)
+class ImbdoParams(MaharofPlant):
+    """The nominal model, the Q filter and the velocity's low-pass."""
+
+    PREFIX: ClassVar[str] = 'imbdo'
+    q_cutoff: float = param(
+        90.0,
+        'cut-off frequency f_c of the Q filter ω_c^n/(s + ω_c)^n, ω_c = 2π f_c, eq. (3) and fig. 5',
+        positive,
+        unit='Hz',
+    )
+    q_order: int = param(
+        2,
+        'order n of the Q filter (≥ 2 so that Q·G_n⁻¹ is proper; not given in the paper)',
+        _order,
+        unit='-',
+    )
+    velocity_cutoff: float = param(
+        math.inf,
+        'cut-off f_v of the first-order low-pass on the backward-difference velocity; '
+        '.inf = plain backward difference',
+        positive_or_inf,
+        unit='Hz',
+    )
+
+
 class Imbdo(Observer):
     """Maharof 2018 IMBDO on the x-axis model; d̂ in volts (subtract it from u).
 
@@ -137,61 +156,16 @@ class Imbdo(Observer):
     input_gain (the suite's torque-model b) is not used: this model's input is a voltage.
     """
 
-    PREFIX: ClassVar[str] = 'imbdo'
+    PARAMS: ClassVar[type[ImbdoParams]] = ImbdoParams
     DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        *plant_specs(),
-        ParamSpec(
-            'q_cutoff',
-            90.0,
-            'cut-off frequency f_c of the Q filter ω_c^n/(s + ω_c)^n, ω_c = 2π f_c, '
-            'eq. (3) and fig. 5 [Hz]',
-            positive,
-            read_only=True,  # read-only, as it has always been (see docs/contract.md)
-        ),
-        ParamSpec(
-            'q_order',
-            2,
-            'order n of the Q filter (≥ 2 so that Q·G_n⁻¹ is proper; not given in the paper) [-]',
-            _order,
-        ),
-        ParamSpec(
-            'velocity_cutoff',
-            math.inf,
-            'cut-off f_v of the first-order low-pass on the backward-difference velocity; '
-            '.inf = plain backward difference [Hz]',
-            positive_or_inf,
-        ),
-    )
 
     def __init__(
-        self,
-        input_gain: float,
-        sample_period: float,
-        plant_gain: float = MAHAROF_A,
-        plant_damping: float = MAHAROF_B,
-        plant_stiffness: float = MAHAROF_C,
-        q_cutoff: float = 90.0,
-        q_order: int = 2,
-        velocity_cutoff: float = math.inf,
+        self, input_gain: float, sample_period: float, params: ImbdoParams = ImbdoParams()
     ) -> None:
         del input_gain  # voltage-input model: A, B, C are this observer's own parameters
         self._T = check_period(sample_period)
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'plant_gain': plant_gain,
-                'plant_damping': plant_damping,
-                'plant_stiffness': plant_stiffness,
-                'q_cutoff': q_cutoff,
-                'q_order': q_order,
-                'velocity_cutoff': velocity_cutoff,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._a, self._b, self._c = v['plant_gain'], v['plant_damping'], v['plant_stiffness']
-        self._q_cutoff, self._q_order = v['q_cutoff'], v['q_order']
-        self._v_cutoff = v['velocity_cutoff']
+        self._a, self._b, self._c = params.plant_gain, params.plant_damping, params.plant_stiffness
+        self._q_cutoff, self._q_order = params.q_cutoff, params.q_order
         wc = 2.0 * math.pi * self._q_cutoff
         n = self._q_order
         q_den = np.poly(np.full(n, -wc))  # (s + ω_c)^n
@@ -202,19 +176,11 @@ class Imbdo(Observer):
         qg_num = wc**n / self._a * np.array([1.0, self._b, self._c])
         self._q_y = _DiscreteSs(qg_num, q_den, self._T, 'bilinear')
         # First-order low-pass, exact for a held input: α = e^{−ω_v T} (0 when f_v = inf)
-        self._alpha = math.exp(-2.0 * math.pi * self._v_cutoff * self._T)
+        self._alpha = math.exp(-2.0 * math.pi * params.velocity_cutoff * self._T)
         self._y_prev = 0.0
         self._v_mm = 0.0
         self._d_hat = 0.0
         self._initialised = False
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> Imbdo:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     # --- run time --------------------------------------------------------------------
 

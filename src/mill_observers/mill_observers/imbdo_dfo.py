@@ -17,50 +17,37 @@ their own gains, as in the paper. Estimate.velocity is the backward difference o
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, validate_all
 from mill_common.signals import Estimate
 
 from mill_observers.base import Observer
-from mill_observers.dfo import Dfo, dfo_specs
-from mill_observers.imbdo import Imbdo, plant_specs
+from mill_observers.dfo import Dfo, DfoParams
+from mill_observers.imbdo import Imbdo, ImbdoParams
 
-_IMBDO_ONLY = ('q_cutoff', 'q_order', 'velocity_cutoff')
-_PLANT = tuple(s.name for s in plant_specs())
+
+@dataclass(frozen=True)
+class ImbdoDfoParams(DfoParams, ImbdoParams):
+    """Both observers' parameters, one nominal model: the plant's, the IMBDO's, the DFO's."""
+
+    PREFIX: ClassVar[str] = 'imbdo_dfo'
 
 
 class ImbdoDfo(Observer):
     """Maharof 2018 combined observer; disturbance = d̂_D + d̂_I [V] (subtract it from u)."""
 
-    PREFIX: ClassVar[str] = 'imbdo_dfo'
+    PARAMS: ClassVar[type[ImbdoDfoParams]] = ImbdoDfoParams
     DISTURBANCE_UNIT: ClassVar[str] = 'V'  # input-equivalent voltage
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        *plant_specs(),
-        *(s for s in Imbdo.PARAMETERS if s.name in _IMBDO_ONLY),
-        *dfo_specs(),
-    )
 
-    def __init__(self, input_gain: float, sample_period: float, **values: Any) -> None:
-        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
-        unknown = set(values) - set(v)
-        if unknown:
-            raise TypeError(f'ImbdoDfo: unknown parameters {sorted(unknown)}')
-        plant = {k: v[k] for k in _PLANT}
-        self._imbdo = Imbdo(input_gain, sample_period, **plant, **{k: v[k] for k in _IMBDO_ONLY})
-        dfo_names = [s.name for s in dfo_specs()]
-        self._dfo = Dfo(input_gain, sample_period, **plant, **{k: v[k] for k in dfo_names})
+    def __init__(
+        self, input_gain: float, sample_period: float, params: ImbdoDfoParams = ImbdoDfoParams()
+    ) -> None:
+        # the set is both an ImbdoParams and a DfoParams: each part reads its own fields
+        self._imbdo = Imbdo(input_gain, sample_period, params)
+        self._dfo = Dfo(input_gain, sample_period, params)
         self._d_dfo = 0.0
         self._d_imbdo = 0.0
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> ImbdoDfo:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     def correct(self, y: float) -> Estimate:
         """Measurement update with y [m]; Estimate(y [m], Δy/T [m/s], d̂_D + d̂_I [V])."""

@@ -15,36 +15,39 @@ commands as the adaptive PI with its own estimator (same RLS parameters).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, validate_all
 from mill_common.signals import Estimate, FopdtEstimate
-from mill_models.rls import RLS_PARAMETERS, RlsEstimator
+from mill_models.rls import RlsEstimator, RlsParams
 
 from mill_observers.base import Observer
+
+
+@dataclass(frozen=True)
+class RlsObserverParams(RlsParams):
+    """The estimator's parameters (mill_models.rls) under this observer's prefix."""
+
+    PREFIX: ClassVar[str] = 'rls'
 
 
 class RlsObserver(Observer):
     """Identifies the velocity loop's FOPDT model online; passes the measurement through."""
 
-    PREFIX: ClassVar[str] = 'rls'
+    PARAMS: ClassVar[type[RlsObserverParams]] = RlsObserverParams
     PROVIDES_MODEL: ClassVar[bool] = True  # model_estimate() (controllers may ask for it)
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = RLS_PARAMETERS
 
-    def __init__(self, sample_period: float, **values: Any) -> None:
-        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
+    def __init__(
+        self,
+        input_gain: float,
+        sample_period: float,
+        params: RlsObserverParams = RlsObserverParams(),
+    ) -> None:
+        del input_gain  # the model is identified, not assumed
         self._T = sample_period
-        self.rls = RlsEstimator.from_parameters(sample_period, v)
+        self.rls = RlsEstimator.from_params(sample_period, params)
         self._y: float | None = None
         self._v = 0.0
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> RlsObserver:
-        del input_gain  # the model is identified, not assumed
-        return cls(sample_period, **values)
 
     def correct(self, y: float) -> Estimate:
         self._v = 0.0 if self._y is None else (y - self._y) / self._T

@@ -8,7 +8,7 @@ import pytest
 from mill_common.signals import AxisReference, ControlInputs
 from mill_controllers.pd_law import AdrcController, PdGains
 from mill_observers.delay import DelayCompensation
-from mill_observers.gpi import GpiObserver
+from mill_observers.gpi import GpiObserver, GpiParams
 from mill_observers.imbdo import Imbdo
 
 B = 20.964  # Beltrán 2013 Table 1, x axis [m/s² per N·m]
@@ -17,7 +17,7 @@ T = 1e-3
 
 def run(delay: int, compensate: bool, steps: int = 3000) -> list[float]:
     """A double integrator x'' = b u + 1 m/s² under ADRC, the command applied `delay` late."""
-    observer = GpiObserver(B, T, omega_o=700.0, zeta_o=0.7071, pole_o=700.0)
+    observer = GpiObserver(B, T, GpiParams(omega_o=700.0, zeta_o=0.7071, pole_o=700.0))
     comp = DelayCompensation(observer, delay if compensate else 0, T)
     law = AdrcController(B, T, PdGains(torque_limit=math.inf))
     x = v = 0.0

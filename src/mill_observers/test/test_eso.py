@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
 from mill_models.loop_tuning import loop_tuning
-from mill_observers.eso import ExtendedStateObserver
+from mill_observers.eso import EsoParams, ExtendedStateObserver
 from mill_observers.registry import make_observer
 
 B, T = 20.96, 1e-3
@@ -26,7 +26,7 @@ def simulate(obs: ExtendedStateObserver, xi: float, steps: int, u: float = 0.01)
 
 @pytest.mark.parametrize('degree', [0, 1, 2, 4])
 def test_a_constant_disturbance_is_estimated_at_the_bandwidth(degree: int) -> None:
-    obs = ExtendedStateObserver(B, T, 200.0, degree)
+    obs = ExtendedStateObserver(B, T, EsoParams(omega_o=200.0, degree=degree))
     est = simulate(obs, 3.0, 400)
     assert est[-1].disturbance == pytest.approx(3.0, rel=1e-6)
     # one bandwidth: after about 10 / omega_o the error has mostly gone
@@ -34,7 +34,7 @@ def test_a_constant_disturbance_is_estimated_at_the_bandwidth(degree: int) -> No
 
 
 def test_the_error_poles_all_sit_at_the_bandwidth() -> None:
-    obs = ExtendedStateObserver(B, T, 300.0, 1)
+    obs = ExtendedStateObserver(B, T, EsoParams(omega_o=300.0, degree=1))
     # the error of x decays as exp(-300 t) times a polynomial: after 0.1 s, nothing left
     est = simulate(obs, -2.0, 150)
     assert abs(est[-1].disturbance + 2.0) < 1e-4
@@ -46,7 +46,7 @@ def test_the_estimation_error_obeys_the_designed_characteristic_polynomial(degre
     # e(k) = ((I − M C) Ad)^k e0; Cayley-Hamilton: Σ c_j e(k + j) = 0 with c the
     # coefficients of (z − e^{−ω_o T})^n, n = degree + 3, computed here from the design.
     omega_o, n = 300.0, degree + 3
-    obs = ExtendedStateObserver(B, T, omega_o, degree)
+    obs = ExtendedStateObserver(B, T, EsoParams(omega_o=omega_o, degree=degree))
     obs.correct(1e-3)
     seq = []
     for _ in range(3 * n):
@@ -64,14 +64,17 @@ def test_the_estimation_error_obeys_the_designed_characteristic_polynomial(degre
 
 
 def test_preload_takes_the_disturbance_a_holding_input_balances() -> None:
-    obs = ExtendedStateObserver(B, T, 200.0)
+    obs = ExtendedStateObserver(B, T, EsoParams(omega_o=200.0))
     obs.correct(0.1)
     assert obs.preload(0.5) == pytest.approx(-B * 0.5)
     assert obs.predicted([]).disturbance == pytest.approx(-B * 0.5)
 
 
 def test_a_fraction_of_a_period_runs_the_model_on_by_that_time() -> None:
-    a, b = ExtendedStateObserver(B, T, 200.0), ExtendedStateObserver(B, T, 200.0)
+    a, b = (
+        ExtendedStateObserver(B, T, EsoParams(omega_o=200.0)),
+        ExtendedStateObserver(B, T, EsoParams(omega_o=200.0)),
+    )
     for obs in (a, b):
         obs.correct(0.0)
         obs.predict(0.2)

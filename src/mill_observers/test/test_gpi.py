@@ -10,7 +10,7 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_common.signals import Estimate
 from mill_observers.base import Observer
-from mill_observers.gpi import GpiObserver
+from mill_observers.gpi import GpiObserver, GpiParams
 from numpy.polynomial import Polynomial
 
 # x axis of Beltrán 2013 Table 1: a = p/2π, m_e = m + J/a², b = 1/(a·m_e) ≈ 20.96
@@ -205,7 +205,7 @@ def test_non_positive_parameters_are_refused(name: str, value: float) -> None:
         GpiObserver.from_parameters(B, 1e-3, {name: value})
     assert info.value.name == f'gpi.{name}'
     with pytest.raises(ParameterError, match=f'gpi.{name}'):
-        GpiObserver(B, 1e-3, **{name: value})
+        GpiObserver(B, 1e-3, GpiParams(**{name: value}))
 
 
 @pytest.mark.parametrize('b', [0.0, math.nan, math.inf])

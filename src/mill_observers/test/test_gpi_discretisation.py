@@ -9,7 +9,7 @@ import pytest
 import scipy.integrate
 from mill_common.parameters import ParameterError
 from mill_observers.delay import DelayCompensation
-from mill_observers.gpi import DISCRETISATIONS, GpiObserver
+from mill_observers.gpi import DISCRETISATIONS, GpiObserver, GpiParams
 
 B = 20.96  # x axis of Beltrán 2013 Table 1 [(m/s²)/(N·m)]
 T = 1e-3
@@ -36,7 +36,7 @@ def _eq15_over_a_period(beta: np.ndarray, x: np.ndarray, u: float, ys: np.ndarra
 
 
 def test_continuous_is_eq15_integrated_with_the_held_command_and_a_parabolic_position() -> None:
-    obs = GpiObserver(B, T, discretisation='continuous')
+    obs = GpiObserver(B, T, GpiParams(discretisation='continuous'))
     beta = obs.continuous_coefficients()
     rng = np.random.default_rng(3)
     ys = 1e-3 * np.cumsum(rng.normal(size=6))
@@ -54,7 +54,7 @@ def test_continuous_is_eq15_integrated_with_the_held_command_and_a_parabolic_pos
 
 def test_predictor_gives_the_current_estimators_estimate_before_the_measurement() -> None:
     current = GpiObserver(B, T)
-    predictor = GpiObserver(B, T, discretisation='predictor')
+    predictor = GpiObserver(B, T, GpiParams(discretisation='predictor'))
     rng = np.random.default_rng(4)
     current.correct(0.01)
     predictor.correct(0.01)
@@ -78,7 +78,7 @@ def test_every_discretisation_learns_a_constant_disturbance(discretisation: str)
     # `continuous`), the estimate converges at the designed rate (slowest pole pair
     # −495 s⁻¹, triple): 1e-6 by 0.1 s is ample. With a straight line between samples
     # `continuous` stays 2.8 % low.
-    obs = GpiObserver(B, T, discretisation=discretisation)
+    obs = GpiObserver(B, T, GpiParams(discretisation=discretisation))
     for k in range(101):
         t = k * T
         est = obs.correct(0.5 * 2.0 * t * t)
@@ -88,7 +88,7 @@ def test_every_discretisation_learns_a_constant_disturbance(discretisation: str)
 
 
 def test_continuous_coasts_and_stretches_a_period_at_rest_without_moving() -> None:
-    obs = GpiObserver(B, T, discretisation='continuous')
+    obs = GpiObserver(B, T, GpiParams(discretisation='continuous'))
     obs.correct(0.02)
     obs.predict(0.0)
     obs.predict(0.0)  # a lost measurement: the model's own position starts the next period
@@ -113,7 +113,7 @@ def test_with_a_command_delay_predictor_gives_the_same_as_current() -> None:
     # The delay compensation runs the model ahead from the state after predict(), which
     # both share (docs/papers.md says so).
     loops = [
-        DelayCompensation(GpiObserver(B, T, discretisation=d), 1, T)
+        DelayCompensation(GpiObserver(B, T, GpiParams(discretisation=d)), 1, T)
         for d in ('current', 'predictor')
     ]
     for k in range(30):

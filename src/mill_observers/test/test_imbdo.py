@@ -9,7 +9,7 @@ import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_observers.base import Observer
-from mill_observers.imbdo import MAHAROF_A, MAHAROF_B, MAHAROF_C, Imbdo
+from mill_observers.imbdo import MAHAROF_A, MAHAROF_B, MAHAROF_C, Imbdo, ImbdoParams
 
 T = 1e-4
 
@@ -47,12 +47,12 @@ def test_is_an_observer_and_starts_at_rest_with_zero_disturbance() -> None:
 @pytest.mark.parametrize('order', [2, 3])
 def test_step_disturbance_is_recovered_with_the_q_filter_step_response(order: int) -> None:
     d0, k0, n = 0.05, 100, 3000  # 0.05 V step at 10 ms, 0.3 s run
-    obs = Imbdo(0.0, T, q_order=order)
+    obs = Imbdo(0.0, T, ImbdoParams(q_order=order))
     d_hat = _run_open_loop(obs, lambda k: d0 if k >= k0 else 0.0, lambda k: 0.3, n)
     # Steady state: exact (both branches keep their DC gains).
     assert abs(d_hat[-1] - d0) < 1e-6 * d0
     # Transient: d̂ follows Q's continuous step response (one sample of timing slack).
-    num, den = Imbdo(0.0, T, q_order=order).q_filter()
+    num, den = Imbdo(0.0, T, ImbdoParams(q_order=order)).q_filter()
     t = np.arange(n - k0) * T
     _, q_step = scipy.signal.step((num, den), T=t)
     err = np.abs(d_hat[k0:] - d0 * q_step)

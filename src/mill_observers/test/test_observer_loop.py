@@ -54,10 +54,12 @@ def test_a_replacement_starts_anew_and_continues_the_estimate() -> None:
 
 
 def test_a_braked_axis_keeps_its_disturbance_estimate() -> None:
-    from mill_observers.eso import ExtendedStateObserver
+    from mill_observers.eso import EsoParams, ExtendedStateObserver
 
     B, T = 20.0, 1e-3
-    loop = ObserverLoop(ExtendedStateObserver(B, T, 200.0), 1, T, 0.0, hold_torque=0.05)
+    loop = ObserverLoop(
+        ExtendedStateObserver(B, T, EsoParams(omega_o=200.0)), 1, T, 0.0, hold_torque=0.05
+    )
     est = loop.step(0.0, None)
     assert est.disturbance == -B * 0.05  # the weight the hold torque balances
     for _ in range(500):  # the axis held by its brake: the commands are brake requests
@@ -66,10 +68,12 @@ def test_a_braked_axis_keeps_its_disturbance_estimate() -> None:
 
 
 def test_a_released_axis_restarts_from_its_hold_torque_not_from_what_it_learnt_moving() -> None:
-    from mill_observers.eso import ExtendedStateObserver
+    from mill_observers.eso import EsoParams, ExtendedStateObserver
 
     B, T = 20.0, 1e-3
-    loop = ObserverLoop(ExtendedStateObserver(B, T, 200.0), 1, T, 0.0, hold_torque=0.05)
+    loop = ObserverLoop(
+        ExtendedStateObserver(B, T, EsoParams(omega_o=200.0)), 1, T, 0.0, hold_torque=0.05
+    )
     loop.step(0.0, None)
     x = v = 0.0
     for _ in range(2000):  # moving against 3 m/s² of friction and load, at 0.2 N·m
@@ -89,10 +93,12 @@ def test_tick_jitter_is_run_through_when_the_stamps_tell_it() -> None:
     # the motion; taking every interval for one period, its velocity is off.
     import math
 
-    from mill_observers.eso import ExtendedStateObserver
+    from mill_observers.eso import EsoParams, ExtendedStateObserver
 
     B, T = 20.0, 1e-3
-    told, untold = (ObserverLoop(ExtendedStateObserver(B, T, 300.0), 1, T, 0.0) for _ in '12')
+    told, untold = (
+        ObserverLoop(ExtendedStateObserver(B, T, EsoParams(omega_o=300.0)), 1, T, 0.0) for _ in '12'
+    )
     x = v = 0.0
     u = 0.01
     errors = {'told': 0.0, 'untold': 0.0}

@@ -48,6 +48,7 @@ from mill_common.parameters import (
     positive_or_inf,
     validate_all,
 )
+from mill_models.harmonics import harmonic_multiples
 
 from mill_plant.cutting import CuttingForceModel, Force3
 
@@ -56,17 +57,6 @@ MAHAROF_TEETH = 1
 MAHAROF_HARMONICS = (1.0, 2.0, 3.0)  # 26/52/78 Hz
 SYNTHESISED_AMPLITUDES = (39.3, 7.3, 7.6)  # N, back-computed from Table 2 (module docstring)
 SYNTHESISED_MEAN = 45.0  # N
-
-
-def _multiples(value: Any) -> str | None:
-    reason = number_list(each=positive)(value)
-    if reason:
-        return reason
-    if not value:
-        return 'must list at least one harmonic'
-    if len(set(value)) != len(value):
-        return 'must not repeat a harmonic'
-    return None
 
 
 def _finite_list(value: Any) -> str | None:
@@ -100,7 +90,7 @@ class HarmonicForce(CuttingForceModel):
             'harmonics',
             list(MAHAROF_HARMONICS),
             'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz) [-]',
-            _multiples,
+            harmonic_multiples,
         ),
         ParamSpec(
             'amplitudes',

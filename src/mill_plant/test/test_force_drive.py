@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_models.force_process import ForceProcessModel, ForceProcessPlant
+from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_plant.force_drive import DrivenForceProcess
 
-MODEL = ForceProcessModel(depth_profile=[0.0, 2.0])
+MODEL = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0]))
 
 
 def test_a_ramp_out_of_range_drives_the_process_like_the_clamped_ramp() -> None:

@@ -24,7 +24,7 @@ def test_defaults_are_26_52_78_hz_like_the_dfo() -> None:
     assert force.frequencies == pytest.approx((26.0, 52.0, 78.0), rel=1e-15)
     # mill_observers is not a dependency of mill_plant: compare only where it is installed.
     dfo_module = pytest.importorskip('mill_observers.dfo')
-    dfo = {s.name: s.default for s in dfo_module.dfo_specs()}
+    dfo = {s.name: s.default for s in dfo_module.Dfo.PARAMETERS}
     assert force.spindle_speed == dfo['spindle_speed']
     assert force.teeth == dfo['teeth']
     assert list(force.harmonics) == dfo['harmonics']

@@ -4,7 +4,7 @@ mill_bringup.force_loop` (the sweep over fixed β and the reordered depth profil
 from __future__ import annotations
 
 import numpy as np
-from mill_models.force_process import ForceProcessModel
+from mill_models.force_process import ForceProcessModel, ForceProcessParams
 
 from mill_bringup import force_loop
 from mill_bringup.docs_figures.runs import offline
@@ -36,7 +36,7 @@ def figures() -> dict[str, str]:
         out[f'sweep.{beta:g}'] = joules(j_c)
     negative = force_loop.sweep([b / 10 for b in range(-10, 0)])
     out['sweep.best_negative'] = f'{100 * (1 - min(negative) / zoh):.2f}'
-    model = ForceProcessModel(depth_profile=REORDERED)
+    model = ForceProcessModel(ForceProcessParams(depth_profile=REORDERED))
     cases = force_loop.paper_cases(model=model)
     r_zoh = cases['ZOH (β = 0)'].j_c
     for key, name in zip(VARIANTS, force_loop.PAPER_CASES, strict=True):
@@ -46,6 +46,8 @@ def figures() -> dict[str, str]:
     out['reordered.best_negative'] = f'{100 * (1 - min(r_negative) / r_zoh):.2f}'
     out['scheme2.beta_max'] = f'{np.abs(offline("rubio", "scheme2").beta).max():g}'
     for key, profile in ONE_STEP.items():  # β = −0.5 against the ZOH [% worse]
-        neg, zoh_j_c = force_loop.sweep([-0.5, 0.0], model=ForceProcessModel(depth_profile=profile))
+        neg, zoh_j_c = force_loop.sweep(
+            [-0.5, 0.0], model=ForceProcessModel(ForceProcessParams(depth_profile=profile))
+        )
         out[f'one_step.{key}.beta_neg0.5'] = f'{100 * (neg / zoh_j_c - 1):.2f}'
     return out
