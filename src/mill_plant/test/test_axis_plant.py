@@ -13,7 +13,7 @@ from mill_models.axis_data import BELTRAN_TABLE1
 from mill_plant.axis_plant import AxisPlant, StepReport
 from mill_plant.cutting import NoCutting, StepForce
 from mill_plant.kline_force import KlineCuttingForce
-from mill_plant.models.flexible import FlexibleAxisModel
+from mill_plant.models.flexible import FlexibleAxisModel, FlexibleModelParams
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
@@ -516,7 +516,11 @@ def test_gravity_sags_a_rigid_z_axis_and_the_holding_torque_holds_it() -> None:
 def test_disturbance_of_internal_state_models() -> None:
     tf = TransferFunctionAxisModel()
     plant = AxisPlant(
-        [tf, VelocityDriveAxisModel(), FlexibleAxisModel(coulomb_friction=0.0)],
+        [
+            tf,
+            VelocityDriveAxisModel(),
+            FlexibleAxisModel(FlexibleModelParams(coulomb_friction=0.0)),
+        ],
         StepForce((50.0, 20.0, 5.0)),
     )
     for _ in range(7):
@@ -525,7 +529,7 @@ def test_disturbance_of_internal_state_models() -> None:
     x, v = plant.states[0]
     a, b, c = plant.models[0].coefficients
     # Maharof eq. (1): x'' = -B v - C x + A (u(t - T_d) - F/k_f); xi = x'' - A u_now
-    expected = -b * v - c * x + a * (1.0 - 50.0 / tf.p['force_constant']) - a * 2.0
+    expected = -b * v - c * x + a * (1.0 - 50.0 / tf.p.force_constant) - a * 2.0
     assert xi[0] == pytest.approx(expected, rel=1e-12)
     # Consistency with the motion over a short step for the non-delayed models
     before = plant.velocity
