@@ -12,7 +12,7 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
 from mill_plant.axis_plant import AxisPlant
-from mill_plant.cutting import NoCutting, StepForce
+from mill_plant.cutting import NoCutting, StepForce, StepParams
 from mill_plant.models.base import AxisModel
 from mill_plant.models.flexible import FlexibleAxisModel, FlexibleModelParams
 from mill_plant.models.rigid import RigidAxisModel, RigidModelParams
@@ -156,7 +156,7 @@ def _torque_run(model: AxisModel, cutting, steps: int, dt: float) -> np.ndarray:
 
 @pytest.mark.parametrize('mu', [0.0, 30.0])
 def test_flexible_axis_with_stiff_elements_approaches_the_rigid_axis(mu) -> None:
-    cut = StepForce((0.1, 0.0, 0.0), start_time=0.1)
+    cut = StepForce(StepParams(force=(0.1, 0.0, 0.0), start_time=0.1))
     dt, steps = 1e-4, 3000
     errors = []
     for k in (1e5, 1e6):
@@ -300,7 +300,7 @@ def test_transfer_function_staircase_with_fractional_dead_time_is_exact() -> Non
     dt = 1e-3
     inputs = [math.sin(0.37 * k) + (k % 5 == 0) for k in range(300)]
     force = 100.0
-    plant = _single(model, StepForce((force, 0.0, 0.0)))
+    plant = _single(model, StepForce(StepParams(force=(force, 0.0, 0.0), start_time=0.0)))
     xs = []
     for u in inputs:
         plant.step((u, 0.0, 0.0), dt)
@@ -312,7 +312,7 @@ def test_transfer_function_staircase_with_fractional_dead_time_is_exact() -> Non
 def test_transfer_function_dc_gain_force_and_load() -> None:
     model = TransferFunctionAxisModel()
     a_mm, c_ = model.p.gain, model.p.stiffness
-    plant = _single(model, StepForce((39.01, 0.0, 0.0)))
+    plant = _single(model, StepForce(StepParams(force=(39.01, 0.0, 0.0), start_time=0.0)))
     for _ in range(2000):
         plant.step((0.5, 0.0, 0.0), 0.01)  # 20 s ≫ B/C = 0.84 s
     kf = model.p.force_constant
@@ -343,7 +343,7 @@ def test_velocity_drive_steady_speed_and_force(axis) -> None:
         models.insert(axis, model)
         fc = [0.0, 0.0, 0.0]
         fc[axis] = force
-        plant = AxisPlant(models, StepForce(fc))
+        plant = AxisPlant(models, StepForce(StepParams(force=fc, start_time=0.0)))
         cmd = [0.0, 0.0, 0.0]
         cmd[axis] = u
         for _ in range(1000):
