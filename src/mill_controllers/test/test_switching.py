@@ -17,7 +17,7 @@ from mill_observers.gpi import GpiObserver
 from mill_plant.axis_plant import AxisPlant
 from mill_plant.cutting import StepForce, StepParams
 from mill_plant.models.rigid import RigidAxisModel
-from mill_trajectory.bezier import BezierRestToRest
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
 
 T = 1e-3
 B = nominal_input_gain('x')
@@ -33,7 +33,9 @@ def run(new_law, switch_at: float, blend_time: float = 0.05, duration: float = 4
     """
     axes = [RigidAxisModel.from_parameters(i, {}) for i in range(3)]  # BELTRAN_TABLE1
     plant = AxisPlant(axes, StepForce(StepParams(force=(20.0, 0.0, 0.0), start_time=0.5)))
-    path = BezierRestToRest((0.0, 0.0, 0.0), (0.01, 0.0, 0.0), 0.0, 3.0)
+    path = BezierRestToRest(
+        BezierParams(start=(0.0, 0.0, 0.0), end=(0.01, 0.0, 0.0), t1=0.0, t2=3.0)
+    )
     observer = GpiObserver.from_parameters(B, T, {})
     switch = BumplessSwitch(AdrcController.from_parameters(B, T, {}), T, blend_time)
     shadow = None  # the old law, run on alongside to know what it would have done
