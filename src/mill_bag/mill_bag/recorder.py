@@ -63,6 +63,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mill_common.declared import ParamSet, param
 from mill_common.node_main import request_exit, run_node
 from mill_common.parameters import ParamSpec, StringList, WholeAtLeast, in_range, one_of, text
 from rclpy.clock import Clock, ClockType
@@ -369,48 +370,44 @@ def _regex(value: Any) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class RecorderParams(ParamSet):
+    """The recorder node's parameters (all read-only: a bag is opened once)."""
+
+    output: str = param(
+        '',
+        'bag directory to create (default rosbag2_YYYY_MM_DD-HH_MM_SS); never overwritten',
+        text,
+        read_only=True,
+    )
+    topics: list[str] = param(
+        [],
+        'topics to record (empty and no regex: all topics)',
+        StringList('topic names'),
+        read_only=True,
+    )
+    regex: str = param(
+        '', 'also record topics matching this regular expression', _regex, read_only=True
+    )
+    compression: str = param(
+        'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), read_only=True
+    )
+    flush_period: float = param(
+        0.5,
+        'write buffered messages to the file this often [s]; a hard kill loses at most this',
+        in_range(0.05, 1.0),
+        read_only=True,
+    )
+    max_message_bytes: int = param(
+        MAX_MESSAGE_BYTES,
+        'a message with more serialized bytes is dropped and counted (mill_bag.intake)',
+        WholeAtLeast(1024),
+        read_only=True,
+    )
+
+
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    specs = [
-        ParamSpec(
-            'output',
-            '',
-            'bag directory to create (default rosbag2_YYYY_MM_DD-HH_MM_SS); never overwritten',
-            text,
-            read_only=True,
-        ),
-        ParamSpec(
-            'topics',
-            [],
-            'topics to record (empty and no regex: all topics)',
-            StringList('topic names'),
-            read_only=True,
-        ),
-        ParamSpec(
-            'regex',
-            '',
-            'also record topics matching this regular expression',
-            _regex,
-            read_only=True,
-        ),
-        ParamSpec(
-            'compression', 'zstd', 'MCAP chunk compression', one_of(*COMPRESSIONS), read_only=True
-        ),
-        ParamSpec(
-            'flush_period',
-            0.5,
-            'write buffered messages to the file this often [s]; a hard kill loses at most this',
-            in_range(0.05, 1.0),
-            read_only=True,
-        ),
-        ParamSpec(
-            'max_message_bytes',
-            MAX_MESSAGE_BYTES,
-            'a message with more serialized bytes is dropped and counted (mill_bag.intake)',
-            WholeAtLeast(1024),
-            read_only=True,
-        ),
-    ]
-    return [(s.name, s) for s in specs]
+    return RecorderParams.named_specs()
 
 
 class RecorderNode(Node):
@@ -420,22 +417,22 @@ class RecorderNode(Node):
 
         self.recorder: TopicRecorder | None = None
         self.params = NodeParameters(self, parameter_specs(), lambda _values: None)
-        v = self.params.values
-        output = v['output'] or dt.datetime.now().strftime('rosbag2_%Y_%m_%d-%H_%M_%S')
+        v = RecorderParams.from_node_values(self.params.values)
+        output = v.output or dt.datetime.now().strftime('rosbag2_%Y_%m_%d-%H_%M_%S')
         sim_time = bool(self.get_parameter('use_sim_time').value)
         self.recorder = TopicRecorder(
             self,
             Path(output),
-            topics=v['topics'],
-            regex=v['regex'],
+            topics=v.topics,
+            regex=v.regex,
             sim_time=sim_time,
-            compression=v['compression'],
-            flush_period=v['flush_period'],
-            max_message_bytes=v['max_message_bytes'],
+            compression=v.compression,
+            flush_period=v.flush_period,
+            max_message_bytes=v.max_message_bytes,
         )
         what = sorted(self.recorder.names)
-        if v['regex']:
-            what.append(f'topics matching {v["regex"]!r}')
+        if v.regex:
+            what.append(f'topics matching {v.regex!r}')
         self.get_logger().info(
             f'recording {", ".join(what) or "all topics"} to {output} '
             f'({"sim time" if sim_time else "wall time"} stamps)'

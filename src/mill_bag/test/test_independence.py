@@ -11,6 +11,7 @@ import mill_bag
 
 ALLOWED = {
     'mill_common.codec',
+    'mill_common.declared',
     'mill_common.executable',
     'mill_common.node_main',
     'mill_common.parameters',

@@ -156,6 +156,10 @@ def _specs(cls: type[ParamSet]) -> tuple[ParamSpec, ...]:
         return _SPECS[cls]
     out = []
     for f in dataclasses.fields(cls):
+        base = _declaring_base(cls, f)
+        if base is not None:  # a field of a base set: the base's spec itself, shared
+            out.append(next(s for s in _specs(base) if s.name == f.name))
+            continue
         declared: Declaration | None = f.metadata.get(_KEY)
         if declared is None:
             raise TypeError(f'{cls.__name__}.{f.name} is not declared with param()')
@@ -178,6 +182,15 @@ def _specs(cls: type[ParamSet]) -> tuple[ParamSpec, ...]:
         )
     _SPECS[cls] = tuple(out)
     return _SPECS[cls]
+
+
+def _declaring_base(cls: type[ParamSet], f: dataclasses.Field[Any]) -> type[ParamSet] | None:
+    """The base set (a ParamSet subclass) whose field f is, if cls inherits it."""
+    for base in cls.__mro__[1:]:
+        inherits = issubclass(base, ParamSet) and base is not ParamSet
+        if inherits and getattr(base, '__dataclass_fields__', {}).get(f.name) is f:
+            return base
+    return None
 
 
 class Configured:

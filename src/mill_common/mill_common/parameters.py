@@ -12,7 +12,10 @@ import difflib
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+
+if TYPE_CHECKING:
+    from mill_common.node_params import AxisNodeParams
 
 Check = Callable[[Any], 'str | None']
 
@@ -378,171 +381,34 @@ def check_gain_and_period(input_gain: float, sample_period: float) -> tuple[floa
 
 def input_watch_specs() -> list[tuple[str, ParamSpec]]:
     """How long a node's inputs may be silent (mill_common.input_guard)."""
-    return [
-        (
-            'input_warn_time',
-            ParamSpec(
-                'input_warn_time',
-                1.0,
-                'an input silent this long (after its first message) is reported as WARN [s]',
-                in_range(0.01, 3600.0),
-            ),
-        ),
-        (
-            'input_timeout',
-            ParamSpec(
-                'input_timeout',
-                10.0,
-                'an input silent this long is an ERROR; in lockstep the node then ends with a '
-                'message naming it [s]',
-                in_range(0.01, 3600.0),
-            ),
-        ),
-    ]
+    from mill_common.node_params import InputWatch
 
-
-def _priority(value: Any) -> str | None:
-    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 98:
-        return 'must be a whole number from 0 (normal scheduling) to 98'
-    return None
-
-
-class _Cpus:
-    """Distinct CPU numbers (a list of whole numbers >= 0, possibly empty)."""
-
-    value_type = 'integer_array'
-    text = 'CPU numbers, each once'
-
-    def __call__(self, value: Any) -> str | None:
-        problem = number_list(each=WholeAtLeast(0))(value)
-        if problem is None and len(set(value)) != len(value):
-            return 'must name each CPU once'
-        return problem
-
-
-_REALTIME_SPECS: tuple[tuple[str, ParamSpec], ...] = (
-    (
-        'realtime_priority',
-        ParamSpec(
-            'realtime_priority',
-            0,
-            "SCHED_FIFO priority of this node's process, every thread (1-98; 0: the normal "
-            'scheduler); with it the memory is locked and the garbage collector frozen. The '
-            'highest of the nodes of a process counts',
-            _priority,
-            read_only=True,
-        ),
-    ),
-    (
-        'cpu_affinity',
-        ParamSpec(
-            'cpu_affinity',
-            [],
-            "CPUs this node's process may run on ([]: any); the nodes of a process together",
-            _Cpus(),
-            read_only=True,
-        ),
-    ),
-)
+    return InputWatch.named_specs()
 
 
 def realtime_specs() -> list[tuple[str, ParamSpec]]:
     """The real-time scheduling of a node's process (mill_common.realtime_setup)."""
-    return list(_REALTIME_SPECS)
+    from mill_common.node_params import RealtimeScheduling
+
+    return RealtimeScheduling.named_specs()
 
 
 def axis_node_specs() -> list[tuple[str, ParamSpec]]:
     """Parameters every per-axis node (controller, observer) has."""
-    from mill_common.signals import AXES
+    from mill_common.node_params import AxisNodeParams
 
-    return [
-        (
-            'axis',
-            ParamSpec('axis', 'x', 'machine axis this node serves', one_of(*AXES), read_only=True),
-        ),
-        (
-            'input_gain',
-            ParamSpec(
-                'input_gain',
-                0.0,
-                'b of the nominal model x" = b tau + xi [m/s^2 per N m]; '
-                '0 = 1/(a m_e) from Beltrán 2013 Table 1 for this axis',
-                non_negative,
-            ),
-        ),
-        (
-            'sample_period',
-            ParamSpec(
-                'sample_period', 0.001, 'sample period T [s]', in_range(1e-6, 1.0), read_only=True
-            ),
-        ),
-        (
-            'design_period',
-            ParamSpec(
-                'design_period',
-                0.0,
-                'the sample period the gains were designed for [s]: at another sample_period '
-                'the node refuses to start rather than run them (0: gains for any period, as '
-                'the tuning rule gives)',
-                non_negative,
-                read_only=True,
-            ),
-        ),
-        (
-            'timing',
-            ParamSpec(
-                'timing',
-                'lockstep',
-                'lockstep: inputs joined by their exact stamps on the sample grid (the plant is '
-                'the clock); realtime: act on the newest state, the reference interpolated at '
-                'its stamp, nothing stale queued',
-                one_of('lockstep', 'realtime'),
-                read_only=True,
-            ),
-        ),
-        (
-            'plant_node',
-            ParamSpec(
-                'plant_node',
-                'plant',
-                'the node whose states this node accepts (header.frame_id); states from any '
-                'other node are dropped and reported',
-                text,
-                read_only=True,
-            ),
-        ),
-        *input_watch_specs(),
-        *realtime_specs(),
-        (
-            'min_subscribers',
-            ParamSpec(
-                'min_subscribers',
-                0,
-                'lockstep: readers the output topic needs before the node answers a step (the '
-                'plant offers it again), so that the first outputs of a node started mid-job '
-                'reach every reader; run_scenario sets the count of its graph',
-                non_negative_int,
-            ),
-        ),
-        (
-            'command_delay',
-            ParamSpec(
-                'command_delay',
-                0,
-                'samples N between the measurement a command is computed from and the period it '
-                'acts in (realtime: 1); the observer predicts with the commands that really act '
-                'and estimates the state N samples ahead, the controller aims at the reference '
-                'N samples ahead',
-                non_negative_int,
-                read_only=True,
-            ),
-        ),
-    ]
+    return AxisNodeParams.named_specs()
 
 
-def check_design_period(values: Mapping[str, Any]) -> None:
-    """ValueError (one line) when gains designed for one sample period would run at another."""
-    designed, period = values['design_period'], values['sample_period']
+def check_design_period(values: Mapping[str, Any] | AxisNodeParams) -> None:
+    """ValueError (one line) when gains designed for one sample period would run at another.
+
+    values: a node's values (a mapping) or its typed set (node_params.AxisNodeParams).
+    """
+    if isinstance(values, Mapping):
+        designed, period = values['design_period'], values['sample_period']
+    else:
+        designed, period = values.design_period, values.sample_period
     if designed and abs(designed - period) > 1e-12 * designed:
         raise ValueError(
             f'the gains were designed for T = {1e3 * designed:g} ms (design_period) and the '

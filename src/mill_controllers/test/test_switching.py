@@ -12,12 +12,12 @@ from mill_controllers.cascade_pi import CascadePi
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.pd_law import AdrcController, PdController
 from mill_controllers.switching import BumplessSwitch, check_replacement
-from mill_models.axis_data import BELTRAN_TABLE1, nominal_input_gain
+from mill_models.axis_data import nominal_input_gain
 from mill_observers.gpi import GpiObserver
 from mill_plant.axis_plant import AxisPlant
-from mill_plant.cutting import StepForce
+from mill_plant.cutting import StepForce, StepParams
 from mill_plant.models.rigid import RigidAxisModel
-from mill_trajectory.bezier import BezierRestToRest
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
 
 T = 1e-3
 B = nominal_input_gain('x')
@@ -31,9 +31,11 @@ def run(new_law, switch_at: float, blend_time: float = 0.05, duration: float = 4
 
     Returns (commands, old-law outputs at each sample, errors, index of the switch).
     """
-    axes = [RigidAxisModel(p) for p in BELTRAN_TABLE1.values()]
-    plant = AxisPlant(axes, StepForce((20.0, 0.0, 0.0), 0.5))
-    path = BezierRestToRest((0.0, 0.0, 0.0), (0.01, 0.0, 0.0), 0.0, 3.0)
+    axes = [RigidAxisModel.from_parameters(i, {}) for i in range(3)]  # BELTRAN_TABLE1
+    plant = AxisPlant(axes, StepForce(StepParams(force=(20.0, 0.0, 0.0), start_time=0.5)))
+    path = BezierRestToRest(
+        BezierParams(start=(0.0, 0.0, 0.0), end=(0.01, 0.0, 0.0), t1=0.0, t2=3.0)
+    )
     observer = GpiObserver.from_parameters(B, T, {})
     switch = BumplessSwitch(AdrcController.from_parameters(B, T, {}), T, blend_time)
     shadow = None  # the old law, run on alongside to know what it would have done

@@ -58,7 +58,8 @@ class DriveBackend(ABC):
         return {}
 
     def input_units(self) -> dict[str, str]:
-        """The unit of each axis's effort (default N·m)."""
+        """The unit of each axis's effort (default N·m): the one place the rest of the suite
+        asks (the simulated machine answers with each axis model's INPUT_UNIT)."""
         return dict.fromkeys(self.axes, 'N·m')
 
     # What only a simulation knows, published for analysis (None: not available).

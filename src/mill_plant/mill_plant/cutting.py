@@ -11,87 +11,83 @@ their own (kline_force.py, harmonic_force.py).
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any, ClassVar, TypeVar
 
-from mill_common.parameters import ParamSpec, non_negative, number_list, validate_all
+from mill_common.declared import Configured, ParamSet, param
+from mill_common.parameters import non_negative, number_list
 
 Force3 = tuple[float, float, float]
 
+F = TypeVar('F', bound='CuttingForceModel')
 
-class CuttingForceModel(ABC):
+
+class CuttingForceModel(Configured, ABC):
     """Anything returning the cutting force (F_cx, F_cy, F_cz) [N] on the tool.
 
-    A model whose force depends on the tool's past path (the Kline chip) says so with
-    PATH_DEPENDENT: the plant then calls `commit(t, position, velocity)` with its initial
-    state and with every state it accepts (after each RK4 substep), in increasing time.
+    A model is built as `Model(params)`, params its PARAMS set. A model whose force depends
+    on the tool's past path (the Kline chip) says so with PATH_DEPENDENT: the plant then
+    calls `commit(t, position, velocity)` with its initial state and with every state it
+    accepts (after each RK4 substep), in increasing time.
     """
 
     PATH_DEPENDENT: ClassVar[bool] = False
 
-    PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
-
     @classmethod
-    @abstractmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> CuttingForceModel:
+    def from_parameters(cls: type[F], values: Mapping[str, Any]) -> F:
         """Build from values named without the prefix (missing names take defaults).
 
         Raises ParameterError naming a bad parameter ('<PREFIX>.<name>').
         """
+        return cls(cls.PARAMS.from_values(values))  # type: ignore[call-arg]
 
     @abstractmethod
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         """Cutting force at time t [s], tool position (x, y, z) [m], velocity [m/s]."""
 
-    def commit(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> None:  # noqa: B027
+    def commit(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> None:
         """An accepted tool state (PATH_DEPENDENT models keep the path)."""
+
+
+@dataclass(frozen=True)
+class NoParams(ParamSet):
+    """Air cutting has no parameters."""
+
+    PREFIX: ClassVar[str] = 'none'
 
 
 class NoCutting(CuttingForceModel):
     """Air cutting: no force at all."""
 
-    PREFIX: ClassVar[str] = 'none'
+    PARAMS: ClassVar[type[NoParams]] = NoParams
 
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> NoCutting:
-        return cls()
+    def __init__(self, params: NoParams = NoParams()) -> None:
+        pass
 
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         return (0.0, 0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class StepParams(ParamSet):
+    PREFIX: ClassVar[str] = 'step'
+    force: list[float] = param(
+        [0.0, 100.0, 0.0], 'constant force Fx, Fy, Fz after the step', number_list(3), unit='N'
+    )
+    start_time: float = param(1.0, 'time the step force starts', non_negative, unit='s')
+
+
 class StepForce(CuttingForceModel):
     """Zero before start_time, then a constant force; a clean disturbance for observer tests."""
 
-    PREFIX: ClassVar[str] = 'step'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'force',
-            [0.0, 100.0, 0.0],
-            'constant force Fx, Fy, Fz after the step [N]',
-            number_list(3),
-        ),
-        ParamSpec('start_time', 1.0, 'time the step force starts [s]', non_negative),
-    )
+    PARAMS: ClassVar[type[StepParams]] = StepParams
 
-    def __init__(self, force: Sequence[float], start_time: float = 0.0) -> None:
-        if len(force) != 3:
-            raise ValueError(f'force must have 3 entries (x, y, z), got {len(force)}')
-        values = tuple(float(f) for f in force)
-        if not all(math.isfinite(f) for f in values):
-            raise ValueError(f'force must be finite, got {force!r}')
-        if not math.isfinite(start_time):
-            raise ValueError(f'start_time must be finite, got {start_time!r}')
-        self._force: Force3 = (values[0], values[1], values[2])
-        self.start_time = float(start_time)
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> StepForce:
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(tuple(v['force']), v['start_time'])
+    def __init__(self, params: StepParams = StepParams()) -> None:
+        f = params.force
+        self._force: Force3 = (f[0], f[1], f[2])
+        self.start_time = params.start_time
 
     @property
     def value(self) -> Force3:

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
+from mill_common.declared import ParamSet, param
+from mill_common.node_params import RealtimeScheduling
 from mill_common.parameters import (
     ParamSpec,
     boolean,
@@ -11,7 +14,6 @@ from mill_common.parameters import (
     non_negative_int,
     one_of,
     positive_int,
-    realtime_specs,
 )
 
 from mill_common import topics
@@ -27,119 +29,90 @@ def _owners(value: Any) -> str | None:
     return None
 
 
-# Shared with the force process, the other node that clocks a lockstep run.
-RECORDER_WINDOW = ParamSpec(
-    'recorder_window',
-    0,
-    'lockstep: steps the plant may run ahead of the newest step the recorder (or '
-    f'run_scenario) has acknowledged on {topics.RECORDED}, so that neither a bag nor a '
-    "run's record misses a step however busy the machine (run_scenario sets it); 0: do "
-    'not wait for a recorder',
-    non_negative_int,
-    read_only=True,
-)
+@dataclass(frozen=True)
+class RecorderWindow(ParamSet):
+    """Shared with the force process, the other node that clocks a lockstep run."""
+
+    recorder_window: int = param(
+        0,
+        'lockstep: steps the plant may run ahead of the newest step the recorder (or '
+        f'run_scenario) has acknowledged on {topics.RECORDED}, so that neither a bag nor a '
+        "run's record misses a step however busy the machine (run_scenario sets it); 0: do "
+        'not wait for a recorder',
+        non_negative_int,
+        read_only=True,
+    )
 
 
-DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
-    *realtime_specs(),
-    (
-        'timing',
-        ParamSpec(
-            'timing',
-            'lockstep',
-            'lockstep: the plant is the clock and waits for the commands of each step; '
-            'realtime: it advances on the wall clock at the sample rate and applies the newest '
-            'command it holds (zero-order hold), as a drive does',
-            one_of(*TIMINGS),
-            read_only=True,
-        ),
-    ),
-    (
-        'command_owners',
-        ParamSpec(
-            'command_owners',
-            ['x_controller', 'y_controller', 'z_controller'],
-            'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
-            'any other node are ignored and reported; "" accepts any',
-            _owners,
-            read_only=True,
-        ),
-    ),
-    (
-        'command_delay',
-        ParamSpec(
-            'command_delay',
-            0,
-            'lockstep: samples N between the step a command answers and the step the plant '
-            'applies it from (a transport delay; the first N steps get zero input); realtime '
-            'has one sample by nature and ignores it',
-            non_negative_int,
-            read_only=True,
-        ),
-    ),
-    ('recorder_window', RECORDER_WINDOW),
-    (
-        'brake_after',
-        ParamSpec(
-            'brake_after',
-            10,
-            'realtime: periods in a row without a fresh command after which the axis is '
-            "stopped (braked until re-armed: the controller's brake request then a valid "
-            'command, or ~/release)',
-            positive_int,
-        ),
-    ),
-    (
-        'speed_limit',
-        ParamSpec(
-            'speed_limit',
-            0.5,
-            'realtime: an axis faster than this over a period is stopped (braked until '
-            "re-armed), fresh commands or not [m/s]; set it to the machine's rapid traverse",
-            in_range(1e-4, 100.0),
-        ),
-    ),
-    (
-        'hold_deviation',
-        ParamSpec(
-            'hold_deviation',
-            0.0005,
-            'realtime: while its commands are late, an axis holds the last one only within '
-            'this distance of where it stood at its last fresh command, else it is stopped '
-            '(braked until re-armed) [m]',
-            in_range(1e-6, 0.1),
-        ),
-    ),
-    (
-        'command_report_time',
-        ParamSpec(
-            'command_report_time',
-            0.5,
-            'wall time without the command an axis waits for before /diagnostics says so [s]',
-            in_range(0.01, 60.0),
-        ),
-    ),
-    (
-        'spindle',
-        ParamSpec(
-            'spindle',
-            'on',
-            f"on: the machine's spindle always runs (a path that programs none); reference: "
-            f"it runs at the speed of the joint 'spindle' of {topics.REFERENCE} (G-code M3/M4/M5 "
-            'and S), sample by sample, and is off before the first; lockstep waits for it',
-            one_of('on', 'reference'),
-            read_only=True,
-        ),
-    ),
-    (
-        'autostart',
-        ParamSpec(
-            'autostart',
-            True,
-            'configure and activate by itself (lockstep: once its peers are matched); false: '
-            'wait for the lifecycle transitions configure and activate',
-            boolean,
-            read_only=True,
-        ),
-    ),
-)
+@dataclass(frozen=True)
+class DriveParams(RealtimeScheduling, RecorderWindow):
+    """The drive front end's own parameters (timing, watchdog, owners), whatever its backend."""
+
+    timing: str = param(
+        'lockstep',
+        'lockstep: the plant is the clock and waits for the commands of each step; '
+        'realtime: it advances on the wall clock at the sample rate and applies the newest '
+        'command it holds (zero-order hold), as a drive does',
+        one_of(*TIMINGS),
+        read_only=True,
+    )
+    command_owners: list[str] = param(
+        ['x_controller', 'y_controller', 'z_controller'],
+        'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
+        'any other node are ignored and reported; "" accepts any',
+        _owners,
+        read_only=True,
+    )
+    command_delay: int = param(
+        0,
+        'lockstep: samples N between the step a command answers and the step the plant '
+        'applies it from (a transport delay; the first N steps get zero input); realtime '
+        'has one sample by nature and ignores it',
+        non_negative_int,
+        read_only=True,
+    )
+    brake_after: int = param(
+        10,
+        'realtime: periods in a row without a fresh command after which the axis is '
+        "stopped (braked until re-armed: the controller's brake request then a valid "
+        'command, or ~/release)',
+        positive_int,
+    )
+    speed_limit: float = param(
+        0.5,
+        'realtime: an axis faster than this over a period is stopped (braked until '
+        "re-armed), fresh commands or not [m/s]; set it to the machine's rapid traverse",
+        in_range(1e-4, 100.0),
+    )
+    hold_deviation: float = param(
+        0.0005,
+        'realtime: while its commands are late, an axis holds the last one only within '
+        'this distance of where it stood at its last fresh command, else it is stopped '
+        '(braked until re-armed)',
+        in_range(1e-6, 0.1),
+        unit='m',
+    )
+    command_report_time: float = param(
+        0.5,
+        'wall time without the command an axis waits for before /diagnostics says so',
+        in_range(0.01, 60.0),
+        unit='s',
+    )
+    spindle: str = param(
+        'on',
+        f"on: the machine's spindle always runs (a path that programs none); reference: "
+        f"it runs at the speed of the joint 'spindle' of {topics.REFERENCE} (G-code M3/M4/M5 "
+        'and S), sample by sample, and is off before the first; lockstep waits for it',
+        one_of('on', 'reference'),
+        read_only=True,
+    )
+    autostart: bool = param(
+        True,
+        'configure and activate by itself (lockstep: once its peers are matched); false: '
+        'wait for the lifecycle transitions configure and activate',
+        boolean,
+        read_only=True,
+    )
+
+
+DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = tuple(DriveParams.named_specs())

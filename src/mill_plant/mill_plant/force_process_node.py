@@ -51,7 +51,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
 from mill_common import topics
-from mill_plant.config import force_process_specs
+from mill_plant.config import ForceProcessParams, force_process_specs
 from mill_plant.force_drive import DrivenForceProcess
 
 STATUS_PART = 'force process'  # the status `<node>: force process`
@@ -103,9 +103,10 @@ class ForceProcessNode(Node):
             return  # the model is read-only; the others are read where used
         model = ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, values))
         self._T = model.sample_period
-        lo, hi = values['feed_limits']
+        own = ForceProcessParams.from_node_values(values)
+        lo, hi = own.feed_limits
         self._drive = DrivenForceProcess(
-            ForceProcessPlant(model), lo, hi, self._T / values['trace_intervals']
+            ForceProcessPlant(model), lo, hi, self._T / own.trace_intervals
         )
         self._built = True
 

@@ -35,18 +35,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParameterError,
-    ParamSpec,
     non_negative,
     number,
     number_list,
     positive,
     positive_int,
     positive_or_inf,
-    validate_all,
 )
 from mill_models.harmonics import harmonic_multiples
 
@@ -67,127 +67,104 @@ def _amplitudes(value: Any) -> str | None:
     return number_list(each=non_negative)(value)
 
 
+@dataclass(frozen=True)
+class HarmonicParams(ParamSet):
+    """Maharof 2018 eq. (5): the harmonics of the spindle frequency, their amplitudes and
+    phases (one entry per harmonic), the mean, the axes and the time window."""
+
+    PREFIX: ClassVar[str] = 'harmonic'
+    spindle_speed: float = param(
+        MAHAROF_SPINDLE_SPEED,
+        "spindle speed n; base harmonic f_0 = n/60·teeth (1560 rpm × 1 = the paper's 26 Hz)",
+        positive,
+        unit='rpm',
+    )
+    teeth: int = param(
+        MAHAROF_TEETH,
+        'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
+        'flute count = tooth passing)',
+        positive_int,
+        unit='-',
+    )
+    harmonics: list[float] = param(
+        list(MAHAROF_HARMONICS),
+        'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz)',
+        harmonic_multiples,
+        unit='-',
+    )
+    amplitudes: list[float] = param(
+        list(SYNTHESISED_AMPLITUDES),
+        'amplitude A_i of each harmonic, eq. (5) (synthesised from Table 2)',
+        _amplitudes,
+        unit='N',
+    )
+    phases: list[float] = param(
+        [0.0] * len(MAHAROF_HARMONICS),
+        'phase θ_i of each harmonic at t = 0, eq. (5)',
+        _finite_list,
+        unit='rad',
+    )
+    mean: float = param(SYNTHESISED_MEAN, 'mean (DC) force F̄', number, unit='N')
+    axis_weights: list[float] = param(
+        [1.0, 0.0, 0.0],
+        'weight of the force on x, y, z (F_axis = weight · F(t))',
+        number_list(3),
+        unit='-',
+    )
+    start_time: float = param(0.0, 'the force acts from this time', non_negative, unit='s')
+    end_time: float = param(
+        math.inf,
+        'the force acts until this time (> start_time; .inf = for ever)',
+        positive_or_inf,
+        unit='s',
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        n = len(self.harmonics)
+        for name in ('amplitudes', 'phases'):
+            given = getattr(self, name)
+            if len(given) != n:
+                raise ParameterError(
+                    f'{self.PREFIX}.{name}',
+                    given,
+                    f'must have one entry per harmonic ({n}), got {len(given)}',
+                )
+        if not self.end_time > self.start_time:
+            raise ParameterError(
+                f'{self.PREFIX}.end_time',
+                self.end_time,
+                f'must be > start_time = {self.start_time}',
+            )
+
+    @classmethod
+    def from_values(cls, values: Mapping[str, Any], owner: str = '') -> HarmonicParams:
+        """As ParamSet.from_values; missing phases: zero phase for every harmonic given."""
+        harmonics = values.get('harmonics')
+        if 'phases' not in values and isinstance(harmonics, list | tuple):
+            values = {**values, 'phases': [0.0] * len(harmonics)}
+        return super().from_values(values, owner)
+
+
 class HarmonicForce(CuttingForceModel):
     """Mean plus harmonics of the spindle frequency on chosen axes."""
 
-    PREFIX: ClassVar[str] = 'harmonic'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'spindle_speed',
-            MAHAROF_SPINDLE_SPEED,
-            'spindle speed n; base harmonic f_0 = n/60·teeth '
-            "(1560 rpm × 1 = the paper's 26 Hz) [rpm]",
-            positive,
-        ),
-        ParamSpec(
-            'teeth',
-            MAHAROF_TEETH,
-            'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
-            'flute count = tooth passing) [-]',
-            positive_int,
-        ),
-        ParamSpec(
-            'harmonics',
-            list(MAHAROF_HARMONICS),
-            'multiples m_i of f_0 in the force, Maharof 2018 §3 (26/52/78 Hz) [-]',
-            harmonic_multiples,
-        ),
-        ParamSpec(
-            'amplitudes',
-            list(SYNTHESISED_AMPLITUDES),
-            'amplitude A_i of each harmonic, eq. (5) (synthesised from Table 2) [N]',
-            _amplitudes,
-        ),
-        ParamSpec(
-            'phases',
-            [0.0] * len(MAHAROF_HARMONICS),
-            'phase θ_i of each harmonic at t = 0, eq. (5) [rad]',
-            _finite_list,
-        ),
-        ParamSpec('mean', SYNTHESISED_MEAN, 'mean (DC) force F̄ [N]', number),
-        ParamSpec(
-            'axis_weights',
-            [1.0, 0.0, 0.0],
-            'weight of the force on x, y, z (F_axis = weight · F(t)) [-]',
-            number_list(3),
-        ),
-        ParamSpec('start_time', 0.0, 'the force acts from this time [s]', non_negative),
-        ParamSpec(
-            'end_time',
-            math.inf,
-            'the force acts until this time (> start_time; .inf = for ever) [s]',
-            positive_or_inf,
-        ),
-    )
+    PARAMS: ClassVar[type[HarmonicParams]] = HarmonicParams
 
-    def __init__(
-        self,
-        *,
-        spindle_speed: float = MAHAROF_SPINDLE_SPEED,
-        teeth: int = MAHAROF_TEETH,
-        harmonics: Sequence[float] = MAHAROF_HARMONICS,
-        amplitudes: Sequence[float] = SYNTHESISED_AMPLITUDES,
-        phases: Sequence[float] | None = None,
-        mean: float = SYNTHESISED_MEAN,
-        axis_weights: Sequence[float] = (1.0, 0.0, 0.0),
-        start_time: float = 0.0,
-        end_time: float = math.inf,
-    ) -> None:
-        """Validate every value; ParameterError names the parameter ('harmonic.<name>')."""
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'spindle_speed': spindle_speed,
-                'teeth': teeth,
-                'harmonics': list(harmonics),
-                'amplitudes': list(amplitudes),
-                'phases': [0.0] * len(harmonics) if phases is None else list(phases),
-                'mean': mean,
-                'axis_weights': list(axis_weights),
-                'start_time': start_time,
-                'end_time': end_time,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        n = len(v['harmonics'])
-        for name in ('amplitudes', 'phases'):
-            if len(v[name]) != n:
-                raise ParameterError(
-                    f'{self.PREFIX}.{name}',
-                    v[name],
-                    f'must have one entry per harmonic ({n}), got {len(v[name])}',
-                )
-        if not v['end_time'] > v['start_time']:
-            raise ParameterError(
-                f'{self.PREFIX}.end_time',
-                v['end_time'],
-                f'must be > start_time = {v["start_time"]}',
-            )
-        self.spindle_speed: float = float(v['spindle_speed'])
-        self.teeth: int = v['teeth']
-        self.harmonics: tuple[float, ...] = tuple(float(m) for m in v['harmonics'])
-        self.amplitudes: tuple[float, ...] = tuple(float(a) for a in v['amplitudes'])
-        self.phases: tuple[float, ...] = tuple(float(p) for p in v['phases'])
-        self.mean: float = float(v['mean'])
-        w = [float(x) for x in v['axis_weights']]
+    def __init__(self, params: HarmonicParams = HarmonicParams()) -> None:
+        self.spindle_speed: float = params.spindle_speed
+        self.teeth: int = params.teeth
+        self.harmonics: tuple[float, ...] = tuple(params.harmonics)
+        self.amplitudes: tuple[float, ...] = tuple(params.amplitudes)
+        self.phases: tuple[float, ...] = tuple(params.phases)
+        self.mean: float = params.mean
+        w = params.axis_weights
         self.axis_weights: tuple[float, float, float] = (w[0], w[1], w[2])
-        self.start_time: float = float(v['start_time'])
-        self.end_time: float = float(v['end_time'])
+        self.start_time: float = params.start_time
+        self.end_time: float = params.end_time
         # f_0 = n/60 · teeth, the same base frequency as the DFO (module docstring)
         self.base_frequency: float = self.spindle_speed / 60.0 * self.teeth
         self._omegas = tuple(2.0 * math.pi * m * self.base_frequency for m in self.harmonics)
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> HarmonicForce:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults).
-
-        A missing 'phases' means zero phase for every harmonic. Raises ParameterError naming
-        the parameter as 'harmonic.<name>'.
-        """
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        if 'phases' not in values:
-            v['phases'] = None
-        return cls(**v)
 
     @property
     def frequencies(self) -> tuple[float, ...]:

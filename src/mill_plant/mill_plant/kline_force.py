@@ -68,18 +68,19 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
-    ParamSpec,
+    ParameterError,
     in_range,
     number,
     number_list,
     one_of,
     positive,
     positive_int,
-    validate_all,
 )
 
 from mill_plant.cutting import CuttingForceModel, Force3
@@ -134,6 +135,65 @@ def _program(value: Any) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class KlineParams(ParamSet):
+    """Beltrán 2013 eq. (4) and the workpiece; the spindle speed in rpm, the angle in degrees."""
+
+    PREFIX: ClassVar[str] = 'kline'
+    specific_energy: float = param(
+        1.37e9, 'u_s, energy per removed volume [J/m^3] (0.5 hp min/in^3)', positive
+    )
+    spindle_speed: float = param(1800.0, 'spindle speed N', positive, unit='rpm')
+    teeth: int = param(2, 'cutter teeth n_t', positive_int)
+    tool_diameter: float = param(0.010, 'cutter diameter D', positive, unit='m')
+    radial_depth: float = param(0.010, 'radial depth of cut b [m] (b = D: slot)', positive)
+    helix_angle: float = param(45.0, 'cutting-edge angle lambda', in_range(0, 89), unit='deg')
+    workpiece_min: list[float] = param(
+        [-0.1, -0.12], 'workpiece corner x, y', number_list(2), unit='m'
+    )
+    workpiece_max: list[float] = param(
+        [0.03, 0.0], 'workpiece corner x, y', number_list(2), unit='m'
+    )
+    workpiece_top: float = param(0.0, 'z of the workpiece top surface', number, unit='m')
+    chip: str = param(
+        'tool',
+        "whose x-y path since the previous tooth is the chip: 'programmed' = "
+        "kline.program's (Beltrán 2013's quasi-static assumption), 'tool' = the tool's",
+        one_of(*PATHS),
+    )
+    depth: str = param(
+        'tool',
+        "depth of cut d_a = workpiece_top - z: 'programmed' = z of kline.program "
+        "(Beltrán 2013's constant depth), 'tool' = the tool's z",
+        one_of(*PATHS),
+    )
+    program: list[float] = param(
+        [v for p in BELTRAN_PROGRAM for v in p],
+        "the programmed path for 'programmed' chip or depth: corners x0, y0, z0, x1, "
+        '... [m], straight segments from t = 0 (as trajectory linear.waypoints)',
+        _program,
+    )
+    program_feed_rate: float = param(
+        BELTRAN_FEED_RATE,
+        'speed along kline.program [m/s] (as trajectory linear.feed_rate)',
+        positive,
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.radial_depth <= self.tool_diameter:
+            raise ParameterError(
+                'kline.radial_depth',
+                self.radial_depth,
+                f'must be in (0, tool_diameter={self.tool_diameter}]',
+            )
+        low, high = self.workpiece_min, self.workpiece_max
+        if not (low[0] < high[0] and low[1] < high[1]):
+            raise ParameterError(
+                'kline.workpiece_min', low, f'must be below workpiece_max {high!r}'
+            )
+
+
 class KlineCuttingForce(CuttingForceModel):
     """Kline quasi-static cutting force (Beltrán 2013 eq. (4)) on a box-shaped workpiece.
 
@@ -141,143 +201,30 @@ class KlineCuttingForce(CuttingForceModel):
     every state it accepts (`commit`, in increasing time). One model belongs to one plant.
     """
 
-    PREFIX: ClassVar[str] = 'kline'
+    PARAMS: ClassVar[type[KlineParams]] = KlineParams
     PATH_DEPENDENT: ClassVar[bool] = True
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'specific_energy',
-            1.37e9,
-            'u_s, energy per removed volume [J/m^3] (0.5 hp min/in^3)',
-            positive,
-        ),
-        ParamSpec('spindle_speed', 1800.0, 'spindle speed N [rpm]', positive),
-        ParamSpec('teeth', 2, 'cutter teeth n_t', positive_int),
-        ParamSpec('tool_diameter', 0.010, 'cutter diameter D [m]', positive),
-        ParamSpec('radial_depth', 0.010, 'radial depth of cut b [m] (b = D: slot)', positive),
-        ParamSpec('helix_angle', 45.0, 'cutting-edge angle lambda [deg]', in_range(0, 89)),
-        ParamSpec('workpiece_min', [-0.1, -0.12], 'workpiece corner x, y [m]', number_list(2)),
-        ParamSpec('workpiece_max', [0.03, 0.0], 'workpiece corner x, y [m]', number_list(2)),
-        ParamSpec('workpiece_top', 0.0, 'z of the workpiece top surface [m]', number),
-        ParamSpec(
-            'chip',
-            'tool',
-            "whose x-y path since the previous tooth is the chip: 'programmed' = "
-            "kline.program's (Beltrán 2013's quasi-static assumption), 'tool' = the tool's",
-            one_of(*PATHS),
-        ),
-        ParamSpec(
-            'depth',
-            'tool',
-            "depth of cut d_a = workpiece_top - z: 'programmed' = z of kline.program "
-            "(Beltrán 2013's constant depth), 'tool' = the tool's z",
-            one_of(*PATHS),
-        ),
-        ParamSpec(
-            'program',
-            [v for p in BELTRAN_PROGRAM for v in p],
-            "the programmed path for 'programmed' chip or depth: corners x0, y0, z0, x1, "
-            '... [m], straight segments from t = 0 (as trajectory linear.waypoints)',
-            _program,
-        ),
-        ParamSpec(
-            'program_feed_rate',
-            BELTRAN_FEED_RATE,
-            'speed along kline.program [m/s] (as trajectory linear.feed_rate)',
-            positive,
-        ),
-    )
+    # k_r of the radial and axial forces (Beltrán 2013 eq. (4)), not a parameter
+    RADIAL_RATIO: ClassVar[float] = 0.3
 
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> KlineCuttingForce:
-        """From PARAMETERS (spindle speed in rpm, helix angle in degrees)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        flat = v['program']
-        return cls(
-            specific_energy=v['specific_energy'],
-            spindle_speed_rpm=v['spindle_speed'],
-            teeth=v['teeth'],
-            tool_diameter=v['tool_diameter'],
-            radial_depth=v['radial_depth'],
-            helix_angle=math.radians(v['helix_angle']),
-            workpiece_min=tuple(v['workpiece_min']),
-            workpiece_max=tuple(v['workpiece_max']),
-            workpiece_top=v['workpiece_top'],
-            chip=v['chip'],
-            depth=v['depth'],
-            program=[flat[i : i + 3] for i in range(0, len(flat), 3)],
-            program_feed_rate=v['program_feed_rate'],
-        )
-
-    def __init__(
-        self,
-        *,
-        specific_energy: float = 1.37e9,
-        spindle_speed_rpm: float = 1800.0,
-        teeth: int = 2,
-        tool_diameter: float = 0.010,
-        radial_depth: float = 0.010,
-        helix_angle: float = math.radians(45.0),
-        radial_ratio: float = 0.3,
-        workpiece_min: Sequence[float] = (-0.1, -0.12),
-        workpiece_max: Sequence[float] = (0.03, 0.0),
-        workpiece_top: float = 0.0,
-        chip: str = 'tool',
-        depth: str = 'tool',
-        program: Sequence[Sequence[float]] = BELTRAN_PROGRAM,
-        program_feed_rate: float = BELTRAN_FEED_RATE,
-    ) -> None:
-        def finite(name: str, value: float) -> float:
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f'{name} must be a number, got {value!r}')
-            if not math.isfinite(value):
-                raise ValueError(f'{name} must be finite, got {value!r}')
-            return float(value)
-
-        self.specific_energy = finite('specific_energy', specific_energy)
-        if self.specific_energy < 0.0:
-            raise ValueError(f'specific_energy must be >= 0, got {specific_energy!r}')
-        self.spindle_speed_rpm = finite('spindle_speed_rpm', spindle_speed_rpm)
-        if self.spindle_speed_rpm <= 0.0:
-            raise ValueError(f'spindle_speed_rpm must be > 0, got {spindle_speed_rpm!r}')
-        if isinstance(teeth, bool) or not isinstance(teeth, int) or teeth < 1:
-            raise ValueError(f'teeth must be a whole number >= 1, got {teeth!r}')
-        self.teeth = teeth
-        self.tool_diameter = finite('tool_diameter', tool_diameter)
-        if self.tool_diameter <= 0.0:
-            raise ValueError(f'tool_diameter must be > 0, got {tool_diameter!r}')
-        self.radial_depth = finite('radial_depth', radial_depth)
-        if not 0.0 < self.radial_depth <= self.tool_diameter:
-            raise ValueError(
-                f'radial_depth must be in (0, tool_diameter={self.tool_diameter}], '
-                f'got {radial_depth!r}'
-            )
-        self.helix_angle = finite('helix_angle', helix_angle)
-        if not 0.0 <= self.helix_angle < 0.5 * math.pi:
-            raise ValueError(f'helix_angle must be in [0, pi/2) rad, got {helix_angle!r}')
-        self.radial_ratio = finite('radial_ratio', radial_ratio)
-        if self.radial_ratio < 0.0:
-            raise ValueError(f'radial_ratio must be >= 0, got {radial_ratio!r}')
-        for name, corner in (('workpiece_min', workpiece_min), ('workpiece_max', workpiece_max)):
-            if len(corner) != 2:
-                raise ValueError(f'{name} must be (x, y), got {corner!r}')
-            for value in corner:
-                finite(name, value)
-        self.workpiece_min = (float(workpiece_min[0]), float(workpiece_min[1]))
-        self.workpiece_max = (float(workpiece_max[0]), float(workpiece_max[1]))
-        if not (
-            self.workpiece_min[0] < self.workpiece_max[0]
-            and self.workpiece_min[1] < self.workpiece_max[1]
-        ):
-            raise ValueError(
-                f'workpiece_min {workpiece_min!r} must be below workpiece_max {workpiece_max!r}'
-            )
-        self.workpiece_top = finite('workpiece_top', workpiece_top)
-        for name, path in (('chip', chip), ('depth', depth)):
-            if path not in PATHS:
-                raise ValueError(f'{name} must be one of {", ".join(PATHS)}, got {path!r}')
-        self.chip = chip
-        self.depth = depth
-        self.program = ProgrammedPath(program, program_feed_rate)
+    def __init__(self, params: KlineParams = KlineParams()) -> None:
+        self.specific_energy = params.specific_energy
+        self.spindle_speed_rpm = params.spindle_speed
+        teeth = self.teeth = params.teeth
+        self.tool_diameter = params.tool_diameter
+        self.radial_depth = params.radial_depth
+        self.helix_angle = math.radians(params.helix_angle)  # degrees on the node
+        self.radial_ratio = self.RADIAL_RATIO
+        self.workpiece_min = (params.workpiece_min[0], params.workpiece_min[1])
+        self.workpiece_max = (params.workpiece_max[0], params.workpiece_max[1])
+        self.workpiece_top = params.workpiece_top
+        chip = self.chip = params.chip
+        depth = self.depth = params.depth
+        flat = params.program
+        program = [flat[i : i + 3] for i in range(0, len(flat), 3)]
+        try:
+            self.program = ProgrammedPath(program, params.program_feed_rate)
+        except ValueError as e:
+            raise ParameterError('kline.program', flat, str(e)) from None
 
         # Beltrán 2013 eq. (4): v_m = acos(1 - 2b/D), the exit angle; entry v_0 = 0
         self.exit_angle = math.acos(1.0 - 2.0 * self.radial_depth / self.tool_diameter)

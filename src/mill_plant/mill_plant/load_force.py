@@ -13,59 +13,42 @@ force resists motion in +axis).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import (
-    ParamSpec,
-    boolean,
-    non_negative,
-    number_list,
-    validate_all,
-)
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import boolean, non_negative, number_list
 
 from mill_plant.cutting import CuttingForceModel, Force3
 
 
-class LoadForce(CuttingForceModel):
+@dataclass(frozen=True)
+class LoadParams(ParamSet):
     PREFIX: ClassVar[str] = 'load'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('force', [0.0, 0.0, 0.0], 'constant load F0 on x, y, z [N]', number_list(3)),
-        ParamSpec(
-            'amplitude',
-            [0.0, 0.0, 0.0],
-            'amplitude A of the harmonic load on x, y, z [N]',
-            number_list(3),
-        ),
-        ParamSpec('frequency', 60.0, 'frequency f of the harmonic load [Hz]', non_negative),
-        ParamSpec(
-            'while_moving',
-            True,
-            'true: the load acts only on a moving axis, against its motion (a process '
-            'load); false: it acts all the time in +axis (a spring, a hanging weight)',
-            boolean,
-        ),
+    force: list[float] = param(
+        [0.0, 0.0, 0.0], 'constant load F0 on x, y, z', number_list(3), unit='N'
+    )
+    amplitude: list[float] = param(
+        [0.0, 0.0, 0.0], 'amplitude A of the harmonic load on x, y, z', number_list(3), unit='N'
+    )
+    frequency: float = param(60.0, 'frequency f of the harmonic load', non_negative, unit='Hz')
+    while_moving: bool = param(
+        True,
+        'true: the load acts only on a moving axis, against its motion (a process '
+        'load); false: it acts all the time in +axis (a spring, a hanging weight)',
+        boolean,
     )
 
-    def __init__(
-        self,
-        force: Sequence[float],
-        amplitude: Sequence[float] = (0.0, 0.0, 0.0),
-        frequency: float = 60.0,
-        while_moving: bool = True,
-    ) -> None:
-        values = [float(v) for v in (*force, *amplitude, frequency)]
-        if len(force) != 3 or len(amplitude) != 3 or not all(map(math.isfinite, values)):
-            raise ValueError('force and amplitude need 3 finite entries, frequency a finite one')
-        self._f0 = tuple(values[:3])
-        self._a = tuple(values[3:6])
-        self._omega = 2.0 * math.pi * values[6]
-        self.while_moving = bool(while_moving)
 
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> LoadForce:
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(v['force'], v['amplitude'], v['frequency'], v['while_moving'])
+class LoadForce(CuttingForceModel):
+    PARAMS: ClassVar[type[LoadParams]] = LoadParams
+
+    def __init__(self, params: LoadParams = LoadParams()) -> None:
+        self._f0 = tuple(params.force)
+        self._a = tuple(params.amplitude)
+        self._omega = 2.0 * math.pi * params.frequency
+        self.while_moving = params.while_moving
 
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         wave = math.sin(self._omega * t)

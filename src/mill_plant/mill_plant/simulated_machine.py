@@ -29,14 +29,8 @@ class SimulatedMachine(DriveBackend):
         self.plant = build_plant(values)
         self.resolution = values['sensor_resolution']
         self._index = [AXES.index(a) for a in self.axes]
-        self._units = {a: self.plant_unit(values, AXES.index(a)) for a in self.axes}
         # Every machine axis: an axis not under control gets NaN, i.e. is braked.
         self._held = [math.nan] * len(AXES)
-
-    @staticmethod
-    def plant_unit(values: dict[str, Any], i: int) -> str:
-        model = values['axis_model'][i]
-        return 'V' if model in ('transfer_function', 'velocity_drive') else 'N·m'
 
     def read(self) -> list[float]:
         position = self.plant.position
@@ -62,7 +56,9 @@ class SimulatedMachine(DriveBackend):
             gate.running = speed != 0.0
 
     def input_units(self) -> dict[str, str]:
-        return dict(self._units)
+        """The unit of each axis's effort: its model's INPUT_UNIT (N·m, or V)."""
+        models = self.plant.models
+        return {a: models[i].INPUT_UNIT for a, i in zip(self.axes, self._index, strict=True)}
 
     # -- what only a simulation knows (analysis topics) ------------------------------------
     def truth(self) -> tuple[Vector3, Vector3, Vector3]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,11 +12,11 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
 from mill_plant.axis_plant import AxisPlant
-from mill_plant.cutting import NoCutting, StepForce
+from mill_plant.cutting import NoCutting, StepForce, StepParams
 from mill_plant.models.base import AxisModel
-from mill_plant.models.flexible import FlexibleAxisModel
-from mill_plant.models.rigid import RigidAxisModel
-from mill_plant.models.transfer_function import TransferFunctionAxisModel
+from mill_plant.models.flexible import FlexibleAxisModel, FlexibleModelParams
+from mill_plant.models.rigid import RigidAxisModel, RigidModelParams
+from mill_plant.models.transfer_function import TransferFunctionAxisModel, TransferFunctionParams
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
 
 MODELS = (RigidAxisModel, FlexibleAxisModel, TransferFunctionAxisModel, VelocityDriveAxisModel)
@@ -128,17 +129,18 @@ def test_rigid_closed_form_disturbance_is_acceleration_less_b_u(gravity: bool) -
 def _rigid_of(flex: FlexibleAxisModel) -> RigidAxisModel:
     p = flex.p
     m_e, c_e = flex.rigid_equivalent()
-    inertia = p['motor_inertia'] + p['coupling_inertia'] + p['screw_inertia']
+    inertia = p.motor_inertia + p.coupling_inertia + p.screw_inertia
     params = RigidAxisParams(
-        mass=p['carriage_mass'],
+        mass=p.carriage_mass,
         screw_inertia=inertia,
-        pitch=p['pitch'],
-        cart_damping=p['guide_damping'],
-        screw_damping=c_e - p['guide_damping'],
-        coulomb_friction=p['coulomb_friction'],
+        pitch=p.pitch,
+        cart_damping=p.guide_damping,
+        screw_damping=c_e - p.guide_damping,
+        coulomb_friction=p.coulomb_friction,
     )
     assert params.effective_mass == pytest.approx(m_e, rel=1e-14)
-    return RigidAxisModel(params)
+    same_on_every_axis = {k: [v] * 3 for k, v in dataclasses.asdict(params).items()}
+    return RigidAxisModel(RigidModelParams(**same_on_every_axis))
 
 
 def _torque_run(model: AxisModel, cutting, steps: int, dt: float) -> np.ndarray:
@@ -154,12 +156,14 @@ def _torque_run(model: AxisModel, cutting, steps: int, dt: float) -> np.ndarray:
 
 @pytest.mark.parametrize('mu', [0.0, 30.0])
 def test_flexible_axis_with_stiff_elements_approaches_the_rigid_axis(mu) -> None:
-    cut = StepForce((0.1, 0.0, 0.0), start_time=0.1)
+    cut = StepForce(StepParams(force=(0.1, 0.0, 0.0), start_time=0.1))
     dt, steps = 1e-4, 3000
     errors = []
     for k in (1e5, 1e6):
         # mu = 30 N lets friction stop the 1979 kg (m_e) axis within the run
-        flex = FlexibleAxisModel(coupling_stiffness=k, screw_stiffness=k, coulomb_friction=mu)
+        flex = FlexibleAxisModel(
+            FlexibleModelParams(coupling_stiffness=k, screw_stiffness=k, coulomb_friction=mu)
+        )
         ref = _torque_run(_rigid_of(flex), cut, steps, dt)
         errors.append(np.max(np.abs(_torque_run(flex, cut, steps, dt)[:, 0] - ref[:, 0])))
         assert flex.input_gain() == pytest.approx(_rigid_of(flex).input_gain(), rel=1e-14)
@@ -179,9 +183,9 @@ def test_flexible_axis_with_stiff_elements_approaches_the_rigid_axis(mu) -> None
 def _chain_frequencies(flex: FlexibleAxisModel) -> tuple[float, float]:
     """Nonzero ω of the free undamped chain J_m -k_c- J_c -k_To- (J_T + m_c a²)."""
     p = flex.p
-    i1, i2 = p['motor_inertia'], p['coupling_inertia']
-    i3 = p['screw_inertia'] + p['carriage_mass'] / flex.n**2
-    k1, k2 = p['coupling_stiffness'], p['screw_stiffness']
+    i1, i2 = p.motor_inertia, p.coupling_inertia
+    i3 = p.screw_inertia + p.carriage_mass / flex.n**2
+    k1, k2 = p.coupling_stiffness, p.screw_stiffness
     # ω⁴ - [k1 (1/i1 + 1/i2) + k2 (1/i2 + 1/i3)] ω² + k1 k2 (i1 + i2 + i3)/(i1 i2 i3) = 0
     s = k1 * (1 / i1 + 1 / i2) + k2 * (1 / i2 + 1 / i3)
     q = k1 * k2 * (i1 + i2 + i3) / (i1 * i2 * i3)
@@ -190,23 +194,23 @@ def _chain_frequencies(flex: FlexibleAxisModel) -> tuple[float, float]:
 
 
 def test_flexible_resonances_from_free_response_match_the_analytic_values() -> None:
-    flex = FlexibleAxisModel(coulomb_friction=0.0)  # paper values, friction off
+    flex = FlexibleAxisModel(
+        FlexibleModelParams(coulomb_friction=0.0)
+    )  # paper values, friction off
     w_low, w_high = _chain_frequencies(flex)
     assert w_low / (2 * math.pi) == pytest.approx(94.2, abs=1.0)
     assert w_high / (2 * math.pi) == pytest.approx(380.0, abs=3.0)
     # mode shapes (θ1, θ2, x) of K φ = ω² M φ
     p, n = flex.p, flex.n
-    m = np.diag(
-        [p['motor_inertia'], p['coupling_inertia'], p['screw_inertia'] * n * n + p['carriage_mass']]
-    )
-    kc, ks = p['coupling_stiffness'], p['screw_stiffness']
+    m = np.diag([p.motor_inertia, p.coupling_inertia, p.screw_inertia * n * n + p.carriage_mass])
+    kc, ks = p.coupling_stiffness, p.screw_stiffness
     k = kc * np.array([[1, -1, 0], [-1, 1, 0], [0, 0, 0]]) + ks * np.array(
         [[0, 0, 0], [0, 1, -n], [0, -n, n * n]]
     )
     w2, shapes = scipy.linalg.eigh(k, m)
     for w_expected, col in ((w_low, 1), (w_high, 2)):
         assert math.sqrt(w2[col]) == pytest.approx(w_expected, rel=1e-9)
-        plant = _single(FlexibleAxisModel(coulomb_friction=0.0))
+        plant = _single(FlexibleAxisModel(FlexibleModelParams(coulomb_friction=0.0)))
         shape = shapes[:, col] / np.max(np.abs(shapes[:, col])) * 1e-3
         plant._state[0] = [*shape, 0.0, 0.0, 0.0]
         dt = 1e-4
@@ -242,7 +246,7 @@ def _exact_delayed(model: TransferFunctionAxisModel, inputs, dt, force: float = 
     """Exact response of eq. (1) to ZOH inputs delayed by T_d, at the step ends."""
     a_, b_, c_ = model.coefficients
     ss = np.array([[0.0, 1.0], [-c_, -b_]])
-    kf = model.p['force_constant']
+    kf = model.p.force_constant
     td = model.dead_time
     events = sorted([(k * dt + td, u) for k, u in enumerate(inputs)])
     x = np.zeros(2)
@@ -269,7 +273,7 @@ def _exact_delayed(model: TransferFunctionAxisModel, inputs, dt, force: float = 
     ('dead_time', 'dt'), [(0.0012, 1e-3), (0.0012, 0.7e-3), (0.002, 1e-3), (0.0, 1e-3)]
 )
 def test_transfer_function_step_response_with_dead_time(dead_time, dt) -> None:
-    model = TransferFunctionAxisModel(dead_time=dead_time)
+    model = TransferFunctionAxisModel(TransferFunctionParams(dead_time=dead_time))
     plant = _single(model)
     steps = 400
     xs = []
@@ -296,7 +300,7 @@ def test_transfer_function_staircase_with_fractional_dead_time_is_exact() -> Non
     dt = 1e-3
     inputs = [math.sin(0.37 * k) + (k % 5 == 0) for k in range(300)]
     force = 100.0
-    plant = _single(model, StepForce((force, 0.0, 0.0)))
+    plant = _single(model, StepForce(StepParams(force=(force, 0.0, 0.0), start_time=0.0)))
     xs = []
     for u in inputs:
         plant.step((u, 0.0, 0.0), dt)
@@ -307,11 +311,11 @@ def test_transfer_function_staircase_with_fractional_dead_time_is_exact() -> Non
 
 def test_transfer_function_dc_gain_force_and_load() -> None:
     model = TransferFunctionAxisModel()
-    a_mm, c_ = model.p['gain'], model.p['stiffness']
-    plant = _single(model, StepForce((39.01, 0.0, 0.0)))
+    a_mm, c_ = model.p.gain, model.p.stiffness
+    plant = _single(model, StepForce(StepParams(force=(39.01, 0.0, 0.0), start_time=0.0)))
     for _ in range(2000):
         plant.step((0.5, 0.0, 0.0), 0.01)  # 20 s ≫ B/C = 0.84 s
-    kf = model.p['force_constant']
+    kf = model.p.force_constant
     # DC gain A/C [mm/V] → m/V, with the force as -F/k_f volts
     assert plant.position[0] == pytest.approx(a_mm / c_ * 1e-3 * (0.5 - 39.01 / kf), rel=1e-6)
     assert kf == pytest.approx(780.2)
@@ -339,7 +343,7 @@ def test_velocity_drive_steady_speed_and_force(axis) -> None:
         models.insert(axis, model)
         fc = [0.0, 0.0, 0.0]
         fc[axis] = force
-        plant = AxisPlant(models, StepForce(fc))
+        plant = AxisPlant(models, StepForce(StepParams(force=fc, start_time=0.0)))
         cmd = [0.0, 0.0, 0.0]
         cmd[axis] = u
         for _ in range(1000):

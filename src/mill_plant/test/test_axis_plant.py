@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from mill_models.axis_data import BELTRAN_TABLE1
 from mill_plant.axis_plant import AxisPlant, StepReport
-from mill_plant.cutting import NoCutting, StepForce
-from mill_plant.kline_force import KlineCuttingForce
-from mill_plant.models.flexible import FlexibleAxisModel
+from mill_plant.cutting import NoCutting, StepForce, StepParams
+from mill_plant.kline_force import KlineCuttingForce, KlineParams
+from mill_plant.models.flexible import FlexibleAxisModel, FlexibleModelParams
 from mill_plant.models.rigid import RigidAxisModel
 from mill_plant.models.transfer_function import TransferFunctionAxisModel
 from mill_plant.models.velocity_drive import VelocityDriveAxisModel
@@ -103,7 +103,7 @@ def _reference(kline: KlineCuttingForce, x0, v0, torque, t_end: float) -> np.nda
 )
 def test_rk4_matches_dop853_with_kline_force(specific_energy, helix_deg, torque) -> None:
     kline = KlineCuttingForce(
-        specific_energy=specific_energy, helix_angle=math.radians(helix_deg), workpiece_top=-0.0048
+        KlineParams(specific_energy=specific_energy, helix_angle=helix_deg, workpiece_top=-0.0048)
     )
     x0 = (-0.06, -0.08, -0.005)
     v0 = (0.01, 0.01, -0.0002)
@@ -141,13 +141,13 @@ def test_stiction_below_breakaway_keeps_axes_exactly_at_rest() -> None:
 
 
 def test_stiction_holds_against_a_sub_breakaway_cutting_force() -> None:
-    plant = AxisPlant(_rigid(), StepForce((0.2, -0.25, 0.29), start_time=0.0))
+    plant = AxisPlant(_rigid(), StepForce(StepParams(force=(0.2, -0.25, 0.29), start_time=0.0)))
     for _ in range(100):
         plant.step((0.0, 0.0, 0.0), DT)
     assert plant.velocity == (0.0, 0.0, 0.0)
     assert plant.position == (0.0, 0.0, 0.0)
     # ...and a force above mu moves the axis against it (here -x).
-    moved = AxisPlant(_rigid(), StepForce((0.31, 0.0, 0.0), start_time=0.0))
+    moved = AxisPlant(_rigid(), StepForce(StepParams(force=(0.31, 0.0, 0.0), start_time=0.0)))
     for _ in range(100):
         moved.step((0.0, 0.0, 0.0), DT)
     assert moved.velocity[0] < 0.0 and moved.position[0] < 0.0
@@ -198,8 +198,12 @@ def test_slow_sinusoidal_torque_gives_no_velocity_chatter() -> None:
 
 def test_non_finite_torque_brakes_only_that_rigid_axis() -> None:
     start = (0.01, 0.02, -0.003)
-    faulty = AxisPlant(_rigid(), StepForce((0.5, -0.7, 1.0), start_time=0.002), start)
-    clean = AxisPlant(_rigid(), StepForce((0.5, -0.7, 1.0), start_time=0.002), start)
+    faulty = AxisPlant(
+        _rigid(), StepForce(StepParams(force=(0.5, -0.7, 1.0), start_time=0.002)), start
+    )
+    clean = AxisPlant(
+        _rigid(), StepForce(StepParams(force=(0.5, -0.7, 1.0), start_time=0.002)), start
+    )
     torque = (0.01, -0.02, 0.03)
     for _ in range(20):
         faulty.step(torque, DT)
@@ -257,7 +261,7 @@ def test_disturbance_of_sliding_axes_without_cutting() -> None:
 
 def test_disturbance_includes_the_cutting_force() -> None:
     force = (40.0, -25.0, 10.0)
-    plant = AxisPlant(_rigid(), StepForce(force, start_time=0.01))
+    plant = AxisPlant(_rigid(), StepForce(StepParams(force=force, start_time=0.01)))
     drive = (0.05, -0.05, 0.05)
     for _ in range(20):
         plant.step(drive, DT)
@@ -336,7 +340,7 @@ def test_rigid_scalar_path_equals_the_general_path_bit_for_bit() -> None:
     def plant(cls: type[RigidAxisModel]) -> AxisPlant:
         models = [cls.from_parameters(i, {}, gravity=(i == 2)) for i in range(3)]
         # chip and depth from the tool's path: the model learns every accepted state
-        kline = KlineCuttingForce(specific_energy=1e8)
+        kline = KlineCuttingForce(KlineParams(specific_energy=1e8))
         return AxisPlant(
             models,
             kline,
@@ -379,7 +383,9 @@ def _mixed(**kw) -> AxisPlant:
         VelocityDriveAxisModel.from_parameters(1, {}),
         RigidAxisModel.from_parameters(2, {}, gravity=True),
     ]
-    return AxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05), **kw)
+    return AxisPlant(
+        models, StepForce(StepParams(force=(30.0, -20.0, 15.0), start_time=0.05)), **kw
+    )
 
 
 def _drive(plant: AxisPlant, steps: int, dt: float = DT) -> list[tuple[float, ...]]:
@@ -403,7 +409,7 @@ def test_mixed_models_run_deterministically_and_each_axis_matches_its_own_plant(
         _rigid(gravity_z=True),
     ]
     for i, models in enumerate(solo):
-        plant = AxisPlant(models, StepForce((30.0, -20.0, 15.0), start_time=0.05))
+        plant = AxisPlant(models, StepForce(StepParams(force=(30.0, -20.0, 15.0), start_time=0.05)))
         ref = _drive(plant, 500)
         for a, b in zip(first, ref, strict=True):
             assert abs(a[1 + i] - b[1 + i]) <= 1e-12
@@ -446,8 +452,8 @@ def test_load_change_happens_at_the_first_step_at_or_after_its_time() -> None:
 
 def test_non_finite_input_brakes_only_that_axis_of_any_model() -> None:
     models = [TransferFunctionAxisModel(), FlexibleAxisModel(), VelocityDriveAxisModel()]
-    faulty = AxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
-    clean = AxisPlant(models, StepForce((0.5, -0.7, 1.0), start_time=0.002))
+    faulty = AxisPlant(models, StepForce(StepParams(force=(0.5, -0.7, 1.0), start_time=0.002)))
+    clean = AxisPlant(models, StepForce(StepParams(force=(0.5, -0.7, 1.0), start_time=0.002)))
     u = (0.2, 0.5, 0.1)
     for _ in range(30):
         faulty.step(u, DT)
@@ -516,8 +522,12 @@ def test_gravity_sags_a_rigid_z_axis_and_the_holding_torque_holds_it() -> None:
 def test_disturbance_of_internal_state_models() -> None:
     tf = TransferFunctionAxisModel()
     plant = AxisPlant(
-        [tf, VelocityDriveAxisModel(), FlexibleAxisModel(coulomb_friction=0.0)],
-        StepForce((50.0, 20.0, 5.0)),
+        [
+            tf,
+            VelocityDriveAxisModel(),
+            FlexibleAxisModel(FlexibleModelParams(coulomb_friction=0.0)),
+        ],
+        StepForce(StepParams(force=(50.0, 20.0, 5.0), start_time=0.0)),
     )
     for _ in range(7):
         plant.step((1.0, 0.5, 0.2), 0.4e-3)  # 2.8 ms: the delayed 1 V acts since 1.2 ms
@@ -525,7 +535,7 @@ def test_disturbance_of_internal_state_models() -> None:
     x, v = plant.states[0]
     a, b, c = plant.models[0].coefficients
     # Maharof eq. (1): x'' = -B v - C x + A (u(t - T_d) - F/k_f); xi = x'' - A u_now
-    expected = -b * v - c * x + a * (1.0 - 50.0 / tf.p['force_constant']) - a * 2.0
+    expected = -b * v - c * x + a * (1.0 - 50.0 / tf.p.force_constant) - a * 2.0
     assert xi[0] == pytest.approx(expected, rel=1e-12)
     # Consistency with the motion over a short step for the non-delayed models
     before = plant.velocity

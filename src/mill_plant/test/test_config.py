@@ -97,3 +97,14 @@ def test_the_force_process_node_shares_the_lockstep_timeouts() -> None:
     assert ours['startup_timeout'] is plant['startup_timeout']
     assert ours['min_subscribers'].default == 1  # the force controller only
     assert all(s.read_only for n, s in ours.items() if n.startswith('force_process.'))
+
+
+def test_the_simulated_machine_takes_each_input_unit_from_its_axis_model() -> None:
+    from mill_plant.simulated_machine import SimulatedMachine
+
+    values = {**DEFAULTS, 'axis_model': ['transfer_function', 'velocity_drive', 'flexible']}
+    machine = SimulatedMachine({**values, 'axes': ['x', 'y', 'z']})
+    assert machine.input_units() == {'x': 'V', 'y': 'V', 'z': 'N·m'}
+    for model, unit in zip(machine.plant.models, machine.input_units().values(), strict=True):
+        assert unit == type(model).INPUT_UNIT
+    assert SimulatedMachine({**DEFAULTS, 'axes': ['y']}).input_units() == {'y': 'N·m'}

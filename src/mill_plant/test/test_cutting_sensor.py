@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from mill_plant.cutting import NoCutting, StepForce
+from mill_plant.cutting import NoCutting, StepForce, StepParams
 from mill_plant.sensor import quantize
 
 P = (0.01, -0.02, -0.005)
@@ -17,7 +17,7 @@ def test_no_cutting_is_zero() -> None:
 
 
 def test_step_force_switches_on_at_start_time() -> None:
-    step = StepForce((10.0, -5.0, 2.5), start_time=0.5)
+    step = StepForce(StepParams(force=(10.0, -5.0, 2.5), start_time=0.5))
     assert step.force(0.4999, P, V) == (0.0, 0.0, 0.0)
     assert step.force(0.5, P, V) == (10.0, -5.0, 2.5)
     assert step.force(3.0, P, (0.0, 0.0, 0.0)) == (10.0, -5.0, 2.5)
@@ -25,9 +25,9 @@ def test_step_force_switches_on_at_start_time() -> None:
 
 def test_step_force_refuses_bad_input() -> None:
     with pytest.raises(ValueError):
-        StepForce((1.0, 2.0), start_time=0.0)
+        StepForce(StepParams(force=(1.0, 2.0), start_time=0.0))
     with pytest.raises(ValueError):
-        StepForce((1.0, math.nan, 0.0), start_time=0.0)
+        StepForce(StepParams(force=(1.0, math.nan, 0.0), start_time=0.0))
 
 
 def test_quantize_rounds_to_nearest_count() -> None:

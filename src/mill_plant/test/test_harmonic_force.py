@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from mill_common.parameters import ParameterError, validate_all
 from mill_models.axis_data import BELTRAN_TABLE1
-from mill_plant.harmonic_force import SYNTHESISED_AMPLITUDES, HarmonicForce
+from mill_plant.harmonic_force import SYNTHESISED_AMPLITUDES, HarmonicForce, HarmonicParams
 
 ORIGIN = (0.0, 0.0, 0.0)
 
@@ -88,7 +88,9 @@ def test_zero_amplitude_is_exactly_the_mean() -> None:
 
 
 def test_time_window() -> None:
-    force = HarmonicForce(start_time=0.5, end_time=1.5, axis_weights=(0.0, 1.0, 2.0))
+    force = HarmonicForce(
+        HarmonicParams(start_time=0.5, end_time=1.5, axis_weights=(0.0, 1.0, 2.0))
+    )
     assert force.force(0.4999, ORIGIN, ORIGIN) == (0.0, 0.0, 0.0)
     assert force.force(1.5, ORIGIN, ORIGIN) == (0.0, 0.0, 0.0)
     f = force.force(0.5, ORIGIN, ORIGIN)

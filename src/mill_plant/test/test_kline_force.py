@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from mill_plant.kline_force import KlineCuttingForce
+from mill_plant.kline_force import KlineCuttingForce, KlineParams
 
 FEED = 0.003  # [m/s], the paper's feed rate
 INSIDE = (-0.05, -0.06, -0.005)  # 5 mm below the default top, inside the default box
@@ -120,7 +120,7 @@ def test_force_is_linear_in_feed_velocity_and_depth() -> None:
 
 def test_engagement_window_half_immersion() -> None:
     # b = D/2: v_m = acos(0) = pi/2; a tooth cuts only while its angle is in (0, pi/2).
-    kline = KlineCuttingForce(radial_depth=0.005)
+    kline = KlineCuttingForce(KlineParams(radial_depth=0.005))
     assert kline.exit_angle == pytest.approx(0.5 * math.pi)
     omega = 2.0 * math.pi * 1800.0 / 60.0
     out = _force(kline, 0.75 * math.pi / omega, INSIDE, (0.0, FEED, 0.0))  # teeth at 3pi/4, 7pi/4
@@ -139,15 +139,15 @@ def test_engagement_window_half_immersion() -> None:
         ({'radial_depth': 0.02}, 'radial_depth'),
         ({'tool_diameter': 0.0}, 'tool_diameter'),
         ({'teeth': 0}, 'teeth'),
-        ({'spindle_speed_rpm': -1.0}, 'spindle_speed_rpm'),
+        ({'spindle_speed': -1.0}, 'spindle_speed'),
         ({'specific_energy': math.nan}, 'specific_energy'),
-        ({'helix_angle': 2.0}, 'helix_angle'),
+        ({'helix_angle': 114.6}, 'helix_angle'),  # degrees: 2 rad
         ({'workpiece_min': (0.1, -0.1), 'workpiece_max': (0.0, 0.0)}, 'workpiece_min'),
     ],
 )
 def test_invalid_parameters_are_refused(kwargs: dict, field: str) -> None:
     with pytest.raises(ValueError, match=field):
-        KlineCuttingForce(**kwargs)
+        KlineCuttingForce(KlineParams(**kwargs))
 
 
 # --- whose path sets the chip and the depth ----------------------------------------------
@@ -156,7 +156,7 @@ TZ = 60.0 / (2 * 1800.0)  # tooth period of the paper's cutter [s]
 
 
 def test_programmed_chip_is_the_programmed_path_between_tooth_passes() -> None:
-    kline = KlineCuttingForce(chip='programmed', depth='programmed')
+    kline = KlineCuttingForce(KlineParams(chip='programmed', depth='programmed'))
     assert kline.tooth_period == pytest.approx(TZ, rel=1e-15)
     # On the first cut (+y at 3 mm/s from t = 0), whatever the tool does: f = 0.05 mm along +y
     # and d_a = 5 mm (the program's z = -5 mm below the top at 0).
@@ -243,8 +243,8 @@ def test_past_position_is_exact_on_a_cubic_path() -> None:
 
 
 def test_programmed_depth_ignores_the_tool_z_and_tool_depth_follows_it() -> None:
-    fixed = KlineCuttingForce(chip='programmed', depth='programmed')
-    coupled = KlineCuttingForce(chip='programmed', depth='tool')
+    fixed = KlineCuttingForce(KlineParams(chip='programmed', depth='programmed'))
+    coupled = KlineCuttingForce(KlineParams(chip='programmed', depth='tool'))
     t = 2.0 + 0.3 * TZ
     shallow, deep = (-0.075, -0.099, -0.005), (-0.075, -0.099, -0.010)
     assert fixed.force(t, deep, (0, 0, 0)) == fixed.force(t, shallow, (0, 0, 0))
@@ -262,11 +262,11 @@ def test_programmed_depth_ignores_the_tool_z_and_tool_depth_follows_it() -> None
     [
         ({'chip': 'velocity'}, 'chip'),
         ({'depth': 'fixed'}, 'depth'),
-        ({'program': ((0.0, 0.0, 0.0),)}, 'program'),
-        ({'program': ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))}, 'program'),
+        ({'program': [0.0, 0.0, 0.0]}, 'program'),
+        ({'program': [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]}, 'program'),
         ({'program_feed_rate': 0.0}, 'program_feed_rate'),
     ],
 )
 def test_invalid_path_parameters_are_refused(kwargs: dict, field: str) -> None:
     with pytest.raises(ValueError, match=field):
-        KlineCuttingForce(**kwargs)
+        KlineCuttingForce(KlineParams(**kwargs))

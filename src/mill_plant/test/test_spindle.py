@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from types import SimpleNamespace
 
-from mill_plant.cutting import StepForce
+from mill_plant.cutting import StepForce, StepParams
 from mill_plant.spindle import SpindleGate, SpindleTrack, spindle_values
 
 
 def test_the_gate_passes_the_force_only_while_the_spindle_runs() -> None:
-    gate = SpindleGate(StepForce([1.0, 2.0, 3.0], 0.0), running=False)
+    gate = SpindleGate(StepForce(StepParams(force=[1.0, 2.0, 3.0], start_time=0.0)), running=False)
     assert gate.force(1.0, (0, 0, 0), (0, 0, 0)) == (0.0, 0.0, 0.0)
     gate.running = True
     assert gate.force(1.0, (0, 0, 0), (0, 0, 0)) == (1.0, 2.0, 3.0)

@@ -14,7 +14,7 @@ from dataclasses import replace
 from typing import Any
 
 from mill_trajectory.base import Trajectory, TrajectorySample
-from mill_trajectory.bezier import BezierRestToRest
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
 
 # Peak of dψ/dΔ of the Bézier blend (at Δ = 7/15): a move of length d in time D peaks at
 # 3.249·d/D, so D = 3.249·d/speed keeps the peak at `speed`.
@@ -64,7 +64,9 @@ class Approach(Trajectory):
         self.distance = distance
         self.duration = PEAK_BLEND_SLOPE * distance / speed if distance > 0.0 else 0.0
         self.move = (
-            BezierRestToRest(here, start, 0.0, self.duration) if self.duration > 0.0 else None
+            BezierRestToRest(BezierParams(start=here, end=list(start), t1=0.0, t2=self.duration))
+            if self.duration > 0.0
+            else None
         )
         self.end_time = self.duration + path.end_time
 

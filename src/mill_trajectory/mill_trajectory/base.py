@@ -1,8 +1,8 @@
 """The trajectory role: a reference for all axes at any time. ROS-free.
 
 Every path type subclasses Trajectory and is registered (mill_trajectory.registry): it
-names its parameter namespace (PREFIX) and parameters (PARAMETERS) and builds itself with
-from_parameters.
+declares its parameters once as a ParamSet (PARAMS; PREFIX and PARAMETERS derive from it) and
+is built as `Path(params)`, or from a mapping by the one generic from_parameters.
 """
 
 from __future__ import annotations
@@ -11,10 +11,12 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, TypeVar
 
-from mill_common.parameters import ParamSpec
+from mill_common.declared import Configured
 from mill_common.signals import AxisReference
+
+P = TypeVar('P', bound='Trajectory')
 
 
 @dataclass(frozen=True)
@@ -31,17 +33,15 @@ class TrajectorySample:
         return AxisReference(self.position[i], self.velocity[i], self.acceleration[i])
 
 
-class Trajectory(ABC):
+class Trajectory(Configured, ABC):
     """A path of the three axes; after end_time [s] it holds its last point at rest."""
 
-    PREFIX: ClassVar[str]
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
     end_time: float
 
     @classmethod
-    @abstractmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> Trajectory:
+    def from_parameters(cls: type[P], values: Mapping[str, Any]) -> P:
         """Build from values named without the prefix; ParameterError names a bad one."""
+        return cls(cls.PARAMS.from_values(values))  # type: ignore[call-arg]
 
     @abstractmethod
     def sample(self, t: float) -> TrajectorySample:

@@ -21,10 +21,11 @@ the paper's 10 mm in 3 s).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, number_list, positive
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import ParameterError, non_negative, number_list, positive
 
 from mill_trajectory.base import Point, Trajectory, TrajectorySample, box
 
@@ -64,42 +65,39 @@ def blend(delta: float) -> tuple[float, float, float]:
     return psi, d1, d2
 
 
+@dataclass(frozen=True)
+class BezierParams(ParamSet):
+    """Chávez-Conde section 5: from F_o to F_f between T1 and T2."""
+
+    PREFIX: ClassVar[str] = 'bezier'
+    start: list[float] = param(
+        list(CHAVEZ_START), 'start position F_o of x, y, z', number_list(3), unit='m'
+    )
+    end: list[float] = param(
+        list(CHAVEZ_END), 'end position F_f of x, y, z', number_list(3), unit='m'
+    )
+    t1: float = param(CHAVEZ_T1, 'time T1 the move starts', non_negative, unit='s')
+    t2: float = param(CHAVEZ_T2, 'time T2 the move ends [s] (> t1)', positive)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.t2 > self.t1:
+            raise ParameterError('bezier.t2', self.t2, f'must be > t1 = {self.t1!r}')
+
+
 class BezierRestToRest(Trajectory):
     """All three axes move from `start` to `end` between t1 and t2, at rest at both ends."""
 
-    PREFIX = 'bezier'
-    PARAMETERS = (
-        ParamSpec('start', list(CHAVEZ_START), 'start position F_o of x, y, z [m]', number_list(3)),
-        ParamSpec('end', list(CHAVEZ_END), 'end position F_f of x, y, z [m]', number_list(3)),
-        ParamSpec('t1', CHAVEZ_T1, 'time T1 the move starts [s]', non_negative),
-        ParamSpec('t2', CHAVEZ_T2, 'time T2 the move ends [s] (> t1)', positive),
-    )
+    PARAMS: ClassVar[type[BezierParams]] = BezierParams
 
-    def __init__(
-        self,
-        start: Sequence[float] = CHAVEZ_START,
-        end: Sequence[float] = CHAVEZ_END,
-        t1: float = CHAVEZ_T1,
-        t2: float = CHAVEZ_T2,
-    ) -> None:
-        start_t = tuple(float(v) for v in start)
-        end_t = tuple(float(v) for v in end)
-        if len(start_t) != 3 or len(end_t) != 3:
-            raise ValueError('start and end must have three coordinates (x, y, z)')
-        if not all(math.isfinite(v) for v in (*start_t, *end_t, t1, t2)):
-            raise ValueError('start, end, t1 and t2 must be finite')
-        if not t2 > t1:
-            raise ValueError(f't2 must be > t1, got t1={t1!r}, t2={t2!r}')
-        self.start: tuple[float, float, float] = start_t
-        self.end: tuple[float, float, float] = end_t
-        self.t1 = float(t1)
-        self.t2 = float(t2)
+    def __init__(self, params: BezierParams = BezierParams()) -> None:
+        start, end = params.start, params.end
+        self.start: tuple[float, float, float] = (start[0], start[1], start[2])
+        self.end: tuple[float, float, float] = (end[0], end[1], end[2])
+        self.t1 = params.t1
+        self.t2 = params.t2
         self.end_time = self.t2
-        self._span = tuple(f - o for o, f in zip(start_t, end_t, strict=True))
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> BezierRestToRest:
-        return cls(values['start'], values['end'], values['t1'], values['t2'])
+        self._span = tuple(f - o for o, f in zip(self.start, self.end, strict=True))
 
     def sample(self, t: float) -> TrajectorySample:
         duration = self.t2 - self.t1

@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
-from mill_common.parameters import ParameterError, ParamSpec, number_list, positive, validate_all
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import ParameterError, number_list, positive
 
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.gcode import read_program
@@ -50,45 +52,48 @@ def _file(value: Any) -> str | None:
     return None if isinstance(value, str) and value.strip() else 'must name a G-code file'
 
 
-class GcodeTrajectory(Trajectory):
-    """The planned path of a G-code file (see the module doc)."""
+@dataclass(frozen=True)
+class GcodeParams(ParamSet):
+    """The part program and the machine's limits it is planned within."""
 
-    PREFIX = 'gcode'
-    PARAMETERS = (
-        ParamSpec('file', 'part.ngc', 'the G-code (RS274/NGC) part program to run', _file),
-        ParamSpec(
-            'start',
-            [0.0, 0.0, 0.0],
-            'where the tool stands when the program starts [m]',
-            number_list(3),
-        ),
-        ParamSpec(
-            'work_offset',
-            [0.0, 0.0, 0.0],
-            'G54 work offset: machine position of the program zero x, y, z [m]',
-            number_list(3),
-        ),
-        ParamSpec('max_velocity', DEFAULT_VELOCITY, 'per-axis velocity limit [m/s]', _positive3),
-        ParamSpec(
-            'max_acceleration',
-            DEFAULT_ACCELERATION,
-            'per-axis acceleration limit [m/s^2]; 0 = none (the velocity steps at corners)',
-            _limit,
-        ),
-        ParamSpec(
-            'max_jerk',
-            DEFAULT_JERK,
-            'per-axis jerk limit [m/s^3]; 0 = none',
-            _limit,
-        ),
-        ParamSpec(
-            'tolerance',
-            DEFAULT_TOLERANCE,
-            'path tolerance: how far a blended corner or an arc chord may leave the '
-            'programmed path [m] (as LinuxCNC G64 P)',
-            positive,
-        ),
+    PREFIX: ClassVar[str] = 'gcode'
+    file: str = param('part.ngc', 'the G-code (RS274/NGC) part program to run', _file)
+    start: list[float] = param(
+        [0.0, 0.0, 0.0],
+        'where the tool stands when the program starts',
+        number_list(3),
+        unit='m',
     )
+    work_offset: list[float] = param(
+        [0.0, 0.0, 0.0],
+        'G54 work offset: machine position of the program zero x, y, z',
+        number_list(3),
+        unit='m',
+    )
+    max_velocity: list[float] = param(
+        DEFAULT_VELOCITY, 'per-axis velocity limit', _positive3, unit='m/s'
+    )
+    max_acceleration: list[float] = param(
+        DEFAULT_ACCELERATION,
+        'per-axis acceleration limit [m/s^2]; 0 = none (the velocity steps at corners)',
+        _limit,
+    )
+    max_jerk: list[float] = param(DEFAULT_JERK, 'per-axis jerk limit [m/s^3]; 0 = none', _limit)
+    tolerance: float = param(
+        DEFAULT_TOLERANCE,
+        'path tolerance: how far a blended corner or an arc chord may leave the '
+        'programmed path [m] (as LinuxCNC G64 P)',
+        positive,
+    )
+
+
+class GcodeTrajectory(Trajectory):
+    """The planned path of a G-code file (see the module doc).
+
+    Built from its plan, not from its set: from_parameters reads and plans the program.
+    """
+
+    PARAMS: ClassVar[type[GcodeParams]] = GcodeParams
 
     def __init__(self, planned: PlannedPath, override_limit: OverrideLimit | None = None) -> None:
         self.planned = planned
@@ -107,12 +112,12 @@ class GcodeTrajectory(Trajectory):
 
         With a feed override (override_max: its maximum) the plan leaves the override room to
         reach its maximum, and to change (mill_trajectory.override_limit)."""
-        v = validate_all(cls.PARAMETERS, values)
+        v = GcodeParams.from_values(values)
         machine = Limits(
-            xyz(v['max_velocity']),
-            xyz([a if a > 0 else math.inf for a in v['max_acceleration']]),
-            xyz([j if j > 0 else math.inf for j in v['max_jerk']]),
-            v['tolerance'],
+            xyz(v.max_velocity),
+            xyz([a if a > 0 else math.inf for a in v.max_acceleration]),
+            xyz([j if j > 0 else math.inf for j in v.max_jerk]),
+            v.tolerance,
         )
         limits, override_limit = machine, None
         if override_max is not None:
@@ -122,12 +127,12 @@ class GcodeTrajectory(Trajectory):
                 machine.velocity, machine.acceleration, machine.jerk, o
             )
         try:
-            moves = read_program(v['file'], xyz(v['start']), xyz(v['work_offset']))
+            moves = read_program(v.file, xyz(v.start), xyz(v.work_offset))
             pieces, wheres = pieces_of(moves, limits.tolerance)
             check_travel(pieces, wheres, travel)
             planned = plan(pieces, limits)
         except (GcodeError, PlanError) as exc:
-            raise ParameterError('file', v['file'], str(exc)) from None
+            raise ParameterError('file', v.file, str(exc)) from None
         return cls(planned, override_limit)
 
     def sample(self, t: float) -> TrajectorySample:

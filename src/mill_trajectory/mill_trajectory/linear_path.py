@@ -11,10 +11,12 @@ from __future__ import annotations
 import bisect
 import itertools
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, number_list, positive
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import ParameterError, non_negative, number_list, positive
 
 from mill_trajectory.base import Point, Trajectory, TrajectorySample, box
 
@@ -33,39 +35,58 @@ def _flat(points: Sequence[Sequence[float]]) -> list[float]:
     return [float(v) for p in points for v in p]
 
 
-class LinearPath(Trajectory):
-    PREFIX = 'linear'
-    PARAMETERS = (
-        ParamSpec(
-            'waypoints',
-            _flat(BELTRAN_WAYPOINTS),
-            'path corners as a flat list x0, y0, z0, x1, y1, z1, ... [m] (at least 2 points)',
-            number_list(),
-        ),
-        ParamSpec('feed_rate', BELTRAN_FEED_RATE, 'programmed path speed [m/s]', positive),
-        ParamSpec('start_time', 0.0, 'time the tool leaves the first waypoint [s]', non_negative),
+@dataclass(frozen=True)
+class LinearParams(ParamSet):
+    """Beltrán 2013 eq. (19)-(22): straight segments at a constant feed rate."""
+
+    PREFIX: ClassVar[str] = 'linear'
+    waypoints: list[float] = param(
+        _flat(BELTRAN_WAYPOINTS),
+        'path corners as a flat list x0, y0, z0, x1, y1, z1, ... [m] (at least 2 points)',
+        number_list(),
+    )
+    feed_rate: float = param(BELTRAN_FEED_RATE, 'programmed path speed', positive, unit='m/s')
+    start_time: float = param(
+        0.0, 'time the tool leaves the first waypoint', non_negative, unit='s'
     )
 
-    def __init__(
-        self,
-        waypoints: Sequence[Sequence[float]] = BELTRAN_WAYPOINTS,
-        feed_rate: float = BELTRAN_FEED_RATE,
-        start_time: float = 0.0,
-    ) -> None:
-        if len(waypoints) < 2 or any(len(p) != 3 for p in waypoints):
-            raise ValueError('waypoints must hold at least two points of three coordinates')
-        points = [(float(p[0]), float(p[1]), float(p[2])) for p in waypoints]
-        if not (feed_rate > 0 and math.isfinite(feed_rate)):
-            raise ValueError(f'feed_rate must be > 0, got {feed_rate!r}')
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if len(self.waypoints) % 3:
+            raise ParameterError(
+                'linear.waypoints', self.waypoints, 'must hold a multiple of 3 numbers'
+            )
+        if len(self.waypoints) < 6:
+            raise ParameterError(
+                'linear.waypoints',
+                self.waypoints,
+                'must hold at least two points of three coordinates',
+            )
+
+    @property
+    def points(self) -> list[tuple[float, float, float]]:
+        w = self.waypoints
+        return [(w[i], w[i + 1], w[i + 2]) for i in range(0, len(w), 3)]
+
+
+class LinearPath(Trajectory):
+    PARAMS: ClassVar[type[LinearParams]] = LinearParams
+
+    def __init__(self, params: LinearParams = LinearParams()) -> None:
+        points = params.points
         self.points = points
-        self.feed_rate = float(feed_rate)
-        self.start_time = float(start_time)
+        self.feed_rate = params.feed_rate
+        self.start_time = params.start_time
         self._starts = [self.start_time]  # segment start times
         self._velocities: list[tuple[float, float, float]] = []
         for a, b in itertools.pairwise(points):
             length = math.dist(a, b)
             if length == 0.0:
-                raise ValueError('waypoints must not repeat a point (zero-length segment)')
+                raise ParameterError(
+                    'linear.waypoints',
+                    params.waypoints,
+                    'must not repeat a point (zero-length segment)',
+                )
             duration = length / self.feed_rate
             # Beltrán 2013 eq. (19)-(22): velocity (p_f - p_i)/(t_f - t_i) on each segment.
             velocity = (
@@ -76,14 +97,6 @@ class LinearPath(Trajectory):
             self._velocities.append(velocity)
             self._starts.append(self._starts[-1] + duration)
         self.end_time = self._starts[-1]
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> LinearPath:
-        flat = values['waypoints']
-        if len(flat) % 3:
-            raise ValueError('linear.waypoints must hold a multiple of 3 numbers')
-        points = [flat[i : i + 3] for i in range(0, len(flat), 3)]
-        return cls(points, values['feed_rate'], values['start_time'])
 
     def sample(self, t: float) -> TrajectorySample:
         zero = (0.0, 0.0, 0.0)

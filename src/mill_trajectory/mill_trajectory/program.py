@@ -37,14 +37,14 @@ from __future__ import annotations
 
 import bisect
 import math
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
-from mill_common.parameters import ParameterError, ParamSpec, number_list, validate_all
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import number_list
 
 from mill_trajectory.base import Trajectory, TrajectorySample, box
-from mill_trajectory.bezier import BezierRestToRest
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
 
 Point = tuple[float, float, float]
 
@@ -148,38 +148,33 @@ class _Piece:
     bezier: BezierRestToRest | None  # bezier only
 
 
+@dataclass(frozen=True)
+class ProgramParams(ParamSet):
+    """A program of segments from a start point."""
+
+    PREFIX: ClassVar[str] = 'program'
+    start: list[float] = param(
+        [0.0, 0.0, 0.0], 'start point x, y, z at t = 0', number_list(3), unit='m'
+    )
+    segments: list[str] = param(
+        list(DEFAULT_SEGMENTS),
+        'segments run in order, one string each, absolute targets [m]: '
+        '"linear X Y Z F" (feed F [m/s]), "bezier X Y Z D" (rest-to-rest in D [s]), '
+        '"dwell D" (hold D [s])',
+        _segments_check,
+    )
+
+
 class ProgramTrajectory(Trajectory):
     """Segments (linear / bezier / dwell) from `start`, one after the other, from t = 0."""
 
-    PREFIX = 'program'
-    PARAMETERS = (
-        ParamSpec('start', [0.0, 0.0, 0.0], 'start point x, y, z at t = 0 [m]', number_list(3)),
-        ParamSpec(
-            'segments',
-            list(DEFAULT_SEGMENTS),
-            'segments run in order, one string each, absolute targets [m]: '
-            '"linear X Y Z F" (feed F [m/s]), "bezier X Y Z D" (rest-to-rest in D [s]), '
-            '"dwell D" (hold D [s])',
-            _segments_check,
-        ),
-    )
+    PARAMS: ClassVar[type[ProgramParams]] = ProgramParams
 
-    def __init__(
-        self,
-        start: Sequence[float] = _ZERO,
-        segments: Sequence[str] = DEFAULT_SEGMENTS,
-    ) -> None:
-        """Build the timeline; ParameterError('start' or 'segments', ...) on bad values."""
-        start_list = list(start)
-        reason = number_list(3)(start_list)
-        if reason:
-            raise ParameterError('start', start_list, reason)
-        try:
-            parsed = parse_segments(list(segments))
-        except SegmentError as exc:
-            raise ParameterError('segments', list(segments), str(exc)) from None
-        self.start: Point = (float(start_list[0]), float(start_list[1]), float(start_list[2]))
-        self.segments: tuple[Segment, ...] = parsed
+    def __init__(self, params: ProgramParams = ProgramParams()) -> None:
+        """Build the timeline (the set has checked start and segments)."""
+        start = params.start
+        self.start: Point = (start[0], start[1], start[2])
+        self.segments: tuple[Segment, ...] = parse_segments(params.segments)
         self._pieces: list[_Piece] = []
         t = 0.0
         here = self.start
@@ -209,17 +204,13 @@ class ProgramTrajectory(Trajectory):
         assert seg.duration is not None
         if seg.kind == 'bezier':
             assert seg.target is not None
-            move = BezierRestToRest(p0, seg.target, 0.0, seg.duration)
+            move = BezierRestToRest(
+                BezierParams(start=list(p0), end=list(seg.target), t1=0.0, t2=seg.duration)
+            )
             # Ends where the Bézier formula ends, F_o + (F_f − F_o)·1 (= target to rounding).
             p1 = move.sample(seg.duration).position
             return _Piece('bezier', t0, seg.duration, p0, p1, _ZERO, move)
         return _Piece('dwell', t0, seg.duration, p0, p0, _ZERO, None)
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> ProgramTrajectory:
-        """Validate and build; ParameterError('segments', value, reason) on a bad segment."""
-        v = validate_all(cls.PARAMETERS, values)
-        return cls(v['start'], v['segments'])
 
     @property
     def boundaries(self) -> tuple[float, ...]:

@@ -16,10 +16,11 @@ start elsewhere). The paper does not state the run length; the default is 4 s, t
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, number_list, positive
+from mill_common.declared import ParamSet, param
+from mill_common.parameters import non_negative, number_list, positive
 
 from mill_trajectory.base import Point, Trajectory, TrajectorySample
 
@@ -28,63 +29,42 @@ MAHAROF_FREQUENCY = (0.5, 0.5, 0.5)
 DEFAULT_DURATION = 4.0
 
 
-class Sinusoid(Trajectory):
-    PREFIX = 'sinusoid'
-    PARAMETERS = (
-        ParamSpec('center', [0.0, 0.0, 0.0], 'centre c of x, y, z [m]', number_list(3)),
-        ParamSpec(
-            'amplitude',
-            list(MAHAROF_AMPLITUDE),
-            'amplitude A of x, y, z (half the peak-to-peak travel) [m]',
-            number_list(3),
-        ),
-        ParamSpec(
-            'frequency',
-            list(MAHAROF_FREQUENCY),
-            'frequency f of x, y, z [Hz]',
-            number_list(3, non_negative),
-        ),
-        ParamSpec('phase', [0.0, 0.0, 0.0], 'phase φ of x, y, z [rad]', number_list(3)),
-        ParamSpec(
-            'duration', DEFAULT_DURATION, 'length of the sine run; end_time = t0 + it [s]', positive
-        ),
-        ParamSpec('start_time', 0.0, 'time t0 the sine starts [s]', non_negative),
+@dataclass(frozen=True)
+class SinusoidParams(ParamSet):
+    """Maharof 2018 section 4: x = c + A sin(2π f t + φ) per axis."""
+
+    PREFIX: ClassVar[str] = 'sinusoid'
+    center: list[float] = param([0.0, 0.0, 0.0], 'centre c of x, y, z', number_list(3), unit='m')
+    amplitude: list[float] = param(
+        list(MAHAROF_AMPLITUDE),
+        'amplitude A of x, y, z (half the peak-to-peak travel)',
+        number_list(3),
+        unit='m',
     )
+    frequency: list[float] = param(
+        list(MAHAROF_FREQUENCY),
+        'frequency f of x, y, z',
+        number_list(3, non_negative),
+        unit='Hz',
+    )
+    phase: list[float] = param([0.0, 0.0, 0.0], 'phase φ of x, y, z', number_list(3), unit='rad')
+    duration: float = param(
+        DEFAULT_DURATION, 'length of the sine run; end_time = t0 + it', positive, unit='s'
+    )
+    start_time: float = param(0.0, 'time t0 the sine starts', non_negative, unit='s')
 
-    def __init__(
-        self,
-        center: Sequence[float] = (0.0, 0.0, 0.0),
-        amplitude: Sequence[float] = MAHAROF_AMPLITUDE,
-        frequency: Sequence[float] = MAHAROF_FREQUENCY,
-        phase: Sequence[float] = (0.0, 0.0, 0.0),
-        duration: float = DEFAULT_DURATION,
-        start_time: float = 0.0,
-    ) -> None:
-        lists = [tuple(float(v) for v in seq) for seq in (center, amplitude, frequency, phase)]
-        if any(len(seq) != 3 for seq in lists):
-            raise ValueError('center, amplitude, frequency and phase need three entries each')
-        values = [v for seq in lists for v in seq] + [duration, start_time]
-        if not all(math.isfinite(v) for v in values):
-            raise ValueError('sinusoid parameters must be finite')
-        if not duration > 0.0:
-            raise ValueError(f'duration must be > 0, got {duration!r}')
-        if any(f < 0.0 for f in lists[2]):
-            raise ValueError('frequency must be >= 0')
-        self.center, self.amplitude, self.frequency, self.phase = lists
+
+class Sinusoid(Trajectory):
+    PARAMS: ClassVar[type[SinusoidParams]] = SinusoidParams
+
+    def __init__(self, params: SinusoidParams = SinusoidParams()) -> None:
+        self.center = tuple(params.center)
+        self.amplitude = tuple(params.amplitude)
+        self.frequency = tuple(params.frequency)
+        self.phase = tuple(params.phase)
         self.omega = tuple(2.0 * math.pi * f for f in self.frequency)
-        self.start_time = float(start_time)
-        self.end_time = self.start_time + float(duration)
-
-    @classmethod
-    def from_parameters(cls, values: Mapping[str, Any]) -> Sinusoid:
-        return cls(
-            values['center'],
-            values['amplitude'],
-            values['frequency'],
-            values['phase'],
-            values['duration'],
-            values['start_time'],
-        )
+        self.start_time = params.start_time
+        self.end_time = self.start_time + params.duration
 
     def sample(self, t: float) -> TrajectorySample:
         moving = self.start_time <= t <= self.end_time

@@ -56,7 +56,12 @@ from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
-from mill_trajectory.config import Schedule, build_schedule, parameter_specs
+from mill_trajectory.config import (
+    FeedOverrideParams,
+    Schedule,
+    build_schedule,
+    parameter_specs,
+)
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.schedule import (
     ClockedReference,
@@ -102,17 +107,16 @@ class TrajectoryNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
-        if values['feed_override.min'] > values['feed_override.max']:
-            raise ValueError('feed_override.min must not exceed feed_override.max')
+        feed = FeedOverrideParams.from_node_values(values)  # min <= max, or ParameterError
         schedule = self._schedule
         if isinstance(schedule, WallClockReference) and schedule.hold_ns is not None:
             raise ValueError('the path cannot change while a realtime job runs')
         if schedule is not None and self._override_scales():
             # The path time has advanced under the overrides: only the range may change.
-            self._override.minimum = values['feed_override.min']
-            self._override.maximum = values['feed_override.max']
+            self._override.minimum = feed.min
+            self._override.maximum = feed.max
             return
-        self._override = FeedOverride(values['feed_override.min'], values['feed_override.max'])
+        self._override = FeedOverride(feed.min, feed.max)
         self._schedule, self.progress = build_schedule(values, self._override)
 
     def _override_scales(self) -> bool:

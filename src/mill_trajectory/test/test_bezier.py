@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import validate_all
-from mill_trajectory.bezier import PSI, BezierRestToRest, blend
+from mill_trajectory.bezier import PSI, BezierParams, BezierRestToRest, blend
 from numpy.polynomial import polynomial as npoly
 
 
@@ -50,7 +50,9 @@ def test_paper_defaults_and_boundary_values() -> None:
 
 
 def test_monotone_and_smooth_near_the_ends() -> None:
-    path = BezierRestToRest((0.0, 0.02, -0.01), (0.01, -0.01, -0.01), 1.0, 4.0)
+    path = BezierRestToRest(
+        BezierParams(start=(0.0, 0.02, -0.01), end=(0.01, -0.01, -0.01), t1=1.0, t2=4.0)
+    )
     ts = np.linspace(1.0, 4.0, 3001)
     x = np.array([path.sample(t).position for t in ts])
     assert np.all(np.diff(x[:, 0]) >= 0.0)
@@ -81,8 +83,8 @@ def test_derivatives_match_finite_differences() -> None:
 
 def test_bad_values() -> None:
     with pytest.raises(ValueError, match='t2'):
-        BezierRestToRest(t1=2.0, t2=2.0)
-    with pytest.raises(ValueError, match='three'):
-        BezierRestToRest(start=(0.0, 0.0))
+        BezierRestToRest(BezierParams(t1=2.0, t2=2.0))
+    with pytest.raises(ValueError, match='3 entries'):
+        BezierRestToRest(BezierParams(start=(0.0, 0.0)))
     with pytest.raises(ValueError, match='finite'):
-        BezierRestToRest(end=(math.nan, 0.0, 0.0))
+        BezierRestToRest(BezierParams(end=(math.nan, 0.0, 0.0)))

@@ -6,21 +6,39 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from mill_trajectory.base import Trajectory
-from mill_trajectory.bezier import BezierRestToRest
-from mill_trajectory.linear_path import LinearPath
-from mill_trajectory.program import ProgramTrajectory
-from mill_trajectory.sinusoid import Sinusoid
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
+from mill_trajectory.linear_path import LinearParams, LinearPath
+from mill_trajectory.program import ProgramParams, ProgramTrajectory
+from mill_trajectory.sinusoid import Sinusoid, SinusoidParams
 
 STEP = 1e-3
 
 PATHS = {
-    'linear': LinearPath([(-0.075, -0.105, -0.005), (-0.075, -0.025, -0.005), (0.005, -0.025, 0)]),
-    'bezier': BezierRestToRest((0.0, 0.01, -0.002), (0.01, 0.0, 0.003), 0.5, 2.0),
-    'program': ProgramTrajectory(
-        (0.0, 0.0, 0.0),
-        ['linear 0.01 0 0 0.01', 'bezier 0.01 -0.02 0.004 1.0', 'dwell 0.2', 'linear 0 0 0 0.02'],
+    'linear': LinearPath(
+        LinearParams(waypoints=[-0.075, -0.105, -0.005, -0.075, -0.025, -0.005, 0.005, -0.025, 0])
     ),
-    'sinusoid': Sinusoid((0.1, -0.2, 0.0), (0.01, -0.002, 0.0), (0.5, 1.0, 2.0), duration=2.0),
+    'bezier': BezierRestToRest(
+        BezierParams(start=(0.0, 0.01, -0.002), end=(0.01, 0.0, 0.003), t1=0.5, t2=2.0)
+    ),
+    'program': ProgramTrajectory(
+        ProgramParams(
+            start=(0.0, 0.0, 0.0),
+            segments=[
+                'linear 0.01 0 0 0.01',
+                'bezier 0.01 -0.02 0.004 1.0',
+                'dwell 0.2',
+                'linear 0 0 0 0.02',
+            ],
+        )
+    ),
+    'sinusoid': Sinusoid(
+        SinusoidParams(
+            center=(0.1, -0.2, 0.0),
+            amplitude=(0.01, -0.002, 0.0),
+            frequency=(0.5, 1.0, 2.0),
+            duration=2.0,
+        )
+    ),
 }
 
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 from mill_trajectory.feed_override import FeedOverride, TimeScaledPath
-from mill_trajectory.linear_path import LinearPath
+from mill_trajectory.linear_path import LinearParams, LinearPath
 
 T = 1e-3
 
@@ -24,7 +24,7 @@ def test_out_of_range_is_clamped_and_nan_holds() -> None:
 
 
 def test_path_time_advances_by_the_override() -> None:
-    path = LinearPath([(0.0, 0.0, 0.0), (0.1, 0.0, 0.0)], feed_rate=0.01)
+    path = LinearPath(LinearParams(waypoints=[0.0, 0.0, 0.0, 0.1, 0.0, 0.0], feed_rate=0.01))
     scaled = TimeScaledPath(path, T)
     for _ in range(1000):
         s = scaled.sample(0.5)

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError, algorithm_specs, validate
-from mill_trajectory.bezier import BezierRestToRest
+from mill_trajectory.bezier import BezierParams, BezierRestToRest
 from mill_trajectory.config import build_job, parameter_specs
-from mill_trajectory.linear_path import LinearPath
-from mill_trajectory.program import ProgramTrajectory, parse_segment
+from mill_trajectory.linear_path import LinearParams, LinearPath
+from mill_trajectory.program import ProgramParams, ProgramTrajectory, parse_segment
 from mill_trajectory.registry import TRAJECTORIES
 
 ZERO = (0.0, 0.0, 0.0)
@@ -39,7 +39,7 @@ def test_defaults() -> None:
 def test_one_bezier_segment_is_bezier_rest_to_rest_exactly() -> None:
     start, end = (0.003, -0.02, 0.001), (0.013, 0.005, -0.004)
     path = _program(['bezier 0.013 0.005 -0.004 2.5'], start)
-    ref = BezierRestToRest(start, end, 0.0, 2.5)
+    ref = BezierRestToRest(BezierParams(start=start, end=end, t1=0.0, t2=2.5))
     assert path.end_time == ref.end_time
     for t in np.linspace(-0.5, 3.0, 3501):
         assert path.sample(float(t)) == ref.sample(float(t)), t
@@ -64,7 +64,7 @@ def test_end_time_and_linear_duration_is_distance_over_feed() -> None:
     s = path.sample(1.75 + d2 + 0.3 * d4)
     assert math.hypot(*s.velocity) == pytest.approx(3e-3, rel=1e-12)
     # Same convention as LinearPath on the same straight line.
-    line = LinearPath([p1, p2], 0.004, start_time=1.5)
+    line = LinearPath(LinearParams(waypoints=[*p1, *p2], feed_rate=0.004, start_time=1.5))
     for t in np.linspace(1.5, 1.5 + d2, 101)[1:-1]:  # LinearPath is at rest at its ends
         a, b = path.sample(float(t)), line.sample(float(t))
         assert a.position == pytest.approx(b.position, abs=1e-16)
@@ -149,7 +149,7 @@ def test_registered_and_built_from_node_values() -> None:
 def test_parse_errors(segments, words: list[str]) -> None:
     with pytest.raises(ParameterError) as info:
         ProgramTrajectory.from_parameters({'segments': segments})
-    assert info.value.name == 'segments'
+    assert info.value.name == 'program.segments'
     for word in words:
         assert word in info.value.reason, info.value.reason
     # The node's own check refuses the same value with the same reason.
@@ -161,9 +161,9 @@ def test_parse_errors(segments, words: list[str]) -> None:
 def test_bad_start_is_refused() -> None:
     with pytest.raises(ParameterError) as info:
         ProgramTrajectory.from_parameters({'start': [0.0, 0.0]})
-    assert info.value.name == 'start'
+    assert info.value.name == 'program.start'
     with pytest.raises(ParameterError):
-        ProgramTrajectory((0.0, math.nan, 0.0))
+        ProgramTrajectory(ProgramParams(start=(0.0, math.nan, 0.0)))
 
 
 def test_parse_segment_fields() -> None:

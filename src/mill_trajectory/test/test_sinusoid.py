@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError, validate_all
-from mill_trajectory.sinusoid import Sinusoid
+from mill_trajectory.sinusoid import Sinusoid, SinusoidParams
 
 
 def test_paper_defaults() -> None:
@@ -22,7 +22,15 @@ def test_paper_defaults() -> None:
 
 
 def test_derivatives_are_exact() -> None:
-    path = Sinusoid((0.001, 0.0, 0.0), (0.01, 0.002, 0.003), (0.5, 2.0, 0.0), (0.3, 1.0, 0.7), 5.0)
+    path = Sinusoid(
+        SinusoidParams(
+            center=(0.001, 0.0, 0.0),
+            amplitude=(0.01, 0.002, 0.003),
+            frequency=(0.5, 2.0, 0.0),
+            phase=(0.3, 1.0, 0.7),
+            duration=5.0,
+        )
+    )
     h = 1e-5
     for t in np.linspace(0.1, 4.9, 49):
         s, lo, hi = path.sample(t), path.sample(t - h), path.sample(t + h)
@@ -36,7 +44,7 @@ def test_derivatives_are_exact() -> None:
 
 
 def test_holds_before_start_and_after_end() -> None:
-    path = Sinusoid(amplitude=(0.01, 0.0, 0.0), duration=1.25, start_time=2.0)
+    path = Sinusoid(SinusoidParams(amplitude=(0.01, 0.0, 0.0), duration=1.25, start_time=2.0))
     assert path.end_time == 3.25
     before = path.sample(1.0)
     assert before.position == (0.0, 0.0, 0.0) and before.velocity == (0.0, 0.0, 0.0)
@@ -49,4 +57,4 @@ def test_bad_values() -> None:
     with pytest.raises(ParameterError, match='frequency'):
         validate_all(Sinusoid.PARAMETERS, {'frequency': [0.5, -1.0, 0.5]})
     with pytest.raises(ValueError, match='duration'):
-        Sinusoid(duration=0.0)
+        Sinusoid(SinusoidParams(duration=0.0))

@@ -30,29 +30,48 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import Any, ClassVar, TypeVar
 
-from mill_common.parameters import ParameterError, ParamSpec, non_negative, validate_all
+from mill_common.declared import Configured, ParamSet, param
+from mill_common.parameters import UnknownParameterError, non_negative
 
 State = list[float]
 
 STANDARD_GRAVITY = 9.80665  # [m/s^2]
 
-# Every model offers g; it is used only on an axis built with gravity (the vertical z).
-GRAVITY_SPEC = ParamSpec(
-    'gravity_acceleration',
-    STANDARD_GRAVITY,
-    'g [m/s^2], used on an axis built with gravity (Chávez-Conde eq. (3))',
-    non_negative,
-)
+M = TypeVar('M', bound='AxisModel')
 
 
-class AxisModel(ABC):
-    """One axis: input (torque or voltage) and cutting force in, carriage motion out."""
+@dataclass(frozen=True)
+class AxisModelParams(ParamSet):
+    """Base of a model's parameters: g, which every model offers (it is used only on an axis
+    built with gravity, the vertical z). A list field holds one entry per axis x, y, z."""
 
+    gravity_acceleration: float = param(
+        STANDARD_GRAVITY,
+        'g [m/s^2], used on an axis built with gravity (Chávez-Conde eq. (3))',
+        non_negative,
+    )
+
+    def at(self, axis: int) -> dict[str, Any]:
+        """name → value on axis 0/1/2 (x/y/z): a list's entry for that axis, a number as is."""
+        check_axis(axis)
+        return {
+            k: float(x[axis]) if isinstance(x, list | tuple) else x
+            for k, x in self.values().items()
+        }
+
+
+class AxisModel(Configured, ABC):
+    """One axis: input (torque or voltage) and cutting force in, carriage motion out.
+
+    A model is built as `Model(params, axis, gravity)`, params its PARAMS set; INPUT_UNIT is
+    the one declaration of the unit of its input, which the plant and the drive read.
+    """
+
+    PARAMS: ClassVar[type[AxisModelParams]] = AxisModelParams
     INPUT_UNIT: ClassVar[str]  # 'N·m' or 'V'
-    PREFIX: ClassVar[str]  # parameter namespace
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
     N_DOF: ClassVar[int]  # generalised coordinates; the state has 2·N_DOF entries
     FRICTION_DOF: ClassVar[int | None] = None  # coordinate carrying Coulomb friction
 
@@ -60,15 +79,21 @@ class AxisModel(ABC):
     coulomb_friction: float = 0.0  # mu [N] on FRICTION_DOF
 
     @classmethod
-    @abstractmethod
     def from_parameters(
-        cls, axis: int, values: Mapping[str, Any], gravity: bool = False
-    ) -> AxisModel:
+        cls: type[M], axis: int, values: Mapping[str, Any], gravity: bool = False
+    ) -> M:
         """Model of axis 0/1/2 (x/y/z) from values named without prefix (missing: defaults).
 
         gravity: the weight of the carried mass acts along -axis (vertical z axis).
-        Raises ParameterError naming the bad parameter.
+        Raises ParameterError naming the bad parameter (ValueError for a bad axis).
         """
+        check_axis(axis)
+        known = [s.name for s in cls.PARAMETERS]
+        unknown = {f'{cls.PREFIX}.{n}': v for n, v in values.items() if n not in known}
+        if unknown:
+            full = [f'{cls.PREFIX}.{n}' for n in known]
+            raise UnknownParameterError(unknown, full, f'the {cls.PREFIX} model')
+        return cls(cls.PARAMS.from_values(values), axis, gravity)  # type: ignore[call-arg]
 
     @abstractmethod
     def initial_state(self, position: float) -> State:
@@ -114,17 +139,6 @@ def check_axis(axis: int) -> int:
     if isinstance(axis, bool) or not isinstance(axis, int) or not 0 <= axis <= 2:
         raise ValueError(f'axis must be 0, 1 or 2 (x, y, z), got {axis!r}')
     return axis
-
-
-def validated(cls: type[AxisModel], axis: int, values: Mapping[str, Any]) -> dict[str, float]:
-    """Validate `values` against cls.PARAMETERS and pick this axis's entry of every list."""
-    check_axis(axis)
-    unknown = sorted(set(values) - {s.name for s in cls.PARAMETERS})
-    if unknown:
-        name = unknown[0]
-        raise ParameterError(f'{cls.PREFIX}.{name}', values[name], 'unknown parameter')
-    v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-    return {k: float(x[axis]) if isinstance(x, list | tuple) else x for k, x in v.items()}
 
 
 def check_mass_change(name: str, current: float, mass: float) -> float:

@@ -34,83 +34,78 @@ Readings (the paper prints the equations but no parameter values for this model)
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, positive
+from mill_common.declared import param
+from mill_common.parameters import non_negative, positive
 
-from mill_plant.models.base import (
-    GRAVITY_SPEC,
-    AxisModel,
-    State,
-    check_mass_change,
-    validated,
-)
+from mill_plant.models.base import AxisModel, AxisModelParams, State, check_mass_change
 
 _A = 0.01 / (2.0 * math.pi)  # Chávez-Conde: a = 0.01 m / 2π
 _C_ROT = 2.5 * _A * _A / 4.0  # a quarter of c_t a² [N·m·s/rad]
 
 
+@dataclass(frozen=True)
+class FlexibleModelParams(AxisModelParams):
+    """Chávez-Conde eq. (4)-(6); the same values on every axis (module docstring)."""
+
+    PREFIX: ClassVar[str] = 'flexible'
+    motor_inertia: float = param(0.0025, 'motor rotor inertia J_m', positive, unit='kg m^2')
+    coupling_inertia: float = param(0.0005, 'coupling inertia J_c', positive, unit='kg m^2')
+    screw_inertia: float = param(0.002, 'ball-screw inertia J_To', non_negative, unit='kg m^2')
+    carriage_mass: float = param(5.0, 'carriage (+ workpiece) mass m_c', positive, unit='kg')
+    pitch: float = param(0.01, 'ball-screw pitch p', positive, unit='m/rev')
+    coupling_stiffness: float = param(2000.0, 'coupling stiffness k_c', positive, unit='N m/rad')
+    screw_stiffness: float = param(500.0, 'screw stiffness k_To', positive, unit='N m/rad')
+    motor_damping: float = param(
+        _C_ROT, 'motor bearing damping c_m', non_negative, unit='N m s/rad'
+    )
+    screw_damping: float = param(
+        _C_ROT, 'bearing after the coupling, on θ2, c_To', non_negative, unit='N m s/rad'
+    )
+    nut_damping: float = param(
+        _C_ROT, 'nut damping C_Tu, on x via n²', non_negative, unit='N m s/rad'
+    )
+    end_bearing_damping: float = param(
+        _C_ROT, 'screw end bearing damping C_b, on x via n²', non_negative, unit='N m s/rad'
+    )
+    guide_damping: float = param(2.5, 'linear guide damping c_g', non_negative, unit='N s/m')
+    coulomb_friction: float = param(
+        0.3, 'Coulomb friction mu_3 on the carriage', non_negative, unit='N'
+    )
+
+
 class FlexibleAxisModel(AxisModel):
     """Three-inertia axis, torque input [N·m]; state [θ1, θ2, x, θ1', θ2', x']."""
 
+    PARAMS: ClassVar[type[FlexibleModelParams]] = FlexibleModelParams
     INPUT_UNIT: ClassVar[str] = 'N·m'
-    PREFIX: ClassVar[str] = 'flexible'
     N_DOF: ClassVar[int] = 3
     FRICTION_DOF: ClassVar[int | None] = 2
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('motor_inertia', 0.0025, 'motor rotor inertia J_m [kg m^2]', positive),
-        ParamSpec('coupling_inertia', 0.0005, 'coupling inertia J_c [kg m^2]', positive),
-        ParamSpec('screw_inertia', 0.002, 'ball-screw inertia J_To [kg m^2]', non_negative),
-        ParamSpec('carriage_mass', 5.0, 'carriage (+ workpiece) mass m_c [kg]', positive),
-        ParamSpec('pitch', 0.01, 'ball-screw pitch p [m/rev]', positive),
-        ParamSpec('coupling_stiffness', 2000.0, 'coupling stiffness k_c [N m/rad]', positive),
-        ParamSpec('screw_stiffness', 500.0, 'screw stiffness k_To [N m/rad]', positive),
-        ParamSpec('motor_damping', _C_ROT, 'motor bearing damping c_m [N m s/rad]', non_negative),
-        ParamSpec(
-            'screw_damping',
-            _C_ROT,
-            'bearing after the coupling, on θ2, c_To [N m s/rad]',
-            non_negative,
-        ),
-        ParamSpec('nut_damping', _C_ROT, 'nut damping C_Tu, on x via n² [N m s/rad]', non_negative),
-        ParamSpec(
-            'end_bearing_damping',
-            _C_ROT,
-            'screw end bearing damping C_b, on x via n² [N m s/rad]',
-            non_negative,
-        ),
-        ParamSpec('guide_damping', 2.5, 'linear guide damping c_g [N s/m]', non_negative),
-        ParamSpec(
-            'coulomb_friction', 0.3, 'Coulomb friction mu_3 on the carriage [N]', non_negative
-        ),
-        GRAVITY_SPEC,
-    )
 
-    def __init__(self, gravity: bool = False, **values: float) -> None:
-        v = validated(type(self), 0, values)
-        self.p = v
+    def __init__(
+        self,
+        params: FlexibleModelParams = FlexibleModelParams(),
+        axis: int = 0,
+        gravity: bool = False,
+    ) -> None:
+        self.p = params  # the same on every axis
         self.gravity = bool(gravity)
-        self.n = 2.0 * math.pi / v['pitch']
-        self.coulomb_friction = v['coulomb_friction']
-        self._mc = v['carriage_mass']
+        self.n = 2.0 * math.pi / params.pitch
+        self.coulomb_friction = params.coulomb_friction
+        self._mc = params.carriage_mass
         self._update()
 
     def _update(self) -> None:
         p, n = self.p, self.n
-        self._inv_jm = 1.0 / p['motor_inertia']
-        self._inv_jc = 1.0 / p['coupling_inertia']
+        self._inv_jm = 1.0 / p.motor_inertia
+        self._inv_jc = 1.0 / p.coupling_inertia
         # Chávez-Conde eq. (6): carriage-side inertia J_T n² + m_c
-        self._inv_m = 1.0 / (p['screw_inertia'] * n * n + self._mc)
-        self._c3 = (p['nut_damping'] + p['end_bearing_damping']) * n * n + p['guide_damping']
-        self._weight = self._mc * p['gravity_acceleration'] if self.gravity else 0.0
-
-    @classmethod
-    def from_parameters(
-        cls, axis: int, values: Mapping[str, Any], gravity: bool = False
-    ) -> FlexibleAxisModel:
-        validated(cls, axis, values)
-        return cls(gravity, **values)
+        self._inv_m = 1.0 / (p.screw_inertia * n * n + self._mc)
+        self._c3 = (p.nut_damping + p.end_bearing_damping) * n * n + p.guide_damping
+        self._weight = self._mc * p.gravity_acceleration if self.gravity else 0.0
 
     @property
     def carriage_mass(self) -> float:
@@ -119,9 +114,9 @@ class FlexibleAxisModel(AxisModel):
     def rigid_equivalent(self) -> tuple[float, float]:
         """(m_e [kg], c_e [N·s/m]) of the stiff limit (all coordinates locked, θ = n x)."""
         p, n = self.p, self.n
-        m_e = self._mc + (p['motor_inertia'] + p['coupling_inertia'] + p['screw_inertia']) * n * n
-        c_rot = p['motor_damping'] + p['screw_damping'] + p['nut_damping']
-        c_e = p['guide_damping'] + (c_rot + p['end_bearing_damping']) * n * n
+        m_e = self._mc + (p.motor_inertia + p.coupling_inertia + p.screw_inertia) * n * n
+        c_rot = p.motor_damping + p.screw_damping + p.nut_damping
+        c_e = p.guide_damping + (c_rot + p.end_bearing_damping) * n * n
         return m_e, c_e
 
     def initial_state(self, position: float) -> State:
@@ -145,12 +140,12 @@ class FlexibleAxisModel(AxisModel):
     def derivative(self, state: Sequence[float], u: float, force: float, mode: float) -> State:
         th1, th2, x, w1, w2, v = state
         p = self.p
-        tc = p['coupling_stiffness'] * (th2 - th1)  # coupling torque k_c (θ2 - θ1)
-        ts = p['screw_stiffness'] * (self.n * x - th2)  # screw torque k_To (n x - θ2)
+        tc = p.coupling_stiffness * (th2 - th1)  # coupling torque k_c (θ2 - θ1)
+        ts = p.screw_stiffness * (self.n * x - th2)  # screw torque k_To (n x - θ2)
         # Chávez-Conde eq. (4): J_m θ1'' = tau + k_c (θ2 - θ1) - c_m θ1'
-        a1 = self._inv_jm * (u + tc - p['motor_damping'] * w1)
+        a1 = self._inv_jm * (u + tc - p.motor_damping * w1)
         # Chávez-Conde eq. (5): J_c θ2'' = -k_c (θ2 - θ1) + k_To (n x - θ2) - c_To θ2'
-        a2 = self._inv_jc * (ts - tc - p['screw_damping'] * w2)
+        a2 = self._inv_jc * (ts - tc - p.screw_damping * w2)
         if mode == 0.0:
             return [w1, w2, 0.0, a1, a2, 0.0]  # carriage stuck
         # Chávez-Conde eq. (6) (factor n restored): M x'' = -n k_To (n x - θ2) - f3 - F_c - m g
@@ -160,5 +155,5 @@ class FlexibleAxisModel(AxisModel):
         return [w1, w2, v, a1, a2, a3]
 
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
-        ts = self.p['screw_stiffness'] * (self.n * state[2] - state[1])
+        ts = self.p.screw_stiffness * (self.n * state[2] - state[1])
         return -self.n * ts - force - self._weight

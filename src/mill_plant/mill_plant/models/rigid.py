@@ -14,67 +14,78 @@ it adds to m (so to m_e) and to the weight.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import Check, ParamSpec, non_negative, number_list, positive
+from mill_common.declared import param
+from mill_common.parameters import non_negative, number_list, positive
 from mill_models.axis_data import BELTRAN_TABLE1, RigidAxisParams
 
-from mill_plant.models.base import (
-    GRAVITY_SPEC,
-    STANDARD_GRAVITY,
-    AxisModel,
-    State,
-    check_mass_change,
-    validated,
-)
+from mill_plant.models.base import AxisModel, AxisModelParams, State, check_mass_change
 
 
 def _table(field: str) -> list[float]:
     return [float(getattr(BELTRAN_TABLE1[a], field)) for a in 'xyz']
 
 
-def _three(name: str, field: str, description: str, check: Check) -> ParamSpec:
-    return ParamSpec(name, _table(field), description, number_list(3, check))
+@dataclass(frozen=True)
+class RigidModelParams(AxisModelParams):
+    """Beltrán 2013 Table 1 per axis x, y, z (on the plant node under their plain names)."""
+
+    PREFIX: ClassVar[str] = 'rigid'
+    mass: list[float] = param(
+        _table('mass'), 'carriage mass m per axis x, y, z', number_list(3, positive), unit='kg'
+    )
+    screw_inertia: list[float] = param(
+        _table('screw_inertia'),
+        'ball-screw inertia J per axis',
+        number_list(3, positive),
+        unit='kg m^2',
+    )
+    pitch: list[float] = param(
+        _table('pitch'), 'ball-screw pitch p per axis', number_list(3, positive), unit='m/rev'
+    )
+    cart_damping: list[float] = param(
+        _table('cart_damping'),
+        'guideway damping c_b per axis',
+        number_list(3, non_negative),
+        unit='N s/m',
+    )
+    screw_damping: list[float] = param(
+        _table('screw_damping'),
+        'screw-bearing damping c_t per axis, translational',
+        number_list(3, non_negative),
+        unit='N s/m',
+    )
+    coulomb_friction: list[float] = param(
+        _table('coulomb_friction'),
+        'Coulomb friction mu',
+        number_list(3, non_negative),
+        unit='N',
+    )
+
+    def axis_params(self, axis: int) -> RigidAxisParams:
+        """The physical parameters of axis 0/1/2 (x/y/z)."""
+        v = self.at(axis)
+        return RigidAxisParams(**{f.name: v[f.name] for f in dataclasses.fields(RigidAxisParams)})
 
 
 class RigidAxisModel(AxisModel):
     """Rigid axis, torque input [N·m]; state [x, x'] [m, m/s]."""
 
+    PARAMS: ClassVar[type[RigidModelParams]] = RigidModelParams
     INPUT_UNIT: ClassVar[str] = 'N·m'
-    PREFIX: ClassVar[str] = 'rigid'
     N_DOF: ClassVar[int] = 1
     FRICTION_DOF: ClassVar[int | None] = 0
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        _three('mass', 'mass', 'carriage mass m per axis x, y, z [kg]', positive),
-        _three(
-            'screw_inertia', 'screw_inertia', 'ball-screw inertia J per axis [kg m^2]', positive
-        ),
-        _three('pitch', 'pitch', 'ball-screw pitch p per axis [m/rev]', positive),
-        _three(
-            'cart_damping', 'cart_damping', 'guideway damping c_b per axis [N s/m]', non_negative
-        ),
-        _three(
-            'screw_damping',
-            'screw_damping',
-            'screw-bearing damping c_t per axis, translational [N s/m]',
-            non_negative,
-        ),
-        _three('coulomb_friction', 'coulomb_friction', 'Coulomb friction mu [N]', non_negative),
-        GRAVITY_SPEC,
-    )
 
     def __init__(
-        self,
-        params: RigidAxisParams,
-        gravity: bool = False,
-        gravity_acceleration: float = STANDARD_GRAVITY,
+        self, params: RigidModelParams = RigidModelParams(), axis: int = 0, gravity: bool = False
     ) -> None:
-        params.validate()
-        self.params = params
+        self.params = params.axis_params(axis)
         self.gravity = bool(gravity)
-        self.gravity_acceleration = float(gravity_acceleration)
-        self.coulomb_friction = params.coulomb_friction
+        self.gravity_acceleration = params.gravity_acceleration
+        self.coulomb_friction = self.params.coulomb_friction
         self._update()
 
     def _update(self) -> None:
@@ -85,14 +96,6 @@ class RigidAxisModel(AxisModel):
         self._mu = p.coulomb_friction
         # Chávez-Conde eq. (3): weight m_3 g of the carriage
         self._weight = p.mass * self.gravity_acceleration if self.gravity else 0.0
-
-    @classmethod
-    def from_parameters(
-        cls, axis: int, values: Mapping[str, Any], gravity: bool = False
-    ) -> RigidAxisModel:
-        v = validated(cls, axis, values)
-        g = v.pop('gravity_acceleration')
-        return cls(RigidAxisParams(**v), gravity, g)
 
     def initial_state(self, position: float) -> State:
         return [float(position), 0.0]

@@ -26,18 +26,14 @@ Readings (not in the paper):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, positive
+from mill_common.declared import param
+from mill_common.parameters import non_negative, positive
 
-from mill_plant.models.base import (
-    GRAVITY_SPEC,
-    AxisModel,
-    State,
-    check_mass_change,
-    validated,
-)
+from mill_plant.models.base import AxisModel, AxisModelParams, State, check_mass_change
 
 M_PER_MM = 1e-3
 
@@ -50,53 +46,52 @@ DEFAULT_MOVING_MASS = 10.0  # [kg], our reading (not published)
 DEFAULT_FORCE_CONSTANT = 780.2  # k_f = A·m0 = 78.02 m/(V·s²) × 10 kg [N/V], our reading
 
 
+@dataclass(frozen=True)
+class TransferFunctionParams(AxisModelParams):
+    """Maharof 2018 eq. (1) and our reading of the force constant; the same on every axis."""
+
+    PREFIX: ClassVar[str] = 'transfer_function'
+    gain: float = param(MAHAROF_A, 'A of A/(s^2 + B s + C), eq. (1)', positive, unit='mm/(V s^2)')
+    damping: float = param(MAHAROF_B, 'B of eq. (1)', non_negative, unit='1/s')
+    stiffness: float = param(MAHAROF_C, 'C of eq. (1)', non_negative, unit='1/s^2')
+    dead_time: float = param(MAHAROF_DEAD_TIME, 'T_d of eq. (1)', non_negative, unit='s')
+    force_constant: float = param(
+        DEFAULT_FORCE_CONSTANT,
+        'k_f: a cutting force F acts as the voltage F/k_f [N/V] (default A x 10 kg, our reading)',
+        positive,
+    )
+
+
 class TransferFunctionAxisModel(AxisModel):
     """Maharof 2018 eq. (1), voltage input [V]; state [x, x'] [m, m/s]."""
 
+    PARAMS: ClassVar[type[TransferFunctionParams]] = TransferFunctionParams
     INPUT_UNIT: ClassVar[str] = 'V'
-    PREFIX: ClassVar[str] = 'transfer_function'
     N_DOF: ClassVar[int] = 1
     FRICTION_DOF: ClassVar[int | None] = None
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('gain', MAHAROF_A, 'A of A/(s^2 + B s + C), eq. (1) [mm/(V s^2)]', positive),
-        ParamSpec('damping', MAHAROF_B, 'B of eq. (1) [1/s]', non_negative),
-        ParamSpec('stiffness', MAHAROF_C, 'C of eq. (1) [1/s^2]', non_negative),
-        ParamSpec('dead_time', MAHAROF_DEAD_TIME, 'T_d of eq. (1) [s]', non_negative),
-        ParamSpec(
-            'force_constant',
-            DEFAULT_FORCE_CONSTANT,
-            'k_f: a cutting force F acts as the voltage F/k_f [N/V] '
-            '(default A x 10 kg, our reading)',
-            positive,
-        ),
-        GRAVITY_SPEC,
-    )
 
-    def __init__(self, gravity: bool = False, **values: float) -> None:
-        v = validated(type(self), 0, values)
-        self.p = v
+    def __init__(
+        self,
+        params: TransferFunctionParams = TransferFunctionParams(),
+        axis: int = 0,
+        gravity: bool = False,
+    ) -> None:
+        self.p = params  # the same on every axis
         self.gravity = bool(gravity)
-        self.dead_time = v['dead_time']
-        self._k_f = v['force_constant']
+        self.dead_time = params.dead_time
+        self._k_f = params.force_constant
         # moving mass m0 = k_f / A [kg] (module docstring)
-        self._m0 = self._k_f / (v['gain'] * M_PER_MM)
+        self._m0 = self._k_f / (params.gain * M_PER_MM)
         self._mass = self._m0
-        self._g = v['gravity_acceleration'] if self.gravity else 0.0
+        self._g = params.gravity_acceleration if self.gravity else 0.0
         self._update()
 
     def _update(self) -> None:
         r = self._m0 / self._mass
-        self._a = self.p['gain'] * M_PER_MM * r
-        self._b = self.p['damping'] * r
-        self._c = self.p['stiffness'] * r
+        self._a = self.p.gain * M_PER_MM * r
+        self._b = self.p.damping * r
+        self._c = self.p.stiffness * r
         self._inv_kf = 1.0 / self._k_f
-
-    @classmethod
-    def from_parameters(
-        cls, axis: int, values: Mapping[str, Any], gravity: bool = False
-    ) -> TransferFunctionAxisModel:
-        validated(cls, axis, values)
-        return cls(gravity, **values)
 
     @property
     def moving_mass(self) -> float:

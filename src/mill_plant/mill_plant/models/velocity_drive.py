@@ -24,92 +24,75 @@ Readings:
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import Check, ParamSpec, non_negative, number_list, positive
+from mill_common.declared import param
+from mill_common.parameters import non_negative, number_list, positive
 
-from mill_plant.models.base import GRAVITY_SPEC, STANDARD_GRAVITY, AxisModel, State, validated
+from mill_plant.models.base import AxisModel, AxisModelParams, State
 
 
-def _three(name: str, default: list[float], description: str, check: Check) -> ParamSpec:
-    return ParamSpec(name, default, description, number_list(3, check))
+@dataclass(frozen=True)
+class VelocityDriveParams(AxisModelParams):
+    """Hatwesh 2013 Table 1 per axis x, y, z (X, Y; Z = Y)."""
+
+    PREFIX: ClassVar[str] = 'velocity_drive'
+    amplifier_gain: list[float] = param(
+        [15.7311] * 3, 'amplifier gain K_a per axis', number_list(3, positive), unit='A/V'
+    )
+    torque_constant: list[float] = param(
+        [1.39] * 3, 'motor torque constant K_t per axis', number_list(3, positive), unit='N m/A'
+    )
+    damping: list[float] = param(
+        [14e-4] * 3, 'viscous damping B per axis', number_list(3, non_negative), unit='kg m^2/s'
+    )
+    inertia: list[float] = param(
+        [2.8828e-3, 3.8028e-3, 3.8028e-3],
+        'inertia J reflected on the motor shaft per axis [kg m^2] (z = y, our choice)',
+        number_list(3, positive),
+    )
+    pitch: list[float] = param(
+        [0.012] * 3, 'ball-screw pitch h_p per axis', number_list(3, positive), unit='m/rev'
+    )
+    carried_mass: list[float] = param(
+        [100.0] * 3,
+        'table + workpiece mass whose weight loads an axis built with gravity [kg] '
+        '(not in the paper)',
+        number_list(3, non_negative),
+    )
 
 
 class VelocityDriveAxisModel(AxisModel):
     """Hatwesh 2013 feed drive, voltage input [V]; state [θ, ω] [rad, rad/s]."""
 
+    PARAMS: ClassVar[type[VelocityDriveParams]] = VelocityDriveParams
     INPUT_UNIT: ClassVar[str] = 'V'
-    PREFIX: ClassVar[str] = 'velocity_drive'
     N_DOF: ClassVar[int] = 1
     FRICTION_DOF: ClassVar[int | None] = None
-    # Hatwesh 2013 Table 1 (X, Y; Z = Y)
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        _three('amplifier_gain', [15.7311] * 3, 'amplifier gain K_a per axis [A/V]', positive),
-        _three(
-            'torque_constant', [1.39] * 3, 'motor torque constant K_t per axis [N m/A]', positive
-        ),
-        _three('damping', [14e-4] * 3, 'viscous damping B per axis [kg m^2/s]', non_negative),
-        _three(
-            'inertia',
-            [2.8828e-3, 3.8028e-3, 3.8028e-3],
-            'inertia J reflected on the motor shaft per axis [kg m^2] (z = y, our choice)',
-            positive,
-        ),
-        _three('pitch', [0.012] * 3, 'ball-screw pitch h_p per axis [m/rev]', positive),
-        _three(
-            'carried_mass',
-            [100.0] * 3,
-            'table + workpiece mass whose weight loads an axis built with gravity [kg] '
-            '(not in the paper)',
-            non_negative,
-        ),
-        GRAVITY_SPEC,
-    )
 
     def __init__(
         self,
-        amplifier_gain: float = 15.7311,
-        torque_constant: float = 1.39,
-        damping: float = 14e-4,
-        inertia: float = 2.8828e-3,
-        pitch: float = 0.012,
-        carried_mass: float = 100.0,
-        gravity_acceleration: float = STANDARD_GRAVITY,
+        params: VelocityDriveParams = VelocityDriveParams(),
+        axis: int = 0,
         gravity: bool = False,
     ) -> None:
-        for name, value, positive_required in (
-            ('amplifier_gain', amplifier_gain, True),
-            ('torque_constant', torque_constant, True),
-            ('damping', damping, False),
-            ('inertia', inertia, True),
-            ('pitch', pitch, True),
-            ('carried_mass', carried_mass, False),
-            ('gravity_acceleration', gravity_acceleration, False),
-        ):
-            reason = (positive if positive_required else non_negative)(value)
-            if reason:
-                raise ValueError(f'{name} {reason}, got {value!r}')
+        v = params.at(axis)
         # Hatwesh eq. (2): torque per volt K_t K_a
-        self.torque_per_volt = float(torque_constant) * float(amplifier_gain)
-        self.damping = float(damping)
-        self.inertia = float(inertia)
-        self.lead = float(pitch) / (2.0 * math.pi)  # r_g = h_p/2π (eq. (1))
-        self.carried_mass = float(carried_mass)
+        self.torque_per_volt = v['torque_constant'] * v['amplifier_gain']
+        self.damping = v['damping']
+        self.inertia = v['inertia']  # grows with add_load
+        self.lead = v['pitch'] / (2.0 * math.pi)  # r_g = h_p/2π (eq. (1))
+        self.carried_mass = v['carried_mass']  # grows with add_load
         self.gravity = bool(gravity)
-        self.gravity_acceleration = float(gravity_acceleration)
+        self.gravity_acceleration = params.gravity_acceleration
         self._update()
 
     def _update(self) -> None:
         self._inv_j = 1.0 / self.inertia
         weight = self.carried_mass * self.gravity_acceleration if self.gravity else 0.0
         self._load_torque = self.lead * weight  # r_g m g
-
-    @classmethod
-    def from_parameters(
-        cls, axis: int, values: Mapping[str, Any], gravity: bool = False
-    ) -> VelocityDriveAxisModel:
-        return cls(**validated(cls, axis, values), gravity=gravity)
 
     def initial_state(self, position: float) -> State:
         return [float(position) / self.lead, 0.0]
