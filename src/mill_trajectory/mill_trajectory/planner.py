@@ -269,25 +269,52 @@ def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
     delta = np.array([np.subtract(p.end, p.start) for p in chain])
     dirs = np.divide(delta, length[:, None], out=np.zeros_like(delta), where=length[:, None] > 0)
     caps = np.where(moving, _caps(chain, dirs, limits), 0.0)
-    u = caps.copy()
-    for _ in range(MAX_PASSES):
-        vel = u[:, None] * dirs
-        dv = vel[1:] - vel[:-1]
-        T = transition_times(dv, limits)
-        bent = moving[1:] & moving[:-1] & (np.abs(dirs[1:] - dirs[:-1]).max(axis=1) > PARALLEL)
-        off = bent & (DEVIATION * np.linalg.norm(dv, axis=1) * T > limits.tolerance)
-        half = np.concatenate([[0.0], 0.5 * T]) + np.concatenate([0.5 * T, [0.0]])
-        with np.errstate(divide='ignore'):
-            long = moving & (half > length / np.where(moving, u, 1.0))
-        slow = long.copy()
-        slow[:-1] |= off
-        slow[1:] |= off
-        if not slow.any():
-            break
-        u = np.where(slow, u * SLOW_DOWN, u)
-    else:
-        raise PlanError(f'no feed meets the limits after {MAX_PASSES} passes')
+    u, T = _settle(caps.copy(), dirs, moving, length, limits)
     return _timeline(chain, u, T, src)
+
+
+def _settle(
+    u: np.ndarray, dirs: np.ndarray, moving: np.ndarray, length: np.ndarray, limits: Limits
+) -> tuple[np.ndarray, np.ndarray]:
+    """Slow pieces by SLOW_DOWN until no junction misses the tolerance and every piece holds
+    its two half-transitions; the speeds and the junctions' transition times.
+
+    A pass slows every piece that misses, as if all were checked anew, but only the
+    junctions and pieces next to a slowed piece are: nothing else changed, so every number
+    is the one a full pass gives (the same operations on the same values), and a pass costs
+    what it slows, not the whole program (most pieces settle in the first few passes)."""
+    n = len(u)
+    bent = moving[1:] & moving[:-1] & (np.abs(dirs[1:] - dirs[:-1]).max(axis=1) > PARALLEL)
+    T = np.zeros(n - 1)
+    off = np.zeros(n - 1, dtype=bool)
+    slow = np.zeros(n, dtype=bool)
+
+    def junctions(j: np.ndarray) -> None:  # junction j: from piece j to piece j + 1
+        dv = u[j + 1, None] * dirs[j + 1] - u[j, None] * dirs[j]
+        T[j] = transition_times(dv, limits)
+        off[j] = bent[j] & (DEVIATION * np.linalg.norm(dv, axis=1) * T[j] > limits.tolerance)
+
+    def pieces(k: np.ndarray) -> None:
+        first, last = k > 0, k < n - 1
+        before, after = np.maximum(k - 1, 0), np.minimum(k, n - 2)
+        half = 0.5 * np.where(first, T[before], 0.0) + 0.5 * np.where(last, T[after], 0.0)
+        with np.errstate(divide='ignore'):
+            long = moving[k] & (half > length[k] / np.where(moving[k], u[k], 1.0))
+        slow[k] = long | (first & off[before]) | (last & off[after])
+
+    junctions(np.arange(n - 1))
+    pieces(np.arange(n))
+    for _ in range(MAX_PASSES):
+        changed = np.flatnonzero(slow)
+        if not len(changed):
+            return u, T
+        u[changed] = u[changed] * SLOW_DOWN
+        j = np.flatnonzero(slow[:-1] | slow[1:])  # a junction next to a slowed piece
+        junctions(j)
+        near = np.zeros(n, dtype=bool)
+        near[j] = near[j + 1] = True
+        pieces(np.flatnonzero(near))
+    raise PlanError(f'no feed meets the limits after {MAX_PASSES} passes')
 
 
 def _timeline(chain: list[Piece], u: np.ndarray, T: np.ndarray, src: list[int]) -> PlannedPath:
