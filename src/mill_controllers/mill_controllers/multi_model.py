@@ -157,7 +157,7 @@ class Scheme1Params(MultiModelParams):
     """Scheme 1: a fixed set of candidate β."""
 
     PREFIX: ClassVar[str] = 'multi_model_1'
-    betas: list[float] = param(  # noqa: RUF009 (param() gives a list a default_factory)
+    betas: list[float] = param(
         list(PAPER_BETAS),
         'candidate β values, each in [-1, 1] (paper: β(i) = 1 − (i−1)/4, i = 1..9)',
         number_list(None, in_range(-1.0, 1.0)),
