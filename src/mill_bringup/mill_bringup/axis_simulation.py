@@ -12,7 +12,7 @@ import math
 from typing import Protocol
 
 import numpy as np
-from mill_analysis.metrics import FORCE_CONTROL, RunRecord
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, axis_index
 from mill_common.timebase import seconds

@@ -15,7 +15,6 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
-from mill_analysis.metrics import RunRecord
 from mill_analysis.papers import (
     HV_BAND,
     HV_INERTIA_CHANGE,
@@ -25,6 +24,7 @@ from mill_analysis.papers import (
     report,
     velocity_steps,
 )
+from mill_analysis.record import RunRecord
 from mill_bringup.cli import run_parameters
 from mill_bringup.docs_figures.runs import offline
 from mill_bringup.jobs.registry import job_for

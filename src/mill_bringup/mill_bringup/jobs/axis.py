@@ -27,13 +27,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_analysis.metrics import (
-    FORCE_CONTROL,
-    RunRecord,
-    summarize,
-    summarize_contour,
-    summary_text,
-)
+from mill_analysis.metrics import summarize, summarize_contour, summary_text
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode

@@ -16,8 +16,9 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import RunRecord, summarize, summary_text
+from mill_analysis.metrics import summarize, summary_text
 from mill_analysis.realtime_record import command_timing, realtime_record
+from mill_analysis.record import RunRecord
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
