@@ -24,6 +24,7 @@ from mill_bringup.job_config import (
     one_command_delay,
     one_sample_period,
 )
+from mill_bringup.jobs.registry import job_for
 from mill_controllers.pd_law import AdrcController
 from mill_controllers.registry import CONTROLLERS
 
@@ -245,3 +246,21 @@ def test_every_rule_is_in_the_table() -> None:
         model_provided,
         following_band,
     ) == RULES
+
+
+@pytest.mark.parametrize('name', ['slotting', 'rubio', 'slotting_adaptive_feed'])
+def test_the_job_validates_each_node_once(name: str, monkeypatch) -> None:
+    scen = scenario.load(name)
+    if scen.variants:
+        scen = scen.variant(next(iter(scen.variants)))
+    calls: list[str] = []
+    validate = scenario.Scenario.parameters
+
+    def counted(self: scenario.Scenario, node: str) -> dict:
+        calls.append(node)
+        return validate(self, node)
+
+    monkeypatch.setattr(scenario.Scenario, 'parameters', counted)
+    job = job_for(scen)
+    job.simulation()
+    assert sorted(calls) == sorted(n.name for n in scen.nodes)
