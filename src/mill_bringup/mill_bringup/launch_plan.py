@@ -151,7 +151,9 @@ def plan(
     if scen.private_clock and scen.namespace != topics.ROOT:
         remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
     out = Plan(scen, parameters=scen.node_parameters(), config=job.config)
-    processes = layout_processes(scen, check_layout(layout) if layout else scen.layout)
+    processes = layout_processes(
+        scen, check_layout(layout) if layout else scen.layout, config=job.config
+    )
     for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
         first = process.nodes[0]
         out.nodes.append(

@@ -263,4 +263,5 @@ def test_the_job_validates_each_node_once(name: str, monkeypatch) -> None:
     monkeypatch.setattr(scenario.Scenario, 'parameters', counted)
     job = job_for(scen)
     job.simulation()
+    job.prepare_graph(monitored=True, layout='per_axis')  # its processes from the config
     assert sorted(calls) == sorted(n.name for n in scen.nodes)

@@ -215,7 +215,7 @@ class AxisJob(Job[RunRecord]):
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""
-        for process in processes(self.scenario, layout):
+        for process in processes(self.scenario, layout, config=self.config):
             roles = [
                 (self.config.node(n.name).values['axis'], n.kind.role)
                 for n in process.nodes
