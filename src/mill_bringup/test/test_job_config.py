@@ -17,12 +17,16 @@ from mill_bringup.job_config import (
     check,
     command_unit,
     disturbance_unit,
+    feed_limits,
     following_band,
+    force_model,
     gains_for_the_rate,
     law_disturbance_unit,
     model_provided,
     one_command_delay,
     one_sample_period,
+    override_period,
+    override_range,
 )
 from mill_bringup.jobs.registry import job_for
 from mill_controllers.pd_law import AdrcController
@@ -245,6 +249,10 @@ def test_every_rule_is_in_the_table() -> None:
         disturbance_unit,
         model_provided,
         following_band,
+        force_model,
+        feed_limits,
+        override_range,
+        override_period,
     ) == RULES
 
 
@@ -265,3 +273,47 @@ def test_the_job_validates_each_node_once(name: str, monkeypatch) -> None:
     job.simulation()
     job.prepare_graph(monitored=True, layout='per_axis')  # its processes from the config
     assert sorted(calls) == sorted(n.name for n in scen.nodes)
+
+
+def test_the_force_controller_designs_with_the_process_the_plant_runs() -> None:
+    scen = broken('rubio', 'force_controller.force_process.flutes=2', variant='zoh')
+    (failure,) = force_model(build_unchecked(scen))
+    assert failure.rule == 'force_model'
+    assert failure.sides == (
+        Side('force_process', 'force_process.flutes', 4),
+        Side('force_controller', 'force_process.flutes', 2),
+    )
+    with pytest.raises(scenario.ScenarioError, match=r'disagree on force_process\.flutes'):
+        job_for(scen)
+
+
+def test_the_force_process_feed_range_is_the_controllers() -> None:
+    scen = broken('rubio', 'force_process.feed_limits=[0.0, 30.0]', variant='zoh')
+    (failure,) = feed_limits(build_unchecked(scen))
+    assert failure.rule == 'feed_limits'
+    assert failure.sides == (
+        Side('force_process', 'feed_limits', [0.0, 30.0]),
+        Side('force_controller', 'override range × nominal_feed', [0.0, 20.0]),
+    )
+
+
+def test_the_trajectory_clamps_the_override_to_the_controllers_range() -> None:
+    scen = broken('slotting_adaptive_feed', 'trajectory.feed_override.max=1.5')
+    (failure,) = failures_of(scen)
+    assert failure.rule == 'override_range'
+    assert failure.sides == (
+        Side('trajectory', 'feed_override.min, .max', [0.1, 1.5]),
+        Side('force_controller', 'override.min, .max', [0.1, 2.0]),
+    )
+    assert override_range(build_unchecked(scen)) == [failure]
+
+
+def test_a_lockstep_override_comes_once_per_spindle_revolution() -> None:
+    scen = broken('slotting_adaptive_feed', 'trajectory.feed_override.period=0.01')
+    (failure,) = override_period(build_unchecked(scen))
+    assert failure.rule == 'override_period'
+    assert failure.sides == (
+        Side('trajectory', 'feed_override.period', 0.01),
+        Side('force_controller', 'spindle revolution 60/S_s', 60.0 / 1800.0),
+    )
+    assert failures_of(scen) == [failure]

@@ -38,7 +38,6 @@ from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
 from mill_common.timebase import job_steps, period_ns, seconds
-from mill_controllers.force_control import ForceFeedLoop
 from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
 
@@ -134,23 +133,8 @@ class AxisJob(Job[RunRecord]):
         slowest = self.end.path_end / lo / seconds(self.dt_ns) if lo > 0 else math.inf
         bound = min(slowest + 2 + self.end.settle_samples, (self.end.cap or math.inf) + 1)
         self._bound = int(bound)
-        if not self.force_controller:
-            return
-        cv = self.config.values(self.force_controller)
-        loop = ForceFeedLoop.from_parameters(cv)
-        if self.lockstep and abs(tv['feed_override.period'] - loop.T) > 1e-12 * loop.T:
-            raise ScenarioError(
-                f"scenario {name}: the trajectory's feed_override.period "
-                f"{tv['feed_override.period']!r} s is not the force controller's control "
-                f'period, one spindle revolution 60/S_s = {loop.T!r} s'
-            )
-        ranges = (tv['feed_override.min'], tv['feed_override.max'])
-        if ranges != (cv['override.min'], cv['override.max']):
-            raise ScenarioError(
-                f"scenario {name}: the trajectory's feed_override range [{ranges[0]:g}, "
-                f"{ranges[1]:g}] differs from the force controller's override range "
-                f'[{cv["override.min"]:g}, {cv["override.max"]:g}]'
-            )
+        # The override's period and range are the force controller's: job_config's rules
+        # override_period and override_range.
 
     def end_at(self, last_sample: int) -> None:
         """The run found the job's last sample (a job with a feed override)."""

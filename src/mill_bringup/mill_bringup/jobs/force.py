@@ -63,27 +63,16 @@ class ForceJob(Job[ForceRecord]):
             raise ScenarioError('a force job needs exactly one trajectory node')
         self.trajectory = trajectories[0].name
         pv = c.values(self.plant)
-        cv = self.controller_values = c.values(self.controller)
+        self.controller_values = c.values(self.controller)
         tv = c.values(self.trajectory)
-        model_p = algorithm_values(ForceProcessModel, pv)
-        model_c = algorithm_values(ForceProcessModel, cv)
-        if model_p != model_c:
-            diff = sorted(k for k in model_p if model_p[k] != model_c.get(k))
-            raise ScenarioError(
-                f'plant and force controller disagree on force_process.{", ".join(diff)}'
-            )
-        self.model = ForceProcessModel.from_parameters(model_p)
+        # The controller's process model is the plant's, and the plant's feed range the
+        # controller's: job_config's rules force_model and feed_limits.
+        self.model = ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, pv))
         if not (tv['feed_override.enabled'] and tv['feed_override.lockstep']):
             raise ScenarioError(
                 'the trajectory of a force job needs feed_override.enabled and .lockstep'
             )
         # one sample period, a spindle revolution: job_config's rule sample_period
-        lo, hi = cv['override.min'] * cv['nominal_feed'], cv['override.max'] * cv['nominal_feed']
-        if list(pv['feed_limits']) != [lo, hi]:
-            raise ScenarioError(
-                f"plant feed_limits {pv['feed_limits']} differ from the controller's override "
-                f'range times nominal_feed, [{lo:g}, {hi:g}] mm/s'
-            )
         if not tv['duration'] > 0:
             raise ScenarioError('a force job needs the trajectory duration > 0 [s]')
         self._samples = max(1, math.ceil(tv['duration'] / self.period - 1e-9))
