@@ -160,12 +160,13 @@ def test_the_command_unit_is_the_axis_models_input_unit() -> None:
     )
 
 
-def test_the_observers_disturbance_unit_is_the_laws(monkeypatch) -> None:
-    # No law declares the unit it reads the disturbance in yet: the rule applies to one
-    # that does (adrc reads an acceleration).
-    assert law_disturbance_unit(AdrcController) is None
-    assert failures_of(broken('slotting', 'x_observer.observer=imbdo')) == []
-    monkeypatch.setattr(AdrcController, 'DISTURBANCE_UNIT', 'm/s²', raising=False)
+def test_the_observers_disturbance_unit_is_the_laws() -> None:
+    # adrc reads an acceleration, pd reads no disturbance at all.
+    assert law_disturbance_unit(AdrcController) == 'm/s²'
+    assert (
+        failures_of(broken('slotting', 'x_controller.controller=pd', 'x_observer.observer=imbdo'))
+        == []
+    )
     (failure,) = disturbance_unit(build_unchecked(broken('slotting', 'x_observer.observer=imbdo')))
     assert failure.rule == 'disturbance_unit'
     assert failure.sides == (

@@ -38,6 +38,9 @@ class AxisController(Configured, ABC):
     """
 
     OUTPUT_UNIT: ClassVar[str] = 'N·m'  # motor torque; 'V' for an amplifier voltage
+    # The unit the law reads the observer's disturbance estimate in (the observer's
+    # DISTURBANCE_UNIT must match: mill_bringup.job_config); None: it does not read it.
+    DISTURBANCE_UNIT: ClassVar[str | None] = None
 
     @classmethod
     def from_parameters(

@@ -123,6 +123,7 @@ class AdrcController(_PdLaw):
     """Eq. (9) with the observer's disturbance estimate compensated (paper figs. 8-10)."""
 
     COMPENSATE: ClassVar[bool] = True
+    DISTURBANCE_UNIT: ClassVar[str | None] = 'm/s²'  # ξ̂ of eq. (9), an acceleration
 
 
 class PdController(_PdLaw):
