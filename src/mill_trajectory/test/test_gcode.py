@@ -76,9 +76,9 @@ def test_spindle_speed_direction_and_changes() -> None:
 @pytest.mark.parametrize(
     ('text', 'where', 'what'),
     [
-        ('G1 X1 F100\nG1 X2 T1', 'part.ngc:2:7', "unsupported word 'T1'"),
-        ('G0 X1\nG43 Z1', 'part.ngc:2:1', 'unsupported code G43'),
-        ('M6', 'part.ngc:1:1', 'unsupported code M6'),
+        ('G1 X1 F100\nG1 X2 A1', 'part.ngc:2:7', "unsupported word 'A1'"),
+        ('G0 X1\nG33 Z1', 'part.ngc:2:1', 'unsupported code G33'),
+        ('M6', 'part.ngc:1:1', 'M6 needs a tool: give T first'),
         ('G1 X1 F100\nM3', 'part.ngc:2:1', 'M3 needs a spindle speed: give S first'),
         ('G1 X1.2.3 F100', 'part.ngc:1:5', "malformed number '1.2.3'"),
         ('G1 X F100', 'part.ngc:1:4', 'word X has no number'),
