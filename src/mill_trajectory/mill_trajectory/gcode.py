@@ -879,7 +879,7 @@ def _arc_move(
     used.update(names)
     turns = 1
     if 'P' in values:
-        turns = _whole(values['P'], 'arc turns P', 1)
+        turns = _whole(values['P'], 'arc turns', 1)
         used.add('P')
     chord = math.hypot(e[a] - s[a], e[b] - s[b])
     g = f'G{(state.motion or 0) // 10}'
