@@ -29,10 +29,11 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from mill_trajectory.gcode_comp import compensate
 from mill_trajectory.gcode_words import (
     Block,
     GcodeError,
@@ -59,7 +60,7 @@ GROUPS: dict[str, set[int]] = {
     'arc distance': {901, 911},
     'feed mode': {940},
     'units': {200, 210},
-    'cutter compensation': {400},
+    'cutter compensation': {400, 410, 411, 420, 421},
     'tool length': {430, 431, 490},
     'retract': {980, 990},
     'coordinate system': {540, 550, 560, 570, 580, 590, 591, 592, 593},
@@ -71,8 +72,6 @@ GROUPS: dict[str, set[int]] = {
 }
 GROUP_OF = {code: group for group, codes in GROUPS.items() for code in codes}
 REFUSED = {
-    410: 'G41 cutter radius compensation is not supported: program the tool centre path (G40)',
-    420: 'G42 cutter radius compensation is not supported: program the tool centre path (G40)',
     930: 'G93 inverse-time feed is not supported: use G94 (units per minute)',
     950: 'G95 feed per revolution is not supported: use G94 (units per minute)',
     960: 'G96 constant surface speed is not supported: use G97 (rev/min)',
@@ -89,7 +88,8 @@ ARC_RELATIVE = 1e-3
 ZERO_RADIUS = {200: 5e-5, 210: 5e-5 * 25.4}
 ITERATIONS = 100_000  # loop passes (while, do, repeat) in one run of a program
 CALL_DEPTH = 10  # subroutine calls nested at most (as LinuxCNC)
-_OWORD_LINE = re.compile(r'^\s*/?\s*(?:[nN][\s\d.]*)?[oO]')
+_COMMENTS = r'(?:\s*\([^)]*\))*\s*'
+_OWORD_LINE = re.compile(rf'^{_COMMENTS}/?{_COMMENTS}(?:[nN][\s\d.]*)?{_COMMENTS}[oO]')
 
 
 @dataclass(frozen=True)
@@ -176,6 +176,7 @@ class _State:
     retract_old_z: bool = True  # G98
     cycle_initial: float | None = None  # machine z where the canned cycles began
     cycle: dict[str, float] = field(default_factory=dict)  # sticky R, Z, P, Q
+    comp: tuple[int, float, int] | None = None  # G41/G42: side (1 left), radius [m], first move
     moves: list[Move] = field(default_factory=list)
 
     def offset(self, i: int) -> float:
@@ -390,6 +391,7 @@ class _Program(Parameters):
                 pc = self._oword(pc, o)
                 continue
             block = read_block(self.lines[pc], self.file, pc + 1, self)
+            assert block.oword is None, 'an O-word line the structure pass did not see'
             if block.delete and self.state.setup.block_delete:
                 pc += 1
                 continue
@@ -399,6 +401,7 @@ class _Program(Parameters):
             if _run_line(self.state, block, Where(self.file, pc + 1, 1)):
                 break
             pc += 1
+        _comp_off(self.state)
         return self.state.moves
 
     def _value(self, pc: int) -> tuple[OWord, tuple[float, ...]]:
@@ -595,9 +598,13 @@ def _run_line(state: _State, block: Block, line: Where) -> bool:
         _dwell(state, values, codes[40], used)
     for code in codes:
         if code in PLANES:
+            if state.comp is not None and code != state.plane:
+                raise GcodeError(codes[code].where, 'a plane change with cutter compensation on')
             state.plane = code
         elif code in UNIT:
             state.unit, state.units = UNIT[code], code
+    if gs.get('cutter compensation'):
+        _cutter(state, values, gs['cutter compensation'], used)
     if 430 in codes or 431 in codes or 490 in codes:
         _tool_length(state, values, codes, used)
     for i, code in enumerate(SYSTEMS):
@@ -666,6 +673,38 @@ def _dwell(state: _State, values: dict[str, Word], g4: Word, used: set[str]) -> 
     state.move('dwell', state.here, p.where, duration=p.value)
 
 
+def _cutter(state: _State, values: dict[str, Word], g: tuple[int, Word], used: set[str]) -> None:
+    code, word = g
+    if code == 400:
+        _comp_off(state)
+        return
+    if state.comp is not None:
+        raise GcodeError(word.where, f'{word.text}: cutter compensation is already on (G40 first)')
+    if state.plane != 170:
+        raise GcodeError(word.where, f'{word.text}: cutter compensation only in the G17 plane')
+    d = values.get('D')
+    used.add('D')
+    if code in (411, 421):  # G41.1 / G42.1 D: the diameter itself
+        if d is None or d.value < 0.0:
+            raise GcodeError(word.where, f'{word.text} needs D, the tool diameter (>= 0)')
+        diameter = d.value / state.unit
+    else:
+        number = state.loaded if d is None else _whole(d, 'tool number')
+        diameter = _tool(state, number or state.loaded, d or word).diameter
+    state.comp = (1 if code in (410, 411) else -1, 0.5 * diameter, len(state.moves))
+
+
+def _comp_off(state: _State) -> None:
+    """G40 (or the program's end): the moves since G41/G42 offset to the tool's centre."""
+    if state.comp is None:
+        return
+    side, radius, first = state.comp
+    state.comp = None
+    state.moves[first:] = compensate(state.moves[first:], side, radius)
+    if state.moves[first:]:
+        state.here = state.moves[-1].end
+
+
 def _tool_length(
     state: _State, values: dict[str, Word], codes: dict[int, Word], used: set[str]
 ) -> None:
@@ -716,6 +755,8 @@ def _non_modal(state: _State, values: dict[str, Word], g: tuple[int, Word], used
     if code == 100:
         _set_system(state, values, word, given, used)
     elif code in (280, 300):
+        if state.comp is not None:
+            raise GcodeError(word.where, f'{word.text} with cutter compensation on (G40 first)')
         home = state.setup.home if code == 280 else state.setup.home2
         if given:
             middle = _target(state, values)
@@ -758,8 +799,6 @@ def _non_modal(state: _State, values: dict[str, Word], g: tuple[int, Word], used
 
 
 def _replace_home(setup: Setup, first: bool, point: Point) -> Setup:
-    from dataclasses import replace
-
     return replace(setup, home=point) if first else replace(setup, home2=point)
 
 
@@ -829,6 +868,8 @@ def _motion(
             raise GcodeError(g53[1].where, 'G53 needs an end point (X, Y or Z)')
     if g is not None and g[0] == 800 and has_axes and axis_words:
         raise GcodeError(where, 'axis words with G80 (no motion)')
+    if state.comp is not None and (g53 is not None or (state.motion in CYCLES and has_axes)):
+        raise GcodeError(where, 'not with cutter compensation on (G40 first)')
     if state.motion in CYCLES and axis_words and has_axes:
         _cycle(state, values, where, used)
         return

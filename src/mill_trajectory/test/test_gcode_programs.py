@@ -256,3 +256,25 @@ def test_a_tool_missing_from_the_table_is_refused(tmp_path: Path) -> None:
     bad.write_text('T1 P1 Z+1\nT2 P2 Q1 W+x\n', encoding='utf-8')
     with pytest.raises(ParameterError, match=r'bad\.tbl:2:10: malformed number'):
         GcodeTrajectory.from_parameters(values | {'tool_table': str(bad)})
+
+
+def test_cutter_radius_compensation_outside_profile() -> None:
+    ms = _moves('fusion_cutter_comp.ngc')  # T1: 6 mm, the tool centre 3 mm left of the path
+    z = 24.0  # Z-1 with T1's 25 mm
+    # The entry to (0, -5) ends 3 mm left of its direction, cut short where it meets the
+    # next move's offset line x = -3 (an inside corner).
+    y = -5 + 3 * 2 / math.sqrt(5) + (-3 + 3 / math.sqrt(5)) / 2
+    assert _mm(_at(ms, 8)) == [(-3, round(y, 6), z)]
+    assert _mm(_at(ms, 9)) == [(-3, 10, z)]
+    corner, top = _at(ms, 10)  # an outside corner: round the corner point
+    assert corner.kind == 'arc' and corner.center == pytest.approx((0.0, 0.01, z / 1e3))
+    assert corner.sweep == pytest.approx(-math.pi / 2) and _mm([corner, top]) == [
+        (0, 13, z),
+        (15, 13, z),
+    ]
+    (round_corner,) = _at(ms, 11)  # G2 R5, the tool outside it: R8
+    assert round_corner.center == pytest.approx((0.015, 0.005, z / 1e3))
+    assert _mm([round_corner]) == [(23, 5, z)] and round_corner.sweep == pytest.approx(-math.pi / 2)
+    assert _mm(_at(ms, 12)) == [(23, 0, z)]  # tangent: no corner
+    assert _mm(_at(ms, 13)) == [(20, -3, z), (0, -3, z)]
+    assert _mm(_at(ms, 14)) == [(-10, -10, z)]  # G40: the exit move to the programmed point
