@@ -13,7 +13,8 @@ and the spindle takes its new speed there (a CNC waits for its spindle as well).
 change (M6) is a `stop` with a message (there is no cycle-start button: the program goes
 on); "(MSG, text)" is a `message` move (nothing moves). Coolant (M7 mist, M8 flood, M9 off)
 and the path tolerance (G64 P) are carried by each move; G61/G61.1 mark moves that end at
-rest.
+rest. Between G41/G42 and G40 the moves are offset to the tool's centre
+(mill_trajectory.gcode_comp).
 
 Within a line the words act in LinuxCNC's order: messages, F (read in the units in force
 before the line's G20/G21, kept in m/s), S, T, M6, M3/M4/M5, M7/M8/M9, G4, plane, units,
