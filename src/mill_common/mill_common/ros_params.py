@@ -107,6 +107,31 @@ def descriptor(spec: ParamSpec) -> ParameterDescriptor:
     return d
 
 
+def declare_with_value(node: Node, name: str, value: Any, spec: ParamSpec) -> None:
+    """Declare `name` statically typed, holding `value`, also when it is an empty list.
+
+    rclpy takes a declared parameter's type from its value, and reads [] as a byte array;
+    declared by type alone, the parameter would be "not set", and rclpy's GetParameters
+    answers no value at all for a request that names one unset parameter (`ros2 param dump`
+    then shows `ros__parameters: {}`). So an empty list is declared by its type, writable,
+    then given [] as a value of that type (before the node's set-callbacks are registered),
+    and a read-only one gets its read-only descriptor last.
+    """
+    full = descriptor(spec)
+    if value != []:
+        node.declare_parameter(name, value, full, ignore_override=True)
+        return
+    kind = Parameter.Type(ROS_TYPES[value_type(spec)])
+    writable = descriptor(spec)
+    writable.read_only = False
+    node.declare_parameter(name, kind, writable, ignore_override=True)
+    (result,) = node.set_parameters([Parameter(name, kind, [])])
+    if not result.successful:
+        raise ParameterError(name, [], result.reason)
+    if full.read_only:
+        node.set_descriptor(name, full)
+
+
 class NodeParameters:
     """Owns a node's validated parameter values; `apply(values)` rebuilds the node's cores."""
 
@@ -127,13 +152,8 @@ class NodeParameters:
         values: dict[str, Any] = {}
         for name, spec in specs:
             value = validate(spec, given.get(name, spec.default), name)
-            # The value is checked already: the override is not read a second time. rclpy
-            # takes a static type from the value, and cannot tell it for an empty list:
-            # such a parameter is declared with its type and no value (`ros2 param get`
-            # says "not set"); the node holds [].
-            kind = ROS_TYPES[value_type(spec)]
-            initial = value if value != [] else Parameter.Type(kind)
-            node.declare_parameter(name, initial, descriptor(spec), ignore_override=True)
+            # The value is checked already: the override is not read a second time.
+            declare_with_value(node, name, value, spec)
             values[name] = value
         try:
             apply(values)
