@@ -144,9 +144,6 @@ class NodeParameters:
         self._node = node
         self._specs = dict(specs)
         self._apply = apply
-        # The names being set while `apply` runs (all of them at start-up): a node may act
-        # on a name set to the value it had (setting following_error_limit clears a trip).
-        self.setting: frozenset[str] = frozenset(self._specs)
         self._check_files()
         given = self._given_values()
         values: dict[str, Any] = {}
@@ -241,7 +238,6 @@ class NodeParameters:
             changed.append(param.name)
         if not changed:
             return SetParametersResult(successful=True)
-        self.setting = frozenset(changed)
         try:
             self._apply(candidate)
         except ValueError as exc:  # ParameterError is a ValueError

@@ -79,7 +79,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
                 0.005,
                 'following-error trip: |measured position - reference| above this latches a '
                 'brake request (effort NaN: the drive brakes the axis) until reset by the '
-                'reset_trip service or by setting this parameter [m]; .inf disables it',
+                'reset_trip service (a new limit leaves a trip latched) [m]; .inf disables it',
                 positive_or_inf,
             ),
         )
