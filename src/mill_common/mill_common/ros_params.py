@@ -8,9 +8,11 @@ refuses each end the node with one line naming the parameter. Each parameter is 
 statically typed, with the range and constraint text its check gives (`ros2 param
 describe`). A change at run time is coerced (an integer for a double), checked by ROS
 against the declared type and range, validated by the spec and then applied by the node's
-`apply` callback; if any of them refuses, the change is rejected with its reason and the
-node keeps its previous configuration; so is a name the node does not declare, with the
-closest one it has.
+`apply` callback, which builds the node's cores from the full set of would-be values; if
+any of them refuses, or the cores cannot be built (a ValueError or an ArithmeticError such
+as an OverflowError: mill_common.build_check), the change is rejected with its reason in one
+line and the node keeps its previous configuration and cores; so is a name the node does
+not declare, with the closest one it has.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from mill_common.build_check import BUILD_ERRORS, build_failure
 from mill_common.param_sources import parameter_sources, params_file_miss, params_files
 from mill_common.parameters import (
     ParameterError,
@@ -156,8 +159,8 @@ class NodeParameters:
             apply(values)
         except ParameterError:
             raise
-        except ValueError as exc:
-            raise ParameterError('configuration', '', str(exc)) from exc
+        except BUILD_ERRORS as exc:
+            raise ParameterError('configuration', '', build_failure(exc)) from exc
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
@@ -233,17 +236,22 @@ class NodeParameters:
             try:
                 candidate[param.name] = validate(spec, _plain(param.value), param.name)
             except ParameterError as exc:
-                self._node.get_logger().warning(f'rejected: {exc}')
-                return SetParametersResult(successful=False, reason=str(exc))
+                return self._refuse(str(exc))
             changed.append(param.name)
         if not changed:
             return SetParametersResult(successful=True)
         try:
             self._apply(candidate)
-        except ValueError as exc:  # ParameterError is a ValueError
-            self._node.get_logger().warning(f'rejected: {exc}')
-            return SetParametersResult(successful=False, reason=str(exc))
+        except ParameterError as exc:
+            return self._refuse(str(exc))
+        except BUILD_ERRORS as exc:  # the cores cannot be built: the old ones run on
+            asked = ', '.join(f'{name}={candidate[name]!r}' for name in changed)
+            return self._refuse(f'{asked}: {build_failure(exc)}')
         self.values = candidate
         for name in changed:
             self._node.get_logger().info(f'parameter {name} = {candidate[name]!r}')
         return SetParametersResult(successful=True)
+
+    def _refuse(self, reason: str) -> SetParametersResult:
+        self._node.get_logger().warning(f'rejected: {reason}')
+        return SetParametersResult(successful=False, reason=reason)

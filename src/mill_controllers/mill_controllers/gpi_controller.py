@@ -69,7 +69,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import AxisReference, ControlInputs
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import AxisController, saturate
 from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
 
 DAMPING_RATE_SPEC = ParamSpec(
@@ -297,7 +297,7 @@ class GpiController(AxisController):
 
     def _finish(self, accel: float) -> float:
         """Torque from the commanded b·τ, clipped; remembered as the applied torque."""
-        tau = min(self._limit, max(-self._limit, accel / self._b))
+        tau = saturate(accel / self._b, self._limit)
         self._u_prev = tau
         return tau
 

@@ -26,7 +26,7 @@ from mill_common.parameters import (
 )
 from mill_common.signals import ControlInputs
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import AxisController, saturate
 
 # 5 N·m: about the peak torque of the ~0.75 kW AC servo that drives a small mill's ball
 # screw. The paper's cut needs well under 1 N·m with the realistic cutting-energy reading,
@@ -139,7 +139,7 @@ class _PdLaw(AxisController):
             - self._alpha0 * (y - ref.position)
             - xi_hat
         ) / self._b
-        return min(self._limit, max(-self._limit, tau))
+        return saturate(tau, self._limit)
 
 
 class AdrcController(_PdLaw):

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import copy
+import math
 from typing import Any
 
+import numpy as np
+from mill_common.build_check import BUILD_ERRORS, build_failure, changed_choices
 from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
@@ -78,11 +82,44 @@ def build_observer(values: dict[str, Any]) -> Observer:
 
 
 def build_observer_loop(values: dict[str, Any]) -> ObserverLoop:
-    """The observer's per-sample step, as the node and the offline simulator run it."""
-    return ObserverLoop(
-        build_observer(values),
-        values['command_delay'],
-        values['sample_period'],
-        values['blend_time'],
-        values['hold_torque'],
-    )
+    """The observer's per-sample step, as the node and the offline simulator run it, tried
+    on three samples; ValueError or ArithmeticError (mill_common.build_check) if it cannot
+    be built: a float overflow, a singular design, numpy's overflow, division by zero or
+    invalid value, or estimates that are not finite (its derived gains are not)."""
+    with np.errstate(over='raise', divide='raise', invalid='raise'):
+        loop = ObserverLoop(
+            build_observer(values),
+            values['command_delay'],
+            values['sample_period'],
+            values['blend_time'],
+            values['hold_torque'],
+        )
+        _try_at_rest(loop, values['observer'])
+    return loop
+
+
+def _try_at_rest(loop: ObserverLoop, name: str) -> None:
+    """ValueError unless a copy of `loop` estimates finite values for an axis at rest, then
+    measured 1 mm away, with no command (a non-finite gain times a zero error is not
+    finite)."""
+    trial = copy.deepcopy(loop)
+    acted = None
+    for y in (0.0, 1e-3, 1e-3):
+        est = trial.step(y, acted)
+        acted = 0.0
+        if not all(math.isfinite(v) for v in (est.position, est.velocity, est.disturbance)):
+            raise ValueError(
+                f'{name} cannot run with these values: it estimates {est} for an axis at '
+                f'rest, measured at {1e3 * y:g} mm'
+            )
+
+
+def check_other_observers(values: dict[str, Any], old: dict[str, Any]) -> None:
+    """A change of the gains of an observer that does not run: a candidate of it built with
+    the would-be values (ValueError naming it if it cannot be built), so that a later
+    switch to it cannot fail on them."""
+    for name in changed_choices(OBSERVERS, values, old):
+        try:
+            build_observer_loop({**values, 'observer': name})
+        except BUILD_ERRORS as exc:
+            raise ValueError(f'{name} (not the running observer): {build_failure(exc)}') from exc
