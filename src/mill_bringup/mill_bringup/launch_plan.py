@@ -18,9 +18,10 @@ tested here without a ROS install that has `launch`:
 
 Every node gets one parameter file (written by `write_parameters`) with its merged values
 keyed `/**/NAME`, so they apply under the namespace whatever the keys of the scenario and
-of params_file. The node that clocks the job (plant or force process) is required: its exit
-ends the launch with its exit code. The `job_watch` node ends the launch when the
-trajectory reports the job done.
+of params_file, and the scenario's `mill_scenario: launch:` list, from which mill_container
+learns what each of its nodes is. The node that clocks the job (plant or force process) is
+required: its exit ends the launch with its exit code. The `job_watch` node ends the launch
+when the trajectory reports the job done.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
 from mill_bringup.scenario import (
     LAYOUTS,
+    SCENARIO_KEY,
     NodeLaunch,
     Scenario,
     ScenarioError,
@@ -140,14 +142,20 @@ def plan(
     if log_level not in LOG_LEVELS:
         raise ScenarioError(f'log_level must be one of {", ".join(LOG_LEVELS)}, got {log_level!r}')
     job = job_for(scen)  # checks the graph: exactly one clock node
+    chosen = check_layout(layout) if layout else scen.layout
+    job.prepare_graph(monitored=False, layout=chosen)  # what the layout changes (no monitor)
     for node in scen.nodes:
         scen.parameters(node.name)  # every value checked before anything starts
     clocks = {n.name for n in job.clock_nodes}
     remappings = []
     if scen.private_clock and scen.namespace != topics.ROOT:
         remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
-    out = Plan(scen, parameters=scen.node_parameters())
-    processes = layout_processes(scen, check_layout(layout) if layout else scen.layout)
+    # What mill_container reads to tell which class each of its nodes is (the runner gives
+    # it the scenario file itself).
+    launch = [f'{n.name} {n.package} {n.executable}' for n in scen.nodes]
+    entry = {SCENARIO_KEY: {'ros__parameters': {'launch': launch}}}
+    out = Plan(scen, parameters={**entry, **scen.node_parameters()})
+    processes = layout_processes(scen, chosen)
     for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
         first = process.nodes[0]
         out.nodes.append(

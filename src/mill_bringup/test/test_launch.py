@@ -59,7 +59,9 @@ def test_every_planned_node_is_an_executable_of_its_package(name: str, tmp_path:
     clock = 'force_process_node' if name == 'rubio' else 'plant_node'
     assert required == sorted([clock, 'job_watch'])
     written = parse_yaml(path.read_text())
-    assert set(written) == {f'/**/{n.name}' for n in plan.scenario.nodes}
+    assert set(written) == {'mill_scenario'} | {f'/**/{n.name}' for n in plan.scenario.nodes}
+    lines = written['mill_scenario']['ros__parameters']['launch']
+    assert lines == [f'{n.name} {n.package} {n.executable}' for n in plan.scenario.nodes]
 
 
 def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
@@ -75,6 +77,7 @@ def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
     assert written['/**/x_controller']['ros__parameters']['pd.omega_c'] == 20.0
     assert written['/**/y_controller']['ros__parameters']['pd.omega_c'] == 12.0  # the file's
     assert written['/**/plant']['ros__parameters']['substeps'] == 8
+    del written['mill_scenario']  # the nodes' names and kinds (for mill_container)
     for entry in written.values():
         # what run_scenario --timing realtime sets: no sim time, one sample of delay
         assert entry['ros__parameters']['timing'] == 'realtime'
@@ -112,6 +115,70 @@ def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> 
     with pytest.raises(ScenarioError, match=message) as info:
         launch_plan.plan(**args)
     assert '\n' not in str(info.value)
+
+
+def launched_argv(node: launch_plan.NodePlan) -> list[str]:
+    """The command line launch_ros starts a Node action with: its executable, its
+    arguments, then --ros-args: the ROS arguments, the node name (none for a container),
+    the namespace, the parameter files and the remappings."""
+    argv = [node.executable, *node.nodes, '--ros-args', *node.ros_arguments]
+    if not node.nodes:
+        argv += ['-r', f'__node:={node.name}']
+    argv += ['-r', f'__ns:={node.namespace}']
+    for f in node.parameters:
+        argv += ['--params-file', f]
+    for rule in node.remappings:
+        argv += ['-r', f'{rule[0]}:={rule[1]}']
+    return argv
+
+
+@pytest.mark.parametrize(
+    ('layout', 'containers'),
+    [
+        (
+            'per_axis',
+            [
+                ['x_observer', 'x_controller'],
+                ['y_observer', 'y_controller'],
+                ['z_observer', 'z_controller'],
+            ],
+        ),
+        ('single', [[n.name for n in launch_plan.load('slotting').nodes]]),
+    ],
+)
+def test_each_container_of_a_layout_finds_its_nodes_in_the_launch_arguments(
+    tmp_path: Path, layout: str, containers: list[list[str]]
+) -> None:
+    # Issue 34: mill_container ended with `no --params-file has a mill_scenario:
+    # ros__parameters: launch: list naming the nodes` (rc 2, and 3 from the plant that waited
+    # for them): the launch gave it the merged parameters only.
+    from mill_bringup.container import makers
+    from mill_common.param_sources import params_files
+
+    plan = launch_plan.plan('slotting', 'machine_a', layout=layout)
+    launch_plan.write_parameters(plan, str(tmp_path))
+    started = [n for n in plan.nodes if n.nodes]
+    assert [list(n.nodes) for n in started] == containers
+    for node in started:
+        argv = launched_argv(node)
+        built = makers(list(node.nodes), params_files(argv))
+        assert [name for name, _make in built] == list(node.nodes)
+
+
+@pytest.mark.parametrize(
+    ('layout', 'readers'), [('processes', None), ('per_axis', 1), ('single', 1)]
+)
+def test_the_plant_waits_for_the_readers_its_layout_gives_it(
+    tmp_path: Path, layout: str, readers: int | None
+) -> None:
+    # An observer and its controller in one process count as one reader of the states: the
+    # plant of a per_axis launch waited for 2 and ended after its startup timeout (rc 3).
+    plan = launch_plan.plan('slotting', layout=layout)
+    written = yaml.safe_load(launch_plan.write_parameters(plan, str(tmp_path)).read_text())
+    assert written['/**/plant']['ros__parameters'].get('min_subscribers') == readers
+    for axis_node in ('x_observer', 'x_controller'):  # no monitor to wait for: their defaults
+        assert 'min_subscribers' not in written[f'/**/{axis_node}']['ros__parameters']
+    assert plan.scenario.parameters('plant')['min_subscribers'] == (readers or 2)
 
 
 def test_layouts_start_containers_that_keep_the_node_names(tmp_path: Path) -> None:
