@@ -75,7 +75,7 @@ def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path, layout: str)
     # the launch's parameter file: rc 2, and the plant timed out waiting for it: rc 3).
     params = tmp_path / 'short.yaml'
     params.write_text('/**/trajectory:\n  ros__parameters:\n    duration: 0.2\n')
-    plan = launch_plan.plan('slotting', 'machine_l', str(params), '', 'warn', layout)
+    plan = launch_plan.plan('slotting', 'machine_l', str(params), '', 'warn', layout, 'true')
     launch_plan.write_parameters(plan, str(tmp_path))
     procs = {}
     for n in plan.nodes:

@@ -25,6 +25,7 @@ from mill_bringup import launch_plan
 
 ROOT = Path(__file__).resolve().parents[3]
 LAUNCH_FILE = ROOT / 'src' / 'mill_bringup' / 'launch' / 'scenario.launch.py'
+USER_GUIDE = ROOT / 'docs' / 'user-guide.md'
 SCENARIOS = sorted(p.stem for p in (ROOT / 'config').glob('*.yaml'))
 
 
@@ -36,10 +37,21 @@ def _console_scripts() -> dict[tuple[str, str], str]:
     return out
 
 
-def test_arguments_are_the_documented_ones() -> None:
-    names = [a.name for a in launch_plan.ARGUMENTS]
-    assert names == ['scenario', 'namespace', 'params_file', 'timing', 'log_level', 'layout']
-    assert all(len(a.description) > 20 for a in launch_plan.ARGUMENTS)
+def documented_arguments() -> dict[str, str]:
+    """The launch-argument table of docs/user-guide.md: name -> its default column."""
+    text = USER_GUIDE.read_text()
+    section = text[text.index('## With a full ROS 2 install') :]
+    table = section[section.index('| argument | default | meaning |') :].split('\n\n')[0]
+    rows = [line.split('|')[1:3] for line in table.splitlines()[2:]]
+    return {name.strip().strip('`'): default.strip() for name, default in rows}
+
+
+def test_the_user_guide_lists_exactly_the_arguments_the_launch_declares() -> None:
+    documented = documented_arguments()
+    assert list(documented) == [a.name for a in launch_plan.ARGUMENTS]
+    for a in launch_plan.ARGUMENTS:  # a default is quoted as it is; none is said in words
+        assert (f'`{a.default}`' in documented[a.name]) is bool(a.default), a.name
+        assert len(a.description) > 20
 
 
 @pytest.mark.parametrize('name', SCENARIOS)
@@ -97,6 +109,23 @@ def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
     plan = launch_plan.plan(str(path))
     assert {n.namespace for n in plan.nodes} == {'/m2'}
     assert all(n.remappings == [('/clock', '/m2/clock')] for n in plan.nodes)
+    # private_clock:=false overrides the scenario's
+    plan = launch_plan.plan(str(path), private_clock='false')
+    assert all(n.remappings == [] for n in plan.nodes)
+
+
+@pytest.mark.parametrize('layout', ['processes', 'single'])
+def test_private_clock_remaps_clock_into_the_namespace_for_every_process(layout: str) -> None:
+    # Issue 34: two machines launched side by side in one domain each hear their own plant.
+    plans = {
+        m: launch_plan.plan('slotting', m, layout=layout, private_clock='true')
+        for m in ('machine_a', 'machine_b')
+    }
+    for m, plan in plans.items():
+        assert [n.remappings for n in plan.nodes] == [[('/clock', f'/{m}/clock')]] * len(plan.nodes)
+        argv = launched_argv(plan.nodes[0])
+        assert argv[-2:] == ['-r', f'/clock:=/{m}/clock']
+    assert all(n.remappings == [] for n in launch_plan.plan('slotting', 'machine_a').nodes)
 
 
 @pytest.mark.parametrize(
@@ -108,6 +137,8 @@ def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
         ({'scenario': 'nope'}, "no scenario 'nope'"),
         ({'params_file': 'missing.yaml'}, 'params_file missing.yaml: No such file'),
         ({'layout': 'pairs'}, "layout must be one of processes, per_axis, single, got 'pairs'"),
+        ({'private_clock': 'yes'}, "private_clock must be true or false, got 'yes'"),
+        ({'private_clock': 'true'}, r'a private clock needs a namespace \(namespace:=NAME\)'),
     ],
 )
 def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> None:
@@ -327,7 +358,7 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     values = {a.name: a.default for a in launch_plan.ARGUMENTS}
-    values.update(namespace='machine2', log_level='warn')
+    values.update(namespace='machine2', log_level='warn', private_clock='true')
     for name, mod in _stand_ins(values).items():
         monkeypatch.setitem(sys.modules, name, mod)
     monkeypatch.setattr('tempfile.tempdir', str(tmp_path))
@@ -347,12 +378,13 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
 
     actions = opaque.kwargs['function'](object())
     nodes = [a.kwargs for a in actions if type(a).__name__ == 'Node']
-    plan = launch_plan.plan('slotting', 'machine2', log_level='warn')
+    plan = launch_plan.plan('slotting', 'machine2', log_level='warn', private_clock='true')
     assert [(n['package'], n['executable'], n['name']) for n in nodes] == [
         (p.package, p.executable, p.name) for p in plan.nodes
     ]
     assert all(n['arguments'] == [] for n in nodes)
     assert all(n['namespace'] == '/machine2' for n in nodes)
+    assert all(n['remappings'] == [('/clock', '/machine2/clock')] for n in nodes)
     assert all(n['ros_arguments'] == ['--log-level', 'warn'] for n in nodes)
     assert all(Path(n['parameters'][0]).is_file() for n in nodes)
     handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']
