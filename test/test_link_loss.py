@@ -9,9 +9,10 @@ commanding when the link returns. A probe next to the drive, in its namespace, w
 every state it publishes and every command that reaches it. Mid-job the link is cut for 1 s
 and, in a second run, for 5 s. The contract (mill_plant.motion_guard, docs/reliability.md):
 
-- the drive stops every axis (brakes it) within `brake_after` ticks of its last fresh
-  command, and within |v|·H + hold_deviation + ½·Δa·T² of where it stood at the last state
-  its controller answered (v: its speed then, H: the time to the stop, Δa: how much the
+- the drive stops every axis (brakes it) within its window H(v) of its last fresh command
+  (mill_common.hold_window: 0.5 s at rest, (excursion − hold_deviation)/|v| at speed), and
+  within |v|·H + hold_deviation + ½·Δa·T² <= excursion + ½·Δa·T² of where it stood at the
+  last state its controller answered (v: its speed then, H: the time to the stop, Δa: how much the
   forces on the axis change in a period — here at most the load's step and swing and a
   reversal of friction, over the smallest effective mass);
 - when the link returns the controllers command again, and no axis moves: the first
@@ -29,13 +30,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from mill_common.hold_window import HoldWindow
 
 from test.test_realtime_driver import MACHINE, MASS, TOLD
 from test.two_hosts import TwoHosts, finish, wait_for_progress
 
 PERIOD = 0.004  # [s]
-BRAKE_AFTER = 10  # the drive's default
-HOLD_DEVIATION = 0.0005  # [m] the drive's default
+WINDOW = HoldWindow()  # the drive's defaults
+HOLD_DEVIATION = WINDOW.hold_deviation  # [m]
 # The forces on an axis that can change within a period: the load (150 N) coming or going, its
 # 80 N swing, a reversal of the 60 N of friction; over the smallest effective mass.
 DELTA_A = (150.0 + 2 * 80.0 + 2 * 60.0) / min(MASS.values())
@@ -190,16 +192,18 @@ def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> d
         moving = [s for s, x in states if s >= last and x != final]
         stop = next(s for s in ticks if s > (moving[-1] if moving else last))
         assert stop < back, (axis, 'the axis was still moving when the link returned')
-        # In time: within brake_after ticks after the first tick that had no fresh command
+        # In time: within the window H(v) after the first tick that had no fresh command
         # (the tick after the last answered state, or the one after it if that command came
         # in the same period).
-        assert ticks.index(stop) <= BRAKE_AFTER + 2, (axis, ticks.index(stop))
+        window = WINDOW.hold_time(v_end)
+        assert (stop - last) * 1e-9 <= window + 2 * PERIOD, (axis, stop - last, window)
         # In distance: on course at v_end until the stop, plus the window and a period's
         # change of the forces.
         held = (stop - last) * 1e-9
         bound = abs(v_end) * held + HOLD_DEVIATION + 0.5 * DELTA_A * PERIOD**2
         moved = abs(final - x_end)
         assert moved <= bound, (axis, moved, bound, v_end, held)
+        assert moved <= WINDOW.excursion + 0.5 * DELTA_A * PERIOD**2, (axis, moved)
         # Nothing moved after the link returned.
         after = [x for s, x in states if s > back]
         assert after and all(x == final for x in after), axis

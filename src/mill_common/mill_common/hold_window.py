@@ -72,6 +72,7 @@ class HoldWindow(ParamSet):
         'reported as a stall, with its length on the monotonic clock',
         in_range(1e-4, 10.0),
         unit='s',
+        read_only=True,
     )
 
     def __post_init__(self) -> None:
