@@ -28,7 +28,7 @@ from __future__ import annotations
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
@@ -44,6 +44,9 @@ from mill_bringup.scenario import (
     load,
 )
 from mill_common import topics
+
+if TYPE_CHECKING:  # the job's modules load only when a plan is made
+    from mill_bringup.job_config import JobConfig
 
 TIMINGS = ('lockstep', 'realtime')
 LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
@@ -115,6 +118,7 @@ class Plan:
     scenario: Scenario
     nodes: list[NodePlan] = field(default_factory=list)
     parameters: dict[str, Any] = field(default_factory=dict)  # the file every node gets
+    config: JobConfig | None = None  # the job's configuration, checked (job_config)
 
 
 def plan(
@@ -139,15 +143,17 @@ def plan(
         set_timing(scen, timing)  # what run_scenario --timing sets, the same way
     if log_level not in LOG_LEVELS:
         raise ScenarioError(f'log_level must be one of {", ".join(LOG_LEVELS)}, got {log_level!r}')
-    job = job_for(scen)  # checks the graph: exactly one clock node
-    for node in scen.nodes:
-        scen.parameters(node.name)  # every value checked before anything starts
+    # The job's configuration: every value and cross-node rule checked before anything
+    # starts, and the graph (exactly one clock node).
+    job = job_for(scen)
     clocks = {n.name for n in job.clock_nodes}
     remappings = []
     if scen.private_clock and scen.namespace != topics.ROOT:
         remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
-    out = Plan(scen, parameters=scen.node_parameters())
-    processes = layout_processes(scen, check_layout(layout) if layout else scen.layout)
+    out = Plan(scen, parameters=scen.node_parameters(), config=job.config)
+    processes = layout_processes(
+        scen, check_layout(layout) if layout else scen.layout, config=job.config
+    )
     for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
         first = process.nodes[0]
         out.nodes.append(

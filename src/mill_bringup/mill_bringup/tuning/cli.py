@@ -21,6 +21,7 @@ from mill_controllers.config import build_loop
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
+from mill_bringup.job_config import JobConfig, build
 from mill_bringup.scenario import ScenarioError, load
 from mill_bringup.tuning.design import (
     MIN_PHASE_MARGIN,
@@ -97,8 +98,17 @@ def _parser() -> OneLineParser:
     return p
 
 
+def tuning_config(scenario: str, T: float, delay: int) -> JobConfig:
+    """The scenario's job configuration at the tuned rate and delay, built and checked once
+    (ScenarioError, one line, if it cannot run there)."""
+    scen = load(scenario)
+    for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
+        scen.add_override(text)
+    return build(scen)
+
+
 def _margins_at(
-    scenario: str,
+    config: JobConfig,
     axis: str,
     T: float,
     delay: int,
@@ -107,25 +117,20 @@ def _margins_at(
     omega_o: float,
     omega_c: float,
 ) -> Margins:
-    """The margins of the loop the nodes would build with these bandwidths."""
-    scen = load(scenario)
-    for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
-        scen.add_override(text)
-    node = f'{axis}_controller'
-    for name, value in {
+    """The margins of the loop the nodes would build with these bandwidths: the axis's
+    controller and observer values of the configuration with the tuned law and gains."""
+    cv = {
+        **config.values(f'{axis}_controller'),
         'controller': 'adrc',
         'input_gain': m.b.value,
         **controller_values(omega_c),
-    }.items():
-        scen.overrides.setdefault(node, {})[name] = value
-    node = f'{axis}_observer'
-    for name, value in {
+    }
+    ov = {
+        **config.values(f'{axis}_observer'),
         'observer': observer,
         'input_gain': m.b.value,
         **observer_values(observer, omega_o),
-    }.items():
-        scen.overrides.setdefault(node, {})[name] = value
-    cv, ov = scen.parameters(f'{axis}_controller'), scen.parameters(f'{axis}_observer')
+    }
     return margins(
         lambda: (build_observer_loop(ov), build_loop(cv)), m.b.value, m.alpha.value, delay, T
     )
@@ -189,6 +194,7 @@ def main(argv: list[str] | None = None) -> int:
         model = read(Path(args.machine))
         T = args.sample_period or model.sample_period
         delay = _delay(model, T, args.delay)
+        config = tuning_config(args.scenario, T, delay)
         tuned = {
             a: design_axis(
                 a,
@@ -196,7 +202,7 @@ def main(argv: list[str] | None = None) -> int:
                 T,
                 delay,
                 args.torque_limit,
-                partial(_margins_at, args.scenario, a, T, delay, m, args.observer),
+                partial(_margins_at, config, a, T, delay, m, args.observer),
                 args.observer,
                 args.min_phase_margin,
             )

@@ -89,9 +89,10 @@ def predict(
     set_timing(scen, None, delay)
     if duration is not None:
         set_duration(scen, duration)
-    rec = simulate(job_for(scen))
+    job = job_for(scen)
+    rec = simulate(job)
     metrics = summarize(rec, skip)
-    T = float(scen.parameters(plant)['sample_period'])
+    T = job.config.sample_period
     return Prediction(
         scen.name,
         T,
