@@ -211,9 +211,10 @@ def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> d
     return out
 
 
-# Controllers that know nothing of the outage, as in the attack that found it: no gap trip,
-# and a following-error limit of 50 mm, so that they command on when the link returns.
-UNAWARE = ('*_controller.max_state_gap=0', '*_controller.following_error_limit=0.05')
+# Controllers that know nothing of the outage, as in the attack that found it: they do not
+# listen to the drive's word (no gap trip), and a following-error limit of 50 mm, so that
+# they command on when the link returns.
+UNAWARE = ('*_controller.gap_trip=false', '*_controller.following_error_limit=0.05')
 
 RESET = """
 import rclpy
@@ -247,11 +248,12 @@ def test_a_one_second_cut_stops_the_axes_and_no_returning_command_releases_them(
 def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axes_stand(
     hosts: TwoHosts, tmp_path: Path
 ) -> None:
-    """The default controllers (gap trip at 10 periods): each trips on the gap (its brake
-    request acknowledges the stop); the operator resets them; each re-arms holding where its
-    axis stands and the drive releases the axes, which stay there. The limit is 5 mm: across
-    this link the trajectory can start up to a second before the drive has the first
-    commands (docs/reliability.md, known limitations), and y's path runs at 3 mm/s."""
+    """The default controllers: each trips when the drive's state says it has stopped the
+    axis (its brake request acknowledges the stop); the operator resets them; each re-arms
+    holding where its axis stands and the drive releases the axes, which stay there. The
+    limit is 5 mm: across this link the trajectory can start up to a second before the drive
+    has the first commands (docs/reliability.md, known limitations), and y's path runs at
+    3 mm/s."""
     reset_log = tmp_path / 'reset.log'
     reset_at: list[int] = []
 
@@ -276,7 +278,7 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
         # observer restarted from its estimate under way).
         later = [x for _, s, x in seen['state'][axis] if s > reset_at[0]]
         assert later and max(abs(x - stood[axis]) for x in later) <= 0.5e-3, axis
-    trips = re.findall(r'FAILED: (\w)_controller: .*no state for', said)
+    trips = re.findall(r'FAILED: (\w)_controller: .*the drive says it has stopped the axis', said)
     assert sorted(set(trips)) == list(AXES), said[-3000:]
     assert 'following-error trip' not in said, said[-3000:]  # none before the cut, none after
     assert code == 1, said[-3000:]

@@ -22,13 +22,15 @@ A drive of this contract says in every state whether it has stopped the axis (th
 `effort`: NaN while stopped, see docs/hardware-driver.md). A controller therefore never
 guesses: it trips on the drive's word; a gap in the states is reported with its length and
 whose stall it was (`state_gap`). Only a driver that does not say (an empty `effort`, the
-old contract) is judged by the window: a gap of H(v) or more means it has stopped the axis.
+old contract) is judged by the window: a gap longer than H(v) (and than a period and a half)
+means it has stopped the axis.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -150,6 +152,14 @@ class StallWatch:
         return sum(max(0, min(end_ns, s.end_ns) - max(start_ns, s.due_ns)) for s in self.recent)
 
 
+def drive_word(effort: Sequence[float]) -> bool | None:
+    """What a state's `effort` says of the drive: True it has stopped the axis (NaN), False it
+    has not (a value), None it does not say (empty: a driver of the old contract)."""
+    if not len(effort):
+        return None
+    return math.isnan(effort[0])
+
+
 # -- a gap in the states a controller steps ------------------------------------------------
 @dataclass(frozen=True)
 class GapVerdict:
@@ -165,6 +175,7 @@ def state_gap(
     drive_stopped: bool | None,
     own_stall_ns: int = 0,
     mono_ns: int | None = None,
+    reason: str = '',
 ) -> GapVerdict:
     """What a controller makes of the state it steps after a gap of gap_ns since the last.
 
@@ -172,14 +183,19 @@ def state_gap(
     not; None: the driver does not say, the old contract). speed: the axis's speed before
     the gap [m/s] (the controller's estimate). own_stall_ns: how long the controller's own
     process was stalled within the gap (StallWatch.within, monotonic); mono_ns: the time
-    between its two steps on its monotonic clock, to report beside the stamps' gap.
+    between its two steps on its monotonic clock, to report beside the stamps' gap; reason:
+    the drive's own reason for its stop, where the controller knows it.
     """
     if drive_stopped:
-        return GapVerdict(trip='the drive says it has stopped the axis (effort NaN in its state)')
+        said = 'the drive says it has stopped the axis (effort NaN in its state)'
+        return GapVerdict(trip=f'{said}: {reason}' if reason else said)
     gap_ms = 1e-6 * gap_ns
     if drive_stopped is None and gap_ns > 0:
+        # The drive holds while its silence plus a period stays within H: it has stopped the
+        # axis by the state after a gap longer than H, and never within one period (a gap
+        # of less than 1.5 periods is jitter, whatever the speed).
         held = window.hold_time(speed)
-        if gap_ns >= round(held * 1e9):
+        if gap_ns > max(round(held * 1e9), 1.5 * period_ns):
             return GapVerdict(
                 trip=(
                     f"no state for {gap_ms:.1f} ms, beyond the drive's window of "

@@ -72,9 +72,12 @@ def test_only_the_drive_says_it_stopped_the_axis():
 
 def test_a_driver_that_does_not_say_is_judged_by_the_window():
     w = HoldWindow()
-    at_speed = w.hold_time(0.016)
-    got = state_gap(round(at_speed * 1e9), T, 0.016, w, drive_stopped=None)
+    assert w.hold_time(0.016) == pytest.approx(0.03125)
+    got = state_gap(32 * MS, T, 0.016, w, drive_stopped=None)
     assert "beyond the drive's window of 31.2 ms at 16.0 mm/s" in got.trip
-    assert not state_gap(round(at_speed * 1e9) - MS, T, 0.016, w, drive_stopped=None).trip
-    assert not state_gap(400 * MS, T, 0.0, w, drive_stopped=None).trip  # at rest: 0.5 s
-    assert state_gap(500 * MS, T, 0.0, w, drive_stopped=None).trip
+    assert not state_gap(31 * MS, T, 0.016, w, drive_stopped=None).trip
+    assert not state_gap(500 * MS, T, 0.0, w, drive_stopped=None).trip  # at rest: 0.5 s
+    assert state_gap(501 * MS, T, 0.0, w, drive_stopped=None).trip
+    # A period is no gap, however fast the axis (the drive stops it at the first late tick).
+    assert not state_gap(T, T, 2.0, w, drive_stopped=None).trip
+    assert state_gap(2 * T, T, 2.0, w, drive_stopped=None).trip
