@@ -148,8 +148,15 @@ class StallWatch:
         return stall
 
     def within(self, start_ns: int, end_ns: int) -> int:
-        """How long this process was stalled within [start_ns, end_ns] (monotonic) [ns]."""
-        return sum(max(0, min(end_ns, s.end_ns) - max(start_ns, s.due_ns)) for s in self.recent)
+        """How long this process was stalled within [start_ns, end_ns] (monotonic) [ns]: its
+        recorded stalls, and the one it is in if its next wake is overdue at end_ns (asked
+        from a callback that ran before the late wake's own: the stall is not over yet)."""
+        total = sum(max(0, min(end_ns, s.end_ns) - max(start_ns, s.due_ns)) for s in self.recent)
+        if self.last_ns is not None:
+            due = self.last_ns + self.period_ns
+            if end_ns - due > self.threshold_ns:
+                total += max(0, end_ns - max(start_ns, due))
+        return total
 
 
 def drive_word(effort: Sequence[float]) -> bool | None:

@@ -25,7 +25,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, owner_check
 from mill_common.hold_window import StallWatch, drive_word
 from mill_common.input_guard import InputGuard
@@ -91,6 +91,7 @@ class AxisControllerNode(Node):
         self._stepped_mono: int | None = None
         self._gaps = 0
         self._gap_reported = 0.0
+        self._drive_reason = ''  # the drive's last stop of this axis, as it said it
         self._pub = data_publisher(self, JointState, topics.joint_command(axis), DATA_QOS)
         self._state_pub = data_publisher(
             self, JointState, topics.controller_state(axis), DATA_QOS, True
@@ -122,6 +123,10 @@ class AxisControllerNode(Node):
         self.create_timer(2.0, self._report_waiting, clock=steady)
         if not self.timing.WAITS_FOR_INPUTS:  # realtime: who stalled, when a gap comes
             self.create_timer(WATCH_NS * 1e-9, self._watch_self, clock=steady)
+            # The drive's reason for a stop it declares (its axis status), for the trip.
+            self._drive_status = topics.status_name(self._owners[CLOCK_INPUT], f'{axis} axis')
+            self._machine = topics.machine_id(self.get_namespace())
+            self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diagnostics, 20)
         self.get_logger().info(
             f'axis {axis}: controller {v["controller"]}, timing {v["timing"]}, commands on '
             f'{self.resolve_topic_name(topics.joint_command(axis))}, following-error limit '
@@ -267,6 +272,7 @@ class AxisControllerNode(Node):
             self._join.references,
             inputs.get('model'),
             drive_stopped=said,
+            drive_reason=self._drive_reason if said else '',
             own_stall_ns=self._stalls.within(last, mono) if last is not None else 0,
             mono_ns=mono - last if last is not None else None,
         )
@@ -296,6 +302,12 @@ class AxisControllerNode(Node):
             self.reports.switched(ns, self._law_name, record, blend)
 
     # -- gaps and this process's own stalls ---------------------------------------------
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            ours = status.name == self._drive_status and status.hardware_id == self._machine
+            if ours and ': stopped: ' in status.message:
+                self._drive_reason = status.message.split(': stopped: ', 1)[1]
+
     def _watch_self(self) -> None:
         self._stalls.wake(time.monotonic_ns(), time.time_ns())
 
