@@ -263,6 +263,8 @@ class AxisControllerNode(Node):
         said = self._said.pop(ns, None)
         for old in [at for at in self._said if at < ns]:
             del self._said[old]  # states the timing dropped
+        if said is False:
+            self._drive_reason = ''  # running: a later stop comes with its own reason
         mono, last = time.monotonic_ns(), self._stepped_mono
         self._stepped_mono = mono
         cmd = loop.step(

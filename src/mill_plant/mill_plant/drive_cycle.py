@@ -27,12 +27,11 @@ reports; its cycle says when a period runs and what counts as late:
   by a re-arm (the owner's brake request then a valid command) or the operator
   (~/release), never by the first command that returns (mill_plant.command_table). Every
   state says whether the drive has stopped its axis (`effort` NaN). Ticks more than half a
-  period late (the
-  machine does not hold the rate) are counted and reported; a tick that wakes more than
-  `stall_report` late on the monotonic clock is the drive's own stall, reported as such
-  ("drive plant (pid …) stalled 112 ms (monotonic) at …"). A simulated machine keeps the
-  wall clock as a real one does: after each tick it moves one period on, and a tick that
-  comes late first moves it by what passed beyond that.
+  period late (the machine does not hold the rate) are counted and reported; a tick that
+  wakes more than `stall_report` late on the monotonic clock is the drive's own stall,
+  reported as such ("drive plant (pid …) stalled 112 ms (monotonic) at …"). A simulated
+  machine keeps the wall clock as a real one does: after each tick it moves one period on,
+  and a tick that comes late first moves it by what passed beyond that.
 """
 
 from __future__ import annotations
