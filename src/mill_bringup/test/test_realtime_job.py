@@ -44,3 +44,16 @@ def test_the_drives_late_ticks_come_with_its_own_tick_count() -> None:
     assert job.overruns() == (0, 0)  # a driver that reports neither
     job.drive = {'overruns': '3', 'active_ticks': '600'}
     assert job.overruns() == (3, 600)
+
+
+def test_the_drives_own_stalls_are_said_as_what_they_were() -> None:
+    """A drive that reports its stalls (ticks that woke late on the monotonic clock): their
+    number and the longest, with which process and when, as the drive said it."""
+    scen = scenario.load('slotting')
+    set_timing(scen, 'realtime')
+    job = job_for(scen)
+    assert isinstance(job, RealtimeAxisJob)
+    assert job.stalls() == (0, 0.0, '')  # a driver that does not report them
+    line = 'drive plant (pid 4242) stalled 112 ms (monotonic) at 22:31:07.015 UTC'
+    job.drive = {'stalls': '2', 'longest_stall_ms': '112.0', 'longest_stall': line}
+    assert job.stalls() == (2, 112.0, line)

@@ -9,13 +9,14 @@ from typing import Any
 
 import numpy as np
 from mill_common.build_check import BUILD_ERRORS, build_failure, changed_choices
-from mill_common.declared import ParamSet, param
+from mill_common.declared import param
+from mill_common.hold_window import HoldWindow
 from mill_common.node_params import axis_node_specs, check_design_period
 from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
+    boolean,
     non_negative,
-    non_negative_int,
     positive_or_inf,
     text,
 )
@@ -29,7 +30,7 @@ from mill_controllers.registry import CONTROLLERS
 
 
 @dataclass(frozen=True)
-class ControllerNodeParams(ParamSet):
+class ControllerNodeParams(HoldWindow):
     """The controller node's own parameters (beside every per-axis node's and the laws')."""
 
     controller: str = param('adrc', 'control law (see README: algorithms)', CONTROLLERS.check())
@@ -58,14 +59,16 @@ class ControllerNodeParams(ParamSet):
         'reset_trip service (a new limit leaves a trip latched) [m]; .inf disables it',
         positive_or_inf,
     )
-    max_state_gap: int = param(
-        10,
-        'realtime: a gap of this many sample periods or more between two states means '
-        "the drive has stopped the axis (set it to the drive's brake_after): the "
-        'controller trips; reset, it re-arms holding the position it measures and '
-        'takes the reference up again once it comes within half the following-error '
-        'limit; 0: off',
-        non_negative_int,
+    gap_trip: bool = param(
+        True,
+        'realtime: trip when the drive says in its state that it has stopped the axis (and, '
+        'from a driver that does not say, after a gap of the window H(v) of the hold '
+        'parameters excursion, max_hold, hold_deviation, which the drive declares the '
+        'same); a shorter gap is reported, never tripped on; reset, the controller re-arms '
+        'holding the position it measures and takes the reference up again once it comes '
+        'within half the following-error limit; false: never (it knows nothing of the '
+        "drive's stops)",
+        boolean,
         read_only=True,
     )
 
@@ -131,5 +134,5 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['following_error_limit'],
         values['command_delay'],
         values['blend_time'],
-        values['max_state_gap'],
+        HoldWindow.from_node_values(values) if values['gap_trip'] else None,
     )

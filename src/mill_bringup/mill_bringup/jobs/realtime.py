@@ -257,6 +257,16 @@ class RealtimeAxisJob(AxisJob):
             int(float(self.drive.get('active_ticks', '0'))),
         )
 
+    def stalls(self) -> tuple[int, float, str]:
+        """The drive's own stalls (ticks that woke more than its `stall_report` late, on the
+        monotonic clock): how many, the longest [ms] and its line (which process, when),
+        from its last status (0 from a driver that does not report them)."""
+        return (
+            int(float(self.drive.get('stalls', '0'))),
+            float(self.drive.get('longest_stall_ms', '0')),
+            self.drive.get('longest_stall', ''),
+        )
+
     def summary(self, rec: RunRecord, skip: float) -> str:
         lines = [
             summary_text(rec, skip),
@@ -280,11 +290,20 @@ class RealtimeAxisJob(AxisJob):
                 f'WARNING: the drive ticked more than half a period late {overruns} times{of}: '
                 'this machine does not hold the sample rate in this layout'
             )
+        stalls, _longest, line = self.stalls()
+        if stalls:
+            over = self.drive.get('stall_report_ms', '?')
+            lines.append(
+                f'WARNING: the drive stalled {stalls} times by more than {over} ms (monotonic), '
+                f'the longest: {line}; its own stalls, not late commands'
+            )
         return '\n'.join(lines)
 
     def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
         out = super().summary_json(rec, skip)
         out['drive'] = self.drive_figures()
         out['drive_overruns'], out['drive_ticks'] = self.overruns()
+        stalls, longest, line = self.stalls()
+        out['drive_stalls'] = {'count': stalls, 'longest_ms': longest, 'longest': line}
         out['start_stamp_ns'] = self.start_ns
         return out
