@@ -30,13 +30,15 @@ import argparse
 import math
 import sys
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 from mill_analysis.force_record import ForceRecord
 from mill_analysis.papers import rubio_claims
+from mill_common.declared import ParamSet, param
 from mill_common.one_line_parser import OneLineParser
-from mill_common.parameters import ParamSpec, number, positive, positive_int, validate_all
+from mill_common.parameters import number, positive, positive_int
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.quadrature import simpson
@@ -52,23 +54,29 @@ def _number_or_inf(value: Any) -> str | None:
     return number(value)
 
 
-LOOP_PARAMETERS: tuple[ParamSpec, ...] = (
-    ParamSpec('reference_force', 1200.0, 'reference peak force F_r [N] (Rubio 2013 §5)', positive),
-    ParamSpec('job_duration', 10.0, 'simulated job length [s]', positive),
-    ParamSpec(
-        'nominal_feed',
-        10.0,
-        'programmed path speed the feed override multiplies [mm/s]',
-        positive,
-    ),
-    ParamSpec('override_min', 0.0, 'lowest feed override [-] (0: never reverse)', _number_or_inf),
-    ParamSpec('override_max', 2.0, 'highest feed override [-] (200 %)', _number_or_inf),
-    ParamSpec('intersample_intervals', 32, 'grid intervals per sample for J_c [-]', positive_int),
-)
+@dataclass(frozen=True)
+class ForceLoopParams(ParamSet):
+    """The offline force job's own settings (the Rubio 2013 experiment)."""
+
+    PREFIX: ClassVar[str] = 'force_loop'
+    reference_force: float = param(
+        1200.0, 'reference peak force F_r (Rubio 2013 §5)', positive, unit='N'
+    )
+    job_duration: float = param(10.0, 'simulated job length', positive, unit='s')
+    nominal_feed: float = param(
+        10.0, 'programmed path speed the feed override multiplies', positive, unit='mm/s'
+    )
+    override_min: float = param(
+        0.0, 'lowest feed override (0: never reverse)', _number_or_inf, unit='-'
+    )
+    override_max: float = param(2.0, 'highest feed override (200 %)', _number_or_inf, unit='-')
+    intersample_intervals: int = param(
+        32, 'grid intervals per sample for J_c', positive_int, unit='-'
+    )
 
 
-def loop_values(values: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    return validate_all(LOOP_PARAMETERS, dict(values or {}), prefix='force_loop.')
+def loop_values(values: Mapping[str, Any] | None = None) -> ForceLoopParams:
+    return ForceLoopParams.from_values(dict(values or {}))
 
 
 def make_controller(
@@ -79,8 +87,8 @@ def make_controller(
 ) -> ForceLaw:
     """'fixed' (values['beta']), 'scheme1' or 'scheme2', with the loop's feed range."""
     lv = loop_values(loop)
-    lo = lv['override_min'] * lv['nominal_feed']
-    hi = lv['override_max'] * lv['nominal_feed']
+    lo = lv.override_min * lv.nominal_feed
+    hi = lv.override_max * lv.nominal_feed
     return build_law(kind, model, dict(values or {}), lo, hi)
 
 
@@ -131,9 +139,9 @@ class ForceLoopSimulation:
     ) -> None:
         lv = loop_values(loop)
         T = model.sample_period
-        self.samples = max(1, math.ceil(lv['job_duration'] / T - 1e-9))
-        self.nominal = lv['nominal_feed']
-        o_lo, o_hi = lv['override_min'], lv['override_max']
+        self.samples = max(1, math.ceil(lv.job_duration / T - 1e-9))
+        self.nominal = lv.nominal_feed
+        o_lo, o_hi = lv.override_min, lv.override_max
         if not o_lo <= o_hi:
             raise ValueError(f'override range [{o_lo}, {o_hi}] is empty')
         if override_corruption:
@@ -145,12 +153,12 @@ class ForceLoopSimulation:
             ForceProcessPlant(model),
             o_lo * self.nominal,
             o_hi * self.nominal,
-            T / lv['intersample_intervals'],
+            T / lv.intersample_intervals,
         )
         # J_c compares with the law's own reference model eq. (7)
         self.f_ref = ContinuousReference(controller.designer.damping, controller.designer.omega_n)
         self.nan_set = set(nan_samples)
-        self.reference = lv['reference_force']
+        self.reference = lv.reference_force
         self.keep_trace = keep_trace
         self.rec = ForceRecord.empty(self.samples, T)
         self.rec.feed = np.full(self.samples, np.nan)

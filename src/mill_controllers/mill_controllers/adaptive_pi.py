@@ -51,9 +51,10 @@ the default reading: a 300 Hz velocity-loop bandwidth, typical of such servo dri
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
-from typing import Any, ClassVar, TypeVar
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParameterError,
     ParamSpec,
@@ -63,7 +64,6 @@ from mill_common.parameters import (
     positive,
     positive_int,
     positive_or_inf,
-    validate_all,
 )
 from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_models.rls import RLS_PARAMETERS, RlsEstimator
@@ -93,64 +93,131 @@ def unit_factor(unit: str, pitch: float) -> float:
     }[unit]
 
 
-def _common_specs(kp: float, ki: float, kp_text: str, ki_text: str) -> tuple[ParamSpec, ...]:
-    return (
-        ParamSpec('k_p', kp, kp_text, non_negative),
-        ParamSpec('k_i', ki, ki_text, non_negative),
-        ParamSpec(
-            'position_gain',
-            0.0,
-            'outer P position gain k_x, v* = ẋ_ref + k_x (x_ref − y); 0 = velocity loop only '
-            '(the paper) [1/s]',
-            non_negative,
-        ),
-        ParamSpec(
-            'voltage_limit',
-            DEFAULT_VOLTAGE_LIMIT,
-            'command saturation ±limit [V]; .inf disables it',
-            positive_or_inf,
-        ),
-        ParamSpec(
-            'velocity_source',
-            'difference',
-            "measured velocity: 'difference' = (y(k) − y(k−1))/T, 'estimate' = est.velocity",
-            one_of('difference', 'estimate'),
-        ),
+def _shared(spec: ParamSpec) -> Any:
+    """A field declared by a spec another package owns (mill_models.rls): same default,
+    text, check and unit, so that the declaration stays in one place."""
+    unit = f' [{spec.unit}]' if spec.unit else ''
+    text = spec.description.removesuffix(unit) if unit else spec.description
+    return param(spec.default, text, spec.check, unit=spec.unit, read_only=spec.read_only)
+
+
+_RLS = {s.name: s for s in RLS_PARAMETERS}
+
+
+@dataclass(frozen=True)
+class VelocityPiParams(ParamSet):
+    """What both velocity PIs take: the gains (the machine PI's Table 1 values), the outer
+    position gain, the saturation and the velocity measurement."""
+
+    k_p: float = param(
+        HATWESH_KP, 'proportional gain K_p, Table 1 [V per velocity_unit]', non_negative
+    )
+    k_i: float = param(
+        HATWESH_KI, 'integral gain K_i, Table 1 [V per velocity_unit·s]', non_negative
+    )
+    position_gain: float = param(
+        0.0,
+        'outer P position gain k_x, v* = ẋ_ref + k_x (x_ref − y); 0 = velocity loop only '
+        '(the paper)',
+        non_negative,
+        unit='1/s',
+    )
+    voltage_limit: float = param(
+        DEFAULT_VOLTAGE_LIMIT,
+        'command saturation ±limit [V]; .inf disables it',
+        positive_or_inf,
+    )
+    velocity_source: str = param(
+        'difference',
+        "measured velocity: 'difference' = (y(k) − y(k−1))/T, 'estimate' = est.velocity",
+        one_of('difference', 'estimate'),
     )
 
 
-V = TypeVar('V', bound='_VelocityPi')
+@dataclass(frozen=True)
+class MachinePiParams(VelocityPiParams):
+    """Hatwesh 2013 Table 1 fixed PI and the unit its gains act in."""
+
+    PREFIX: ClassVar[str] = 'machine_pi'
+    velocity_unit: str = param(
+        'rev/s',
+        'unit of the velocity error the gains act on (not stated in the paper; rev/s of '
+        'the motor keeps the 0.25 ms loop stable)',
+        one_of(*_UNITS),
+    )
+    screw_pitch: float = param(HATWESH_PITCH, 'ball-screw pitch h_p, Table 1', positive, unit='m')
+
+
+@dataclass(frozen=True)
+class AdaptivePiParams(VelocityPiParams):
+    """The self-tuning PI: initial gains, the phase-margin design and the RLS."""
+
+    PREFIX: ClassVar[str] = 'adaptive_pi'
+    k_p: float = param(
+        HATWESH_KP / HATWESH_PITCH,
+        'initial proportional gain until the estimate is usable (default: Table 1 read '
+        'in motor rev/s)',
+        non_negative,
+        unit='V/(m/s)',
+    )
+    k_i: float = param(
+        HATWESH_KI / HATWESH_PITCH,
+        'initial integral gain until the estimate is usable',
+        non_negative,
+        unit='V/m',
+    )
+    phase_margin: float = param(
+        60.0,
+        'desired phase margin φ_m (the machine PI has ≈ 63-76° on the nominal plant)',
+        in_range(1.0, 89.0),
+        unit='deg',
+    )
+    design_rule: str = param(
+        'continuous',
+        "phase-margin rule: 'continuous' = ω_gc = (π/2 − φ_m)/θ with the hold as a T/2 "
+        "delay (the paper's s-domain eq. (8)-(10)); 'discrete' = exact on the sampled loop",
+        one_of(*DESIGN_RULES),
+    )
+    model_source: str = param(
+        'internal',
+        "plant model for the design: 'internal' = the law's own RLS (the parameters "
+        "below), 'observer' = the FOPDT estimate of the observer node (observer: rls)",
+        one_of('internal', 'observer'),
+    )
+    forgetting: float = _shared(_RLS['forgetting'])
+    initial_covariance: float = _shared(_RLS['initial_covariance'])
+    covariance_limit: float = _shared(_RLS['covariance_limit'])
+    input_taps: int = _shared(_RLS['input_taps'])
+    load_term: bool = _shared(_RLS['load_term'])
+    # a field() with a default_factory, as param() makes for a list (ruff cannot tell)
+    a_bounds: list[float] = _shared(_RLS['a_bounds'])  # noqa: RUF009
+    b_bounds: list[float] = _shared(_RLS['b_bounds'])  # noqa: RUF009
+    warmup: int = param(
+        400,
+        'RLS updates before the estimated gains replace the initial ones',
+        positive_int,
+        unit='samples',
+    )
 
 
 class _VelocityPi(AxisController):
     """Incremental PI on the table velocity; subclasses supply the gains."""
 
-    PREFIX: ClassVar[str] = ''
+    PARAMS: ClassVar[type[VelocityPiParams]]
     OUTPUT_UNIT: ClassVar[str] = 'V'  # amplifier input voltage (Hatwesh eq. (1))
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
 
-    def _init_loop(self, sample_period: float, values: Mapping[str, Any]) -> None:
+    def _init_loop(self, sample_period: float, params: VelocityPiParams) -> None:
         reason = positive(sample_period)
         if reason:
             raise ParameterError('sample_period', sample_period, reason)
         self._T = float(sample_period)
-        self._kx = values['position_gain']
-        self._limit = values['voltage_limit']
-        self._use_estimate = values['velocity_source'] == 'estimate'
+        self._kx = params.position_gain
+        self._limit = params.voltage_limit
+        self._use_estimate = params.velocity_source == 'estimate'
         self._y_prev: float | None = None
         self._i = 0.0
         self._u = 0.0
         self._v = 0.0
-
-    @classmethod
-    def from_parameters(
-        cls: type[V], input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> V:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        # Each subclass's constructor takes (input_gain, sample_period, **its parameters).
-        build: Callable[..., V] = cls
-        return build(input_gain, sample_period, **v)
 
     def _measure(self, t: float, y: float, ref: AxisReference, est: Estimate) -> float:
         inputs = (t, y, ref.position, ref.velocity, est.velocity)
@@ -194,53 +261,18 @@ class _VelocityPi(AxisController):
 class MachinePi(_VelocityPi):
     """Hatwesh 2013 Table 1 fixed PI; the error is converted to velocity_unit first."""
 
-    PREFIX: ClassVar[str] = 'machine_pi'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        *_common_specs(
-            HATWESH_KP,
-            HATWESH_KI,
-            'proportional gain K_p, Table 1 [V per velocity_unit]',
-            'integral gain K_i, Table 1 [V per velocity_unit·s]',
-        ),
-        ParamSpec(
-            'velocity_unit',
-            'rev/s',
-            'unit of the velocity error the gains act on (not stated in the paper; rev/s of '
-            'the motor keeps the 0.25 ms loop stable)',
-            one_of(*_UNITS),
-        ),
-        ParamSpec('screw_pitch', HATWESH_PITCH, 'ball-screw pitch h_p, Table 1 [m]', positive),
-    )
+    PARAMS: ClassVar[type[MachinePiParams]] = MachinePiParams
 
     def __init__(
         self,
         input_gain: float,
         sample_period: float,
-        k_p: float = HATWESH_KP,
-        k_i: float = HATWESH_KI,
-        position_gain: float = 0.0,
-        voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
-        velocity_source: str = 'difference',
-        velocity_unit: str = 'rev/s',
-        screw_pitch: float = HATWESH_PITCH,
+        params: MachinePiParams = MachinePiParams(),
     ) -> None:
         del input_gain  # voltage output
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'k_p': k_p,
-                'k_i': k_i,
-                'position_gain': position_gain,
-                'voltage_limit': voltage_limit,
-                'velocity_source': velocity_source,
-                'velocity_unit': velocity_unit,
-                'screw_pitch': screw_pitch,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._init_loop(sample_period, v)
-        self._factor = unit_factor(v['velocity_unit'], v['screw_pitch'])
-        self._kp, self._ki = v['k_p'], v['k_i']
+        self._init_loop(sample_period, params)
+        self._factor = unit_factor(params.velocity_unit, params.screw_pitch)
+        self._kp, self._ki = params.k_p, params.k_i
 
     @property
     def gains_si(self) -> tuple[float, float]:
@@ -258,99 +290,26 @@ class MachinePi(_VelocityPi):
 class AdaptivePi(_VelocityPi):
     """Hatwesh 2013 self-tuning PI: RLS on the velocity loop + phase-margin re-tuning."""
 
-    PREFIX: ClassVar[str] = 'adaptive_pi'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        *_common_specs(
-            HATWESH_KP / HATWESH_PITCH,
-            HATWESH_KI / HATWESH_PITCH,
-            'initial proportional gain until the estimate is usable (default: Table 1 read '
-            'in motor rev/s) [V/(m/s)]',
-            'initial integral gain until the estimate is usable [V/m]',
-        ),
-        ParamSpec(
-            'phase_margin',
-            60.0,
-            'desired phase margin φ_m (the machine PI has ≈ 63-76° on the nominal plant) [deg]',
-            in_range(1.0, 89.0),
-        ),
-        ParamSpec(
-            'design_rule',
-            'continuous',
-            "phase-margin rule: 'continuous' = ω_gc = (π/2 − φ_m)/θ with the hold as a T/2 "
-            "delay (the paper's s-domain eq. (8)-(10)); 'discrete' = exact on the sampled loop",
-            one_of(*DESIGN_RULES),
-        ),
-        ParamSpec(
-            'model_source',
-            'internal',
-            "plant model for the design: 'internal' = the law's own RLS (the parameters "
-            "below), 'observer' = the FOPDT estimate of the observer node (observer: rls)",
-            one_of('internal', 'observer'),
-        ),
-        *RLS_PARAMETERS,
-        ParamSpec(
-            'warmup',
-            400,
-            'RLS updates before the estimated gains replace the initial ones [samples]',
-            positive_int,
-        ),
-    )
+    PARAMS: ClassVar[type[AdaptivePiParams]] = AdaptivePiParams
 
     def __init__(
         self,
         input_gain: float,
         sample_period: float,
-        k_p: float = HATWESH_KP / HATWESH_PITCH,
-        k_i: float = HATWESH_KI / HATWESH_PITCH,
-        position_gain: float = 0.0,
-        voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
-        velocity_source: str = 'difference',
-        phase_margin: float = 60.0,
-        design_rule: str = 'continuous',
-        forgetting: float = 0.9995,
-        initial_covariance: float = 1e4,
-        covariance_limit: float = 1e8,
-        input_taps: int = 2,
-        load_term: bool = True,
-        a_bounds: tuple[float, float] | list[float] = (0.0, 0.99999),
-        b_bounds: tuple[float, float] | list[float] = (-1.0, 1.0),
-        warmup: int = 400,
-        model_source: str = 'internal',
+        params: AdaptivePiParams = AdaptivePiParams(),
     ) -> None:
         del input_gain  # voltage output; the plant is identified online
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'k_p': k_p,
-                'k_i': k_i,
-                'position_gain': position_gain,
-                'voltage_limit': voltage_limit,
-                'velocity_source': velocity_source,
-                'phase_margin': phase_margin,
-                'design_rule': design_rule,
-                'forgetting': forgetting,
-                'initial_covariance': initial_covariance,
-                'covariance_limit': covariance_limit,
-                'input_taps': input_taps,
-                'load_term': load_term,
-                'a_bounds': list(a_bounds),
-                'b_bounds': list(b_bounds),
-                'warmup': warmup,
-                'model_source': model_source,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._init_loop(sample_period, v)
-        self._kp0, self._ki0 = v['k_p'], v['k_i']
+        self._init_loop(sample_period, params)
+        self._kp0, self._ki0 = params.k_p, params.k_i
         self._kp, self._ki = self._kp0, self._ki0
-        self._phi_m = math.radians(v['phase_margin'])
-        self._rule = v['design_rule']
-        self._warmup = v['warmup']
+        self._phi_m = math.radians(params.phase_margin)
+        self._rule = params.design_rule
+        self._warmup = params.warmup
         self._w_gc = math.nan
         self._adapted = False
-        self._external = v['model_source'] == 'observer'
+        self._external = params.model_source == 'observer'
         self._model: FopdtEstimate | None = None  # the model of the current design
-        self.rls = RlsEstimator.from_parameters(self._T, v)
+        self.rls = RlsEstimator.from_parameters(self._T, params.values())
 
     def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V]; identifies the plant from (v(k), u(k)) and re-tunes every sample."""

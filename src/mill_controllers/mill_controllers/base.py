@@ -19,7 +19,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
 
-from mill_common.declared import Configured
+from mill_common.declared import Configured, ParamSet
 from mill_common.parameters import check_gain_and_period
 from mill_common.signals import ControlInputs
 
@@ -48,7 +48,12 @@ class AxisController(Configured, ABC):
         input_gain: b of the nominal model x'' = b u + ξ [m/s² per N·m]; sample_period T
         [s]. Raises ParameterError naming a bad parameter.
         """
-        return cls(input_gain, sample_period, cls.PARAMS.from_values(values))  # type: ignore[call-arg]
+        return cls.from_params(input_gain, sample_period, cls.PARAMS.from_values(values))
+
+    @classmethod
+    def from_params(cls: type[C], input_gain: float, sample_period: float, params: ParamSet) -> C:
+        """Build from a set of the law's PARAMS (e.g. one the tuning rule has filled in)."""
+        return cls(input_gain, sample_period, params)  # type: ignore[call-arg]
 
     @abstractmethod
     def compute(self, inputs: ControlInputs) -> float:

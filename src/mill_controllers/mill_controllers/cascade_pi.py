@@ -25,17 +25,16 @@ input_gain (the suite's torque-model b) is not used: the output is a voltage.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParameterError,
-    ParamSpec,
     boolean,
     non_negative,
     positive,
     positive_or_inf,
-    validate_all,
 )
 from mill_common.signals import ControlInputs
 
@@ -48,81 +47,60 @@ MM_PER_M = 1000.0
 DEFAULT_VOLTAGE_LIMIT = 10.0
 
 
+@dataclass(frozen=True)
+class CascadePiGains(ParamSet):
+    """The cascade's gains (§4.1), the voltage saturation and the two switches."""
+
+    PREFIX: ClassVar[str] = 'cascade_pi'
+    k_v: float = param(225.0, 'position-loop proportional gain k_v, §4.1', positive, unit='1/s')
+    k_p: float = param(
+        0.00661, 'velocity-loop proportional gain k_p, §4.1', positive, unit='V·s/mm'
+    )
+    k_i: float = param(
+        0.12075,
+        'velocity-loop integral gain k_i, §4.1 (printed V·s²/mm)',
+        non_negative,
+        unit='V/mm',
+    )
+    voltage_limit: float = param(
+        DEFAULT_VOLTAGE_LIMIT,
+        'command saturation ±limit [V]; .inf disables it (the paper has none)',
+        positive_or_inf,
+    )
+    compensate: bool = param(
+        True,
+        'subtract the observer disturbance estimate (volts) in the velocity loop',
+        boolean,
+    )
+    velocity_feedforward: bool = param(
+        False,
+        'add the reference velocity to the position-loop output (not in the paper)',
+        boolean,
+    )
+
+
 class CascadePi(AxisController):
     """Maharof 2018 cascade P/PI with input-voltage disturbance compensation."""
 
-    PREFIX: ClassVar[str] = 'cascade_pi'
+    PARAMS: ClassVar[type[CascadePiGains]] = CascadePiGains
     OUTPUT_UNIT: ClassVar[str] = 'V'  # amplifier input voltage (Maharof eq. (1))
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('k_v', 225.0, 'position-loop proportional gain k_v, §4.1 [1/s]', positive),
-        ParamSpec('k_p', 0.00661, 'velocity-loop proportional gain k_p, §4.1 [V·s/mm]', positive),
-        ParamSpec(
-            'k_i',
-            0.12075,
-            'velocity-loop integral gain k_i, §4.1 (printed V·s²/mm) [V/mm]',
-            non_negative,
-        ),
-        ParamSpec(
-            'voltage_limit',
-            DEFAULT_VOLTAGE_LIMIT,
-            'command saturation ±limit [V]; .inf disables it (the paper has none)',
-            positive_or_inf,
-        ),
-        ParamSpec(
-            'compensate',
-            True,
-            'subtract the observer disturbance estimate (volts) in the velocity loop',
-            boolean,
-        ),
-        ParamSpec(
-            'velocity_feedforward',
-            False,
-            'add the reference velocity to the position-loop output (not in the paper)',
-            boolean,
-        ),
-    )
 
     def __init__(
         self,
         input_gain: float,
         sample_period: float,
-        k_v: float = 225.0,
-        k_p: float = 0.00661,
-        k_i: float = 0.12075,
-        voltage_limit: float = DEFAULT_VOLTAGE_LIMIT,
-        compensate: bool = True,
-        velocity_feedforward: bool = False,
+        params: CascadePiGains = CascadePiGains(),
     ) -> None:
         del input_gain  # voltage output; the loop gains carry the plant's units
         reason = positive(sample_period)
         if reason:
             raise ParameterError('sample_period', sample_period, reason)
-        v = validate_all(
-            self.PARAMETERS,
-            {
-                'k_v': k_v,
-                'k_p': k_p,
-                'k_i': k_i,
-                'voltage_limit': voltage_limit,
-                'compensate': compensate,
-                'velocity_feedforward': velocity_feedforward,
-            },
-            prefix=self.PREFIX + '.',
-        )
         self._T = float(sample_period)
-        self._kv, self._kp, self._ki = v['k_v'], v['k_p'], v['k_i']
-        self._limit = v['voltage_limit']
-        self._compensate = v['compensate']
-        self._feedforward = v['velocity_feedforward']
+        self._kv, self._kp, self._ki = params.k_v, params.k_p, params.k_i
+        self._limit = params.voltage_limit
+        self._compensate = params.compensate
+        self._feedforward = params.velocity_feedforward
         self._integral = 0.0  # Σ e_v T [mm]
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> CascadePi:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     def compute(self, inputs: ControlInputs) -> float:
         """Voltage [V] from y [m], ref [m, m/s], est.velocity [m/s], est.disturbance [V]."""

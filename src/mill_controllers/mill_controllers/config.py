@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
@@ -22,85 +24,50 @@ from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.registry import CONTROLLERS
 
 
+@dataclass(frozen=True)
+class ControllerNodeParams(ParamSet):
+    """The controller node's own parameters (beside every per-axis node's and the laws')."""
+
+    controller: str = param('adrc', 'control law (see README: algorithms)', CONTROLLERS.check())
+    blend_time: float = param(
+        0.05,
+        'after a run-time change of controller or gains, the time constant with which '
+        "the old law's output fades into the new one's [s]; 0 = at the next sample",
+        non_negative,
+    )
+    observer_node: str = param(
+        '',
+        'the node whose estimates this controller accepts; "" = <axis>_observer',
+        text,
+        read_only=True,
+    )
+    trajectory_node: str = param(
+        'trajectory',
+        'the node whose reference this controller accepts',
+        text,
+        read_only=True,
+    )
+    following_error_limit: float = param(
+        0.005,
+        'following-error trip: |measured position - reference| above this latches a '
+        'brake request (effort NaN: the drive brakes the axis) until reset by the '
+        'reset_trip service or by setting this parameter [m]; .inf disables it',
+        positive_or_inf,
+    )
+    max_state_gap: int = param(
+        10,
+        'realtime: a gap of this many sample periods or more between two states means '
+        "the drive has stopped the axis (set it to the drive's brake_after): the "
+        'controller trips; reset, it re-arms holding the position it measures and '
+        'takes the reference up again once it comes within half the following-error '
+        'limit; 0: off',
+        non_negative_int,
+        read_only=True,
+    )
+
+
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    specs = axis_node_specs()
-    specs.append(
-        (
-            'controller',
-            ParamSpec(
-                'controller',
-                'adrc',
-                'control law (see README: algorithms)',
-                CONTROLLERS.check(),
-            ),
-        )
-    )
-    specs.append(
-        (
-            'blend_time',
-            ParamSpec(
-                'blend_time',
-                0.05,
-                'after a run-time change of controller or gains, the time constant with which '
-                "the old law's output fades into the new one's [s]; 0 = at the next sample",
-                non_negative,
-            ),
-        )
-    )
-    specs.append(
-        (
-            'observer_node',
-            ParamSpec(
-                'observer_node',
-                '',
-                'the node whose estimates this controller accepts; "" = <axis>_observer',
-                text,
-                read_only=True,
-            ),
-        )
-    )
-    specs.append(
-        (
-            'trajectory_node',
-            ParamSpec(
-                'trajectory_node',
-                'trajectory',
-                'the node whose reference this controller accepts',
-                text,
-                read_only=True,
-            ),
-        )
-    )
-    specs.append(
-        (
-            'following_error_limit',
-            ParamSpec(
-                'following_error_limit',
-                0.005,
-                'following-error trip: |measured position - reference| above this latches a '
-                'brake request (effort NaN: the drive brakes the axis) until reset by the '
-                'reset_trip service or by setting this parameter [m]; .inf disables it',
-                positive_or_inf,
-            ),
-        )
-    )
-    specs.append(
-        (
-            'max_state_gap',
-            ParamSpec(
-                'max_state_gap',
-                10,
-                'realtime: a gap of this many sample periods or more between two states means '
-                "the drive has stopped the axis (set it to the drive's brake_after): the "
-                'controller trips; reset, it re-arms holding the position it measures and '
-                'takes the reference up again once it comes within half the following-error '
-                'limit; 0: off',
-                non_negative_int,
-                read_only=True,
-            ),
-        )
-    )
-    return specs + CONTROLLERS.parameter_specs()
+    return axis_node_specs() + ControllerNodeParams.named_specs() + CONTROLLERS.parameter_specs()
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -110,10 +77,11 @@ def input_gain(values: dict[str, Any]) -> float:
 def build_controller(values: dict[str, Any]) -> AxisController:
     cls = CONTROLLERS.get(values['controller'])
     check_design_period(values)
-    own = algorithm_values(cls, values)
-    if own.get('omega_c') == 0.0:  # the tuning rule's bandwidth for this rate and delay
-        own['omega_c'] = loop_tuning(values['sample_period'], values['command_delay']).omega_c
-    return cls.from_parameters(input_gain(values), values['sample_period'], own)
+    params = cls.PARAMS.from_values(algorithm_values(cls, values))
+    if cls.PARAMS.rule_fields():  # a 0 stands for the tuning rule's value at this rate, delay
+        rule = loop_tuning(values['sample_period'], values['command_delay'])
+        params = params.tuned({'omega_c': rule.omega_c, 'omega_o': rule.omega_o})
+    return cls.from_params(input_gain(values), values['sample_period'], params)
 
 
 def build_loop(values: dict[str, Any]) -> AxisControlLoop:

@@ -16,104 +16,80 @@ job is to find: amplitude = acceleration / b with the nominal b the law is given
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParameterError,
-    ParamSpec,
-    non_negative,
-    positive,
-    validate_all,
-)
+from mill_common.declared import param
+from mill_common.parameters import ParameterError, non_negative, positive
 from mill_common.signals import ControlInputs
 
 from mill_controllers.pd_law import AdrcController, PdGains
 
 
+@dataclass(frozen=True)
+class ExcitationParams(PdGains):
+    """The PD hold's gains (softer defaults, no tuning rule) and the binary torque."""
+
+    PREFIX: ClassVar[str] = 'excitation'
+    omega_c: float = param(
+        30.0,
+        'bandwidth of the PD hold [rad/s]: low, so that the binary torque moves the axis',
+        positive,
+    )
+    zeta_c: float = param(1.0, 'damping ratio of the PD hold', positive, unit='-')
+    acceleration: float = param(
+        1.0,
+        'amplitude of the binary torque as the acceleration it gives with the nominal '
+        'input gain [m/s²]; choose it well above the friction (torque = acceleration / b)',
+        positive,
+    )
+    bit_period: float = param(
+        0.01,
+        'shortest time between two changes of the binary torque [s]; each bit lasts one '
+        'to four of these, at random',
+        positive,
+    )
+    max_speed: float = param(
+        0.05, 'above this speed the binary torque opposes the motion', positive, unit='m/s'
+    )
+    seed: int = param(
+        1,
+        'seed of the random sequence (one per axis gives independent sequences)',
+        non_negative,
+        unit='-',
+    )
+    torque_limit: float = param(
+        5.0,
+        'command saturation ±limit [N·m]; the amplitude and the hold must fit in it',
+        positive,
+    )
+
+
 class ExcitationController(AdrcController):
     """PD hold (bandwidth omega_c) + ±amplitude random binary torque, bit period in s."""
 
-    PREFIX: ClassVar[str] = 'excitation'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_c',
-            30.0,
-            'bandwidth of the PD hold [rad/s]: low, so that the binary torque moves the axis',
-            positive,
-        ),
-        ParamSpec('zeta_c', 1.0, 'damping ratio of the PD hold [-]', positive),
-        ParamSpec(
-            'acceleration',
-            1.0,
-            'amplitude of the binary torque as the acceleration it gives with the nominal '
-            'input gain [m/s²]; choose it well above the friction (torque = acceleration / b)',
-            positive,
-        ),
-        ParamSpec(
-            'bit_period',
-            0.01,
-            'shortest time between two changes of the binary torque [s]; each bit lasts one '
-            'to four of these, at random',
-            positive,
-        ),
-        ParamSpec(
-            'max_speed',
-            0.05,
-            'above this speed the binary torque opposes the motion [m/s]',
-            positive,
-        ),
-        ParamSpec(
-            'seed',
-            1,
-            'seed of the random sequence (one per axis gives independent sequences) [-]',
-            non_negative,
-        ),
-        ParamSpec(
-            'torque_limit',
-            5.0,
-            'command saturation ±limit [N·m]; the amplitude and the hold must fit in it',
-            positive,
-        ),
-    )
+    PARAMS: ClassVar[type[ExcitationParams]] = ExcitationParams
 
     def __init__(
         self,
         input_gain: float,
         sample_period: float,
-        omega_c: float = 30.0,
-        zeta_c: float = 1.0,
-        acceleration: float = 1.0,
-        bit_period: float = 0.01,
-        max_speed: float = 0.05,
-        seed: int = 1,
-        torque_limit: float = 5.0,
+        params: ExcitationParams = ExcitationParams(),
     ) -> None:
-        super().__init__(
-            input_gain,
-            sample_period,
-            PdGains(omega_c=omega_c, zeta_c=zeta_c, torque_limit=torque_limit),
-        )
-        self.amplitude = acceleration / abs(input_gain)  # [N·m]
-        if self.amplitude >= torque_limit:
+        super().__init__(input_gain, sample_period, params)
+        self.amplitude = params.acceleration / abs(input_gain)  # [N·m]
+        if self.amplitude >= params.torque_limit:
             raise ParameterError(
                 'excitation.acceleration',
-                acceleration,
+                params.acceleration,
                 f'needs {self.amplitude:.3g} N·m, not below excitation.torque_limit = '
-                f'{torque_limit:g} N·m',
+                f'{params.torque_limit:g} N·m',
             )
-        self._bit = max(1, round(bit_period / sample_period))  # [samples]
-        self._max_speed = max_speed
-        self._seed = int(seed)
+        self._bit = max(1, round(params.bit_period / sample_period))  # [samples]
+        self._max_speed = params.max_speed
+        self._seed = int(params.seed)
         self.reset()
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> ExcitationController:
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     def reset(self) -> None:
         self._rng = np.random.default_rng(self._seed)

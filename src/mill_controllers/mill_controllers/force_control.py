@@ -28,6 +28,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Protocol
 
+from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
@@ -95,91 +96,67 @@ def _override_bound(value: Any) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class ForceNodeParams(ParamSet):
+    """The force controller node's own parameters (beside the input watch, the process
+    model and the laws')."""
+
+    force_controller: str = param(
+        'fixed',
+        'force law: fixed (one β), scheme1 or scheme2 (Rubio 2013 multi-model)',
+        FORCE_CONTROLLERS.check(),
+        read_only=True,
+    )
+    reference_force: float = param(1200.0, 'reference peak force F_r', positive, unit='N')
+    nominal_feed: float = param(
+        10.0,
+        'programmed feed of the path [mm/s]: override 1 means this feed',
+        positive,
+        read_only=True,
+    )
+    force_component: str = param(
+        'resultant',
+        'what of /mill/cutting_force is the controlled force: the resultant |F| or one component',
+        one_of(*FORCE_COMPONENTS),
+        read_only=True,
+    )
+    force_measure: str = param(
+        'peak',
+        'force the law gets at a control instant: the peak |force| of the samples '
+        'heard since the last instant (Rubio 2013 F_p: the peak force of each '
+        'revolution), or the sample at the instant',
+        one_of('peak', 'sample'),
+        read_only=True,
+    )
+    depth_source: str = param(
+        'profile',
+        'depth of cut the law is told: profile = force_process.depth_profile at the '
+        'control instant (Rubio 2013: a known function of time); position = the '
+        "tool's depth below workpiece_top, from the measured z (/mill/z/state)",
+        one_of(*DEPTH_SOURCES),
+        read_only=True,
+    )
+    workpiece_top: float = param(
+        0.0,
+        'z of the workpiece top surface [m] (depth_source position: a_dc = top − z)',
+        number,
+        read_only=True,
+    )
+
+
+@dataclass(frozen=True)
+class OverrideRange(ParamSet):
+    """The range of the feed override sent (override.min, override.max)."""
+
+    PREFIX: ClassVar[str] = 'override'
+    min: float = param(
+        0.0, 'smallest feed override sent', _override_bound, unit='-', read_only=True
+    )
+    max: float = param(2.0, 'largest feed override sent', _override_bound, unit='-', read_only=True)
+
+
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    specs = [
-        (
-            'force_controller',
-            ParamSpec(
-                'force_controller',
-                'fixed',
-                'force law: fixed (one β), scheme1 or scheme2 (Rubio 2013 multi-model)',
-                FORCE_CONTROLLERS.check(),
-                read_only=True,
-            ),
-        ),
-        (
-            'reference_force',
-            ParamSpec('reference_force', 1200.0, 'reference peak force F_r [N]', positive),
-        ),
-        (
-            'nominal_feed',
-            ParamSpec(
-                'nominal_feed',
-                10.0,
-                'programmed feed of the path [mm/s]: override 1 means this feed',
-                positive,
-                read_only=True,
-            ),
-        ),
-        (
-            'override.min',
-            ParamSpec(
-                'min', 0.0, 'smallest feed override sent [-]', _override_bound, read_only=True
-            ),
-        ),
-        (
-            'override.max',
-            ParamSpec(
-                'max', 2.0, 'largest feed override sent [-]', _override_bound, read_only=True
-            ),
-        ),
-        (
-            'force_component',
-            ParamSpec(
-                'force_component',
-                'resultant',
-                'what of /mill/cutting_force is the controlled force: the resultant |F| '
-                'or one component',
-                one_of(*FORCE_COMPONENTS),
-                read_only=True,
-            ),
-        ),
-        (
-            'force_measure',
-            ParamSpec(
-                'force_measure',
-                'peak',
-                'force the law gets at a control instant: the peak |force| of the samples '
-                'heard since the last instant (Rubio 2013 F_p: the peak force of each '
-                'revolution), or the sample at the instant',
-                one_of('peak', 'sample'),
-                read_only=True,
-            ),
-        ),
-        (
-            'depth_source',
-            ParamSpec(
-                'depth_source',
-                'profile',
-                'depth of cut the law is told: profile = force_process.depth_profile at the '
-                'control instant (Rubio 2013: a known function of time); position = the '
-                "tool's depth below workpiece_top, from the measured z (/mill/z/state)",
-                one_of(*DEPTH_SOURCES),
-                read_only=True,
-            ),
-        ),
-        (
-            'workpiece_top',
-            ParamSpec(
-                'workpiece_top',
-                0.0,
-                'z of the workpiece top surface [m] (depth_source position: a_dc = top − z)',
-                number,
-                read_only=True,
-            ),
-        ),
-        *input_watch_specs(),
-    ]
+    specs = [*ForceNodeParams.named_specs(), *OverrideRange.named_specs(), *input_watch_specs()]
     # The process model and the law's design are built once (read-only): a law's memory
     # belongs to its design, so a new design means a new node.
     model = [
@@ -240,12 +217,12 @@ class ForceFeedLoop:
     @classmethod
     def from_parameters(cls, values: Mapping[str, Any]) -> ForceFeedLoop:
         model = build_model(values)
-        kind = values['force_controller']
-        nominal = values['nominal_feed']
-        lo, hi = values['override.min'], values['override.max']
+        node = ForceNodeParams.from_node_values(values)
+        kind, nominal = node.force_controller, node.nominal_feed
+        bounds = OverrideRange.from_node_values(values)
         own = algorithm_values(FORCE_CONTROLLERS[kind], values)
-        law = build_law(kind, model, own, lo * nominal, hi * nominal)
-        return cls(law, model, nominal, lo, hi)
+        law = build_law(kind, model, own, bounds.min * nominal, bounds.max * nominal)
+        return cls(law, model, nominal, bounds.min, bounds.max)
 
     @property
     def held_samples(self) -> int:

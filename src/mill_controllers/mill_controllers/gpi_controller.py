@@ -54,45 +54,58 @@ Non-finite inputs raise ValueError (the node catches and logs it), as in pd_law.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParamSpec,
-    non_negative,
-    one_of,
-    positive,
-    positive_or_inf,
-    validate_all,
-)
+from mill_common.declared import param
+from mill_common.parameters import non_negative, one_of, positive
 from mill_common.signals import AxisReference, ControlInputs
 
 from mill_controllers.base import AxisController, check_gain_and_period
-from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
+from mill_controllers.pd_law import TorqueLimited
 
-DAMPING_RATE_SPEC = ParamSpec(
-    'damping_rate',
-    0.0,
-    'viscous rate κ = η2/η1 = d2/d1 of the nominal model ẍ = −κẋ + bτ + ξ [1/s]; '
-    '0 leaves viscous friction to the disturbance (κ = 0.0025 on Chávez-Conde x, '
-    '0.053 on Beltrán x, with c_t read as translational)',
-    non_negative,
-)
 DISCRETISATIONS = ('zoh', 'continuous')
-DISCRETISATION_SPEC = ParamSpec(
-    'discretisation',
-    'zoh',
-    "'zoh': gains designed on the exactly sampled loop (roots exp(s T)); 'continuous': the "
-    "paper's continuous gains α evaluated each sample (for a short sample period)",
-    one_of(*DISCRETISATIONS),
-)
-TORQUE_LIMIT_SPEC = ParamSpec(
-    'torque_limit',
-    DEFAULT_TORQUE_LIMIT,
-    'torque command saturation ±limit [N·m]; .inf disables it (the paper has none)',
-    positive_or_inf,
-)
+
+
+@dataclass(frozen=True)
+class GpiShared(TorqueLimited):
+    """What the GPI laws share: the nominal model's viscous rate and the discretisation."""
+
+    damping_rate: float = param(
+        0.0,
+        'viscous rate κ = η2/η1 = d2/d1 of the nominal model ẍ = −κẋ + bτ + ξ [1/s]; '
+        '0 leaves viscous friction to the disturbance (κ = 0.0025 on Chávez-Conde x, '
+        '0.053 on Beltrán x, with c_t read as translational)',
+        non_negative,
+    )
+    discretisation: str = param(
+        'zoh',
+        "'zoh': gains designed on the exactly sampled loop (roots exp(s T)); 'continuous': "
+        "the paper's continuous gains α evaluated each sample (for a short sample period)",
+        one_of(*DISCRETISATIONS),
+    )
+
+
+@dataclass(frozen=True)
+class GpiParams(GpiShared):
+    """The GPI law's parameters: the cubic error polynomial (s² + 2ζω_n s + ω_n²)(s + p)."""
+
+    PREFIX: ClassVar[str] = 'gpi'
+    omega_n: float = param(
+        80.0,
+        'natural frequency ω_n of the quadratic factor of the error polynomial',
+        positive,
+        unit='rad/s',
+    )
+    zeta: float = param(0.9, 'damping ratio ζ of the quadratic factor', positive, unit='-')
+    pole: float = param(
+        80.0,
+        'third (real) root of the cubic error polynomial, at s = −pole',
+        positive,
+        unit='rad/s',
+    )
 
 
 def quadratic_roots(omega_n: float, zeta: float) -> list[complex]:
@@ -144,56 +157,19 @@ def discrete_gpi_gains(
 class GpiController(AxisController):
     """Chávez-Conde eq. (12) for one axis: position feedback, velocity reconstructed."""
 
-    PREFIX: ClassVar[str] = 'gpi'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_n',
-            80.0,
-            'natural frequency ω_n of the quadratic factor of the error polynomial [rad/s]',
-            positive,
-        ),
-        ParamSpec('zeta', 0.9, 'damping ratio ζ of the quadratic factor [-]', positive),
-        ParamSpec(
-            'pole',
-            80.0,
-            'third (real) root of the cubic error polynomial, at s = −pole [rad/s]',
-            positive,
-        ),
-        DAMPING_RATE_SPEC,
-        DISCRETISATION_SPEC,
-        TORQUE_LIMIT_SPEC,
-    )
+    # GpiShared: SlidingGpiController declares its own set beside GpiParams
+    PARAMS: ClassVar[type[GpiShared]] = GpiParams
 
     def __init__(
-        self,
-        input_gain: float,
-        sample_period: float,
-        omega_n: float = 80.0,
-        zeta: float = 0.9,
-        pole: float = 80.0,
-        damping_rate: float = 0.0,
-        discretisation: str = 'zoh',
-        torque_limit: float = DEFAULT_TORQUE_LIMIT,
+        self, input_gain: float, sample_period: float, params: GpiParams = GpiParams()
     ) -> None:
         self._b, self._T = check_gain_and_period(input_gain, sample_period)
-        values = validate_all(
-            GpiController.PARAMETERS,  # not self.: a subclass has other names
-            {
-                'omega_n': omega_n,
-                'zeta': zeta,
-                'pole': pole,
-                'damping_rate': damping_rate,
-                'discretisation': discretisation,
-                'torque_limit': torque_limit,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._discretisation: str = values['discretisation']
-        self._omega_n: float = values['omega_n']
-        self._zeta: float = values['zeta']
-        self._pole: float = values['pole']
-        self._kappa: float = values['damping_rate']
-        self._limit: float = values['torque_limit']
+        self._discretisation = params.discretisation
+        self._omega_n = params.omega_n
+        self._zeta = params.zeta
+        self._pole = params.pole
+        self._kappa = params.damping_rate
+        self._limit = params.torque_limit
         # Chávez-Conde eq. (12), names fixed: e⁽³⁾ + α2 ë + α1 ė + α0 e = 0 with
         # s³ + α2 s² + α1 s + α0 = (s² + 2ζω_n s + ω_n²)(s + p)
         zw = 2.0 * self._zeta * self._omega_n
@@ -208,14 +184,6 @@ class GpiController(AxisController):
         if self._discretisation == 'continuous':
             return alpha
         return discrete_gpi_gains(self._kappa, self._T, self._roots)
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> GpiController:
-        """Build from a mapping keyed by PARAMETERS names (missing names take defaults)."""
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     def reset(self) -> None:
         """Forget the integrals; the next compute() takes its y as F(0)."""

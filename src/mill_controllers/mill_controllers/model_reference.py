@@ -35,16 +35,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 import numpy as np
-from mill_common.parameters import (
-    ParamSpec,
-    in_range,
-    non_negative,
-    positive,
-    validate_all,
-)
+from mill_common.declared import Configured, ParamSet, param
+from mill_common.parameters import in_range, non_negative, positive
 from mill_models.force_process import AffineLti, ForceProcessModel
 from mill_models.holds import DiscreteTF, froh_discretize
 from mill_models.polynomials import Poly, degree, pad, solve_diophantine, split_numerator, trim
@@ -139,80 +134,89 @@ def _observer_degree(value: Any) -> str | None:
     return None
 
 
-DESIGN_PARAMETERS: tuple[ParamSpec, ...] = (
-    ParamSpec('damping_ratio', 0.7, 'ξ of the reference model eq. (7) [-]', positive),
-    ParamSpec(
-        'rise_time_periods',
+@dataclass(frozen=True)
+class RstDesignParams(ParamSet):
+    """The eq. (7)-(11) design: reference model, observer polynomial, cancelled zeros."""
+
+    damping_ratio: float = param(0.7, 'ξ of the reference model eq. (7)', positive, unit='-')
+    rise_time_periods: float = param(
         3.0,
-        'rise time T_r of the reference model in spindle periods (ω_n = 2.5/T_r) [-]',
+        'rise time T_r of the reference model in spindle periods (ω_n = 2.5/T_r)',
         positive,
-    ),
-    ParamSpec(
-        'natural_frequency',
+        unit='-',
+    )
+    natural_frequency: float = param(
         0.0,
         'ω_n of eq. (7) [rad/s]; 0 = 2.5/T_r (Rubio 2013 §2.3)',
         non_negative,
-    ),
-    ParamSpec(
-        'observer_degree',
+    )
+    observer_degree: int = param(
         1,
-        'degree n_o of the observer polynomial A_o = (z − e^{−T/τ_o})^{n_o} [-]',
+        'degree n_o of the observer polynomial A_o = (z − e^{−T/τ_o})^{n_o}',
         _observer_degree,
-    ),
-    ParamSpec(
-        'observer_time_constant',
+        unit='-',
+    )
+    observer_time_constant: float = param(
         0.0,
         'τ_o of the observer poles [s]; 0 = τ_c, the cutting-process constant',
         non_negative,
-    ),
-    ParamSpec(
-        'zero_cancel_radius',
+    )
+    zero_cancel_radius: float = param(
         1.0,
-        'plant zeros with |z| below this are cancelled (B⁺); the rest kept (B⁻) [-]',
+        'plant zeros with |z| below this are cancelled (B⁺); the rest kept (B⁻)',
         in_range(0.0, 1.0),
-    ),
-)
+        unit='-',
+    )
+
+
+@dataclass(frozen=True)
+class ForceControlParams(RstDesignParams):
+    """The basic scheme: the design and its one β."""
+
+    PREFIX: ClassVar[str] = 'force_control'
+    beta: float = param(0.0, 'β of the fractional-order hold, 0 = ZOH', in_range(-1, 1), unit='-')
+
+
+L = TypeVar('L', bound='ForceLawBase')
+
+
+class ForceLawBase(Configured):
+    """A force law the force_controller parameter chooses: built as
+    `Law(model, params, feed_min, feed_max)`, params its PARAMS set."""
+
+    PARAMS: ClassVar[type[RstDesignParams]]
+
+    @classmethod
+    def from_parameters(
+        cls: type[L],
+        model: ForceProcessModel,
+        values: Mapping[str, Any],
+        feed_min: float = -math.inf,
+        feed_max: float = math.inf,
+    ) -> L:
+        """The law from its values (names without prefix) and the feed range [mm/s]."""
+        params = cls.PARAMS.from_values(values)
+        return cls(model, params, feed_min, feed_max)  # type: ignore[call-arg]
 
 
 class ForceControlDesigner:
     """Builds (and caches) the eq. (7)-(11) design for any β for one force-process model."""
 
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = DESIGN_PARAMETERS
-
     def __init__(
-        self,
-        model: ForceProcessModel,
-        damping_ratio: float = 0.7,
-        rise_time_periods: float = 3.0,
-        natural_frequency: float = 0.0,
-        observer_degree: int = 1,
-        observer_time_constant: float = 0.0,
-        zero_cancel_radius: float = 1.0,
-        prefix: str = '',
+        self, model: ForceProcessModel, params: RstDesignParams = RstDesignParams()
     ) -> None:
-        v = validate_all(
-            DESIGN_PARAMETERS,
-            {
-                'damping_ratio': damping_ratio,
-                'rise_time_periods': rise_time_periods,
-                'natural_frequency': natural_frequency,
-                'observer_degree': observer_degree,
-                'observer_time_constant': observer_time_constant,
-                'zero_cancel_radius': zero_cancel_radius,
-            },
-            prefix=prefix,
-        )
+        v = params
         self.model = model
         self.T = model.sample_period
-        self.damping: float = v['damping_ratio']
-        rise_time = v['rise_time_periods'] * self.T
-        wn = v['natural_frequency']
+        self.damping = v.damping_ratio
+        rise_time = v.rise_time_periods * self.T
+        wn = v.natural_frequency
         self.omega_n: float = wn if wn > 0 else rise_time_frequency(rise_time)
-        tau_o = v['observer_time_constant'] or model.tau_c
+        tau_o = v.observer_time_constant or model.tau_c
         self.observer_pole = math.exp(-self.T / tau_o)
-        self.observer = np.real(np.poly(np.full(v['observer_degree'], self.observer_pole)))
+        self.observer = np.real(np.poly(np.full(v.observer_degree, self.observer_pole)))
         self.observer = np.atleast_1d(self.observer)
-        self.zero_cancel_radius: float = v['zero_cancel_radius']
+        self.zero_cancel_radius = v.zero_cancel_radius
         self._plant_s = model.unit_transfer_function()
         self._ref_s = reference_model(self.damping, self.omega_n)
         a, b, c = reference_state_space(self.damping, self.omega_n)
@@ -315,7 +319,7 @@ class RstController:
         self._u_hist = [0.0] * self.HISTORY
 
 
-class ModelReferenceForceController:
+class ModelReferenceForceController(ForceLawBase):
     """Basic scheme of Rubio 2013 fig. 1: a fixed β, feed command from force samples.
 
     update(force_reference [N], force_measured [N]) → feed command f_c [mm/s], unclamped
@@ -323,31 +327,21 @@ class ModelReferenceForceController:
     set_depth() gives the known axial depth of cut (the paper assumes it known).
     """
 
-    PREFIX: ClassVar[str] = 'force_control'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('beta', 0.0, 'β of the fractional-order hold, 0 = ZOH [-]', in_range(-1, 1)),
-        *DESIGN_PARAMETERS,
-    )
+    PARAMS: ClassVar[type[ForceControlParams]] = ForceControlParams
 
-    def __init__(self, model: ForceProcessModel, beta: float = 0.0, **design: Any) -> None:
-        v = validate_all(self.PARAMETERS, {'beta': beta, **design}, prefix=self.PREFIX + '.')
-        self.beta: float = v.pop('beta')
-        self.designer = ForceControlDesigner(model, **v, prefix=self.PREFIX + '.')
+    def __init__(
+        self,
+        model: ForceProcessModel,
+        params: ForceControlParams = ForceControlParams(),
+        feed_min: float = -math.inf,
+        feed_max: float = math.inf,
+    ) -> None:
+        del feed_min, feed_max  # one design, no shadow loops to simulate in the feed range
+        self.beta = params.beta
+        self.designer = ForceControlDesigner(model, params)
         self.model = model
         self._depth = model.depth_at(0.0)
         self._ctrl = RstController(self.designer.design(self.beta), model.process_gain(self._depth))
-
-    @classmethod
-    def from_parameters(
-        cls,
-        model: ForceProcessModel,
-        values: Mapping[str, Any],
-        feed_min: float = -math.inf,
-        feed_max: float = math.inf,
-    ) -> ModelReferenceForceController:
-        del feed_min, feed_max  # one design, no shadow loops to simulate in the feed range
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(model, **v)
 
     @property
     def active_beta(self) -> float:

@@ -43,28 +43,31 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+from mill_common.declared import param
 from mill_common.parameters import (
     ParameterError,
-    ParamSpec,
     in_range,
     non_negative,
+    non_negative_int,
     number_list,
     one_of,
     positive,
-    validate_all,
+    positive_int,
 )
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 from mill_models.holds import HeldPlant
 from mill_models.reference_model import ContinuousReference
 
 from mill_controllers.model_reference import (
-    DESIGN_PARAMETERS,
     ForceControlDesigner,
+    ForceLawBase,
     RstController,
+    RstDesignParams,
 )
 
 
@@ -78,18 +81,6 @@ def lfilter(b: Any, a: Any, x: Any, zi: Any) -> Any:
 PAPER_BETAS: tuple[float, ...] = tuple(1.0 - (i - 1) / 4.0 for i in range(1, 10))
 
 
-def _non_negative_int(value: Any) -> str | None:
-    if not isinstance(value, int) or isinstance(value, bool) or value < 0:
-        return 'must be a whole number >= 0'
-    return None
-
-
-def _positive_int(value: Any) -> str | None:
-    if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-        return 'must be a whole number >= 1'
-    return None
-
-
 def _forgetting(value: Any) -> str | None:
     reason = positive(value)
     if reason:
@@ -97,45 +88,111 @@ def _forgetting(value: Any) -> str | None:
     return None if value <= 1.0 else 'must be in (0, 1]'
 
 
-def _index_parameters(weights: tuple[float, float, float, float]) -> tuple[ParamSpec, ...]:
-    a, b, g, d = weights
-    return (
-        ParamSpec('weight_tracking', a, 'α of eq. (13): closed-loop tracking [-]', non_negative),
-        ParamSpec('weight_jump', b, 'β_k of eq. (13): output jump at a switch [-]', non_negative),
-        ParamSpec('weight_control', g, 'γ of eq. (13): control difference [-]', non_negative),
-        ParamSpec(
-            'weight_identification',
-            d,
-            'δ of eq. (13): measured force vs model output [-]',
-            non_negative,
-        ),
-        ParamSpec('horizon', 4, 'M of eq. (13): samples in the sums, k−M..k [-]', _positive_int),
-        ParamSpec('forgetting', 0.8, 'λ of eq. (13) in (0, 1] [-]', _forgetting),
-        ParamSpec(
-            'residence_samples',
-            2,
-            'minimum residence time τ_R = N_r·T between switches, N_r [samples]',
-            _positive_int,
-        ),
-        ParamSpec(
-            'stop_after',
-            30,
-            'freeze the active β after this many samples; 0 = never [samples]',
-            _non_negative_int,
-        ),
-        ParamSpec(
-            'index_signal',
-            'continuous',
-            "tracking error in eq. (13): 'continuous' (inter-sample, per interval) or "
-            "'sampled' (at the instants, literal)",
-            one_of('continuous', 'sampled'),
-        ),
-        ParamSpec(
-            'intersample_intervals',
-            16,
-            'grid intervals per sample for the continuous error [-]',
-            _positive_int,
-        ),
+def _weight(default: float, text: str) -> Any:
+    return param(default, text, non_negative, unit='-')
+
+
+_TRACKING = 'α of eq. (13): closed-loop tracking'
+_JUMP = 'β_k of eq. (13): output jump at a switch'
+_CONTROL = 'γ of eq. (13): control difference'
+
+
+@dataclass(frozen=True)
+class MultiModelParams(RstDesignParams):
+    """What both schemes take: the design of every candidate and the index eq. (13).
+
+    The weights' defaults are scheme 1's; scheme 2 declares its own.
+    """
+
+    weight_tracking: float = _weight(0.8, _TRACKING)
+    weight_jump: float = _weight(0.2, _JUMP)
+    weight_control: float = _weight(0.0, _CONTROL)
+    weight_identification: float = _weight(0.0, 'δ of eq. (13): measured force vs model output')
+    horizon: int = param(4, 'M of eq. (13): samples in the sums, k−M..k', positive_int, unit='-')
+    forgetting: float = param(0.8, 'λ of eq. (13) in (0, 1]', _forgetting, unit='-')
+    residence_samples: int = param(
+        2,
+        'minimum residence time τ_R = N_r·T between switches, N_r',
+        positive_int,
+        unit='samples',
+    )
+    stop_after: int = param(
+        30,
+        'freeze the active β after this many samples; 0 = never',
+        non_negative_int,
+        unit='samples',
+    )
+    index_signal: str = param(
+        'continuous',
+        "tracking error in eq. (13): 'continuous' (inter-sample, per interval) or "
+        "'sampled' (at the instants, literal)",
+        one_of('continuous', 'sampled'),
+    )
+    intersample_intervals: int = param(
+        16, 'grid intervals per sample for the continuous error', positive_int, unit='-'
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if sum(self.weights) <= 0.0:
+            raise ParameterError(
+                self.full_name('weight_tracking'),
+                self.weight_tracking,
+                'at least one weight of eq. (13) must be > 0',
+            )
+
+    @property
+    def weights(self) -> tuple[float, float, float, float]:
+        """(α, β_k, γ, δ) of eq. (13)."""
+        return (
+            self.weight_tracking,
+            self.weight_jump,
+            self.weight_control,
+            self.weight_identification,
+        )
+
+
+@dataclass(frozen=True)
+class Scheme1Params(MultiModelParams):
+    """Scheme 1: a fixed set of candidate β."""
+
+    PREFIX: ClassVar[str] = 'multi_model_1'
+    betas: list[float] = param(
+        list(PAPER_BETAS),
+        'candidate β values, each in [-1, 1] (paper: β(i) = 1 − (i−1)/4, i = 1..9)',
+        number_list(None, in_range(-1.0, 1.0)),
+    )
+    initial_beta: float = param(
+        0.0,
+        'active β at start, one of betas (0 = ZOH, the shop-floor choice)',
+        in_range(-1.0, 1.0),
+        unit='-',
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.betas:
+            raise ParameterError(self.full_name('betas'), self.betas, 'must not be empty')
+        if float(self.initial_beta) not in [float(b) for b in self.betas]:
+            raise ParameterError(
+                self.full_name('initial_beta'), float(self.initial_beta), 'must be one of betas'
+            )
+
+
+@dataclass(frozen=True)
+class Scheme2Params(MultiModelParams):
+    """Scheme 2: β and its neighbours β ± Δβ, Δβ divided by m when β is kept."""
+
+    PREFIX: ClassVar[str] = 'multi_model_2'
+    weight_jump: float = _weight(0.0, _JUMP)
+    weight_control: float = _weight(0.2, _CONTROL)
+    initial_beta: float = param(0.0, 'β at start (paper: "arbitrary")', in_range(-1, 1), unit='-')
+    delta_beta: float = param(0.2, 'initial Δβ (paper 0.2)', in_range(1e-9, 2.0), unit='-')
+    divisor: float = param(
+        2.0,
+        'm: Δβ ← Δβ/m when β is kept (paper 2)',
+        lambda v: positive(v) or (None if v > 1 else 'must be > 1'),
+        unit='-',
     )
 
 
@@ -228,44 +285,33 @@ class _RealLoop:
         self.beta = float(beta)  # hold used over the current interval
 
 
-class _MultiModelBase:
+class _MultiModelBase(ForceLawBase):
     """Common machinery; subclasses implement _decide(k, r)."""
 
-    PREFIX: ClassVar[str] = ''
-    SCHEME_PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = ()
+    PARAMS: ClassVar[type[MultiModelParams]]
 
     def __init__(
         self,
         model: ForceProcessModel,
-        values: Mapping[str, Any],
+        params: MultiModelParams,
         feed_min: float = -math.inf,
         feed_max: float = math.inf,
     ) -> None:
-        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
         if not feed_min <= feed_max:
             raise ValueError(f'feed range [{feed_min}, {feed_max}] is empty')
-        design_values = {p.name: v[p.name] for p in DESIGN_PARAMETERS}
-        self.values = v
+        v = self.params = params
         self.model = model
-        self.designer = ForceControlDesigner(model, **design_values, prefix=self.PREFIX + '.')
+        self.designer = ForceControlDesigner(model, params)
         self.T = model.sample_period
         self.lo = float(feed_min)
         self.hi = float(feed_max)
-        self.horizon: int = v['horizon']
-        self.forgetting: float = v['forgetting']
-        self.residence: int = v['residence_samples']
-        self.stop_after: int = v['stop_after']
-        self.continuous_index: bool = v['index_signal'] == 'continuous'
-        self.spacing = self.T / v['intersample_intervals']
-        self.weights = (
-            v['weight_tracking'],
-            v['weight_jump'],
-            v['weight_control'],
-            v['weight_identification'],
-        )
-        if sum(self.weights) <= 0.0:
-            raise ValueError('at least one weight of eq. (13) must be > 0')
+        self.horizon = v.horizon
+        self.forgetting = v.forgetting
+        self.residence = v.residence_samples
+        self.stop_after = v.stop_after
+        self.continuous_index = v.index_signal == 'continuous'
+        self.spacing = self.T / v.intersample_intervals
+        self.weights = v.weights
         self._reference = ContinuousReference(self.designer.damping, self.designer.omega_n)
         self._r_full: list[float] = []
         self._k = 0
@@ -277,16 +323,6 @@ class _MultiModelBase:
         )
         self.shadows: list[_Shadow] = [self._new_shadow(b) for b in self._candidate_betas()]
         self.switch_count = 0
-
-    @classmethod
-    def from_parameters(
-        cls,
-        model: ForceProcessModel,
-        values: Mapping[str, Any],
-        feed_min: float = -math.inf,
-        feed_max: float = math.inf,
-    ) -> _MultiModelBase:
-        return cls(model, values, feed_min, feed_max)
 
     # --- subclass hooks ----------------------------------------------------------------
 
@@ -420,41 +456,18 @@ class _MultiModelBase:
 class MultiModelScheme1(_MultiModelBase):
     """Scheme 1 (§3.2.1): a fixed set of β; switch to the lowest J_k^(l) after τ_R."""
 
-    PREFIX: ClassVar[str] = 'multi_model_1'
-    SCHEME_PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'betas',
-            list(PAPER_BETAS),
-            'candidate β values, each in [-1, 1] (paper: β(i) = 1 − (i−1)/4, i = 1..9)',
-            number_list(None, in_range(-1.0, 1.0)),
-        ),
-        ParamSpec(
-            'initial_beta',
-            0.0,
-            'active β at start, one of betas (0 = ZOH, the shop-floor choice) [-]',
-            in_range(-1.0, 1.0),
-        ),
-        *_index_parameters((0.8, 0.2, 0.0, 0.0)),
-    )
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (*SCHEME_PARAMETERS, *DESIGN_PARAMETERS)
+    PARAMS: ClassVar[type[Scheme1Params]] = Scheme1Params
 
     def __init__(
         self,
         model: ForceProcessModel,
-        values: Mapping[str, Any] | None = None,
+        params: Scheme1Params = Scheme1Params(),
         feed_min: float = -math.inf,
         feed_max: float = math.inf,
     ) -> None:
-        values = dict(values or {})
-        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
-        if not v['betas']:
-            raise ParameterError('multi_model_1.betas', v['betas'], 'must not be empty')
-        self._betas = [float(b) for b in dict.fromkeys(v['betas'])]
-        init = float(v['initial_beta'])
-        if init not in self._betas:
-            raise ParameterError('multi_model_1.initial_beta', init, 'must be one of betas')
-        self._init = init
-        super().__init__(model, values, feed_min, feed_max)
+        self._betas = [float(b) for b in dict.fromkeys(params.betas)]
+        self._init = float(params.initial_beta)
+        super().__init__(model, params, feed_min, feed_max)
 
     def _initial_beta(self) -> float:
         return self._init
@@ -474,33 +487,19 @@ class MultiModelScheme1(_MultiModelBase):
 class MultiModelScheme2(_MultiModelBase):
     """Scheme 2 (§3.2.3): compare β, β ± Δβ; move by Δβ or divide Δβ by m when staying."""
 
-    PREFIX: ClassVar[str] = 'multi_model_2'
-    SCHEME_PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec('initial_beta', 0.0, 'β at start (paper: "arbitrary") [-]', in_range(-1, 1)),
-        ParamSpec('delta_beta', 0.2, 'initial Δβ (paper 0.2) [-]', in_range(1e-9, 2.0)),
-        ParamSpec(
-            'divisor',
-            2.0,
-            'm: Δβ ← Δβ/m when β is kept (paper 2) [-]',
-            lambda v: positive(v) or (None if v > 1 else 'must be > 1'),
-        ),
-        *_index_parameters((0.8, 0.0, 0.2, 0.0)),
-    )
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (*SCHEME_PARAMETERS, *DESIGN_PARAMETERS)
+    PARAMS: ClassVar[type[Scheme2Params]] = Scheme2Params
 
     def __init__(
         self,
         model: ForceProcessModel,
-        values: Mapping[str, Any] | None = None,
+        params: Scheme2Params = Scheme2Params(),
         feed_min: float = -math.inf,
         feed_max: float = math.inf,
     ) -> None:
-        values = dict(values or {})
-        v = validate_all(self.PARAMETERS, values, prefix=self.PREFIX + '.')
-        self._delta: float = v['delta_beta']
-        self._divisor: float = v['divisor']
-        self._init = float(v['initial_beta'])
-        super().__init__(model, values, feed_min, feed_max)
+        self._delta = params.delta_beta
+        self._divisor = params.divisor
+        self._init = float(params.initial_beta)
+        super().__init__(model, params, feed_min, feed_max)
 
     @property
     def delta_beta(self) -> float:

@@ -30,7 +30,19 @@ DEFAULT_TORQUE_LIMIT = 5.0
 
 
 @dataclass(frozen=True)
-class PdGains(ParamSet):
+class TorqueLimited(ParamSet):
+    """The torque saturation of a law that commands a torque (shared by the laws)."""
+
+    torque_limit: float = param(
+        DEFAULT_TORQUE_LIMIT,
+        'torque command saturation ±limit; .inf disables it (the paper has none)',
+        positive_or_inf,
+        unit='N·m',
+    )
+
+
+@dataclass(frozen=True)
+class PdGains(TorqueLimited):
     """The law's parameters, eq. (12) and the saturation."""
 
     PREFIX: ClassVar[str] = 'pd'
@@ -43,12 +55,6 @@ class PdGains(ParamSet):
     )
     zeta_c: float = param(
         0.7071, 'damping ratio ζ_c of the tracking-error dynamics, eq. (12)', positive, unit='-'
-    )
-    torque_limit: float = param(
-        DEFAULT_TORQUE_LIMIT,
-        'torque command saturation ±limit; .inf disables it (the paper has none)',
-        positive_or_inf,
-        unit='N·m',
     )
 
 

@@ -31,98 +31,66 @@ limit: with a finite limit the switching term saturates the actuator.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from typing import ClassVar
 
-from mill_common.parameters import ParamSpec, non_negative, positive, validate_all
+from mill_common.declared import param
+from mill_common.parameters import non_negative, positive
 from mill_common.signals import ControlInputs
 
-from mill_controllers.gpi_controller import (
-    DAMPING_RATE_SPEC,
-    DISCRETISATION_SPEC,
-    TORQUE_LIMIT_SPEC,
-    GpiController,
-)
-from mill_controllers.pd_law import DEFAULT_TORQUE_LIMIT
+from mill_controllers.gpi_controller import GpiController, GpiParams, GpiShared
+
+
+@dataclass(frozen=True)
+class SlidingGpiParams(GpiShared):
+    """The sliding GPI law's parameters: the surface eq. (13)-(15) and the reaching law."""
+
+    PREFIX: ClassVar[str] = 'sliding_gpi'
+    omega_n: float = param(
+        80.0,
+        'natural frequency ω_n of the sliding dynamics eq. (15), α0 = ω_n²',
+        positive,
+        unit='rad/s',
+    )
+    zeta: float = param(0.9, 'damping ratio ζ of eq. (15), α1 = 2ζω_n', positive, unit='-')
+    mu: float = param(15.0, 'μ of the reaching law eq. (16)', positive, unit='1/s')
+    gamma: float = param(10.0, 'γ of the reaching law eq. (16)', non_negative, unit='m/s')
+    boundary_layer: float = param(
+        0.0,
+        'φ: sign(σ̂) is replaced by sat(σ̂/φ); 0 = the exact signum (paper)',
+        non_negative,
+        unit='m/s',
+    )
 
 
 class SlidingGpiController(GpiController):
     """Chávez-Conde eq. (17) for one axis: GPI law plus −μγ sign(σ̂)."""
 
-    PREFIX: ClassVar[str] = 'sliding_gpi'
-    PARAMETERS: ClassVar[tuple[ParamSpec, ...]] = (
-        ParamSpec(
-            'omega_n',
-            80.0,
-            'natural frequency ω_n of the sliding dynamics eq. (15), α0 = ω_n² [rad/s]',
-            positive,
-        ),
-        ParamSpec('zeta', 0.9, 'damping ratio ζ of eq. (15), α1 = 2ζω_n [-]', positive),
-        ParamSpec('mu', 15.0, 'μ of the reaching law eq. (16) [1/s]', positive),
-        ParamSpec('gamma', 10.0, 'γ of the reaching law eq. (16) [m/s]', non_negative),
-        ParamSpec(
-            'boundary_layer',
-            0.0,
-            'φ: sign(σ̂) is replaced by sat(σ̂/φ); 0 = the exact signum (paper) [m/s]',
-            non_negative,
-        ),
-        DAMPING_RATE_SPEC,
-        DISCRETISATION_SPEC,
-        TORQUE_LIMIT_SPEC,
-    )
+    PARAMS: ClassVar[type[GpiShared]] = SlidingGpiParams
 
     def __init__(
         self,
         input_gain: float,
         sample_period: float,
-        omega_n: float = 80.0,
-        zeta: float = 0.9,
-        mu: float = 15.0,
-        gamma: float = 10.0,
-        boundary_layer: float = 0.0,
-        damping_rate: float = 0.0,
-        discretisation: str = 'zoh',
-        torque_limit: float = DEFAULT_TORQUE_LIMIT,
+        params: SlidingGpiParams = SlidingGpiParams(),
     ) -> None:
         # The GPI part with the real root at −μ: (s² + α1 s + α0)(s + μ).
-        super().__init__(
-            input_gain,
-            sample_period,
-            omega_n=omega_n,
-            zeta=zeta,
-            pole=mu,
-            damping_rate=damping_rate,
-            discretisation=discretisation,
-            torque_limit=torque_limit,
+        gpi = GpiParams(
+            omega_n=params.omega_n,
+            zeta=params.zeta,
+            pole=params.mu,
+            damping_rate=params.damping_rate,
+            discretisation=params.discretisation,
+            torque_limit=params.torque_limit,
         )
-        values = validate_all(
-            self.PARAMETERS,
-            {
-                'omega_n': omega_n,
-                'zeta': zeta,
-                'mu': mu,
-                'gamma': gamma,
-                'boundary_layer': boundary_layer,
-                'damping_rate': damping_rate,
-                'discretisation': discretisation,
-                'torque_limit': torque_limit,
-            },
-            prefix=self.PREFIX + '.',
-        )
-        self._mu: float = values['mu']
-        self._gamma: float = values['gamma']
-        self._phi: float = values['boundary_layer']
+        super().__init__(input_gain, sample_period, gpi)
+        self._mu = params.mu
+        self._gamma = params.gamma
+        self._phi = params.boundary_layer
         # Chávez-Conde section 5: α1 = 2ζω_n, α0 = ω_n² (the surface eq. (13)-(15))
         self._a1 = 2.0 * self._zeta * self._omega_n
         self._a0 = self._omega_n**2
         self._sigma = 0.0
-
-    @classmethod
-    def from_parameters(
-        cls, input_gain: float, sample_period: float, values: Mapping[str, Any]
-    ) -> SlidingGpiController:
-        v = validate_all(cls.PARAMETERS, values, prefix=cls.PREFIX + '.')
-        return cls(input_gain, sample_period, **v)
 
     @property
     def surface_gains(self) -> tuple[float, float]:

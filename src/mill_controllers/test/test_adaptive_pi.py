@@ -9,7 +9,7 @@ import pytest
 import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
-from mill_controllers.adaptive_pi import AdaptivePi, MachinePi
+from mill_controllers.adaptive_pi import AdaptivePi, AdaptivePiParams, MachinePi, MachinePiParams
 from mill_controllers.phase_margin import design_pi, phase_margin_pi, phase_margin_pi_discrete
 from mill_observers.registry import make_observer
 
@@ -109,7 +109,7 @@ def test_margins_of_the_drive_sampled_exactly() -> None:
 
 @pytest.mark.parametrize(('load_term', 'tracking'), [(False, 1e-3), (True, 2e-2)])
 def test_adaptive_pi_identifies_the_plant_and_retunes(load_term: bool, tracking: float) -> None:
-    ctrl = AdaptivePi(0.0, T, load_term=load_term)
+    ctrl = AdaptivePi(0.0, T, AdaptivePiParams(load_term=load_term))
     assert ctrl.gains == pytest.approx((1.5735 / PITCH, 5.4976 / PITCH))
     out = simulate(ctrl)
     assert out is not None
@@ -149,7 +149,9 @@ def test_inertia_change_raises_the_proportional_gain() -> None:
     ],
 )
 def test_machine_pi_is_stable_only_in_some_velocity_units(unit, stable) -> None:
-    out = simulate(MachinePi(0.0, T, velocity_unit=unit, voltage_limit=math.inf), duration=0.3)
+    out = simulate(
+        MachinePi(0.0, T, MachinePiParams(velocity_unit=unit, voltage_limit=math.inf)), duration=0.3
+    )
     assert (out is not None) == stable
     if unit == 'rev/s':
         assert abs(out[-1, 1] - out[-1, 2]) < 2e-3 * 0.05  # settled at the end
@@ -169,8 +171,8 @@ def test_parameters_are_checked() -> None:
 def test_model_from_the_rls_observer_gives_the_same_commands(load_term, first_design) -> None:
     """model_source 'observer' + the rls observer = the law with its own RLS, bit for bit,
     through the inertia change (the estimate of sample k has used the same samples)."""
-    own = AdaptivePi(0.0, T, load_term=load_term)
-    outside = AdaptivePi(0.0, T, model_source='observer', load_term=load_term)
+    own = AdaptivePi(0.0, T, AdaptivePiParams(load_term=load_term))
+    outside = AdaptivePi(0.0, T, AdaptivePiParams(model_source='observer', load_term=load_term))
     observer = make_observer('rls', 0.0, T, {'load_term': load_term})
     assert outside.needs_model and not own.needs_model
     a = np.array([[0.0, PITCH / (2 * math.pi)], [0.0, -B / J]])
@@ -204,6 +206,6 @@ def test_model_from_the_rls_observer_gives_the_same_commands(load_term, first_de
 
 
 def test_model_source_observer_needs_a_model_with_the_sample() -> None:
-    ctrl = AdaptivePi(0.0, T, model_source='observer')
+    ctrl = AdaptivePi(0.0, T, AdaptivePiParams(model_source='observer'))
     with pytest.raises(ValueError, match='rls'):
         ctrl.compute(ControlInputs(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0.0, 0.0, 0.0)))

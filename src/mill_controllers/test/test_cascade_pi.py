@@ -14,7 +14,7 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
-from mill_controllers.cascade_pi import CascadePi
+from mill_controllers.cascade_pi import CascadePi, CascadePiGains
 from mill_observers.dfo import Dfo
 from mill_observers.imbdo import MAHAROF_A, MAHAROF_B, MAHAROF_C, Imbdo
 from mill_observers.imbdo_dfo import ImbdoDfo
@@ -70,7 +70,7 @@ def _amplitude(t: np.ndarray, x: np.ndarray, f: float) -> float:
 
 
 def test_plain_cascade_reproduces_the_papers_table1_errors() -> None:
-    ctrl = CascadePi(0.0, T, compensate=False)
+    ctrl = CascadePi(0.0, T, CascadePiGains(compensate=False))
     assert isinstance(ctrl, AxisController)
     out = simulate(Imbdo(0.0, T), ctrl, 4.0)
     e = out[out[:, 0] >= 2.0, 2] * 1000.0  # mm, after the start-up transient
@@ -96,7 +96,9 @@ def test_closed_loop_with_dead_time_is_stable_and_settles(observer_cls) -> None:
 def test_imbdo_compensation_removes_a_step_disturbance() -> None:
     step = lambda t: 0.2 * (t >= 0.1)  # noqa: E731
     hold = lambda t: (0.0, 0.0)  # noqa: E731
-    plain = simulate(Imbdo(0.0, T), CascadePi(0.0, T, compensate=False), 0.4, hold, step)
+    plain = simulate(
+        Imbdo(0.0, T), CascadePi(0.0, T, CascadePiGains(compensate=False)), 0.4, hold, step
+    )
     comp = simulate(Imbdo(0.0, T), CascadePi(0.0, T), 0.4, hold, step)
     peak_plain = np.max(np.abs(plain[:, 2]))
     peak_comp = np.max(np.abs(comp[:, 2]))
@@ -112,7 +114,9 @@ def test_harmonic_errors_are_reduced_by_the_observers() -> None:
         ('dfo', Dfo(0.0, T), True),
         ('both', ImbdoDfo(0.0, T), True),
     ):
-        out = simulate(obs, CascadePi(0.0, T, compensate=comp), 4.0, dist=_harmonics)
+        out = simulate(
+            obs, CascadePi(0.0, T, CascadePiGains(compensate=comp)), 4.0, dist=_harmonics
+        )
         last = out[:, 0] >= 2.0  # a whole number of periods of 0.5, 26, 52, 78 Hz
         amps[name] = [_amplitude(out[last, 0], out[last, 2], f) for f in (26.0, 52.0, 78.0)]
     plain, imbdo, dfo, both = (np.array(amps[k]) for k in ('plain', 'imbdo', 'dfo', 'both'))
@@ -126,7 +130,7 @@ def test_imbdo_with_the_papers_gains_needs_a_fast_sample_rate() -> None:
     """At T = 1 ms the 1.2 ms dead time + Q at 90 Hz destabilise the paper's cascade."""
     out = simulate(
         Imbdo(0.0, 1e-3),
-        CascadePi(0.0, 1e-3, voltage_limit=math.inf),
+        CascadePi(0.0, 1e-3, CascadePiGains(voltage_limit=math.inf)),
         1.0,
         ref=lambda t: (0.001, 0.0),
         period=1e-3,
@@ -135,14 +139,14 @@ def test_imbdo_with_the_papers_gains_needs_a_fast_sample_rate() -> None:
 
 
 def test_output_is_clipped_and_the_integral_does_not_wind_up() -> None:
-    ctrl = CascadePi(0.0, T, voltage_limit=1.0)
+    ctrl = CascadePi(0.0, T, CascadePiGains(voltage_limit=1.0))
     est = Estimate(0.0, 0.0, 0.0)
     for k in range(1000):
         u = ctrl.compute(ControlInputs(k * T, 0.0, AxisReference(1.0, 0.0, 0.0), est))
         assert u == 1.0
     assert ctrl.integral == 0.0
     # Subtracts the disturbance estimate [V].
-    free = CascadePi(0.0, T, k_i=0.0, voltage_limit=math.inf)
+    free = CascadePi(0.0, T, CascadePiGains(k_i=0.0, voltage_limit=math.inf))
     assert (
         free.compute(ControlInputs(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0, 0, 0.3)))
         == -0.3

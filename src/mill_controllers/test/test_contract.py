@@ -6,7 +6,7 @@ from dataclasses import fields
 
 import pytest
 from mill_common.signals import JOINED_INPUTS, AxisReference, ControlInputs, Estimate
-from mill_controllers.adaptive_pi import AdaptivePi
+from mill_controllers.adaptive_pi import AdaptivePi, AdaptivePiParams
 from mill_controllers.base import BASE_INPUTS, AxisController
 from mill_controllers.controller_inputs import INPUTS
 from mill_controllers.registry import CONTROLLERS, make_controller
@@ -36,7 +36,7 @@ def test_status_is_empty_unless_the_law_has_estimates() -> None:
 
 
 def test_a_law_designing_with_the_observers_model_requires_it() -> None:
-    law = AdaptivePi(0.0, 1e-3, model_source='observer')
+    law = AdaptivePi(0.0, 1e-3, AdaptivePiParams(model_source='observer'))
     assert law.needs_model
     assert law.required_inputs() == (*BASE_INPUTS, 'model')
 

@@ -11,7 +11,7 @@ import scipy.linalg
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_controllers.base import AxisController
-from mill_controllers.gpi_controller import GpiController
+from mill_controllers.gpi_controller import GpiController, GpiParams
 from mill_trajectory.bezier import BezierRestToRest
 
 # Chávez-Conde section 5, x axis; c_t read as translational (as the suite's plant does).
@@ -85,7 +85,9 @@ def test_sampled_closed_loop_roots_are_the_designed_ones(
     omega_n: float, zeta: float, pole: float
 ) -> None:
     ctrl = GpiController(
-        B, T, omega_n=omega_n, zeta=zeta, pole=pole, damping_rate=KAPPA, torque_limit=math.inf
+        B,
+        T,
+        GpiParams(omega_n=omega_n, zeta=zeta, pole=pole, damping_rate=KAPPA, torque_limit=math.inf),
     )
     got = closed_loop_poles(ctrl)
     wd = complex(zeta**2 - 1.0) ** 0.5 * omega_n
@@ -95,20 +97,20 @@ def test_sampled_closed_loop_roots_are_the_designed_ones(
 
 
 def test_gains_tend_to_the_continuous_alphas() -> None:
-    ctrl = GpiController(B, T, damping_rate=KAPPA)
+    ctrl = GpiController(B, T, GpiParams(damping_rate=KAPPA))
     # (s² + 144 s + 6400)(s + 80)
     assert ctrl.alphas == pytest.approx((512000.0, 17920.0, 224.0))
     assert ctrl.gains == pytest.approx((458025, 16497.4, 208.705), rel=1e-4)
-    fine = GpiController(B, 1e-6, damping_rate=KAPPA)
+    fine = GpiController(B, 1e-6, GpiParams(damping_rate=KAPPA))
     assert fine.gains == pytest.approx(fine.alphas, rel=1e-3)
 
 
 def test_continuous_runs_the_printed_alphas_and_zoh_is_the_default() -> None:
-    cont = GpiController(B, T, damping_rate=KAPPA, discretisation='continuous')
+    cont = GpiController(B, T, GpiParams(damping_rate=KAPPA, discretisation='continuous'))
     assert cont.gains == cont.alphas == (512000.0, 17920.0, 224.0)
-    assert GpiController(B, T, damping_rate=KAPPA).gains != cont.alphas
+    assert GpiController(B, T, GpiParams(damping_rate=KAPPA)).gains != cont.alphas
     with pytest.raises(ParameterError, match=r'gpi\.discretisation'):
-        GpiController(B, T, discretisation='tustin')
+        GpiController(B, T, GpiParams(discretisation='tustin'))
 
 
 def simulate(ctrl, force: float = 0.0, coulomb: float = 0.0, t_end: float = 3.5):
@@ -129,7 +131,7 @@ def simulate(ctrl, force: float = 0.0, coulomb: float = 0.0, t_end: float = 3.5)
 
 
 def test_bezier_move_is_tracked_on_the_nominal_plant() -> None:
-    ctrl = GpiController(B, T, damping_rate=KAPPA)
+    ctrl = GpiController(B, T, GpiParams(damping_rate=KAPPA))
     e, tau = simulate(ctrl)
     # Only the zero-order hold of the feed-forward F̈* is not exact: measured 2.8e-10 m.
     assert np.max(np.abs(e)) < 1e-9
@@ -137,7 +139,7 @@ def test_bezier_move_is_tracked_on_the_nominal_plant() -> None:
 
 
 def test_coulomb_friction_leaves_the_predicted_small_error() -> None:
-    ctrl = GpiController(B, T, damping_rate=KAPPA)
+    ctrl = GpiController(B, T, GpiParams(damping_rate=KAPPA))
     e, _ = simulate(ctrl, coulomb=MU)
     k0, _, k2 = ctrl.gains
     # Constant ξ = −μ while ẋ > 0: steady e = (k2 − κ) ξ / (η1 k0) = −6.9e-8 m.
@@ -163,7 +165,7 @@ def test_est_is_ignored_and_repeated_calls_are_idempotent() -> None:
 
 
 def test_torque_is_clipped_and_the_clipped_torque_is_reconstructed() -> None:
-    ctrl = GpiController(B, T, torque_limit=0.01)
+    ctrl = GpiController(B, T, GpiParams(torque_limit=0.01))
     big = AxisReference(0.01, 0.0, 0.0)
     assert ctrl.compute(ControlInputs(0.0, 0.0, big, EST)) == pytest.approx(0.01)
     ctrl.compute(ControlInputs(T, 0.0, big, EST))

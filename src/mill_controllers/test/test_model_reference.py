@@ -10,8 +10,10 @@ import scipy.signal
 from mill_common.parameters import ParameterError
 from mill_controllers.model_reference import (
     ForceControlDesigner,
+    ForceControlParams,
     ModelReferenceForceController,
     RstController,
+    RstDesignParams,
 )
 from mill_models.force_process import ForceProcessModel
 from mill_models.reference_model import reference_model
@@ -73,7 +75,7 @@ def test_every_zero_is_stable_so_every_zero_is_cancelled() -> None:
 @pytest.mark.parametrize('beta', [-1.0, 0.5, 1.0])
 def test_unstable_zeros_are_kept_when_not_cancelled(beta: float) -> None:
     """A small cancel radius puts zeros in B⁻: the identity and unit DC gain still hold."""
-    d = ForceControlDesigner(MODEL, zero_cancel_radius=0.2, observer_degree=2)
+    d = ForceControlDesigner(MODEL, RstDesignParams(zero_cancel_radius=0.2, observer_degree=2))
     des = d.design(beta)
     assert len(des.b_minus) >= 2
     np.testing.assert_allclose(
@@ -89,7 +91,9 @@ def test_unstable_zeros_are_kept_when_not_cancelled(beta: float) -> None:
 @pytest.mark.parametrize('tau_o', [0.0, 0.05])
 @pytest.mark.parametrize('n_o', [0, 1, 3])
 def test_observer_polynomial_choices(tau_o: float, n_o: int) -> None:
-    d = ForceControlDesigner(MODEL, observer_degree=n_o, observer_time_constant=tau_o)
+    d = ForceControlDesigner(
+        MODEL, RstDesignParams(observer_degree=n_o, observer_time_constant=tau_o)
+    )
     pole = math.exp(-T / (tau_o or MODEL.tau_c))
     np.testing.assert_allclose(np.roots(d.observer) if n_o else [], [pole] * n_o, atol=1e-4)
     for beta in (-0.3, 0.0, 0.7):
@@ -115,7 +119,7 @@ def _closed_loop(ctrl, beta: float, gain: float, n: int, r: np.ndarray) -> tuple
 
 @pytest.mark.parametrize('beta', BETAS)
 def test_closed_loop_follows_the_discrete_reference_model_exactly(beta: float) -> None:
-    ctrl = ModelReferenceForceController(MODEL, beta=beta)
+    ctrl = ModelReferenceForceController(MODEL, ForceControlParams(beta=beta))
     ctrl.set_depth(3.0)
     n = 40
     r = np.full(n, 1200.0)
@@ -139,7 +143,7 @@ def test_controller_is_causal() -> None:
     for beta in (-0.3, 0.0, 1.0):
         outs = []
         for r, y in ((r1, y1), (r2, y2)):
-            c = ModelReferenceForceController(MODEL, beta=beta)
+            c = ModelReferenceForceController(MODEL, ForceControlParams(beta=beta))
             outs.append(np.array([c.update(rk, yk) for rk, yk in zip(r, y, strict=True)]))
         np.testing.assert_array_equal(outs[0][: k0 + 1], outs[1][: k0 + 1])
         assert np.all(outs[0][k0 + 1 :] != outs[1][k0 + 1 :])
@@ -147,16 +151,16 @@ def test_controller_is_causal() -> None:
 
 def test_depth_scales_s_and_t_only() -> None:
     """u = (T r − S y)/K_p − (R − 1)u: doubling K_p halves the first output."""
-    a = ModelReferenceForceController(MODEL, beta=-0.3)
-    b = ModelReferenceForceController(MODEL, beta=-0.3)
+    a = ModelReferenceForceController(MODEL, ForceControlParams(beta=-0.3))
+    b = ModelReferenceForceController(MODEL, ForceControlParams(beta=-0.3))
     a.set_depth(1.0)
     b.set_depth(2.0)
     assert a.update(1200.0, 100.0) == pytest.approx(2.0 * b.update(1200.0, 100.0), rel=1e-12)
 
 
 def test_record_applied_changes_the_memory() -> None:
-    a = ModelReferenceForceController(MODEL, beta=0.5)
-    b = ModelReferenceForceController(MODEL, beta=0.5)
+    a = ModelReferenceForceController(MODEL, ForceControlParams(beta=0.5))
+    b = ModelReferenceForceController(MODEL, ForceControlParams(beta=0.5))
     for c in (a, b):
         c.update(1200.0, 0.0)
     b.record_applied(1.0)
@@ -177,10 +181,10 @@ def test_non_finite_input_is_refused_without_touching_the_memory() -> None:
 
 def test_bad_parameters_are_refused() -> None:
     with pytest.raises(ParameterError, match='beta'):
-        ModelReferenceForceController(MODEL, beta=1.2)
+        ModelReferenceForceController(MODEL, ForceControlParams(beta=1.2))
     with pytest.raises(ParameterError, match='damping_ratio'):
         ModelReferenceForceController.from_parameters(MODEL, {'damping_ratio': -1.0})
     with pytest.raises(ParameterError, match='observer_degree'):
-        ModelReferenceForceController(MODEL, observer_degree=-1)
+        ModelReferenceForceController(MODEL, ForceControlParams(observer_degree=-1))
     with pytest.raises(ValueError, match='gain'):
         RstController(ForceControlDesigner(MODEL).design(0.0), gain=0.0)

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
-from mill_controllers.model_reference import ModelReferenceForceController
+from mill_controllers.model_reference import ForceControlParams, ModelReferenceForceController
 from mill_controllers.multi_model import PAPER_BETAS, MultiModelScheme1, MultiModelScheme2
 from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.holds import HeldPlant
@@ -38,7 +38,7 @@ def test_paper_beta_set() -> None:
 
 
 def test_scheme1_respects_set_residence_time_and_freeze() -> None:
-    ctrl = MultiModelScheme1(MODEL, {'stop_after': 60}, LO, HI)
+    ctrl = MultiModelScheme1.from_parameters(MODEL, {'stop_after': 60}, LO, HI)
     betas, _, _, _ = _run(ctrl, 100)
     assert set(betas) <= set(PAPER_BETAS)
     switches = np.nonzero(np.diff(betas))[0] + 1  # first sample with the new β
@@ -50,8 +50,8 @@ def test_scheme1_respects_set_residence_time_and_freeze() -> None:
 
 
 def test_scheme1_with_one_candidate_is_the_fixed_controller() -> None:
-    mm = MultiModelScheme1(MODEL, {'betas': [-0.3], 'initial_beta': -0.3}, LO, HI)
-    fixed = ModelReferenceForceController(MODEL, beta=-0.3)
+    mm = MultiModelScheme1.from_parameters(MODEL, {'betas': [-0.3], 'initial_beta': -0.3}, LO, HI)
+    fixed = ModelReferenceForceController(MODEL, ForceControlParams(beta=-0.3))
     _, feeds_mm, forces_mm, _ = _run(mm, 60)
     _, feeds_fx, forces_fx, _ = _run(fixed, 60)
     np.testing.assert_allclose(feeds_mm, feeds_fx, rtol=1e-12, atol=1e-12)
@@ -60,17 +60,17 @@ def test_scheme1_with_one_candidate_is_the_fixed_controller() -> None:
 
 def test_scheme1_initial_beta_must_be_a_candidate() -> None:
     with pytest.raises(ParameterError, match='initial_beta'):
-        MultiModelScheme1(MODEL, {'betas': [0.5, -0.5], 'initial_beta': 0.0})
+        MultiModelScheme1.from_parameters(MODEL, {'betas': [0.5, -0.5], 'initial_beta': 0.0})
     with pytest.raises(ParameterError, match='betas'):
-        MultiModelScheme1(MODEL, {'betas': [0.0, 1.5]})
+        MultiModelScheme1.from_parameters(MODEL, {'betas': [0.0, 1.5]})
     with pytest.raises(ParameterError, match='forgetting'):
-        MultiModelScheme1(MODEL, {'forgetting': 1.5})
+        MultiModelScheme1.from_parameters(MODEL, {'forgetting': 1.5})
     with pytest.raises(ParameterError, match='weight_jump'):
-        MultiModelScheme1(MODEL, {'weight_jump': -0.1})
+        MultiModelScheme1.from_parameters(MODEL, {'weight_jump': -0.1})
 
 
 def test_scheme2_moves_by_delta_or_halves_it() -> None:
-    ctrl = MultiModelScheme2(MODEL, {'stop_after': 0}, LO, HI)
+    ctrl = MultiModelScheme2.from_parameters(MODEL, {'stop_after': 0}, LO, HI)
     betas, _, _, cands = _run(ctrl, 80)
     delta = 0.2
     for k in range(1, len(betas)):
@@ -90,7 +90,7 @@ def test_scheme2_moves_by_delta_or_halves_it() -> None:
 
 
 def test_scheme2_freezes_after_stop_after() -> None:
-    ctrl = MultiModelScheme2(MODEL, {'stop_after': 10}, LO, HI)
+    ctrl = MultiModelScheme2.from_parameters(MODEL, {'stop_after': 10}, LO, HI)
     betas, _, _, _ = _run(ctrl, 40)
     assert np.all(betas[10:] == betas[10])
 
@@ -106,7 +106,7 @@ def test_schemes_are_causal(cls) -> None:
     y2[k0 + 1 :] *= 0.6
     outs = []
     for r, y in ((r1, y1), (r2, y2)):
-        c = cls(MODEL, {}, LO, HI)
+        c = cls.from_parameters(MODEL, {}, LO, HI)
         outs.append(np.array([c.update(rk, yk) for rk, yk in zip(r, y, strict=True)]))
     np.testing.assert_array_equal(outs[0][: k0 + 1], outs[1][: k0 + 1])
     assert np.any(outs[0][k0 + 1 :] != outs[1][k0 + 1 :])
@@ -118,8 +118,12 @@ def test_sampled_index_cannot_rank_perfect_models() -> None:
     continuous reading)."""
     model = ForceProcessModel(ForceProcessParams(depth_profile=[0.0, 2.0]))
     only_tracking = {'weight_jump': 0.0, 'weight_tracking': 1.0, 'stop_after': 0}
-    sampled = MultiModelScheme1(model, {**only_tracking, 'index_signal': 'sampled'}, LO, HI)
-    cont = MultiModelScheme1(model, {**only_tracking, 'residence_samples': 1000}, LO, HI)
+    sampled = MultiModelScheme1.from_parameters(
+        model, {**only_tracking, 'index_signal': 'sampled'}, LO, HI
+    )
+    cont = MultiModelScheme1.from_parameters(
+        model, {**only_tracking, 'residence_samples': 1000}, LO, HI
+    )
     _run(sampled, 12, model)
     _run(cont, 12, model)
     assert max(sampled.indices()) < 1e-12
@@ -129,6 +133,6 @@ def test_sampled_index_cannot_rank_perfect_models() -> None:
 
 
 def test_non_finite_input_is_refused() -> None:
-    ctrl = MultiModelScheme2(MODEL, {}, LO, HI)
+    ctrl = MultiModelScheme2.from_parameters(MODEL, {}, LO, HI)
     with pytest.raises(ValueError, match='non-finite'):
         ctrl.update(1200.0, math.nan)

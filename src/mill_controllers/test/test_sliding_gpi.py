@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 from mill_common.parameters import ParameterError
 from mill_common.signals import AxisReference, ControlInputs, Estimate
-from mill_controllers.gpi_controller import GpiController
-from mill_controllers.sliding_gpi import SlidingGpiController
+from mill_controllers.gpi_controller import GpiController, GpiParams
+from mill_controllers.sliding_gpi import SlidingGpiController, SlidingGpiParams
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_gpi_controller import (
@@ -41,7 +41,9 @@ FORCE = 100.0
 
 
 def test_linear_part_has_the_roots_of_eq15_times_s_plus_mu() -> None:
-    ctrl = SlidingGpiController(B, T, gamma=0.0, damping_rate=KAPPA, torque_limit=math.inf)
+    ctrl = SlidingGpiController(
+        B, T, SlidingGpiParams(gamma=0.0, damping_rate=KAPPA, torque_limit=math.inf)
+    )
     got = closed_loop_poles(ctrl)
     wd = 80.0 * math.sqrt(1.0 - 0.81)
     _match(got, [complex(-72.0, wd), complex(-72.0, -wd), complex(-15.0)], atol=1e-4)
@@ -49,22 +51,22 @@ def test_linear_part_has_the_roots_of_eq15_times_s_plus_mu() -> None:
 
 
 def test_continuous_gains_are_eq17_expanded() -> None:
-    ctrl = SlidingGpiController(B, T, discretisation='continuous')
+    ctrl = SlidingGpiController(B, T, SlidingGpiParams(discretisation='continuous'))
     # (s² + 144 s + 6400)(s + 15): μα0, α0 + μα1, α1 + μ
     assert ctrl.gains == pytest.approx((96000.0, 8560.0, 159.0), rel=1e-12)
     with pytest.raises(ParameterError, match=r'sliding_gpi\.discretisation'):
-        SlidingGpiController(B, T, discretisation='tustin')
+        SlidingGpiController(B, T, SlidingGpiParams(discretisation='tustin'))
 
 
 def test_switching_function() -> None:
     sign = SlidingGpiController(B, T)
     assert [sign.switch(s) for s in (-2.0, 0.0, 1e-12)] == [-1.0, 0.0, 1.0]
-    sat = SlidingGpiController(B, T, boundary_layer=0.1)
+    sat = SlidingGpiController(B, T, SlidingGpiParams(boundary_layer=0.1))
     assert [sat.switch(s) for s in (-2.0, 0.05, 0.3)] == [-1.0, pytest.approx(0.5), 1.0]
 
 
 def test_sigma_is_eq13() -> None:
-    ctrl = SlidingGpiController(B, T, torque_limit=math.inf)
+    ctrl = SlidingGpiController(B, T, SlidingGpiParams(torque_limit=math.inf))
     ref = AxisReference(0.002, 0.001, 0.0)
     tau0 = ctrl.compute(ControlInputs(0.0, 0.0, ref, EST))
     tau = ctrl.compute(ControlInputs(T, 0.0005, ref, EST))
@@ -82,8 +84,10 @@ def _errors(ctrl) -> tuple[float, float, float]:
 
 
 def test_sliding_reduces_the_gpi_error_with_the_torque_limit() -> None:
-    gpi_max, gpi_rms, _ = _errors(GpiController(B, T, damping_rate=KAPPA))
-    smc_max, smc_rms, smc_tau = _errors(SlidingGpiController(B, T, damping_rate=KAPPA))
+    gpi_max, gpi_rms, _ = _errors(GpiController(B, T, GpiParams(damping_rate=KAPPA)))
+    smc_max, smc_rms, smc_tau = _errors(
+        SlidingGpiController(B, T, SlidingGpiParams(damping_rate=KAPPA))
+    )
     assert gpi_max == pytest.approx(23.1e-6, rel=0.05)
     assert smc_max < 0.6 * gpi_max
     assert smc_rms < 0.4 * gpi_rms
@@ -93,9 +97,11 @@ def test_sliding_reduces_the_gpi_error_with_the_torque_limit() -> None:
 
 
 def test_literal_paper_gains_chatter_without_a_torque_limit() -> None:
-    gpi_max, _, _ = _errors(GpiController(B, T, damping_rate=KAPPA, torque_limit=math.inf))
+    gpi_max, _, _ = _errors(
+        GpiController(B, T, GpiParams(damping_rate=KAPPA, torque_limit=math.inf))
+    )
     smc_max, _, smc_tau = _errors(
-        SlidingGpiController(B, T, damping_rate=KAPPA, torque_limit=math.inf)
+        SlidingGpiController(B, T, SlidingGpiParams(damping_rate=KAPPA, torque_limit=math.inf))
     )
     # μγ = 150 m/s² switched every sample: hundreds of N·m and a larger error than GPI.
     assert smc_tau > 400.0
@@ -108,7 +114,7 @@ def test_parameters() -> None:
     with pytest.raises(ParameterError, match=r'sliding_gpi\.gamma'):
         SlidingGpiController.from_parameters(B, T, {'gamma': -1.0})
     with pytest.raises(ParameterError, match=r'sliding_gpi\.boundary_layer'):
-        SlidingGpiController(B, T, boundary_layer=math.nan)
+        SlidingGpiController(B, T, SlidingGpiParams(boundary_layer=math.nan))
     assert (
         SlidingGpiController(B, T).compute(
             ControlInputs(0.0, 0.0, AxisReference(0, 0, 0), Estimate(0, 0, 0))

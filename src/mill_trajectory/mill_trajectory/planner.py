@@ -125,8 +125,17 @@ class PlannedPath(Trajectory):
     def from_parameters(cls, values: Mapping[str, Any]) -> PlannedPath:
         raise NotImplementedError('a planned path is built by plan()')
 
-    def __init__(self, segments: list[_Segment], corners: list[float], end: Point) -> None:
+    def __init__(
+        self,
+        segments: list[_Segment],
+        corners: list[float],
+        end: Point,
+        sources: list[int] | None = None,
+    ) -> None:
         self._segments = segments
+        # Per segment: the index of the input piece it comes from (-1: the rest before the
+        # start or after the end).
+        self.sources = sources if sources is not None else [-1] * len(segments)
         self._corners = corners  # transition time before segment i (0 for the first)
         starts, t = [], 0.0
         for seg in segments:
@@ -136,6 +145,21 @@ class PlannedPath(Trajectory):
         self.end_time = t
         self.end_point = end
         self.start_point = segments[0].start if segments else end
+
+    def piece_times(self, count: int) -> tuple[np.ndarray, np.ndarray]:
+        """For each of the `count` input pieces: its time on the sharp timeline [s] (the
+        blended path takes the same time: each transition is centred on its corner) and its
+        planned speed [m/s], which the blended path reaches (transitions never overlap);
+        0 and 0 for a dropped (zero-length) piece, a rest's time is its dwell."""
+        time, speed = np.zeros(count), np.zeros(count)
+        for seg, k in zip(self._segments, self.sources, strict=True):
+            if k < 0:
+                continue
+            v = math.hypot(*seg.velocity)
+            if v > 0.0:
+                time[k] += seg.duration
+                speed[k] = max(speed[k], v)
+        return time, speed
 
     @property
     def transitions(self) -> list[float]:
@@ -213,7 +237,8 @@ def _split(p: Piece, base: float) -> list[Piece]:
 def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
     """Plan the chain (see the module doc). Zero-length moves are dropped, rests merged."""
     chain: list[Piece] = []
-    for p in pieces:
+    src: list[int] = []  # the input piece each chain piece comes from
+    for i, p in enumerate(pieces):
         if not p.rest and math.dist(p.start, p.end) <= ZERO_LENGTH:
             continue
         if p.rest and chain and chain[-1].rest and chain[-1].spindle == p.spindle:
@@ -222,11 +247,15 @@ def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
             )
             continue
         chain.append(p)
+        src.append(i)
     if not chain:
         start = pieces[0].start if pieces else _ZERO
         return PlannedPath([], [], start)
     if not all(math.isinf(x) for x in (*limits.acceleration, *limits.jerk)):
-        chain = [q for p in chain for q in _split(p, limits.tolerance)]
+        cut = [_split(p, limits.tolerance) for p in chain]
+        src = [i for i, parts in zip(src, cut, strict=True) for _ in parts]
+        chain = [q for parts in cut for q in parts]
+    src = [-1, *src, -1]
     first, last = chain[0].start, chain[-1].end
     # Rest before and after the program: the start and end are junctions with rest.
     s0, s1 = chain[0].spindle, chain[-1].spindle
@@ -240,28 +269,55 @@ def plan(pieces: Sequence[Piece], limits: Limits) -> PlannedPath:
     delta = np.array([np.subtract(p.end, p.start) for p in chain])
     dirs = np.divide(delta, length[:, None], out=np.zeros_like(delta), where=length[:, None] > 0)
     caps = np.where(moving, _caps(chain, dirs, limits), 0.0)
-    u = caps.copy()
-    for _ in range(MAX_PASSES):
-        vel = u[:, None] * dirs
-        dv = vel[1:] - vel[:-1]
-        T = transition_times(dv, limits)
-        bent = moving[1:] & moving[:-1] & (np.abs(dirs[1:] - dirs[:-1]).max(axis=1) > PARALLEL)
-        off = bent & (DEVIATION * np.linalg.norm(dv, axis=1) * T > limits.tolerance)
-        half = np.concatenate([[0.0], 0.5 * T]) + np.concatenate([0.5 * T, [0.0]])
+    u, T = _settle(caps.copy(), dirs, moving, length, limits)
+    return _timeline(chain, u, T, src)
+
+
+def _settle(
+    u: np.ndarray, dirs: np.ndarray, moving: np.ndarray, length: np.ndarray, limits: Limits
+) -> tuple[np.ndarray, np.ndarray]:
+    """Slow pieces by SLOW_DOWN until no junction misses the tolerance and every piece holds
+    its two half-transitions; the speeds and the junctions' transition times.
+
+    A pass slows every piece that misses, as if all were checked anew, but only the
+    junctions and pieces next to a slowed piece are: nothing else changed, so every number
+    is the one a full pass gives (the same operations on the same values), and a pass costs
+    what it slows, not the whole program (most pieces settle in the first few passes)."""
+    n = len(u)
+    bent = moving[1:] & moving[:-1] & (np.abs(dirs[1:] - dirs[:-1]).max(axis=1) > PARALLEL)
+    T = np.zeros(n - 1)
+    off = np.zeros(n - 1, dtype=bool)
+    slow = np.zeros(n, dtype=bool)
+
+    def junctions(j: np.ndarray) -> None:  # junction j: from piece j to piece j + 1
+        dv = u[j + 1, None] * dirs[j + 1] - u[j, None] * dirs[j]
+        T[j] = transition_times(dv, limits)
+        off[j] = bent[j] & (DEVIATION * np.linalg.norm(dv, axis=1) * T[j] > limits.tolerance)
+
+    def pieces(k: np.ndarray) -> None:
+        first, last = k > 0, k < n - 1
+        before, after = np.maximum(k - 1, 0), np.minimum(k, n - 2)
+        half = 0.5 * np.where(first, T[before], 0.0) + 0.5 * np.where(last, T[after], 0.0)
         with np.errstate(divide='ignore'):
-            long = moving & (half > length / np.where(moving, u, 1.0))
-        slow = long.copy()
-        slow[:-1] |= off
-        slow[1:] |= off
-        if not slow.any():
-            break
-        u = np.where(slow, u * SLOW_DOWN, u)
-    else:
-        raise PlanError(f'no feed meets the limits after {MAX_PASSES} passes')
-    return _timeline(chain, u, T)
+            long = moving[k] & (half > length[k] / np.where(moving[k], u[k], 1.0))
+        slow[k] = long | (first & off[before]) | (last & off[after])
+
+    junctions(np.arange(n - 1))
+    pieces(np.arange(n))
+    for _ in range(MAX_PASSES):
+        changed = np.flatnonzero(slow)
+        if not len(changed):
+            return u, T
+        u[changed] = u[changed] * SLOW_DOWN
+        j = np.flatnonzero(slow[:-1] | slow[1:])  # a junction next to a slowed piece
+        junctions(j)
+        near = np.zeros(n, dtype=bool)
+        near[j] = near[j + 1] = True
+        pieces(np.flatnonzero(near))
+    raise PlanError(f'no feed meets the limits after {MAX_PASSES} passes')
 
 
-def _timeline(chain: list[Piece], u: np.ndarray, T: np.ndarray) -> PlannedPath:
+def _timeline(chain: list[Piece], u: np.ndarray, T: np.ndarray, src: list[int]) -> PlannedPath:
     segments: list[_Segment] = []
     corners = [0.0, *(float(x) for x in T)]
     for k, p in enumerate(chain):
@@ -275,4 +331,4 @@ def _timeline(chain: list[Piece], u: np.ndarray, T: np.ndarray) -> PlannedPath:
         duration = math.dist(p.start, p.end) / float(u[k])
         v = tuple((b - a) / duration for a, b in zip(p.start, p.end, strict=True))
         segments.append(_Segment(p.start, v, duration, p.spindle))  # type: ignore[arg-type]
-    return PlannedPath(segments, corners, chain[-1].end)
+    return PlannedPath(segments, corners, chain[-1].end, src)

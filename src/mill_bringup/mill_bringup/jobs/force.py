@@ -21,7 +21,7 @@ from mill_analysis.force_record import record_from_messages as force_record_from
 from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
-from mill_controllers.model_reference import DESIGN_PARAMETERS, ForceControlDesigner
+from mill_controllers.model_reference import ForceControlDesigner, RstDesignParams
 from mill_models.force_process import ForceProcessModel
 
 from mill_analysis import records
@@ -110,9 +110,8 @@ class ForceJob(Job[ForceRecord]):
         """The controller's design; its reference model (ξ, ω_n) is what J_c compares with."""
         kind = self.controller_values['force_controller']
         values = algorithm_values(FORCE_CONTROLLERS[kind], self.controller_values)
-        return ForceControlDesigner(
-            self.model, **{p.name: values[p.name] for p in DESIGN_PARAMETERS}
-        )
+        # the design's fields out of the law's (the law's own, e.g. beta, are not needed)
+        return ForceControlDesigner(self.model, RstDesignParams.from_node_values(values))
 
     # -- the distributed run ---------------------------------------------------------------
     def prepare_graph(

@@ -1,0 +1,52 @@
+"""The controller node's parameters and how they build the core (ROS-free)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from mill_common.parameters import ParameterError
+from mill_controllers.config import ControllerNodeParams, build_controller, parameter_specs
+from mill_controllers.pd_law import AdrcController
+from mill_models.loop_tuning import loop_tuning
+
+
+def _values(**changes: Any) -> dict[str, Any]:
+    values = {name: spec.default for name, spec in parameter_specs()}
+    values.update(changes)
+    return values
+
+
+def test_the_node_parameters_are_declared_once_each() -> None:
+    names = [name for name, _ in parameter_specs()]
+    assert len(names) == len(set(names))
+    own = [name for name, _ in ControllerNodeParams.named_specs()]
+    assert own == [
+        'controller',
+        'blend_time',
+        'observer_node',
+        'trajectory_node',
+        'following_error_limit',
+        'max_state_gap',
+    ]
+    assert all(name in names for name in own)
+
+
+def test_a_zero_bandwidth_takes_the_tuning_rule() -> None:
+    values = _values(**{'controller': 'adrc', 'pd.omega_c': 0.0, 'design_period': 0.0})
+    ctrl = build_controller(values)
+    assert isinstance(ctrl, AdrcController)
+    rule = loop_tuning(values['sample_period'], values['command_delay'])
+    assert ctrl.alpha0 == pytest.approx(rule.omega_c**2)
+
+
+def test_a_given_bandwidth_is_kept() -> None:
+    ctrl = build_controller(_values(**{'controller': 'adrc', 'pd.omega_c': 20.0}))
+    assert isinstance(ctrl, AdrcController)
+    assert ctrl.alpha0 == pytest.approx(400.0)
+
+
+def test_only_fields_declared_with_the_rule_are_tuned() -> None:
+    # excitation.omega_c is declared positive, without the rule: 0 is refused, not tuned
+    with pytest.raises(ParameterError, match=r'excitation\.omega_c'):
+        build_controller(_values(**{'controller': 'excitation', 'excitation.omega_c': 0.0}))
