@@ -46,7 +46,7 @@ PYTHON_KEYS = {
     'hypothesis': 'python3-hypothesis',
 }
 # No rosdep key: installed from requirements.txt (pip).
-PIP_ONLY = {'rosbags', 'mcap', 'mcap_ros2'}
+PIP_ONLY = {'rosbags', 'mcap', 'mcap_ros2', 'control'}
 WORKSPACE_TESTS = 'test'  # the workspace's test/ package (its conftest), not a dependency
 # Declared, not imported: provided through another dependency, left to the package's owners.
 KNOWN_UNUSED = {('mill_common', 'std_msgs')}  # sensor_msgs brings it (JointState's header)

@@ -18,11 +18,14 @@ from pathlib import Path
 from mill_analysis.identify.machine_file import MachineFileError, MachineModel, read
 from mill_common.one_line_parser import OneLineParser, positive
 from mill_controllers.config import build_loop
+from mill_models.axis_model import TWO_MASS
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
 from mill_bringup.scenario import ScenarioError, load
 from mill_bringup.tuning.design import (
+    MIN_GAIN_MARGIN,
+    MIN_MEASURED_PHASE,
     MIN_PHASE_MARGIN,
     AxisTuning,
     TuneError,
@@ -32,6 +35,7 @@ from mill_bringup.tuning.design import (
 )
 from mill_bringup.tuning.margins import Margins, UnstableLoop, margins
 from mill_bringup.tuning.params_file import write_params
+from mill_bringup.tuning.plant_response import PlantResponse, lightly_damped, plant_response
 from mill_bringup.tuning.predict import predict
 from mill_bringup.tuning.prediction_file import Prediction, prediction_path, write_prediction
 
@@ -104,10 +108,13 @@ def _margins_at(
     delay: int,
     m: AxisIdentification,
     observer: str,
+    response: PlantResponse | None,
+    worst_case: PlantResponse | None,
     omega_o: float,
     omega_c: float,
 ) -> Margins:
-    """The margins of the loop the nodes would build with these bandwidths."""
+    """The margins of the loop the nodes would build with these bandwidths, on the rigid
+    model and on the axis's response."""
     scen = load(scenario)
     for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
         scen.add_override(text)
@@ -127,7 +134,13 @@ def _margins_at(
         scen.overrides.setdefault(node, {})[name] = value
     cv, ov = scen.parameters(f'{axis}_controller'), scen.parameters(f'{axis}_observer')
     return margins(
-        lambda: (build_observer_loop(ov), build_loop(cv)), m.b.value, m.alpha.value, delay, T
+        lambda: (build_observer_loop(ov), build_loop(cv)),
+        m.b.value,
+        m.alpha.value,
+        delay,
+        T,
+        response,
+        worst_case,
     )
 
 
@@ -160,25 +173,47 @@ def _header(
             f'{a}: observer {t.omega_o:.1f} rad/s, controller {t.omega_c:.1f} rad/s '
             f'(limited by the {t.limited_by}); {t.margins.text()}'
         )
+        lines.extend(f'{a}: {line}' for line in _why(t))
     return '\n'.join(lines)
+
+
+def _why(t: AxisTuning) -> list[str]:
+    """What the measured response says of the loop, and why the bandwidths came down."""
+    mg = t.margins.measured
+    if mg is None:
+        return []
+    lines = [
+        f'on the measured response ({100 * mg.share:.0f} % of the bins measured, the fitted '
+        f'model elsewhere; a two-mass model also with half its damping, the worse): '
+        f'{mg.text()}'
+    ]
+    if t.at_rule is not None:
+        state = '' if t.at_rule.stable else ', unstable on the fitted model'
+        lines.append(
+            f"at the rule's bandwidths it had {t.at_rule.text()}{state}: lowered until the "
+            f'gain margin is {MIN_GAIN_MARGIN:g} dB and the phase margin {MIN_MEASURED_PHASE:g}°'
+        )
+    return lines
 
 
 def _report(tuned: dict[str, AxisTuning], pred: Prediction | None) -> str:
     rows = [
         '| axis | ω_o [rad/s] | ω_c [rad/s] | limited by | crossover [rad/s] | phase margin | '
-        'gain margin | delay margin [samples] | encoder noise [mN·m RMS] | predicted RMS e '
-        '[µm] | predicted max e [µm] |',
-        '|---|---|---|---|---|---|---|---|---|---|---|',
+        'gain margin | delay margin [samples] | measured: phase / gain margin | encoder '
+        'noise [mN·m RMS] | predicted RMS e [µm] | predicted max e [µm] |',
+        '|---|---|---|---|---|---|---|---|---|---|---|---|',
     ]
     for a, t in tuned.items():
         mg = t.margins
         gm = 'inf' if math.isinf(mg.gain_db) else f'{mg.gain_db:.1f} dB'
         rms = f'{1e6 * pred.rms[a]:.3g}' if pred and a in pred.rms else '-'
         peak = f'{1e6 * pred.max[a]:.3g}' if pred and a in pred.max else '-'
+        on = mg.measured
+        measured = f'{on.phase:.0f}° / {on.gain_db:.1f} dB' if on is not None else '-'
         rows.append(
             f'| {a} | {t.omega_o:.1f} | {t.omega_c:.1f} | {t.limited_by} | {mg.crossover:.0f} | '
-            f'{mg.phase:.0f}° | {gm} | {mg.delay:.2f} | {1e3 * t.torque_noise:.3g} | {rms} | '
-            f'{peak} |'
+            f'{mg.phase:.0f}° | {gm} | {mg.delay:.2f} | {measured} | '
+            f'{1e3 * t.torque_noise:.3g} | {rms} | {peak} |'
         )
     return '\n'.join(rows)
 
@@ -189,19 +224,22 @@ def main(argv: list[str] | None = None) -> int:
         model = read(Path(args.machine))
         T = args.sample_period or model.sample_period
         delay = _delay(model, T, args.delay)
-        tuned = {
-            a: design_axis(
+        tuned = {}
+        for a, m in model.axes.items():
+            structure = model.structure.get(a)
+            response = plant_response(structure, m, T, delay)
+            light = lightly_damped(structure, m, T, delay)
+            tuned[a] = design_axis(
                 a,
                 m,
                 T,
                 delay,
                 args.torque_limit,
-                partial(_margins_at, args.scenario, a, T, delay, m, args.observer),
+                partial(_margins_at, args.scenario, a, T, delay, m, args.observer, response, light),
                 args.observer,
                 args.min_phase_margin,
+                two_mass=structure is not None and structure.model == TWO_MASS,
             )
-            for a, m in model.axes.items()
-        }
     except (MachineFileError, TuneError, ScenarioError) as exc:
         print(f'tune: error: {exc}', file=sys.stderr)
         return 1

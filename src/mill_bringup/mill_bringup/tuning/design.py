@@ -8,7 +8,12 @@ for the sample period and the identified delay (mill_models.loop_tuning: ω_o·(
 - the encoder: its quantization (q/√12 RMS) must not move the command by more than
   `noise_share` of the torque limit, else ω_o (and ω_c with it) comes down until it does;
 - the friction and the load: the torque that balances them, (β + |γ|)/b, must leave at least
-  half the torque limit to accelerate with, else the axis is refused.
+  half the torque limit to accelerate with, else the axis is refused;
+- the axis as it is: the loop as built, on the response identify measured (the fitted model
+  where the measurement is poor: mill_bringup.tuning.margins), must keep a gain margin of
+  MIN_GAIN_MARGIN and a phase margin of MIN_MEASURED_PHASE and settle on the fitted model,
+  else both bandwidths come down in steps of MARGIN_STEP until it does (`limited by:
+  resonance` on a two-mass axis, `measured response` on another).
 
 The observer starts from the identified load (hold_torque = γ/b), so a vertical axis does not
 sag when it is released, and both roles are told the identified input gain and delay.
@@ -30,6 +35,9 @@ NOISE_SHARE = 0.01  # of the torque limit, RMS
 TORQUE_SHARE = 0.5  # of the torque limit that friction and load may take
 NOISE_STEP = 0.8  # ω_o is lowered by this factor until the noise fits
 MIN_PHASE_MARGIN = 20.0  # [deg] below it the design is refused (--min-phase-margin)
+MIN_GAIN_MARGIN = 6.0  # [dB] on the measured response
+MIN_MEASURED_PHASE = 30.0  # [deg] on the measured response
+MARGIN_STEP = 0.9  # ω_o and ω_c are lowered by this factor until the measured margins hold
 
 
 def observer_values(kind: str, omega_o: float) -> dict[str, object]:
@@ -58,8 +66,10 @@ class AxisTuning:
     omega_c: float  # [rad/s]
     margins: Margins
     torque_noise: float  # RMS command from the encoder's quantization [N·m]
-    limited_by: str  # 'rate and delay' or 'encoder'
+    limited_by: str  # 'rate and delay', 'encoder', 'resonance' or 'measured response'
     observer_kind: str = 'eso'
+    at_rule: Margins | None = None  # on the measured response at the rule's bandwidths,
+    # when they did not hold there (why the bandwidths came down)
 
     def controller(
         self, m: AxisIdentification, delay: int, torque_limit: float, following_error_limit: float
@@ -101,25 +111,42 @@ def design_axis(
     margins_at: Callable[[float, float], Margins],
     observer_kind: str = 'eso',
     min_phase_margin: float = MIN_PHASE_MARGIN,
+    two_mass: bool = False,
 ) -> AxisTuning:
-    """margins_at(ω_o, ω_c): the margins of the loop built with those bandwidths."""
+    """margins_at(ω_o, ω_c): the margins of the loop built with those bandwidths (with
+    `.measured`, those on the axis's response, when it has one). `two_mass`: the axis has
+    a resonance (names what limits the bandwidth)."""
     check_torque(axis, m, torque_limit)
     rule = loop_tuning(T, delay)
     omega_o, limited_by = rule.omega_o, 'rate and delay'
     quantization = m.resolution / math.sqrt(12.0)
-    for _ in range(40):
+    first: Margins | None = None
+    for _ in range(60):
         found = margins_at(omega_o, omega_o * rule.omega_c / rule.omega_o)
         noise = found.noise_gain * quantization
-        if noise <= NOISE_SHARE * torque_limit:
-            if found.phase < min_phase_margin:
-                raise TuneError(
-                    f'{axis}: with the {observer_kind} observer the loop as built has a phase '
-                    f'margin of {found.phase:.0f}° (below {min_phase_margin:g}°): '
-                    f'{found.text()}; use the eso observer'
-                )
-            omega_c = omega_o * rule.omega_c / rule.omega_o
-            return AxisTuning(axis, omega_o, omega_c, found, noise, limited_by, observer_kind)
-        omega_o, limited_by = omega_o * NOISE_STEP, 'encoder'
+        if noise > NOISE_SHARE * torque_limit:
+            omega_o, limited_by = omega_o * NOISE_STEP, 'encoder'
+            continue
+        if found.phase < min_phase_margin:
+            raise TuneError(
+                f'{axis}: with the {observer_kind} observer the loop as built has a phase '
+                f'margin of {found.phase:.0f}° (below {min_phase_margin:g}°): '
+                f'{found.text()}; use the eso observer'
+            )
+        on_axis = found.measured
+        if on_axis is not None and not on_axis.holds(MIN_MEASURED_PHASE, MIN_GAIN_MARGIN):
+            first = first or on_axis
+            omega_o = omega_o * MARGIN_STEP
+            limited_by = 'resonance' if two_mass else 'measured response'
+            continue
+        omega_c = omega_o * rule.omega_c / rule.omega_o
+        return AxisTuning(axis, omega_o, omega_c, found, noise, limited_by, observer_kind, first)
+    if first is not None:
+        raise TuneError(
+            f'{axis}: no bandwidth keeps a gain margin of {MIN_GAIN_MARGIN:g} dB and a phase '
+            f"margin of {MIN_MEASURED_PHASE:g}° on the measured response (at the rule's: "
+            f'{first.text()})'
+        )
     raise TuneError(
         f'{axis}: the encoder ({1e6 * m.resolution:.3g} µm) moves the command by more than '
         f'{100 * NOISE_SHARE:g} % of the torque limit at any usable bandwidth'
