@@ -7,12 +7,14 @@ from typing import Any
 
 from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
+    ParameterError,
     ParamSpec,
     algorithm_values,
     axis_node_specs,
     check_design_period,
     non_negative,
     non_negative_int,
+    positive,
     positive_or_inf,
     text,
 )
@@ -54,6 +56,23 @@ class ControllerNodeParams(ParamSet):
         'reset_trip service or by setting this parameter [m]; .inf disables it',
         positive_or_inf,
     )
+    min_following_error: float = param(
+        0.0,
+        'the following-error limit at rest, growing linearly with the reference speed to '
+        'following_error_limit at max_velocity (LinuxCNC MIN_FERROR and FERROR); 0 = the '
+        'fixed following_error_limit at every speed',
+        non_negative,
+        unit='m',
+        read_only=True,
+    )
+    max_velocity: float = param(
+        0.1,
+        'the reference speed at which the following-error limit reaches '
+        'following_error_limit (used only with min_following_error > 0)',
+        positive,
+        unit='m/s',
+        read_only=True,
+    )
     max_state_gap: int = param(
         10,
         'realtime: a gap of this many sample periods or more between two states means '
@@ -64,6 +83,15 @@ class ControllerNodeParams(ParamSet):
         non_negative_int,
         read_only=True,
     )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.min_following_error > self.following_error_limit:
+            raise ParameterError(
+                'min_following_error',
+                self.min_following_error,
+                f'above following_error_limit = {self.following_error_limit!r}',
+            )
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -93,4 +121,6 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['command_delay'],
         values['blend_time'],
         values['max_state_gap'],
+        values['min_following_error'],
+        values['max_velocity'],
     )

@@ -59,9 +59,11 @@ class AxisControlLoop:
         command_delay: int = 0,
         blend_time: float = 0.0,
         max_state_gap: int = 0,
+        min_following_error: float = 0.0,
+        max_velocity: float = math.inf,
     ) -> None:
         self.switch = BumplessSwitch(law, sample_period, blend_time)
-        self.trip = FollowingErrorTrip(following_error_limit)
+        self.trip = FollowingErrorTrip(following_error_limit, min_following_error, max_velocity)
         self.lead_ns = command_delay * period_ns(sample_period)
         self.period_ns = period_ns(sample_period)
         self.max_gap_ns = max_state_gap * self.period_ns  # 0: no gap trips
@@ -137,6 +139,7 @@ class AxisControlLoop:
             effort, problem = BRAKE, str(exc)
         if not math.isfinite(effort):
             effort, problem = BRAKE, problem or f'the law gave {effort}'
-        error = position - (aimed if here is None else here).position
-        effort = self.trip.command(seconds(ns), error, effort)
+        now = aimed if here is None else here
+        error = position - now.position
+        effort = self.trip.command(seconds(ns), error, effort, now.velocity)
         return Command(effort, problem, self.trip.tripped and not was)

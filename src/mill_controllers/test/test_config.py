@@ -27,6 +27,8 @@ def test_the_node_parameters_are_declared_once_each() -> None:
         'observer_node',
         'trajectory_node',
         'following_error_limit',
+        'min_following_error',
+        'max_velocity',
         'max_state_gap',
     ]
     assert all(name in names for name in own)
