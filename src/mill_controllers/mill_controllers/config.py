@@ -22,6 +22,12 @@ from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
 from mill_controllers.base import AxisController
+from mill_controllers.command_shaping import (
+    BacklashParams,
+    CommandFilterParams,
+    CommandShaping,
+    FrictionCompensationParams,
+)
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.registry import CONTROLLERS
 
@@ -94,8 +100,27 @@ class ControllerNodeParams(ParamSet):
             )
 
 
+SHAPING = (CommandFilterParams, FrictionCompensationParams, BacklashParams)
+
+
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    return axis_node_specs() + ControllerNodeParams.named_specs() + CONTROLLERS.parameter_specs()
+    shaping = [spec for cls in SHAPING for spec in cls.named_specs()]
+    return (
+        axis_node_specs()
+        + ControllerNodeParams.named_specs()
+        + shaping
+        + CONTROLLERS.parameter_specs()
+    )
+
+
+def build_shaping(values: dict[str, Any]) -> CommandShaping:
+    """The command shaping the values ask for (inactive when all are at their defaults)."""
+    return CommandShaping(
+        values['sample_period'],
+        CommandFilterParams.from_node_values(values),
+        FrictionCompensationParams.from_node_values(values),
+        BacklashParams.from_node_values(values),
+    )
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -123,4 +148,5 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['max_state_gap'],
         values['min_following_error'],
         values['max_velocity'],
+        build_shaping(values),
     )
