@@ -1,5 +1,7 @@
-"""`tune`'s margins on the axis as it is (issue 32, item 2.1), checked against python-control
-and on the simulated machines of issue 32 (mill_models/test/ident_machines.py).
+"""`tune` on machines as they are (issue 32, item 2): its margins on the axis as it is,
+checked against python-control, and its prediction, which runs an axis again on its
+identified structure, on the simulated machines of issue 32
+(mill_models/test/ident_machines.py).
 
 The machines are identified as `identify` does (mill_models.axis_model) from a record of the
 identify job on them; the design must keep a gain margin of 6 dB and a phase margin of 30°
@@ -19,7 +21,10 @@ from types import ModuleType, SimpleNamespace
 import control
 import numpy as np
 import pytest
+from mill_analysis.identify import machine_file
+from mill_bringup.tuning import predict as prediction
 from mill_bringup.tuning.cli import _margins_at
+from mill_bringup.tuning.cli import main as tune
 from mill_bringup.tuning.design import (
     MARGIN_STEP,
     MIN_GAIN_MARGIN,
@@ -183,3 +188,40 @@ def test_the_design_keeps_its_margins_on_the_machines_true_response(name: str) -
     else:
         # the rule's own loop has 29-31° (two samples of delay: 29°): a few steps down at most
         assert tuned.omega_c >= MARGIN_STEP**3 * rule.omega_c * 0.999, tuned.limited_by
+
+
+AIR = ['-p', 'plant.cutting_model=none']
+
+
+def machine(tmp_path: Path, name: str, axes: str = 'y') -> Path:
+    """The machine file identify writes for `name` on the given axes."""
+    _, T = MACHINES[name]
+    structure = identified(name)
+    fit = structure.fit
+    assert fit is not None
+    path = tmp_path / 'machine.yaml'
+    machine_file.write(
+        path,
+        machine_file.MachineModel(
+            T, dict.fromkeys(axes, fit), 'simulated', dict.fromkeys(axes, structure)
+        ),
+    )
+    return path
+
+
+def test_an_axis_run_again_on_its_rigid_model_is_the_offline_prediction(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the re-run (axis_prediction) and the plant of the offline job are two simulations of
+    # one rigid axis: they must agree before the re-run is trusted with more
+    path = machine(tmp_path, 'rigid')
+    assert tune([str(path), '--duration', '5']) == 0
+    model = machine_file.read(path)
+    out = str(tmp_path / 'tuned.yaml')
+    monkeypatch.setattr(prediction, 'needs_structure', lambda s: False)
+    offline = prediction.predict('slotting', out, model, 1, 1.0, 5.0)
+    monkeypatch.setattr(prediction, 'needs_structure', lambda s: True)
+    again = prediction.predict('slotting', out, model, 1, 1.0, 5.0)
+    assert again.rms['y'] == pytest.approx(offline.rms['y'], rel=0.05)
+    assert again.max['y'] == pytest.approx(offline.max['y'], rel=0.1)
+    assert math.isfinite(again.rms['y']) and again.rms['y'] > 5e-6  # a cut, not quantization
