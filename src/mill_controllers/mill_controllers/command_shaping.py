@@ -4,11 +4,16 @@ Two optional stages, both off by default (every parameter 0), which `tune` sets 
 identified machine (docs/bring-up.md):
 
 - friction compensation: the identified friction at the reference speed v_r, as the motor
-  torque that balances it, is added to the law's command (a feed-forward; the observer then
-  carries only what it leaves):
+  torque that balances it,
       u_f(v) = tanh(v/v_s)·(F_c + (F_s − F_c)·exp(−(v/v_St)²)) + σ·v
   (the Stribeck curve of Olsson et al. 1998 §2 with δ = 2, as mill_models.friction_id fits
-  it, its sign smoothed through zero speed over v_s so that a reversal gives no torque step);
+  it, its sign smoothed through zero speed over v_s so that a reversal gives no torque step),
+  is added to the law's command for as long as the observer has not learnt it: the
+  observer is told the whole command, so its disturbance estimate, which the law cancels,
+  comes to hold the friction the feed-forward holds; the feed-forward is therefore handed
+  over to it, high-passed at the observer's bandwidth ω_h (`handover`): u_f − LP_ωh(u_f).
+  What it adds is the friction's changes (breakaway, the Stribeck drop, reversals) before
+  the observer can see them;
 - backlash compensation: half the identified gap is added to the reference the law tracks,
   in the direction the reference moves, ramped over `backlash.ramp_time` at each reversal
   (LinuxCNC's BACKLASH);
@@ -108,6 +113,15 @@ class FrictionCompensationParams(ParamSet):
         'the sign of the friction is smoothed through zero speed over this speed',
         positive,
         unit='m/s',
+        read_only=True,
+    )
+    handover: float = param(
+        0.0,
+        "the observer's bandwidth: the feed-forward is handed over to the observer's "
+        'disturbance estimate at it (high-passed), so that the two do not compensate the '
+        'friction twice; 0 = never (a law without a disturbance observer)',
+        non_negative,
+        unit='rad/s',
         read_only=True,
     )
 
@@ -244,6 +258,9 @@ class CommandShaping:
         self.filters = command_filters(filters, sample_period)
         self._T = sample_period
         self._side = 0.0  # the backlash compensation's side, −1 … 1 (ramped)
+        # the share of the feed-forward the observer has learnt per sample: 1 − e^(−ω_h·T)
+        self._learn = -math.expm1(-friction.handover * sample_period)
+        self._learnt = 0.0
 
     @property
     def active(self) -> bool:
@@ -264,7 +281,12 @@ class CommandShaping:
 
     def command(self, effort: float, velocity: float) -> float:
         """The command sent for the law's `effort` at reference speed `velocity`."""
-        u = effort + (self.friction.torque(velocity) if self.friction.active else 0.0)
+        u = effort
+        if self.friction.active:
+            ff = self.friction.torque(velocity)
+            u += ff - self._learnt
+            # LP_ωh(u_f): what the observer's estimate holds of it by the next sample
+            self._learnt += self._learn * (ff - self._learnt)
         for f in self.filters:
             u = f.step(u)
         return u

@@ -10,15 +10,17 @@ cannot be tuned gets one line and no file (exit 1); bad options one line (exit 2
 
 from __future__ import annotations
 
+import argparse
 import math
 import sys
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
 from mill_analysis.identify.machine_file import MachineFileError, MachineModel, read
 from mill_common.one_line_parser import OneLineParser, positive
 from mill_controllers.config import build_loop
-from mill_models.axis_model import TWO_MASS
+from mill_models.axis_model import TWO_MASS, AxisModel
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
@@ -27,10 +29,14 @@ from mill_bringup.tuning.design import (
     MIN_GAIN_MARGIN,
     MIN_MEASURED_PHASE,
     MIN_PHASE_MARGIN,
+    NOTCH_DAMPINGS,
     AxisTuning,
     TuneError,
+    choose_for_resonance,
     controller_values,
     design_axis,
+    friction_values,
+    notch_values,
     observer_values,
 )
 from mill_bringup.tuning.margins import Margins, UnstableLoop, margins
@@ -110,6 +116,7 @@ def _margins_at(
     observer: str,
     response: PlantResponse | None,
     worst_case: PlantResponse | None,
+    shaping: dict[str, object],
     omega_o: float,
     omega_c: float,
 ) -> Margins:
@@ -123,6 +130,7 @@ def _margins_at(
         'controller': 'adrc',
         'input_gain': m.b.value,
         **controller_values(omega_c),
+        **shaping,
     }.items():
         scen.overrides.setdefault(node, {})[name] = value
     node = f'{axis}_observer'
@@ -173,7 +181,7 @@ def _header(
             f'{a}: observer {t.omega_o:.1f} rad/s, controller {t.omega_c:.1f} rad/s '
             f'(limited by the {t.limited_by}); {t.margins.text()}'
         )
-        lines.extend(f'{a}: {line}' for line in _why(t))
+        lines.extend(f'{a}: {line}' for line in (*_why(t), *t.notes))
     return '\n'.join(lines)
 
 
@@ -218,6 +226,62 @@ def _report(tuned: dict[str, AxisTuning], pred: Prediction | None) -> str:
     return '\n'.join(rows)
 
 
+def _design(
+    args: argparse.Namespace,
+    a: str,
+    m: AxisIdentification,
+    structure: AxisModel | None,
+    T: float,
+    delay: int,
+    response: PlantResponse | None,
+    light: PlantResponse | None,
+) -> AxisTuning:
+    """The axis's design: for a two-mass axis the better of a notch at its resonance and a
+    lowered bandwidth; a Stribeck friction's feed-forward in either (it feeds the reference's
+    speed forward: the loop's margins do not depend on it)."""
+
+    def design(shaping: dict[str, object]) -> AxisTuning:
+        at = partial(
+            _margins_at, args.scenario, a, T, delay, m, args.observer, response, light, shaping
+        )
+        found = design_axis(
+            a,
+            m,
+            T,
+            delay,
+            args.torque_limit,
+            at,
+            args.observer,
+            args.min_phase_margin,
+            two_mass=structure is not None and structure.model == TWO_MASS,
+        )
+        friction = friction_values(structure, m, found.omega_o)
+        notes = found.notes
+        if friction:
+            notes = (
+                *notes,
+                'friction feed-forward from the identified Stribeck curve: breakaway '
+                f'{friction["friction_compensation.breakaway"]:.3g} N·m, sliding '
+                f'{friction["friction_compensation.sliding"]:.3g} N·m, Stribeck speed '
+                f'{1e3 * float(friction["friction_compensation.stribeck_speed"]):.2g} mm/s, '  # type: ignore[arg-type]
+                f'handed over to the observer at {found.omega_o:.0f} rad/s',
+            )
+        return replace(found, shaping={**shaping, **friction}, notes=notes)
+
+    lowered = design({})
+    if structure is None or structure.model != TWO_MASS or structure.two_mass is None:
+        return lowered
+    notched: AxisTuning | None = None
+    for zeta in NOTCH_DAMPINGS:
+        try:
+            found = design(notch_values(structure, zeta))
+        except TuneError:
+            continue
+        if notched is None or found.omega_c > notched.omega_c:
+            notched = found
+    return choose_for_resonance(lowered, notched, structure)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
@@ -229,17 +293,7 @@ def main(argv: list[str] | None = None) -> int:
             structure = model.structure.get(a)
             response = plant_response(structure, m, T, delay)
             light = lightly_damped(structure, m, T, delay)
-            tuned[a] = design_axis(
-                a,
-                m,
-                T,
-                delay,
-                args.torque_limit,
-                partial(_margins_at, args.scenario, a, T, delay, m, args.observer, response, light),
-                args.observer,
-                args.min_phase_margin,
-                two_mass=structure is not None and structure.model == TWO_MASS,
-            )
+            tuned[a] = _design(args, a, m, structure, T, delay, response, light)
     except (MachineFileError, TuneError, ScenarioError) as exc:
         print(f'tune: error: {exc}', file=sys.stderr)
         return 1

@@ -23,8 +23,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
+from mill_models.axis_model import AxisModel
 from mill_models.identification import AxisIdentification
 from mill_models.loop_tuning import loop_tuning
 
@@ -70,6 +71,9 @@ class AxisTuning:
     observer_kind: str = 'eso'
     at_rule: Margins | None = None  # on the measured response at the rule's bandwidths,
     # when they did not hold there (why the bandwidths came down)
+    shaping: dict[str, object] = field(default_factory=dict)  # the controller's command
+    # shaping (command_filter.*, friction_compensation.*, backlash.*)
+    notes: tuple[str, ...] = ()  # what was chosen for the axis's structure, and why
 
     def controller(
         self, m: AxisIdentification, delay: int, torque_limit: float, following_error_limit: float
@@ -81,6 +85,7 @@ class AxisTuning:
             **controller_values(self.omega_c),
             'pd.torque_limit': torque_limit,
             'following_error_limit': following_error_limit,
+            **self.shaping,
         }
 
     def observer(self, m: AxisIdentification, delay: int) -> dict[str, object]:
@@ -151,3 +156,62 @@ def design_axis(
         f'{axis}: the encoder ({1e6 * m.resolution:.3g} µm) moves the command by more than '
         f'{100 * NOISE_SHARE:g} % of the torque limit at any usable bandwidth'
     )
+
+
+# notch widths tried: a wider notch covers more of the resonance's uncertainty and shift,
+# a narrower one lags less at the crossover (a width ζ lags ~2ζ·ω/ωn rad below ωn)
+NOTCH_DAMPINGS = (0.05, 0.1, 0.2, 0.3)
+SMOOTHING_SHARE = 0.25  # the friction feed-forward's sign smoothed over this × the Stribeck speed
+
+
+def notch_values(structure: AxisModel, damping: float) -> dict[str, object]:
+    """A notch on the command at the identified resonance."""
+    tm = structure.two_mass
+    assert tm is not None
+    return {
+        'command_filter.notch_frequency': tm.resonance_hz,
+        'command_filter.notch_damping': damping,
+    }
+
+
+def friction_values(
+    structure: AxisModel | None, m: AxisIdentification, omega_o: float
+) -> dict[str, object]:
+    """The friction feed-forward from the identified Stribeck curve, as motor torques (none
+    when identify saw no Stribeck effect: the observer carries Coulomb friction as it is)."""
+    fr = structure.friction if structure is not None else None
+    if fr is None or not fr.present or fr.speed is None:
+        return {}
+    b = m.b.value
+    return {
+        # the curve's accelerations as the motor torques that balance them: F/b
+        'friction_compensation.breakaway': fr.static.value / b,
+        'friction_compensation.sliding': fr.coulomb.value / b,
+        'friction_compensation.stribeck_speed': fr.speed.value,
+        'friction_compensation.viscous': max(0.0, fr.viscous.value) / b,
+        'friction_compensation.smoothing_speed': SMOOTHING_SHARE * fr.speed.value,
+        'friction_compensation.handover': omega_o,
+    }
+
+
+def choose_for_resonance(
+    lowered: AxisTuning, notched: AxisTuning | None, structure: AxisModel
+) -> AxisTuning:
+    """The design that keeps the margins with the better tracking: the higher bandwidth (a
+    disturbance's tracking error falls as 1/ω_c²)."""
+    tm = structure.two_mass
+    hz = tm.resonance_hz if tm is not None else math.nan
+    if notched is not None and notched.omega_c > lowered.omega_c * 1.001:
+        zeta = notched.shaping.get('command_filter.notch_damping')
+        why = (
+            f'a notch at {hz:.3g} Hz (ζ {zeta}) keeps the margins at ω_c '
+            f'{notched.omega_c:.1f} rad/s; without it the bandwidth must come down to '
+            f'{lowered.omega_c:.1f} rad/s: the notch tracks better'
+        )
+        return replace(notched, notes=(*notched.notes, why))
+    alt = f'a notch at {hz:.3g} Hz allows only {notched.omega_c:.1f} rad/s' if notched else ''
+    why = (
+        f'the bandwidth lowered to ω_c {lowered.omega_c:.1f} rad/s for the resonance at '
+        f'{hz:.3g} Hz' + (f' ({alt}): no filter' if alt else '')
+    )
+    return replace(lowered, notes=(*lowered.notes, why))

@@ -81,15 +81,15 @@ def machine_overrides(scen: Scenario, plant: str, model: MachineModel) -> list[s
     ]
 
 
-def predict(
+def offline_job(
     scenario: str,
     params_file: str,
     model: MachineModel,
     delay: int,
-    skip: float,
     duration: float | None = None,
     overrides: Sequence[str] = (),
-) -> Prediction:
+) -> tuple[Scenario, RunRecord]:
+    """The scenario as tuned, on the identified machine's rigid plant, and its record."""
     scen = load(scenario)
     apply_params_file(scen, params_file)
     for text in overrides:
@@ -100,7 +100,20 @@ def predict(
     set_timing(scen, None, delay)
     if duration is not None:
         set_duration(scen, duration)
-    rec = simulate(job_for(scen))
+    return scen, simulate(job_for(scen))
+
+
+def predict(
+    scenario: str,
+    params_file: str,
+    model: MachineModel,
+    delay: int,
+    skip: float,
+    duration: float | None = None,
+    overrides: Sequence[str] = (),
+) -> Prediction:
+    scen, rec = offline_job(scenario, params_file, model, delay, duration, overrides)
+    plant = next(n.name for n in scen.nodes if n.kind.role == 'plant')
     metrics = summarize(rec, skip)
     T = float(scen.parameters(plant)['sample_period'])
     rms = {m.axis: m.rms_error for m in metrics}
