@@ -305,3 +305,20 @@ def test_stick_slip_at_250_hz_is_predicted_not_a_surprise(
         'slotting', str(tmp_path / 'tuned.yaml'), model, 2, 1.0, 5.0, AIR[1:]
     )
     assert measured > 5.0 * rigid.rms['y']
+
+
+def test_a_job_that_cannot_be_held_is_refused_in_one_line_naming_a_rate_that_holds_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # M1 at 250 Hz with the 1 mm limit: y sticks at the start of the cut and trips; at
+    # 500 Hz it does not. Nothing is written, and there is no "next: run"
+    path = machine(tmp_path, 'M1', 'xyz')
+    assert tune([str(path), '--duration', '3', *AIR]) == 1
+    captured = capsys.readouterr()
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith('tune: error: slotting cannot be held at 250 Hz')
+    assert 'on its identified Stribeck friction' in err[0] and 'y axis:' not in err[0]
+    assert err[0].endswith(f'tune {path} --sample-period 0.002 --delay 2')
+    assert 'next:' not in captured.out
+    assert not (tmp_path / 'tuned.yaml').exists()
+    assert not (tmp_path / 'tuned.prediction.yaml').exists()

@@ -25,6 +25,7 @@ from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
 from mill_bringup.scenario import ScenarioError, load
+from mill_bringup.tuning.bode import bode_path, plot_bode
 from mill_bringup.tuning.design import (
     MIN_GAIN_MARGIN,
     MIN_MEASURED_PHASE,
@@ -80,6 +81,21 @@ def _parser() -> OneLineParser:
         type=positive,
         default=0.001,
         help='trip threshold [m] (default 0.001)',
+    )
+    p.add_argument(
+        '--min-following-error',
+        type=float,
+        default=0.0,
+        help='the trip threshold at rest [m], growing with the reference speed to '
+        '--following-error-limit at --max-velocity (LinuxCNC MIN_FERROR; default 0: the '
+        'limit is fixed)',
+    )
+    p.add_argument(
+        '--max-velocity',
+        type=positive,
+        default=0.1,
+        help='the speed at which the trip threshold reaches --following-error-limit [m/s] '
+        '(default 0.1)',
     )
     p.add_argument(
         '--scenario',
@@ -282,18 +298,76 @@ def _design(
     return choose_for_resonance(lowered, notched, structure)
 
 
+def _tune_at(
+    args: argparse.Namespace, model: MachineModel, T: float, delay: int
+) -> dict[str, AxisTuning]:
+    tuned = {}
+    for a, m in model.axes.items():
+        structure = model.structure.get(a)
+        response = plant_response(structure, m, T, delay)
+        light = lightly_damped(structure, m, T, delay)
+        tuned[a] = _design(args, a, m, structure, T, delay, response, light)
+    return tuned
+
+
+def _write(
+    args: argparse.Namespace,
+    model: MachineModel,
+    out: Path,
+    T: float,
+    delay: int,
+    tuned: dict[str, AxisTuning],
+) -> None:
+    nodes: dict[str, dict[str, object]] = {}
+    for a, t in tuned.items():
+        m = model.axes[a]
+        nodes[f'{a}_controller'] = {
+            **t.controller(m, delay, args.torque_limit, args.following_error_limit),
+            'min_following_error': min(args.min_following_error, args.following_error_limit),
+            'max_velocity': args.max_velocity,
+        }
+        nodes[f'{a}_observer'] = t.observer(m, delay)
+    write_params(out, T, nodes, _header(model, args.machine, T, delay, tuned))
+
+
+FASTER = (2, 4, 8)  # a job that cannot be held is tried at these multiples of the rate
+FASTEST = 0.00025  # [s]: not beyond 4 kHz
+
+
+def _held_at(args: argparse.Namespace, model: MachineModel, T: float, delay: int, out: Path) -> str:
+    """Where a faster rate holds the job (the drive's delay the same number of its ticks):
+    the text naming it, or '' when none up to FASTEST does."""
+    trial = out.with_name(out.stem + '.faster.yaml')
+    try:
+        for k in FASTER:
+            T2 = T / k
+            if T2 < FASTEST * (1.0 - 1e-9):
+                break
+            try:
+                _write(args, model, trial, T2, delay, _tune_at(args, model, T2, delay))
+                pred = predict(
+                    args.scenario, str(trial), model, delay, args.skip, args.duration, args.param
+                )
+            except (TuneError, ScenarioError, UnstableLoop):
+                continue
+            if not pred.events:
+                rms = ', '.join(f'{a} {1e6 * v:.3g}' for a, v in pred.rms.items())
+                return (
+                    f'at {1.0 / T2:g} Hz ({delay} sample(s) of delay) it is held, predicted RMS '
+                    f'e [µm] {rms}: tune {args.machine} --sample-period {T2:g} --delay {delay}'
+                )
+        return f'nor at any rate up to {1.0 / FASTEST:g} Hz'
+    finally:
+        trial.unlink(missing_ok=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         model = read(Path(args.machine))
         T = args.sample_period or model.sample_period
         delay = _delay(model, T, args.delay)
-        tuned = {}
-        for a, m in model.axes.items():
-            structure = model.structure.get(a)
-            response = plant_response(structure, m, T, delay)
-            light = lightly_damped(structure, m, T, delay)
-            tuned[a] = _design(args, a, m, structure, T, delay, response, light)
+        tuned = _tune_at(args, model, T, delay)
     except (MachineFileError, TuneError, ScenarioError) as exc:
         print(f'tune: error: {exc}', file=sys.stderr)
         return 1
@@ -304,14 +378,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 1
     out = args.output or Path(args.machine).resolve().parent / 'tuned.yaml'
-    nodes: dict[str, dict[str, object]] = {}
-    for a, t in tuned.items():
-        m = model.axes[a]
-        nodes[f'{a}_controller'] = t.controller(
-            m, delay, args.torque_limit, args.following_error_limit
-        )
-        nodes[f'{a}_observer'] = t.observer(m, delay)
-    write_params(out, T, nodes, _header(model, args.machine, T, delay, tuned))
+    _write(args, model, out, T, delay, tuned)
     print(
         f'tune {args.machine}: T = {1e3 * T:g} ms, delay {delay} sample(s); predicting '
         f'{args.scenario} offline on the identified machine ...',
@@ -323,15 +390,25 @@ def main(argv: list[str] | None = None) -> int:
         out.unlink()
         print(f'tune: error: {exc}', file=sys.stderr)
         return 1
+    if pred.events:
+        # refused before anything moves: no parameter file, one line saying why and where
+        out.unlink()
+        prediction_path(out).unlink(missing_ok=True)
+        print(
+            f'tune: error: {args.scenario} cannot be held at {1.0 / T:g} Hz: '
+            f'{"; ".join(pred.events)}; {_held_at(args, model, T, delay, out)}',
+            file=sys.stderr,
+        )
+        return 1
     write_prediction(prediction_path(out), pred)
+    picture = bode_path(out)
+    plot_bode(picture, tuned, T)
     print(_report(tuned, pred))
-    for event in pred.events:
-        print(f'predicted: {event}')
     print(
-        f'parameter file: {out}\nprediction: {prediction_path(out)}\n'
+        f'parameter file: {out}\nprediction: {prediction_path(out)}\nBode plot: {picture}\n'
         f'next: run_scenario {args.scenario} --params-file {out}'
     )
-    return 1 if pred.events else 0
+    return 0
 
 
 if __name__ == '__main__':

@@ -130,6 +130,8 @@ def predict(
         e = e[np.isfinite(e)]
         rms[axis] = float(np.sqrt(np.mean(e * e))) if e.size else math.nan
         peak[axis] = float(np.abs(e).max()) if e.size else math.nan
+        # the rigid plant's events of this axis are superseded by its own run
+        events = [e for e in events if not e.startswith(f'{axis} axis:')]
         if found.tripped_at is not None:
             events.append(
                 f'axis {axis}: following-error trip at {found.tripped_at:.3f} s, |e| = '
