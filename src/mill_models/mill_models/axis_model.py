@@ -10,9 +10,10 @@
 - the friction at low speed (mill_models.friction_id): breakaway and Stribeck friction,
   from the stops.
 
-The choice, in this order: a resonance → 'two_mass' (the FRF's model); backlash → 'none'
-(a rigid model would hide the lost motion at every reversal); a refused rigid fit → 'none';
-else 'rigid', with its low-speed friction. `reason` says why in one line, naming the effect.
+The choice, in this order: a resonance → 'two_mass' (the FRF's model); backlash → 'rigid'
+with the backlash beside it (`tune` compensates the lost motion at reversals and predicts
+with the gap; without a rigid fit, 'none'); a refused rigid fit → 'none'; else 'rigid',
+with its low-speed friction. `reason` says why in one line, naming the effect.
 
 A two-mass axis whose rigid fit was refused (its resonance makes the delay ambiguous) gets
 the rigid fit again with the delay its response shows (`slow`): over the stretches of steady
@@ -123,7 +124,10 @@ def identify_structure(
         except IdentificationError:
             return chosen
     if backlash is not None and backlash.present:
-        return choose(NONE, backlash.reason)
+        if rigid is None:
+            return choose(NONE, backlash.reason)
+        # the rigid model with the gap beside it: `tune` compensates and predicts with both
+        return choose(RIGID, f'rigid with {backlash.reason}')
     if rigid is None:
         why = error
         if (

@@ -10,6 +10,10 @@ at the table (lead a, whole mass M = 1/(a·b)):
 - a motor side m1 driven by u/a and, for a two-mass axis, a table m2 on the screw
   (stiffness k, damping c; mill_models.frequency_response: m1 = M/(1 + r), m2 = M·r/(1 + r),
   ωr² = k/μ, μ = m1·m2/M), through a gap when identify found backlash;
+- an axis with backlash: a motor side and a table (the motor side's share of the mass as
+  identify fitted it) in contact through the gap (stiff: CONTACT_HZ, ζ CONTACT_ZETA), the
+  friction on the table (the guides), measured where identify measured it (the table when
+  it saw the gap from the table alone);
 - friction on the motor side (the screw's bearings and nut) for a two-mass axis, on the one
   mass of a rigid one: the Stribeck curve F(v) = sign(v)·(Fc + (Fs − Fc)·e^(−(v/vs)²)) + σ·v
   with sticking (at rest the axis stays while the force on it is within ±Fs);
@@ -34,6 +38,9 @@ from mill_models.identification import AxisIdentification
 from mill_observers.observer_loop import ObserverLoop
 
 SUBSTEPS = 20
+CONTACT_HZ = 300.0  # the closed gap's contact mode
+CONTACT_ZETA = 0.5
+MOTOR_SHARE = 0.8  # of the mass on the motor side, when identify did not fit it
 
 
 @dataclass(frozen=True)
@@ -53,6 +60,8 @@ class AxisPlant:
     lead: float  # [m/rad]
     resolution: float  # encoder [m]
     delay: int  # [samples]
+    friction_on_table: bool = False  # else on the motor side
+    measure_table: bool = False  # else the motor side is measured
 
     @property
     def mass(self) -> float:
@@ -87,6 +96,14 @@ def axis_plant(
         c = 2.0 * tm.zeta.value * tm.omega_r.value * mu  # ζ = c/(2√(kμ))
     bl = structure.backlash if structure is not None else None
     gap = bl.width.value if bl is not None and bl.present else 0.0
+    on_table = False
+    if gap > 0.0 and m2 == 0.0:
+        share = bl.motor_share if bl is not None and math.isfinite(bl.motor_share) else MOTOR_SHARE
+        m1, m2 = share * M, (1.0 - share) * M
+        mu = m1 * m2 / M
+        k = (2.0 * math.pi * CONTACT_HZ) ** 2 * mu  # ω² = k/μ
+        c = 2.0 * CONTACT_ZETA * math.sqrt(k * mu)
+        on_table = True
     return AxisPlant(
         m1,
         m2,
@@ -101,6 +118,8 @@ def axis_plant(
         lead,
         fit.resolution,
         delay,
+        friction_on_table=on_table,
+        measure_table=on_table and bl is not None and bl.source == 'table',
     )
 
 
@@ -147,8 +166,11 @@ def run_axis(
     queue: deque[float] = deque([0.0] * plant.delay)
     acted: float | None = None
     error = np.full(n, np.nan)
+    if plant.measure_table:
+        x1, x2 = x1 + half_gap, x1  # the table at the reference, the nut pushing it +
     for k in range(n):
-        y = round(x1 / q) * q if q > 0.0 else x1
+        seen = x2 if plant.measure_table else x1
+        y = round(seen / q) * q if q > 0.0 else seen
         est = observer.step(y, acted)
         cmd = loop.step(k * period_ns, y, est, refs)
         error[k] = y - reference[k]
@@ -177,6 +199,11 @@ def run_axis(
                 spring = plant.k * over + (plant.c * (v1 - v2) if over else 0.0)
             else:
                 spring = plant.k * stretch + plant.c * (v1 - v2)
+            if plant.friction_on_table:
+                v1 += h * (drive - spring) / plant.m1
+                x1 += h * v1
+                x2, v2 = _slide(plant, x2, v2, spring - cut - plant.load, plant.m2, h)
+                continue
             x1, v1 = _slide(plant, x1, v1, drive - spring, plant.m1, h)
             # m2·x2'' = spring − cutting force − load
             v2 += h * (spring - cut - plant.load) / plant.m2

@@ -33,6 +33,7 @@ from mill_bringup.tuning.design import (
     NOTCH_DAMPINGS,
     AxisTuning,
     TuneError,
+    backlash_values,
     choose_for_resonance,
     controller_values,
     design_axis,
@@ -282,7 +283,9 @@ def _design(
                 f'{1e3 * float(friction["friction_compensation.stribeck_speed"]):.2g} mm/s, '  # type: ignore[arg-type]
                 f'handed over to the observer at {found.omega_o:.0f} rad/s',
             )
-        return replace(found, shaping={**shaping, **friction}, notes=notes)
+        backlash, note = backlash_values(structure)
+        notes = (*notes, note) if note else notes
+        return replace(found, shaping={**shaping, **friction, **backlash}, notes=notes)
 
     lowered = design({})
     if structure is None or structure.model != TWO_MASS or structure.two_mass is None:

@@ -215,3 +215,22 @@ def choose_for_resonance(
         f'{hz:.3g} Hz' + (f' ({alt}): no filter' if alt else '')
     )
     return replace(lowered, notes=(*lowered.notes, why))
+
+
+def backlash_values(structure: AxisModel | None) -> tuple[dict[str, object], str]:
+    """LinuxCNC's backlash compensation (half the gap added to the reference towards the
+    motion) for an axis measured on the motor: its values and a note. An axis measured on
+    the table has the gap inside its loop: no offset, and the note says so."""
+    bl = structure.backlash if structure is not None else None
+    if bl is None or not bl.present:
+        return {}, ''
+    um = 1e6 * bl.width.value
+    if bl.source == 'table':
+        return {}, (
+            f'{um:.3g} µm of backlash seen from the table, whose position the loop is closed '
+            'on: the gap is inside the loop, no reference offset (predicted with the gap)'
+        )
+    return {'backlash.width': bl.width.value}, (
+        f'backlash compensation: half of the {um:.3g} µm gap added to the reference towards '
+        'the motion at each reversal (LinuxCNC BACKLASH)'
+    )
