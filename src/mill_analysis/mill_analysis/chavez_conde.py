@@ -15,7 +15,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from mill_analysis.metrics import RunRecord
+from mill_analysis.metrics import peak, rms
+from mill_analysis.record import RunRecord
 
 X = 0
 PAPER = ('gpi', 'sliding_gpi')
@@ -34,7 +35,7 @@ CHATTER_FACTOR = 100.0
 def tracking_metrics(rec: RunRecord) -> tuple[float, float]:
     """max |e| and RMS e of the x axis over the whole run [mm]."""
     e = rec.tracking_error[:, X]
-    return float(np.max(np.abs(e))) * 1e3, float(np.sqrt(np.mean(e * e))) * 1e3
+    return peak(e) * 1e3, rms(e) * 1e3
 
 
 def torque_metrics(rec: RunRecord) -> tuple[float, float, float]:

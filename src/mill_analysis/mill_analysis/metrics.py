@@ -1,91 +1,53 @@
-"""The record of one run and the metrics computed from it. ROS-free.
+"""Every figure computed from a run, each defined once with its window and NaN rule. ROS-free.
 
-The offline simulator fills a RunRecord directly; the distributed run fills
-it from the messages it received. Both go through `summarize`, so the
-figures of the two are computed by the same code.
+In the manner of python-control's `step_info`: plain functions of arrays, used by the run
+summaries (text and JSON), `report`, the papers' verdicts and `tune`'s prediction.
+
+- NaN rule: a sample that is not finite (not measured, lost) is left out of every figure;
+  a figure over no finite sample is NaN, never 0.
+- Window: the samples with start <= t < end (`Window`); a summary's window starts at its
+  `skip` (the start transient left out) and ends at the record's end.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from mill_common.signals import AXES
 
 from mill_analysis.contour import distance_to_path
-from mill_analysis.record_checks import Drops
-
-SIGNALS = (
-    'position',  # measured position [m]
-    'reference',  # reference position [m]
-    'reference_velocity',  # [m/s]
-    'estimate_velocity',  # observer velocity [m/s]
-    'estimate_disturbance',  # observer xi [m/s^2]
-    'torque',  # commanded torque [N m]
-    'true_velocity',  # plant velocity [m/s] (simulation only)
-    'true_disturbance',  # plant xi [m/s^2] (simulation only)
-    'force',  # cutting force [N]
-)
+from mill_analysis.record import RunRecord
 
 
-# /mill/force_control/state of each control instant, with its time first
-FORCE_CONTROL = ('t', 'force', 'reference', 'feed_command', 'override', 'beta', 'depth')
+@dataclass(frozen=True)
+class Window:
+    """The samples a figure is computed over: start <= t < end [s]."""
+
+    start: float
+    end: float = math.inf
+
+    def mask(self, t: np.ndarray) -> np.ndarray:
+        return (t >= self.start) & (t < self.end)
 
 
-@dataclass
-class RunRecord:
-    """Signals of a run on the sample grid t[k] = k T; absent values are NaN."""
+def finite(x: np.ndarray) -> np.ndarray:
+    """The finite samples of x (the NaN rule)."""
+    x = np.asarray(x)
+    return x[np.isfinite(x)]
 
-    t: np.ndarray
-    signals: dict[str, np.ndarray] = field(default_factory=dict)
-    events: list[str] = field(default_factory=list)  # what happened besides the signals
-    # Messages left out per topic: what the nodes drop (mill_analysis.record_checks): sent by
-    # another node than the topic's owner, a stamp they refuse, or malformed; and why.
-    foreign: dict[str, int] = field(default_factory=dict)
-    drops: Drops = field(default_factory=Drops)
-    # Per topic, the runs (first, last) of the samples it lacks.
-    gaps: dict[str, list[tuple[int, int]]] = field(default_factory=dict)
-    # A job with a force controller: one row per control instant, columns FORCE_CONTROL
-    force_control: np.ndarray | None = None
 
-    @classmethod
-    def empty(cls, n: int, dt: float) -> RunRecord:
-        t = np.arange(n) * dt
-        return cls(t, {s: np.full((n, len(AXES)), np.nan) for s in SIGNALS})
+def rms(x: np.ndarray) -> float:
+    """Root mean square of the finite samples of x; NaN if there is none."""
+    x = finite(x)
+    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
 
-    def trimmed(self, n: int) -> RunRecord:
-        """The first n samples (a job that ended before the space it was given)."""
-        return RunRecord(
-            self.t[:n],
-            {k: v[:n] for k, v in self.signals.items()},
-            self.events,
-            self.foreign,
-            self.drops,
-            self.gaps,
-            self.force_control,
-        )
 
-    def grown(self, n: int, dt: float) -> RunRecord:
-        """Room for n samples t = k dt: the present ones, then NaN."""
-        old = len(self.t)
-        out = RunRecord.empty(n, dt)
-        for k, v in self.signals.items():
-            out.signals[k][:old] = v
-        out.events, out.foreign, out.force_control = self.events, self.foreign, self.force_control
-        out.drops, out.gaps = self.drops, self.gaps
-        return out
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self.signals[name]
-
-    @property
-    def tracking_error(self) -> np.ndarray:
-        return self['position'] - self['reference']
-
-    @property
-    def disturbance_error(self) -> np.ndarray:
-        return self['estimate_disturbance'] - self['true_disturbance']
+def peak(x: np.ndarray) -> float:
+    """Largest |x| over the finite samples; NaN if there is none."""
+    x = finite(x)
+    return float(np.max(np.abs(x))) if x.size else math.nan
 
 
 @dataclass(frozen=True)
@@ -95,16 +57,6 @@ class AxisMetrics:
     rms_error: float  # RMS e after the skip [m]
     rms_disturbance_error: float  # RMS (xi_hat - xi) after the skip [m/s^2]
     rms_disturbance: float  # RMS xi after the skip, for scale [m/s^2]
-
-
-def _rms(x: np.ndarray) -> float:
-    x = x[np.isfinite(x)]
-    return float(np.sqrt(np.mean(x * x))) if x.size else math.nan
-
-
-def _max_abs(x: np.ndarray) -> float:
-    x = x[np.isfinite(x)]
-    return float(np.max(np.abs(x))) if x.size else math.nan
 
 
 def summarize(record: RunRecord, skip: float = 1.0) -> list[AxisMetrics]:
@@ -117,9 +69,7 @@ def summarize(record: RunRecord, skip: float = 1.0) -> list[AxisMetrics]:
     for i, axis in enumerate(AXES):
         if not np.isfinite(record['position'][:, i]).any():
             continue  # axis not in this run
-        out.append(
-            AxisMetrics(axis, _max_abs(e[:, i]), _rms(e[:, i]), _rms(d[:, i]), _rms(xi[:, i]))
-        )
+        out.append(AxisMetrics(axis, peak(e[:, i]), rms(e[:, i]), rms(d[:, i]), rms(xi[:, i])))
     return out
 
 
@@ -166,7 +116,7 @@ def summarize_contour(
     if contour is None:
         return None
     after = contour.distance[record.t >= skip]
-    return ContourMetrics(contour.axes, _max_abs(after), _rms(after))
+    return ContourMetrics(contour.axes, peak(after), rms(after))
 
 
 def summary_text(record: RunRecord, skip: float) -> str:

@@ -17,7 +17,8 @@ import numpy as np
 
 from mill_analysis.chavez_conde import chavez_conde
 from mill_analysis.force_record import ForceRecord
-from mill_analysis.metrics import RunRecord
+from mill_analysis.metrics import Window, peak, rms
+from mill_analysis.record import RunRecord
 
 X = 0  # the one-axis papers' experiments run on the x axis
 
@@ -27,21 +28,8 @@ def amplitude(t: np.ndarray, x: np.ndarray, f: float) -> float:
     return float(2.0 * abs(np.mean(x * np.exp(-2j * math.pi * f * t))))
 
 
-def _rms(x: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x)))
-
-
 def _verdict(holds: bool) -> str:
     return 'agrees' if holds else 'DISAGREES'
-
-
-@dataclass(frozen=True)
-class Window:
-    start: float
-    end: float = math.inf
-
-    def mask(self, t: np.ndarray) -> np.ndarray:
-        return (t >= self.start) & (t < self.end)
 
 
 # --- Beltrán 2013 -------------------------------------------------------------------------
@@ -77,12 +65,12 @@ def estimation_errors(rec: RunRecord, window: Window = BELTRAN_WINDOW):
     """Per axis: RMS(ξ̂ − ξ)/RMS ξ over the window, and the same for the block means."""
     w = window.mask(rec.t)
     xi, xi_hat = rec['true_disturbance'][w], rec['estimate_disturbance'][w]
-    whole = [_rms(xi_hat[:, i] - xi[:, i]) / _rms(xi[:, i]) for i in range(3)]
+    whole = [rms(xi_hat[:, i] - xi[:, i]) / rms(xi[:, i]) for i in range(3)]
     m, m_hat = (
         block_means(rec.t[w], xi, BELTRAN_BLOCK),
         block_means(rec.t[w], xi_hat, BELTRAN_BLOCK),
     )
-    slow = [_rms(m_hat[:, i] - m[:, i]) / _rms(m[:, i]) for i in range(3)]
+    slow = [rms(m_hat[:, i] - m[:, i]) / rms(m[:, i]) for i in range(3)]
     return whole, slow
 
 
@@ -94,7 +82,7 @@ def beltran(records: Mapping[str, RunRecord]) -> str:
         f'{"variant":<16} {"axis":>4} {"max |e| [mm]":>13} {"RMS e [mm]":>11} '
         f'{"RMS(xi_hat-xi)/RMS xi":>22} {"same, 0.1 s means":>18}',
     ]
-    rms: dict[str, list[float]] = {}
+    rms_by: dict[str, list[float]] = {}
     estimation = {}
     for name, rec in list(records.items()):
         if rec.t[-1] < BELTRAN_FIRST_CUT.end - (rec.t[1] - rec.t[0]) * 1.5:
@@ -103,12 +91,12 @@ def beltran(records: Mapping[str, RunRecord]) -> str:
             continue
         w = BELTRAN_WINDOW.mask(rec.t)
         e = rec.tracking_error[w]
-        rms[name] = [_rms(e[:, i]) for i in range(3)]
+        rms_by[name] = [rms(e[:, i]) for i in range(3)]
         whole, slow = estimation[name] = estimation_errors(rec)
         for i, axis in enumerate('xyz'):
             lines.append(
-                f'{name:<16} {axis:>4} {float(np.max(np.abs(e[:, i]))) * 1e3:13.4f} '
-                f'{rms[name][i] * 1e3:11.6f} {whole[i]:22.3f} {slow[i]:18.4f}'
+                f'{name:<16} {axis:>4} {peak(e[:, i]) * 1e3:13.4f} '
+                f'{rms_by[name][i] * 1e3:11.6f} {whole[i]:22.3f} {slow[i]:18.4f}'
             )
     lines.append(
         "mean force on the first cut (1-26 s) [N] F_x F_y F_z; eq. (4) with the paper's "
@@ -122,8 +110,8 @@ def beltran(records: Mapping[str, RunRecord]) -> str:
         mean = force.mean(axis=0)
         lines.append(f'  {name:<16} {" ".join(f"{f:.2f}" for f in mean)}')
     for comp, plain in BELTRAN_PAIRS:
-        if comp in rms and plain in rms:
-            ratio = [p / c for p, c in zip(rms[plain], rms[comp], strict=True)]
+        if comp in rms_by and plain in rms_by:
+            ratio = [p / c for p, c in zip(rms_by[plain], rms_by[comp], strict=True)]
             lines.append(
                 'claim "without compensation the tracking errors are large; with it the '
                 f'tracking is efficient" ({plain} vs {comp}): RMS e ratio '
@@ -173,7 +161,7 @@ def maharof_metrics(rec: RunRecord) -> tuple[float, float, tuple[float, ...]]:
     e = -rec.tracking_error[w, X]  # reference − position, as the paper
     t = rec.t[w]
     amps = tuple(amplitude(t, e, f) * 1e6 for f in MAHAROF_FREQUENCIES)
-    return _rms(e) * 1e3, float(np.max(np.abs(e))) * 1e3, amps
+    return rms(e) * 1e3, peak(e) * 1e3, amps
 
 
 def harmonic_cuts(base: Sequence[float], other: Sequence[float]) -> list[float]:

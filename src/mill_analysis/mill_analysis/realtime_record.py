@@ -33,7 +33,7 @@ from mill_common.signals import AXES, AxisReference
 from mill_common.timebase import time_ns
 from mill_common.timing import Realtime
 
-from mill_analysis.metrics import SIGNALS, RunRecord
+from mill_analysis.record import SIGNALS, RunRecord
 from mill_analysis.record_checks import Drops, Intake, arrival_order, subset
 from mill_common import topics
 

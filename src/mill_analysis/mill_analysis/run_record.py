@@ -41,8 +41,8 @@ from mill_common.timing import Lockstep
 
 from mill_analysis import records
 from mill_analysis.bag_status import job_end, job_start, plant_status
-from mill_analysis.metrics import RunRecord
 from mill_analysis.realtime_record import command_timing, realtime_record
+from mill_analysis.record import RunRecord
 from mill_analysis.record_checks import Intake, Received, arrival_order, drop_lines, subset
 from mill_common import topics as topic_names
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from mill_analysis.metrics import RunRecord
+from mill_analysis.record import RunRecord
 from mill_bag.types import (
     DIAGNOSTIC_ARRAY,
     FLOAT64,

@@ -8,13 +8,8 @@ import math
 import numpy as np
 import pytest
 from mill_analysis.contour import distance_to_path
-from mill_analysis.metrics import (
-    RunRecord,
-    contour_error,
-    format_summary,
-    summarize,
-    summarize_contour,
-)
+from mill_analysis.metrics import contour_error, format_summary, summarize, summarize_contour
+from mill_analysis.record import RunRecord
 
 from mill_analysis import contour
 

@@ -7,7 +7,6 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from mill_analysis.metrics import RunRecord
 from mill_analysis.papers import (
     amplitude,
     maharof,
@@ -16,6 +15,7 @@ from mill_analysis.papers import (
     report,
     rubio_claims,
 )
+from mill_analysis.record import RunRecord
 
 
 def record(t: np.ndarray, position: np.ndarray, reference: np.ndarray) -> RunRecord:

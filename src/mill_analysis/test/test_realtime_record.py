@@ -7,13 +7,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from mill_analysis.metrics import SIGNALS, RunRecord
 from mill_analysis.realtime_record import (
     command_timing,
     longest_run,
     missing_ticks,
     realtime_record,
 )
+from mill_analysis.record import SIGNALS, RunRecord
 from mill_common.ros import joint_state_bytes
 
 from mill_common import topics

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
-from mill_analysis.metrics import SIGNALS, summarize
+from mill_analysis.metrics import summarize
+from mill_analysis.record import SIGNALS
 from mill_analysis.record_checks import Received, subset
 from mill_analysis.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_bag.errors import BagError

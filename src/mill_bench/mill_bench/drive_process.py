@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from mill_analysis.metrics import RunRecord
+from mill_analysis.record import RunRecord
 from mill_bringup.catalogue import PLANT
 from mill_bringup.cli import set_duration, set_timing, set_tuning
 from mill_bringup.graph import Graph, cpu_seconds

@@ -12,7 +12,7 @@ import math
 from typing import Protocol
 
 import numpy as np
-from mill_analysis.metrics import FORCE_CONTROL, RunRecord
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, axis_index
 from mill_common.timebase import seconds
@@ -28,7 +28,8 @@ from mill_trajectory.config import build_schedule
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.schedule import ClockedReference, OverrideReference, Points
 
-from mill_bringup.catalogue import CONTROLLER, PLANT
+from mill_bringup.catalogue import CONTROLLER
+from mill_bringup.job_config import JobConfig
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer, NoTimer
 
@@ -37,6 +38,7 @@ class SimulatedJob(Protocol):
     """What the simulation reads of its job (mill_bringup.jobs.axis.AxisJob)."""
 
     scenario: Scenario
+    config: JobConfig
     plant: str
     trajectory: str
     force_controller: str  # '' without one
@@ -49,60 +51,23 @@ class SimulatedJob(Protocol):
     def end_at(self, last_sample: int) -> None: ...
 
 
-def timing_of(scen: Scenario, node: str) -> str:
-    """A node's `timing` parameter (lockstep for nodes that have none)."""
-    return str(scen.parameters(node).get('timing', 'lockstep'))
-
-
-def axis_delays(scen: Scenario) -> dict[int, int]:
-    """command_delay of each axis's controller and observer, which must agree."""
-    delays: dict[int, int] = {}
-    for node in scen.nodes:
-        if not node.kind.per_axis:
-            continue
-        values = scen.parameters(node.name)
-        i = axis_index(values['axis'])
-        if delays.setdefault(i, values['command_delay']) != values['command_delay']:
-            raise ScenarioError(
-                f'scenario {scen.name}: the {AXES[i]} controller and observer disagree on '
-                'command_delay'
-            )
-    return delays
-
-
-def build_axis_loops(scen: Scenario) -> tuple[dict[int, AxisControlLoop], dict[int, ObserverLoop]]:
+def build_axis_loops(
+    config: JobConfig,
+) -> tuple[dict[int, AxisControlLoop], dict[int, ObserverLoop]]:
     """The controller's and the observer's per-sample step of each axis, by axis index,
-    built from the scenario as their nodes build them, and checked to fit together.
-
-    ScenarioError if an active axis lacks one, or if a controller designs with the
-    observer's model estimate and the observer of its axis estimates none.
-    """
-    pv = scen.parameters(scen.nodes_of(PLANT)[0].name)
+    built from the job's configuration as their nodes build them (that they fit together,
+    and that every active axis has both, is the configuration's: mill_bringup.job_config)."""
     controllers: dict[int, AxisControlLoop] = {}
     observers: dict[int, ObserverLoop] = {}
-    names: dict[int, str] = {}
-    for node in scen.nodes:
+    for node in config.nodes:
         if not node.kind.per_axis:
             continue  # a force controller, say: not an axis core
-        values = scen.parameters(node.name)
+        values = dict(node.values)
         i = axis_index(values['axis'])
-        if node.kind.role == CONTROLLER:
+        if node.role == CONTROLLER:
             controllers[i] = build_loop(values)
         else:
             observers[i] = build_observer_loop(values)
-            names[i] = f'{node.name} (observer {values["observer"]})'
-    active = [i for i, a in enumerate(AXES) if a in pv['axes']]
-    missing = [AXES[i] for i in active if i not in controllers or i not in observers]
-    if missing:
-        raise ScenarioError(
-            f'scenario {scen.name}: axes {missing} lack a controller or an observer'
-        )
-    for i in active:
-        if controllers[i].law.needs_model and not observers[i].observer.PROVIDES_MODEL:
-            raise ScenarioError(
-                f"scenario {scen.name}: the {AXES[i]} controller designs with the observer's "
-                f'model estimate, but {names[i]} estimates none (use observer rls)'
-            )
     return controllers, observers
 
 
@@ -110,7 +75,7 @@ class AdaptiveFeed:
     """The force controller of an axis job and the trajectory's answer to its override."""
 
     def __init__(self, job: SimulatedJob, schedule: OverrideReference) -> None:
-        cv = job.scenario.parameters(job.force_controller)
+        cv = job.config.values(job.force_controller)
         self.loop = ForceFeedLoop.from_parameters(cv)
         self.sampler = ForceSampler(self.loop.T, cv['force_component'], cv['force_measure'])
         self.reference = cv['reference_force']
@@ -151,19 +116,19 @@ class AxisSimulation:
     the same ROS-free objects the nodes step, fed as the messages feed them."""
 
     def __init__(self, job: SimulatedJob, times: CoreTimer | None) -> None:
-        scen = job.scenario
-        pv = scen.parameters(job.plant)
+        scen, config = job.scenario, job.config
+        pv = config.values(job.plant)
         # The machine behind the plant node's front end: the same backend, the same calls.
         self.machine = SimulatedMachine(pv)
         self.active = [AXES.index(a) for a in self.machine.axes]
         self.dt_ns = job.dt_ns
         self.dt = seconds(job.dt_ns)
-        controllers, observers = build_axis_loops(scen)
+        controllers, observers = build_axis_loops(config)
         self.controllers = {i: controllers[i] for i in self.active}
         self.observers = {i: observers[i] for i in self.active}
         self.acted: dict[int, float | None] = dict.fromkeys(self.active)
         # The reference points each controller holds, from the trajectory's schedule.
-        tv = scen.parameters(job.trajectory)
+        tv = config.values(job.trajectory)
         override = FeedOverride(tv['feed_override.min'], tv['feed_override.max'])
         self.schedule, _ = build_schedule(tv, override)
         self.clock_every = max(1, round(pv['clock_period'] * 1e9 / self.dt_ns))

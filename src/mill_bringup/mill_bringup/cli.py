@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 from mill_common.declared import Configured, ParamSet
 
 from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
+from mill_bringup.job_config import JobConfig
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
 
 
@@ -218,10 +220,10 @@ def load_scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Scenari
     return scen, runs
 
 
-def run_parameters(runs: dict[str, Scenario]) -> dict[str, dict[str, dict[str, Any]]]:
-    """Each run's validated node parameters (variant → node → name → value): what a paper
-    report names as the readings its figures rest on."""
+def run_parameters(configs: Mapping[str, JobConfig]) -> dict[str, dict[str, dict[str, Any]]]:
+    """Each run's validated node parameters (variant → node → name → value), from its job
+    configuration: what a paper report names as the readings its figures rest on."""
     return {
-        name: {node.name: run.parameters(node.name) for node in run.nodes}
-        for name, run in runs.items()
+        name: {node.name: dict(node.values) for node in config.nodes}
+        for name, config in configs.items()
     }

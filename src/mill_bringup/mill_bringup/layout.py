@@ -15,8 +15,12 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario, ScenarioError, check_layout
+
+if TYPE_CHECKING:
+    from mill_bringup.job_config import JobConfig
 
 __all__ = ['LAYOUTS', 'Process', 'check_layout', 'processes']
 
@@ -44,9 +48,11 @@ def processes(
     layout: str,
     external: Iterable[str] = (),
     alone: Iterable[str] = (),
+    config: JobConfig | None = None,
 ) -> list[Process]:
     """The processes that run the scenario's nodes in this layout, in the scenario's order
-    (a process comes where its first node is listed)."""
+    (a process comes where its first node is listed). The axis of a per-axis node comes
+    from the job's configuration if given (else the node's parameters are validated)."""
     check_layout(layout)
     left_out = set(external)
     apart = set(alone)
@@ -59,7 +65,8 @@ def processes(
             if layout == 'single':
                 key = CONTAINER
             elif layout == 'per_axis' and node.kind.per_axis:
-                key = f'{scen.parameters(node.name)["axis"]}_axis'
+                values = config.node(node.name).values if config else scen.parameters(node.name)
+                key = f'{values["axis"]}_axis'
         groups.setdefault(key, []).append(node)
     names = {n.name for n in scen.nodes}
     for key, members in groups.items():

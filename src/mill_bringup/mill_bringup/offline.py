@@ -75,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     except ScenarioError as exc:
         print(f'offline_sim: error: {exc}', file=sys.stderr)
         return 2
-    text = papers.report(scen.paper, records, run_parameters(runs))
+    configs = {name: job.config for name, job in jobs.items()}
+    text = papers.report(scen.paper, records, run_parameters(configs))
     if text:
         print(text)
     return 0

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from mill_analysis.metrics import FORCE_CONTROL, RunRecord
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_bringup.docs_figures.runs import offline
 from mill_bringup.jobs.axis import AxisJob, depth_stretches
 from mill_bringup.jobs.base import simulate

@@ -15,7 +15,6 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
-from mill_analysis.metrics import RunRecord
 from mill_analysis.papers import (
     HV_BAND,
     HV_INERTIA_CHANGE,
@@ -25,8 +24,10 @@ from mill_analysis.papers import (
     report,
     velocity_steps,
 )
+from mill_analysis.record import RunRecord
 from mill_bringup.cli import run_parameters
 from mill_bringup.docs_figures.runs import offline
+from mill_bringup.job_config import build
 from mill_bringup.jobs.registry import job_for
 
 from mill_bringup import scenario
@@ -170,8 +171,8 @@ def test_the_other_readings_figures_are_those_of_the_docs(override: str, variant
 
 def test_the_claims_and_their_verdicts(records) -> None:
     scen = scenario.load(NAME)
-    runs = {name: scen.variant(name) for name in scen.variants}
-    text = report('hatwesh_velocity', records, run_parameters(runs))
+    configs = {name: build(scen.variant(name)) for name in scen.variants}
+    text = report('hatwesh_velocity', records, run_parameters(configs))
     verdicts = [line.split('": ')[1].split(' ')[0] for line in text.splitlines() if 'claim' in line]
     # φ_m 25° overshoots: agrees; better than the machine PI: no (more overshoot); copes with
     # the inertia change: yes; copes with the load torque: no, even with the load term

@@ -15,10 +15,11 @@ from mill_bringup import scenario
 
 def test_a_model_hungry_controller_without_the_rls_observer_is_refused() -> None:
     scen = scenario.load('hatwesh').variant('adaptive_pi_rls')
-    build_axis_loops(scen)  # rls observer: fits
+    controllers, observers = build_axis_loops(job_for(scen).config)  # rls observer: fits
+    assert controllers[0].law.needs_model and observers[0].observer.PROVIDES_MODEL
     scen.add_override('x_observer.observer=dfo')
     with pytest.raises(scenario.ScenarioError, match=r'x_observer \(observer dfo\).*rls'):
-        build_axis_loops(scen)
+        job_for(scen)
 
 
 def test_the_rls_observer_model_gives_the_same_run_as_the_own_estimator() -> None:

@@ -24,7 +24,7 @@ import pytest
 import yaml
 from mill_analysis.identify import machine_file
 from mill_bringup.tuning import predict as prediction
-from mill_bringup.tuning.cli import _margins_at
+from mill_bringup.tuning.cli import _margins_at, tuning_config
 from mill_bringup.tuning.cli import main as tune
 from mill_bringup.tuning.design import (
     MARGIN_STEP,
@@ -145,8 +145,9 @@ def test_the_adrc_loops_rigid_margins_are_python_controls(T: float, delay: int) 
     fit = identified('rigid').rigid
     assert fit is not None
     rule = loop_tuning(T, delay)
+    config = tuning_config('slotting', T, delay)
     found = _margins_at(
-        'slotting', 'x', T, delay, fit, 'eso', None, None, {}, rule.omega_o, rule.omega_c
+        config, 'x', T, delay, fit, 'eso', None, None, {}, rule.omega_o, rule.omega_c
     )
     assert found.curve is not None
     w, L = found.curve
@@ -163,6 +164,7 @@ def _design(name: str, axis: str = 'y'):
     structure = identified(name)
     fit = structure.fit
     assert fit is not None
+    config = tuning_config('slotting', T, fit.delay)
     response = plant_response(structure, fit, T, fit.delay)
     light = lightly_damped(structure, fit, T, fit.delay)
     tuned = design_axis(
@@ -171,11 +173,11 @@ def _design(name: str, axis: str = 'y'):
         T,
         fit.delay,
         5.0,
-        partial(_margins_at, 'slotting', axis, T, fit.delay, fit, 'eso', response, light, {}),
+        partial(_margins_at, config, axis, T, fit.delay, fit, 'eso', response, light, {}),
         two_mass=structure.model == 'two_mass',
     )
     true = partial(
-        _margins_at, 'slotting', axis, T, fit.delay, fit, 'eso', true_response(machine, T), None, {}
+        _margins_at, config, axis, T, fit.delay, fit, 'eso', true_response(machine, T), None, {}
     )
     return tuned, true, loop_tuning(T, fit.delay)
 

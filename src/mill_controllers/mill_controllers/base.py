@@ -15,6 +15,7 @@ rely on is declared here, with defaults a law overrides only where it differs:
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
@@ -31,6 +32,13 @@ C = TypeVar('C', bound='AxisController')
 BASE_INPUTS: tuple[str, ...] = ('position', 'estimate', 'reference')
 
 
+def saturate(value: float, limit: float) -> float:
+    """`value` clipped to ±limit; NaN stays NaN (min/max would turn it into a limit): a law
+    whose gains or states are not finite gives no command, and the loop asks for the brake
+    (mill_controllers.control_loop) instead of sending a full-scale one."""
+    return value if math.isnan(value) else min(limit, max(-limit, value))
+
+
 class AxisController(Configured, ABC):
     """One axis: measured position, reference and observer estimate in, command out.
 
@@ -38,6 +46,9 @@ class AxisController(Configured, ABC):
     """
 
     OUTPUT_UNIT: ClassVar[str] = 'N·m'  # motor torque; 'V' for an amplifier voltage
+    # The unit the law reads the observer's disturbance estimate in (the observer's
+    # DISTURBANCE_UNIT must match: mill_bringup.job_config); None: it does not read it.
+    DISTURBANCE_UNIT: ClassVar[str | None] = None
 
     @classmethod
     def from_parameters(

@@ -84,6 +84,7 @@ class CascadePi(AxisController):
 
     PARAMS: ClassVar[type[CascadePiGains]] = CascadePiGains
     OUTPUT_UNIT: ClassVar[str] = 'V'  # amplifier input voltage (Maharof eq. (1))
+    DISTURBANCE_UNIT: ClassVar[str | None] = 'V'  # d̂, an input-equivalent voltage
 
     def __init__(
         self,

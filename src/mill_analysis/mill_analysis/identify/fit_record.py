@@ -12,7 +12,7 @@ from mill_models.identification import (
     identify_axis,
 )
 
-from mill_analysis.metrics import RunRecord
+from mill_analysis.record import RunRecord
 
 # axis -> (model, the positions and commands it was fitted to)
 Fits = dict[str, tuple[AxisIdentification, np.ndarray, np.ndarray]]

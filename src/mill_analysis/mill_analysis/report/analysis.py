@@ -21,6 +21,8 @@ from mill_analysis.metrics import (
     Contour,
     ContourMetrics,
     contour_error,
+    peak,
+    rms,
     summarize,
     summarize_contour,
 )
@@ -147,14 +149,14 @@ def analyse(run: BagRun, label: str, skip: float, window: float, freqs: list[flo
                 axis=axis,
                 summary=summary[axis],
                 max_window_rms_error=max_window_rms(e[:, i], width),
-                max_disturbance_error=_stat(lambda v: np.max(np.abs(v)), d[:, i]),
+                max_disturbance_error=peak(d[:, i]),
                 error_amplitude={f: amplitude_at(ei, dt_s, f) for f in freqs},
                 disturbance_error_amplitude={f: amplitude_at(di, dt_s, f) for f in freqs},
-                rms_torque=_stat(lambda v: np.sqrt(np.mean(v * v)), tau[:, i]),
-                max_torque=_stat(lambda v: np.max(np.abs(v)), tau[:, i]),
+                rms_torque=rms(tau[:, i]),
+                max_torque=peak(tau[:, i]),
                 force_mean=_stat(np.mean, force[:, i]),
                 force_std=_stat(np.std, force[:, i]),
-                force_max=_stat(lambda v: np.max(np.abs(v)), force[:, i]),
+                force_max=peak(force[:, i]),
             )
         )
     report = RunReport(label, run, skip, window, freqs, axes)

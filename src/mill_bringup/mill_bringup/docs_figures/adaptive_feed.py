@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from mill_analysis.metrics import FORCE_CONTROL
+from mill_analysis.record import FORCE_CONTROL
 
 from mill_bringup import scenario
 from mill_bringup.docs_figures.runs import offline

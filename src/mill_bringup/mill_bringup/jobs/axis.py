@@ -27,26 +27,19 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_analysis.metrics import (
-    FORCE_CONTROL,
-    RunRecord,
-    summarize,
-    summarize_contour,
-    summary_text,
-)
+from mill_analysis.metrics import summarize, summarize_contour, summary_text
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.record_checks import subset
 from mill_analysis.run_record import record_from_raw
 from mill_bag.types import decode
-from mill_common.signals import AXES, axis_index
 from mill_common.timebase import job_steps, period_ns, seconds
-from mill_controllers.force_control import ForceFeedLoop
-from mill_trajectory.base import Trajectory
 from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
 
 from mill_analysis import records
-from mill_bringup.axis_simulation import AxisSimulation, axis_delays, build_axis_loops, timing_of
+from mill_bringup.axis_simulation import AxisSimulation, build_axis_loops
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
+from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
 from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
@@ -62,30 +55,6 @@ JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
 WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
 
-def check_following_band(scen: Scenario, path: Trajectory, tv: Mapping[str, Any]) -> None:
-    """ScenarioError if an axis, anywhere within its following-error limit of the path, could
-    leave the machine's travel (the trajectory's travel.min / travel.max): a controller trips
-    only beyond that limit, so the whole band must fit, as before an identify run."""
-    band = [0.0, 0.0, 0.0]
-    for node in scen.nodes_of(CONTROLLER):
-        values = scen.parameters(node.name)
-        band[axis_index(values['axis'])] = float(values['following_error_limit'])
-    lo, hi = path.bounds(tv['sample_period'])
-    for i, axis in enumerate(AXES):
-        b = band[i] if math.isfinite(band[i]) else 0.0
-        for edge, sign, end, side in (
-            (lo[i], -1.0, tv['travel.min'][i], 'min'),
-            (hi[i], 1.0, tv['travel.max'][i], 'max'),
-        ):
-            if sign * (edge + sign * b - end) > 0.0:
-                raise ScenarioError(
-                    f'scenario {scen.name}: axis {axis} may leave the machine travel before '
-                    f'its controller trips: its path reaches {edge:.6g} m and its '
-                    f'following-error limit is {1e3 * b:g} mm, beyond travel.{side} {end:g} m; '
-                    'move the axis or lower the limit'
-                )
-
-
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
     RECORD = records.AXIS
@@ -93,35 +62,28 @@ class AxisJob(Job[RunRecord]):
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
 
     @classmethod
-    def runs(cls, scen: Scenario) -> bool:
-        plants = scen.nodes_of(cls.CLOCK)
-        return bool(plants) and timing_of(scen, plants[0].name) == 'lockstep'
+    def runs(cls, config: JobConfig) -> bool:
+        return bool(config.of_role(cls.CLOCK)) and config.timing == 'lockstep'
 
-    def __init__(self, scen: Scenario) -> None:
-        super().__init__(scen)
-        for node in scen.nodes:
-            scen.parameters(node.name)  # every node's parameters are valid
-        plants, trajectories = scen.nodes_of(PLANT), scen.nodes_of(TRAJECTORY)
+    def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
+        super().__init__(scen, config)  # every node's parameters valid, the rules kept
+        c = self.config
+        plants, trajectories = c.names_of(PLANT), c.names_of(TRAJECTORY)
         if len(plants) != 1 or len(trajectories) != 1:
             raise ScenarioError(
                 f'scenario {scen.name}: an axis job has one plant and one trajectory'
             )
-        self.plant, self.trajectory = plants[0].name, trajectories[0].name
-        build_axis_loops(scen)  # the axes' cores fit together
-        pv = scen.parameters(self.plant)
-        tv = scen.parameters(self.trajectory)
-        self.dt_ns = period_ns(pv['sample_period'])
-        job = build_job(tv)
-        self.end_time = job.end_time
-        check_following_band(scen, job.trajectory, tv)
+        self.plant, self.trajectory = plants[0], trajectories[0]
+        build_axis_loops(c)  # the axes' cores build
+        tv = c.values(self.trajectory)
+        self.dt_ns = period_ns(c.sample_period)
+        self.end_time = c.trajectory_job().end_time
         self._samples = job_steps(self.end_time, self.dt_ns)
-        self.axes = list(pv['axes'])
+        self.axes = list(c.axes)
         # Who publishes the states: the plant, or the driver the controllers are told of.
-        controllers = [n for n in scen.nodes if n.kind.per_axis]
-        self.state_owner = (
-            scen.parameters(controllers[0].name)['plant_node'] if controllers else self.plant
-        )
-        forces = [n.name for n in scen.nodes_of(FORCE_CONTROLLER)]
+        controllers = [n for n in c.nodes if n.kind.per_axis]
+        self.state_owner = controllers[0].values['plant_node'] if controllers else self.plant
+        forces = c.names_of(FORCE_CONTROLLER)
         if len(forces) > 1:
             raise ScenarioError(f'scenario {scen.name}: more than one force controller')
         self.force_controller = forces[0] if forces else ''
@@ -151,7 +113,7 @@ class AxisJob(Job[RunRecord]):
                 f'scenario {name}: the trajectory waits for a lockstep feed override, but no '
                 'force controller sends one'
             )
-        if self.lockstep and any(axis_delays(self.scenario).values()):
+        if self.lockstep and any(self.config.delays().values()):
             raise ScenarioError(
                 f'scenario {name}: controllers with a command_delay aim at references beyond '
                 'those a lockstep feed override has set; use command_delay 0'
@@ -166,23 +128,8 @@ class AxisJob(Job[RunRecord]):
         slowest = self.end.path_end / lo / seconds(self.dt_ns) if lo > 0 else math.inf
         bound = min(slowest + 2 + self.end.settle_samples, (self.end.cap or math.inf) + 1)
         self._bound = int(bound)
-        if not self.force_controller:
-            return
-        cv = self.scenario.parameters(self.force_controller)
-        loop = ForceFeedLoop.from_parameters(cv)
-        if self.lockstep and abs(tv['feed_override.period'] - loop.T) > 1e-12 * loop.T:
-            raise ScenarioError(
-                f"scenario {name}: the trajectory's feed_override.period "
-                f"{tv['feed_override.period']!r} s is not the force controller's control "
-                f'period, one spindle revolution 60/S_s = {loop.T!r} s'
-            )
-        ranges = (tv['feed_override.min'], tv['feed_override.max'])
-        if ranges != (cv['override.min'], cv['override.max']):
-            raise ScenarioError(
-                f"scenario {name}: the trajectory's feed_override range [{ranges[0]:g}, "
-                f"{ranges[1]:g}] differs from the force controller's override range "
-                f'[{cv["override.min"]:g}, {cv["override.max"]:g}]'
-            )
+        # The override's period and range are the force controller's: job_config's rules
+        # override_period and override_range.
 
     def end_at(self, last_sample: int) -> None:
         """The run found the job's last sample (a job with a feed override)."""
@@ -207,12 +154,16 @@ class AxisJob(Job[RunRecord]):
     ) -> None:
         # The monitor listens to every state topic too: the plant waits for it (controller,
         # observer, monitor), so that the first samples reach the record. A controller that
-        # shares its observer's process takes the states from it (a servo cycle).
-        if monitored:
-            readers = 2 if self._servo_cycles(layout) else 3
+        # shares its observer's process takes the states from it (a servo cycle), and the
+        # plant counts the two as one reader: without a monitor (the launch file) that one
+        # is all it gets, and waiting for its default 2 it never started.
+        servo = self._servo_cycles(layout)
+        if monitored or servo:
+            readers = (2 if servo else 3) if monitored else 1
             self.scenario.overrides.setdefault(self.plant, {}).setdefault(
                 'min_subscribers', readers
             )
+        if monitored:
             # An axis node answers only once the monitor hears it too (at the start, and when
             # --respawn starts it again mid-job): the estimate goes to the controller and the
             # monitor, the command to the plant, the observer and the monitor. A command sent
@@ -230,6 +181,7 @@ class AxisJob(Job[RunRecord]):
             wanted.setdefault('recorder_window', RECORDER_WINDOW)
 
     def recorded_steps(self) -> RecordedSteps | None:
+        # The plant's values as prepare_graph left them (it sets recorder_window).
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
             return None
@@ -240,15 +192,15 @@ class AxisJob(Job[RunRecord]):
             stepped[topics.estimate(axis)] = 0
             stepped[topics.joint_command(axis)] = 0
         stepped[topics.CUTTING_FORCE] = 0
-        if self.scenario.parameters(self.plant)['publish_ground_truth']:
+        if self.config.node(self.plant).values['publish_ground_truth']:
             stepped[topics.GROUND_TRUTH] = 1
         return RecordedSteps(stepped, seconds(self.dt_ns), window)
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""
-        for process in processes(self.scenario, layout):
+        for process in processes(self.scenario, layout, config=self.config):
             roles = [
-                (self.scenario.parameters(n.name)['axis'], n.kind.role)
+                (self.config.node(n.name).values['axis'], n.kind.role)
                 for n in process.nodes
                 if n.kind.per_axis
             ]
@@ -322,10 +274,10 @@ class AxisJob(Job[RunRecord]):
     def owners(self) -> dict[str, str]:
         """The node each per-axis topic must come from (header.frame_id)."""
         out = {}
-        for node in self.scenario.nodes:
+        for node in self.config.nodes:
             if not node.kind.per_axis:
                 continue
-            axis = self.scenario.parameters(node.name)['axis']
+            axis = node.values['axis']
             topic = topics.joint_command(axis) if node.kind.role == CONTROLLER else None
             out[topic or topics.estimate(axis)] = node.name
         for axis in self.axes:

@@ -23,6 +23,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
+from mill_bringup.job_config import JobConfig, build
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario
 from mill_bringup.simulation import CoreTimer, Simulation, run_samples
@@ -77,13 +78,16 @@ class Job(ABC, Generic[R]):
     # What to say before the paper's verdicts on a run of this kind ('': nothing to add).
     PAPER_NOTE: ClassVar[str] = ''
 
-    def __init__(self, scen: Scenario) -> None:
+    def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
+        """The job of scen, whose configuration (mill_bringup.job_config, built from scen
+        if not given) is validated and checked once: the job reads its values from it."""
         self.scenario = scen
+        self.config = config if config is not None else build(scen)
 
     @classmethod
-    def runs(cls, scen: Scenario) -> bool:
+    def runs(cls, config: JobConfig) -> bool:
         """Whether the scenario is a job of this kind (its clock node is in the launch list)."""
-        return any(n.kind.role == cls.CLOCK for n in scen.nodes)
+        return bool(config.of_role(cls.CLOCK))
 
     # -- what it is ------------------------------------------------------------------------
     @property

@@ -27,6 +27,7 @@ from mill_models.force_process import ForceProcessModel
 from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
+from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
@@ -52,42 +53,26 @@ class ForceJob(Job[ForceRecord]):
     RECORD = records.FORCE
     CLOCK = FORCE_PROCESS
 
-    def __init__(self, scen: Scenario) -> None:
-        super().__init__(scen)
-        for node in scen.nodes:
-            scen.parameters(node.name)
+    def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
+        super().__init__(scen, config)  # every node's parameters valid, the rules kept
+        c = self.config
         self.plant = _only(scen, self.CLOCK)
         self.controller = _only(scen, FORCE_CONTROLLER)
         trajectories = scen.nodes_of(TRAJECTORY)
         if len(trajectories) != 1:
             raise ScenarioError('a force job needs exactly one trajectory node')
         self.trajectory = trajectories[0].name
-        pv = scen.parameters(self.plant)
-        cv = self.controller_values = scen.parameters(self.controller)
-        tv = scen.parameters(self.trajectory)
-        model_p = algorithm_values(ForceProcessModel, pv)
-        model_c = algorithm_values(ForceProcessModel, cv)
-        if model_p != model_c:
-            diff = sorted(k for k in model_p if model_p[k] != model_c.get(k))
-            raise ScenarioError(
-                f'plant and force controller disagree on force_process.{", ".join(diff)}'
-            )
-        self.model = ForceProcessModel.from_parameters(model_p)
+        pv = c.values(self.plant)
+        self.controller_values = c.values(self.controller)
+        tv = c.values(self.trajectory)
+        # The controller's process model is the plant's, and the plant's feed range the
+        # controller's: job_config's rules force_model and feed_limits.
+        self.model = ForceProcessModel.from_parameters(algorithm_values(ForceProcessModel, pv))
         if not (tv['feed_override.enabled'] and tv['feed_override.lockstep']):
             raise ScenarioError(
                 'the trajectory of a force job needs feed_override.enabled and .lockstep'
             )
-        if abs(tv['sample_period'] - self.period) > 1e-12 * self.period:
-            raise ScenarioError(
-                f'trajectory sample_period {tv["sample_period"]!r} s is not one spindle '
-                f'revolution, 60/S_s = {self.period!r} s'
-            )
-        lo, hi = cv['override.min'] * cv['nominal_feed'], cv['override.max'] * cv['nominal_feed']
-        if list(pv['feed_limits']) != [lo, hi]:
-            raise ScenarioError(
-                f"plant feed_limits {pv['feed_limits']} differ from the controller's override "
-                f'range times nominal_feed, [{lo:g}, {hi:g}] mm/s'
-            )
+        # one sample period, a spindle revolution: job_config's rule sample_period
         if not tv['duration'] > 0:
             raise ScenarioError('a force job needs the trajectory duration > 0 [s]')
         self._samples = max(1, math.ceil(tv['duration'] / self.period - 1e-9))

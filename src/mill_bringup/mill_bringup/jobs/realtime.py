@@ -16,13 +16,14 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import RunRecord, summarize, summary_text
+from mill_analysis.metrics import summarize, summary_text
 from mill_analysis.realtime_record import command_timing, realtime_record
+from mill_analysis.record import RunRecord
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
 from mill_analysis import records
-from mill_bringup.axis_simulation import timing_of
+from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob
 from mill_bringup.jobs.base import MessageSource
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
@@ -56,19 +57,20 @@ class RealtimeAxisJob(AxisJob):
     )
 
     @classmethod
-    def runs(cls, scen: Scenario) -> bool:
-        plants = scen.nodes_of(cls.CLOCK)
-        return bool(plants) and timing_of(scen, plants[0].name) == 'realtime'
+    def runs(cls, config: JobConfig) -> bool:
+        return bool(config.of_role(cls.CLOCK)) and config.timing == 'realtime'
 
-    def __init__(self, scen: Scenario) -> None:
-        super().__init__(scen)
-        lockstep = [n.name for n in scen.nodes if timing_of(scen, n.name) != 'realtime']
+    def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
+        super().__init__(scen, config)
+        lockstep = [
+            n.name for n in self.config.nodes if n.values.get('timing', 'lockstep') != 'realtime'
+        ]
         if lockstep:
             raise ScenarioError(
                 f'the plant runs in realtime but {", ".join(lockstep)} in lockstep: '
                 'set timing realtime on every node (run_scenario --timing realtime)'
             )
-        waited = list(scen.parameters(self.trajectory).get('axes', AXES))
+        waited = list(self.config.node(self.trajectory).values.get('axes', AXES))
         if sorted(waited) != sorted(self.axes):
             raise ScenarioError(
                 f'the trajectory starts the job once axes {", ".join(waited)} report their '

@@ -208,7 +208,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
         return 130
-    text = paper_text(scen.paper, jobs, records, run_parameters(runs))
+    configs = {name: job.config for name, job in jobs.items()}
+    text = paper_text(scen.paper, jobs, records, run_parameters(configs))
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')

@@ -53,7 +53,9 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
     job.prepare_graph(monitored=True, layout=layout, recorded=options.record_bag is not None)
     clock_names = {n.name for n in job.clock_nodes}
     managed = {n.name for n in job.clock_nodes if n.kind.lifecycle}
-    planned = processes(scen, layout, options.external, alone=clock_names - managed)
+    planned = processes(
+        scen, layout, options.external, alone=clock_names - managed, config=job.config
+    )
     held = [n for p in planned if p.container for n in p.nodes if n.name in clock_names]
     for node in held:
         scen.overrides.setdefault(node.name, {})['autostart'] = False

@@ -24,6 +24,7 @@ from mill_models.axis_model import TWO_MASS, AxisModel
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
+from mill_bringup.job_config import JobConfig, build
 from mill_bringup.scenario import ScenarioError, load
 from mill_bringup.tuning.bode import bode_path, plot_bode
 from mill_bringup.tuning.design import (
@@ -124,8 +125,17 @@ def _parser() -> OneLineParser:
     return p
 
 
+def tuning_config(scenario: str, T: float, delay: int) -> JobConfig:
+    """The scenario's job configuration at the tuned rate and delay, built and checked once
+    (ScenarioError, one line, if it cannot run there)."""
+    scen = load(scenario)
+    for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
+        scen.add_override(text)
+    return build(scen)
+
+
 def _margins_at(
-    scenario: str,
+    config: JobConfig,
     axis: str,
     T: float,
     delay: int,
@@ -138,26 +148,21 @@ def _margins_at(
     omega_c: float,
 ) -> Margins:
     """The margins of the loop the nodes would build with these bandwidths, on the rigid
-    model and on the axis's response."""
-    scen = load(scenario)
-    for text in (f'*.sample_period={T!r}', '*.design_period=0.0', f'*.command_delay={delay}'):
-        scen.add_override(text)
-    node = f'{axis}_controller'
-    for name, value in {
+    model and on the axis's response: the axis's controller and observer values of the
+    configuration with the tuned law, gains and command shaping."""
+    cv = {
+        **config.values(f'{axis}_controller'),
         'controller': 'adrc',
         'input_gain': m.b.value,
         **controller_values(omega_c),
         **shaping,
-    }.items():
-        scen.overrides.setdefault(node, {})[name] = value
-    node = f'{axis}_observer'
-    for name, value in {
+    }
+    ov = {
+        **config.values(f'{axis}_observer'),
         'observer': observer,
         'input_gain': m.b.value,
         **observer_values(observer, omega_o),
-    }.items():
-        scen.overrides.setdefault(node, {})[name] = value
-    cv, ov = scen.parameters(f'{axis}_controller'), scen.parameters(f'{axis}_observer')
+    }
     return margins(
         lambda: (build_observer_loop(ov), build_loop(cv)),
         m.b.value,
@@ -245,6 +250,7 @@ def _report(tuned: dict[str, AxisTuning], pred: Prediction | None) -> str:
 
 def _design(
     args: argparse.Namespace,
+    config: JobConfig,
     a: str,
     m: AxisIdentification,
     structure: AxisModel | None,
@@ -258,9 +264,7 @@ def _design(
     speed forward: the loop's margins do not depend on it)."""
 
     def design(shaping: dict[str, object]) -> AxisTuning:
-        at = partial(
-            _margins_at, args.scenario, a, T, delay, m, args.observer, response, light, shaping
-        )
+        at = partial(_margins_at, config, a, T, delay, m, args.observer, response, light, shaping)
         found = design_axis(
             a,
             m,
@@ -304,12 +308,13 @@ def _design(
 def _tune_at(
     args: argparse.Namespace, model: MachineModel, T: float, delay: int
 ) -> dict[str, AxisTuning]:
+    config = tuning_config(args.scenario, T, delay)
     tuned = {}
     for a, m in model.axes.items():
         structure = model.structure.get(a)
         response = plant_response(structure, m, T, delay)
         light = lightly_damped(structure, m, T, delay)
-        tuned[a] = _design(args, a, m, structure, T, delay, response, light)
+        tuned[a] = _design(args, config, a, m, structure, T, delay, response, light)
     return tuned
 
 
