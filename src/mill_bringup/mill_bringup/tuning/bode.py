@@ -1,5 +1,7 @@
 """The Bode plot `tune` writes beside the parameter file: per axis the return ratio of the
-loop as built, on the measured response (the rigid model's dashed), its margins marked."""
+loop as built, on the axis as it is (the measured response, the fitted model beyond it, or
+a two-mass model with half its damping where that is the worse; the rigid model's dashed),
+its crossover (green) and gain margin (red) marked."""
 
 from __future__ import annotations
 
@@ -35,7 +37,10 @@ def plot_bode(path: Path, tuned: dict[str, AxisTuning], T: float) -> None:
         mag_ax, ph_ax = grid[0][j], grid[1][j]
         shown = [(t.margins, 'rigid model', '--')]
         if t.margins.measured is not None:
-            shown.append((t.margins.measured, 'measured response', '-'))
+            label = 'on the axis (measured response, fitted model beyond)'
+            if t.margins.measured.share == 0.0:
+                label = 'on the fitted model (a two-mass one with half its damping)'
+            shown.append((t.margins.measured, label, '-'))
         for m, label, style in shown:
             curve = _curve(m)
             if curve is None:
@@ -43,11 +48,16 @@ def plot_bode(path: Path, tuned: dict[str, AxisTuning], T: float) -> None:
             w, L = curve
             f = w / (2.0 * math.pi)
             mag_ax.semilogx(f, 20.0 * np.log10(np.abs(L)), style, label=label)
-            ph_ax.semilogx(f, np.degrees(np.unwrap(np.angle(L))), style, label=label)
+            phase = np.degrees(np.unwrap(np.angle(L)))
+            # the loop's low-frequency phase is −180° or below (a double integrator and the
+            # observer's integral): start it in (−360°, 0°]
+            phase -= 360.0 * np.ceil(phase[0] / 360.0)
+            ph_ax.semilogx(f, phase, style, label=label)
         on = t.margins.measured or t.margins
         mag_ax.axhline(0.0, color='k', lw=0.5)
         mag_ax.axhline(-on.gain_db if math.isfinite(on.gain_db) else -60, color='r', lw=0.5)
-        ph_ax.axhline(-180.0, color='k', lw=0.5)
+        for odd in (-180.0, -540.0):
+            ph_ax.axhline(odd, color='k', lw=0.5)
         if math.isfinite(on.crossover):
             fc = on.crossover / (2.0 * math.pi)
             mag_ax.axvline(fc, color='g', lw=0.5)
