@@ -13,10 +13,12 @@ from mill_common.declared import param
 from mill_common.hold_window import HoldWindow
 from mill_common.node_params import axis_node_specs, check_design_period
 from mill_common.parameters import (
+    ParameterError,
     ParamSpec,
     algorithm_values,
     boolean,
     non_negative,
+    positive,
     positive_or_inf,
     text,
 )
@@ -25,6 +27,12 @@ from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
 from mill_controllers.base import AxisController
+from mill_controllers.command_shaping import (
+    BacklashParams,
+    CommandFilterParams,
+    CommandShaping,
+    FrictionCompensationParams,
+)
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.registry import CONTROLLERS
 
@@ -71,10 +79,55 @@ class ControllerNodeParams(HoldWindow):
         boolean,
         read_only=True,
     )
+    min_following_error: float = param(
+        0.0,
+        'the following-error limit at rest, growing linearly with the reference speed to '
+        'following_error_limit at max_velocity (LinuxCNC MIN_FERROR and FERROR); 0 = the '
+        'fixed following_error_limit at every speed',
+        non_negative,
+        unit='m',
+        read_only=True,
+    )
+    max_velocity: float = param(
+        0.1,
+        'the reference speed at which the following-error limit reaches '
+        'following_error_limit (used only with min_following_error > 0)',
+        positive,
+        unit='m/s',
+        read_only=True,
+    )
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.min_following_error > self.following_error_limit:
+            raise ParameterError(
+                'min_following_error',
+                self.min_following_error,
+                f'above following_error_limit = {self.following_error_limit!r}',
+            )
+
+
+SHAPING = (CommandFilterParams, FrictionCompensationParams, BacklashParams)
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    return axis_node_specs() + ControllerNodeParams.named_specs() + CONTROLLERS.parameter_specs()
+    shaping = [spec for cls in SHAPING for spec in cls.named_specs()]
+    return (
+        axis_node_specs()
+        + ControllerNodeParams.named_specs()
+        + shaping
+        + CONTROLLERS.parameter_specs()
+    )
+
+
+def build_shaping(values: dict[str, Any]) -> CommandShaping:
+    """The command shaping the values ask for (inactive when all are at their defaults)."""
+    return CommandShaping(
+        values['sample_period'],
+        CommandFilterParams.from_node_values(values),
+        FrictionCompensationParams.from_node_values(values),
+        BacklashParams.from_node_values(values),
+    )
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -135,4 +188,7 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['command_delay'],
         values['blend_time'],
         HoldWindow.from_node_values(values) if values['gap_trip'] else None,
+        values['min_following_error'],
+        values['max_velocity'],
+        build_shaping(values),
     )

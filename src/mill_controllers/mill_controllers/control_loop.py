@@ -10,7 +10,9 @@ construction. A step:
    reference there (mill_observers.delay estimates that state);
 2. evaluates the law (a BumplessSwitch: it can be replaced between samples); a law that
    cannot compute (ValueError, a non-finite result) gives the brake request;
-3. checks the following error e = y − r(t), at the state's own stamp, against the trip,
+3. shapes the command (mill_controllers.command_shaping: friction feed-forward, backlash
+   offset of the reference, command filter), when the node was given any;
+4. checks the following error e = y − r(t), at the state's own stamp, against the trip,
    which latches the brake request (mill_controllers.trip).
 
 The drive says in every state whether it has stopped the axis (mill_common.hold_window:
@@ -40,6 +42,7 @@ from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEst
 from mill_common.timebase import period_ns, seconds
 
 from mill_controllers.base import AxisController
+from mill_controllers.command_shaping import CommandShaping
 from mill_controllers.switching import BumplessSwitch, check_replacement
 from mill_controllers.trip import BRAKE, FollowingErrorTrip, Trip
 
@@ -67,9 +70,12 @@ class AxisControlLoop:
         command_delay: int = 0,
         blend_time: float = 0.0,
         window: HoldWindow | None = None,
+        min_following_error: float = 0.0,
+        max_velocity: float = math.inf,
+        shaping: CommandShaping | None = None,
     ) -> None:
         self.switch = BumplessSwitch(law, sample_period, blend_time)
-        self.trip = FollowingErrorTrip(following_error_limit)
+        self.trip = FollowingErrorTrip(following_error_limit, min_following_error, max_velocity)
         self.lead_ns = command_delay * period_ns(sample_period)
         self.period_ns = period_ns(sample_period)
         self.window = window  # None: no gap rule
@@ -78,6 +84,8 @@ class AxisControlLoop:
         self.drive_said: bool | None = None  # what the drive said of the axis in it
         self.last_position = math.nan
         self.hold: float | None = None  # the position held after a re-arm
+        # friction and backlash compensation, command filter (None: the law's command as is)
+        self.shaping = shaping if shaping is not None and shaping.active else None
 
     @property
     def law(self) -> AxisController:
@@ -160,6 +168,11 @@ class AxisControlLoop:
                 self.hold = None
             else:
                 aimed = here = AxisReference(self.hold, 0.0, 0.0)
+        offset = 0.0
+        if self.shaping is not None:
+            # backlash: half the gap on the side the reference moves towards (ramped)
+            offset = self.shaping.offset(aimed.velocity)
+            aimed = AxisReference(aimed.position + offset, aimed.velocity, aimed.acceleration)
         t, y = seconds(ns), position
         if self.lead_ns:  # the command acts N samples on: aim at the state there
             t, y = seconds(ns + self.lead_ns), estimate.position
@@ -170,6 +183,9 @@ class AxisControlLoop:
             effort, problem = BRAKE, str(exc)
         if not math.isfinite(effort):
             effort, problem = BRAKE, problem or f'the law gave {effort}'
-        error = position - (aimed if here is None else here).position
-        effort = self.trip.command(seconds(ns), error, effort)
+        elif self.shaping is not None:
+            effort = self.shaping.command(effort, aimed.velocity)
+        now = aimed if here is None else here
+        error = position - now.position - (offset if here is not None else 0.0)
+        effort = self.trip.command(seconds(ns), error, effort, now.velocity)
         return Command(effort, problem, self.trip.tripped and not was, reported)

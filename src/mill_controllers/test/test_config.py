@@ -32,6 +32,8 @@ def test_the_node_parameters_are_declared_once_each() -> None:
         'trajectory_node',
         'following_error_limit',
         'gap_trip',
+        'min_following_error',
+        'max_velocity',
     ]
     assert all(name in names for name in own)
 
