@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 import scipy.linalg
 import scipy.signal
 from mill_common.signals import AxisReference, ControlInputs, Estimate
@@ -121,3 +122,138 @@ def test_sliding_gpi_reaches_the_surface_as_eq_16_says() -> None:
     # Sliding: σ stays within the sampled band μγT of the surface after t_r.
     reached = t > np.log(1 + sigma0 / gamma) / MU + 1e-3
     assert np.max(np.abs(sigma[reached])) < 2 * MU * gamma * T
+
+
+# --- Beltrán 2013 eq. (9)-(12): PD and ADRC ------------------------------------------------
+
+B_X = 20.96  # Beltrán x: b = 1/(a m_e) [m/s² per N·m]
+XI = 2.0  # a constant disturbance [m/s²]
+
+
+def beltran_loop(law, xi_hat: float, seconds: float, period: float = 1e-4):
+    """ẍ = bτ + ξ from x = X0 at rest, reference 0; the law reads the true velocity."""
+    a, b = zoh_plant(0.0, B_X, period)
+    n = round(seconds / period)
+    state, out = np.array([X0, 0.0]), np.zeros(n)
+    for k in range(n):
+        out[k] = state[0]
+        est = Estimate(float(state[0]), float(state[1]), xi_hat)
+        tau = law.compute(ControlInputs(k * period, float(state[0]), REST, est))
+        state = a @ state + b * (tau + XI / B_X)  # ξ enters as an acceleration
+    return np.arange(n) * period, out
+
+
+def pd_response(t: np.ndarray, forced: float) -> np.ndarray:
+    """e of ë + 2ζ_c ω_c ė + ω_c² e = forced, e(0) = X0, ė(0) = 0 (eq. (11)-(12), the
+    paper's ζ_c = 0.7071, ω_c = 12 rad/s)."""
+    zeta, omega = 0.7071, 12.0
+    sys = scipy.signal.lti([1.0], [1.0, 2 * zeta * omega, omega**2])
+    ss = sys.to_ss()
+    # state of the controllable canonical form: [ė, e]
+    _, y, _ = scipy.signal.lsim(ss, np.full_like(t, forced), t, X0=[0.0, X0 / ss.C[0, -1]])
+    return y
+
+
+def test_pd_law_leaves_the_static_lag_of_eq_12() -> None:
+    """ξ̂ ≡ 0: the error obeys p_d(s) with the steady lag ξ/ω_c² (figs. 5-7)."""
+    from mill_controllers.pd_law import PdController, PdGains
+
+    law = PdController(B_X, 1e-4, dataclasses.replace(PdGains(), torque_limit=np.inf))
+    t, got = beltran_loop(law, 0.0, 1.0)
+    want = pd_response(t, XI)
+    assert np.max(np.abs(got - want)) < 1e-3 * XI / 144.0
+    assert got[-1] == pytest.approx(XI / 144.0, rel=0.05)
+
+
+def test_adrc_law_cancels_the_disturbance_it_is_given() -> None:
+    """ξ̂ = ξ: the error obeys p_d(s) unforced (figs. 8-10)."""
+    from mill_controllers.pd_law import AdrcController, PdGains
+
+    law = AdrcController(B_X, 1e-4, dataclasses.replace(PdGains(), torque_limit=np.inf))
+    t, got = beltran_loop(law, XI, 1.0)
+    assert np.max(np.abs(got - pd_response(t, 0.0))) < 1e-3 * X0
+
+
+# --- Maharof 2018 §4.1: cascade P position / PI velocity ----------------------------------
+
+
+def test_cascade_pi_step_is_the_closed_loop_of_section_4_1() -> None:
+    """x/x* = G C k_v/(1 + G C (k_v + s)) with G = A/(s² + Bs + C) of eq. (1) (no dead time)
+    and C(s) = k_p + k_i/s: the paper's k_v = 225 1/s, k_p = 0.00661 V·s/mm, k_i = 0.12075
+    V/mm, the loop reading the true velocity; a 1 mm step of the reference."""
+    from mill_controllers.cascade_pi import CascadePi, CascadePiGains
+
+    a_, b_, c_ = 78020.0, 163.0, 193.3
+    k_v, k_p, k_i = 225.0, 0.00661, 0.12075
+    g = ([a_], [1.0, b_, c_])
+    ctrl = ([k_p, k_i], [1.0, 0.0])
+    open_num = np.polymul(g[0], ctrl[0])
+    open_den = np.polymul(g[1], ctrl[1])
+    closed = scipy.signal.lti(
+        k_v * open_num, np.polyadd(open_den, np.polymul(open_num, [1.0, k_v]))
+    )
+    period, seconds = 2e-5, 0.3
+    t = np.arange(round(seconds / period)) * period
+    _, want = scipy.signal.step(closed, T=t)
+    # the plant in mm, its input the held voltage
+    aug = np.zeros((3, 3))
+    aug[0, 1], aug[1, 0], aug[1, 1], aug[1, 2] = 1.0, -c_, -b_, a_
+    phi = scipy.linalg.expm(aug * period)
+    ad, bd = phi[:2, :2], phi[:2, 2]
+
+    def run(reference: float, disturbance: float) -> np.ndarray:
+        law = CascadePi(0.0, period, dataclasses.replace(CascadePiGains(), voltage_limit=np.inf))
+        ref = AxisReference(reference * 1e-3, 0.0, 0.0)
+        state, out = np.zeros(2), np.zeros(t.size)
+        for k in range(t.size):
+            out[k] = state[0]
+            est = Estimate(state[0] * 1e-3, state[1] * 1e-3, 0.0)
+            u = law.compute(ControlInputs(k * period, state[0] * 1e-3, ref, est))
+            state = ad @ state + bd * (u + disturbance)
+        return out
+
+    # the sampled law lags the continuous one by about a sample at ~500 rad/s
+    assert np.max(np.abs(run(1.0, 0.0) - want)) < 3e-3
+    # A constant input disturbance of 1 V: x/d = G/(1 + G C (k_v + s)), cleared by k_i alone.
+    _, want_d = scipy.signal.step(
+        scipy.signal.lti(
+            np.polymul(g[0], ctrl[1]), np.polyadd(open_den, np.polymul(open_num, [1.0, k_v]))
+        ),
+        T=t,
+    )
+    got_d = run(0.0, 1.0)
+    assert np.max(np.abs(got_d - want_d)) < 0.02 * np.max(np.abs(want_d))
+
+
+# --- Rubio 2013 eq. (7)-(11): the RST force law -------------------------------------------
+
+
+def test_rst_force_loop_follows_the_reference_model_of_eq_7() -> None:
+    """Under the ZOH (β = 0) the closed loop R, S, T around the plant is the reference model:
+    its force step equals that of G_m(s) = ω_n²/(s² + 2ξω_n s + ω_n²) sampled by the ZOH,
+    ξ = 0.7, ω_n = 2.5/(3T) (§2.3, §5), both discretised here by scipy; the plant is the
+    unit-gain drive × process lag of eq. (1)-(3), τ_m = 0.1 s, τ_c = 1/(N_t S_s)."""
+    from mill_controllers.model_reference import ForceControlDesigner, RstController
+    from mill_models.force_process import ForceProcessModel
+
+    period = 60.0 / 715.0
+    tau_m, tau_c = 0.1, 1.0 / (4 * 715.0 / 60.0)
+    omega_n, xi = 2.5 / (3 * period), 0.7
+    plant = scipy.signal.cont2discrete(
+        ([1.0], np.polymul([tau_c, 1.0], [tau_m, 1.0])), period, method='zoh'
+    )
+    model = scipy.signal.cont2discrete(
+        ([omega_n**2], [1.0, 2 * xi * omega_n, omega_n**2]), period, method='zoh'
+    )
+    n = 40
+    model_num = np.trim_zeros(np.ravel(model[0]), 'f')  # a leading 0 is the one-step delay
+    _, (want,) = scipy.signal.dstep((model_num, model[1], period), n=n)
+    law = RstController(ForceControlDesigner(ForceProcessModel()).design(0.0), gain=1.0)
+    num, den = np.ravel(plant[0]), plant[1]  # y_k = (num/den) u, num[0] = 0 (strictly proper)
+    y, u = np.zeros(n), np.zeros(n)
+    for k in range(n):
+        y[k] = sum(num[i] * u[k - i] for i in range(1, len(num)) if k >= i) - sum(
+            den[i] * y[k - i] for i in range(1, len(den)) if k >= i
+        )
+        u[k] = law.update(1.0, float(y[k]))
+    assert np.max(np.abs(y - np.ravel(want))) < 1e-9
