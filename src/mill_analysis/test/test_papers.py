@@ -70,3 +70,19 @@ def test_rubio_claims_are_judged_from_the_figures() -> None:
     assert text[2].endswith('agrees (+0.00 %)')
     text = rubio_claims({-0.5: 101.0, 0.0: 100.0}, cases).splitlines()
     assert 'disagrees' in text[0]
+
+
+def test_every_report_names_the_settings_its_verdicts_rest_on() -> None:
+    from mill_analysis.papers import settings_lines
+
+    parameters = {
+        'gpi': {'plant': {'sample_period': 1e-4, 'friction_reversal': 'through'}},
+        'gpi_1ms': {'plant': {'sample_period': 1e-3, 'friction_reversal': 'through'}},
+        'sliding_gpi': {'plant': {'sample_period': 1e-4, 'friction_reversal': 'through'}},
+    }
+    lines = settings_lines('chavez_conde', parameters).splitlines()
+    assert lines == [
+        'setting plant.sample_period, sample period [s] (paper: fixed step 1e-3): 0.0001 '
+        '(other: gpi_1ms 0.001)',
+        "setting plant.friction_reversal, friction reversal (paper: not said): 'through'",
+    ]

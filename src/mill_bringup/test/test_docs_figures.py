@@ -19,7 +19,11 @@ from mill_bringup.docs_figures.registry import GROUPS, MEASURED, compute, group_
 REPO = Path(__file__).resolve().parents[3]
 # Each group's check runs on one xdist worker with the paper tests that share its runs
 # (their module's xdist_group; scripts/test.sh passes --dist loadgroup).
-SHARED = {'beltran_discretisation': 'beltran', 'beltran_step': 'beltran'}  # the same runs
+SHARED = {
+    'beltran_discretisation': 'beltran',
+    'beltran_step': 'beltran',
+    'beltran_specific_energy': 'beltran',
+}  # the same runs
 OFFLINE = [
     pytest.param(name, marks=pytest.mark.xdist_group(SHARED.get(name, name)))
     for name, g in sorted(GROUPS.items())

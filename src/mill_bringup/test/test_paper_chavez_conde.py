@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from mill_analysis.chavez_conde import chavez_conde, tracking_metrics
+from mill_analysis.chavez_conde import chavez_conde, tracking_metrics, trip
 from mill_bringup.docs_figures.runs import offline
 
 from mill_bringup import scenario
@@ -73,3 +73,27 @@ def test_verdict_per_setting() -> None:
     assert 'zero-order hold): RMS e x1.41, max |e| x7.01 — DISAGREES' in text
     assert 'sliding_gpi / gpi, holds if >= 100): x434874 — agrees' in text
     assert text.endswith('rigid x axis, no torque limit): agrees')
+
+
+def test_the_sliding_verdict_depends_on_the_sample_period_and_says_so() -> None:
+    """At the paper's 1 ms fixed step the sliding law loses (max 0.530 mm against 0.077):
+    the report's verdict names the reading instead of agreeing."""
+    names = ('gpi', 'sliding_gpi', 'gpi_1ms', 'sliding_gpi_1ms', 'gpi_stop', 'sliding_gpi_stop')
+    text = chavez_conde({n: record(n) for n in names})
+    assert 'reversal through), rigid axis' not in text
+    rows = [line for line in text.splitlines() if line.startswith(('0.1 ms', '1 ms'))]
+    assert [row.split()[-1] for row in rows] == ['agrees', 'agrees', 'DISAGREES']
+    assert text.endswith('readings as above: depends on the sample period')
+
+
+def test_a_braked_run_gives_its_trip_not_tracking_figures() -> None:
+    """The flexible axis trips the 5 mm following-error limit: the report gives the time and
+    the error of the trip (the record's event), and the law that trips first loses."""
+    names = ('gpi_flexible', 'sliding_gpi_flexible')
+    recs = {n: record(n) for n in names}
+    assert trip(recs['gpi_flexible']) == pytest.approx((1.8357, 5.012))
+    assert trip(recs['sliding_gpi_flexible']) == pytest.approx((0.0758, 5.098))
+    text = chavez_conde(recs)
+    assert 'sliding_gpi_flexible       braked: following-error trip at t = 0.0758 s' in text
+    assert 'GPI braked at 1.836 s (|e| 5.012 mm), sliding-mode GPI braked at 0.0758 s' in text
+    assert text.splitlines()[-1].endswith('— DISAGREES')

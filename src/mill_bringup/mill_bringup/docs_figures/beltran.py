@@ -132,3 +132,40 @@ def step_figures() -> dict[str, str]:
     out['step.min'], out['step.max'] = f'{min(times):.0f}', f'{max(times):.0f}'
     out['step.peak'] = f'{np.mean(peaks):.1f}'
     return out
+
+
+PRINTED_US = 3.0e10  # [J/m³] 0.5 kW/(cm³/min) as printed: 0.5e3 W / (1e-6 m³ / 60 s)
+
+
+def specific_energy_figures() -> dict[str, str]:
+    """`adrc` and `pd` with u_s as printed (`-p plant.kline.specific_energy=3.0e10`): the
+    errors and the two claims' verdicts under that reading (the criteria of the report)."""
+    from mill_analysis.papers import BELTRAN_EFFECTIVE, BELTRAN_FACTOR
+
+    out: dict[str, str] = {}
+    override = (f'plant.kline.specific_energy={PRINTED_US:.1e}',)
+    us = scenario.load('beltran').variant('adrc').parameters('plant')['kline.specific_energy']
+    out['printed.factor'] = f'{PRINTED_US / us:.1f}'
+    rms = {}
+    for variant in ('adrc', 'pd'):
+        rec = offline('beltran', variant, override)
+        rms[variant] = _errors(rec)[1]
+        scale = 1e6 if variant == 'adrc' else 1e3  # [µm] / [mm]
+        for i, a in enumerate(AXES):
+            out[f'printed.{variant}.rms.{a}'] = sig(rms[variant][i] * scale)
+        if variant == 'adrc':
+            out['printed.force.y'] = f'{_first_cut_forces(rec)[1]:.0f}'
+            whole, slow = estimation_errors(rec)
+            out['printed.xi_whole.max'] = f'{100 * max(whole):.0f}'
+            out['printed.xi_slow.max'] = f'{100 * max(slow):.2f}'
+            out['printed.verdict.slow'] = (
+                'agrees' if max(slow) <= BELTRAN_EFFECTIVE else 'DISAGREES'
+            )
+            out['printed.verdict.whole'] = (
+                'agrees' if max(whole) <= BELTRAN_EFFECTIVE else 'DISAGREES'
+            )
+    ratio = [p / c for p, c in zip(rms['pd'], rms['adrc'], strict=True)]
+    for i, a in enumerate(AXES):
+        out[f'printed.ratio.{a}'] = f'{ratio[i]:.0f}'
+    out['printed.verdict.ratio'] = 'agrees' if min(ratio) >= BELTRAN_FACTOR else 'DISAGREES'
+    return out

@@ -7,7 +7,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from mill_analysis.chavez_conde import chatters, reduces, torque_metrics, tracking_metrics
+from mill_analysis.chavez_conde import (
+    READINGS,
+    chatters,
+    reading_verdicts,
+    reduces,
+    torque_metrics,
+    tracking_metrics,
+    trip,
+)
+from mill_analysis.readings import overall
 from mill_controllers.gpi_controller import GpiController
 from mill_controllers.sliding_gpi import SlidingGpiController
 from mill_plant.config import build_axis_model
@@ -24,12 +33,19 @@ def figures() -> dict[str, str]:
     """The table (every variant) and the ratios and constants the claims quote."""
     out: dict[str, str] = {}
     ours = {}
+    trips: dict[str, tuple[float, float] | None] = {}
+    readings = {v for _, values in READINGS for v, _ in values if v}
     for variant in scenario.load(NAME).variants:
         rec = offline(NAME, variant)
         peak, rms = ours[variant] = tracking_metrics(rec)
         top, at_top, chatter = torque_metrics(rec)
-        out[f'{variant}.max_e'] = sig(peak)  # [mm]
-        out[f'{variant}.rms_e'] = sig(rms)
+        if tripped := trips.setdefault(variant, trip(rec)):  # braked: no tracking figures
+            out[f'{variant}.trip_t'], out[f'{variant}.trip_e'] = sig(tripped[0]), sig(tripped[1])
+        else:
+            out[f'{variant}.max_e'] = sig(peak)  # [mm]
+            out[f'{variant}.rms_e'] = sig(rms)
+        if any(r in variant for r in readings):  # the readings table quotes the errors only
+            continue
         out[f'{variant}.max_tau'] = sig(top)  # [N m]
         out[f'{variant}.rms_dtau'] = sig(chatter, 3)
         if variant == 'gpi':
@@ -40,7 +56,12 @@ def figures() -> dict[str, str]:
         if variant.endswith('_limited') and variant.startswith('sliding'):
             out[f'{variant}.at_max'] = f'{at_top:.0f}'  # [% of samples]
     for suffix in ('', '_zoh', '_flexible'):
-        out[f'verdict{suffix}'] = reduces(ours['gpi' + suffix], ours['sliding_gpi' + suffix])
+        gpi, sliding = 'gpi' + suffix, 'sliding_gpi' + suffix
+        out[f'verdict{suffix}'] = reduces(ours[gpi], ours[sliding], trips[gpi], trips[sliding])
+    verdicts = reading_verdicts(ours, trips)
+    for combo, holds in verdicts.items():
+        out[f'reading.{"".join(combo).lstrip("_") or "ours"}'] = 'agrees' if holds else 'DISAGREES'
+    out['verdict.readings'] = overall(verdicts, [n for n, _ in READINGS]).split()[0]
     for suffix in ('', '_zoh'):
         (pg, rg), (ps, rs) = ours['gpi' + suffix], ours['sliding_gpi' + suffix]
         out[f'ratio{suffix}.rms'] = f'{rs / rg:.2f}'

@@ -40,6 +40,12 @@ GROUPS = {
             beltran.discretisation_figures,
         ),
         Group(
+            'beltran_specific_energy',
+            'offline_sim beltran --variant adrc -p plant.kline.specific_energy=3.0e10'
+            ' (and --variant pd)',
+            beltran.specific_energy_figures,
+        ),
+        Group(
             'beltran_model',
             'docs_figures --group beltran_model (the model and the cores, no run)',
             beltran_model.figures,

@@ -4,9 +4,11 @@ mill_bringup.force_loop` (the sweep over fixed β and the reordered depth profil
 from __future__ import annotations
 
 import numpy as np
+from mill_analysis.papers import RUBIO_READINGS, RUBIO_SCHEME_CLAIMS, rubio_reading_cases
+from mill_analysis.readings import overall
 from mill_models.force_process import ForceProcessModel, ForceProcessParams
 
-from mill_bringup import force_loop
+from mill_bringup import force_loop, scenario
 from mill_bringup.docs_figures.runs import offline
 
 VARIANTS = ('zoh', 'beta_neg0.3', 'scheme1', 'scheme2')
@@ -50,4 +52,21 @@ def figures() -> dict[str, str]:
             [-0.5, 0.0], model=ForceProcessModel(ForceProcessParams(depth_profile=profile))
         )
         out[f'one_step.{key}.beta_neg0.5'] = f'{100 * (neg / zoh_j_c - 1):.2f}'
+    out.update(reading_figures())
+    return out
+
+
+def reading_figures() -> dict[str, str]:
+    """The schemes against the ZOH under each reading (variants of `offline_sim rubio`)."""
+    out: dict[str, str] = {}
+    records = {v: offline('rubio', v) for v in scenario.load('rubio').variants}
+    cases = rubio_reading_cases(records)
+    names = [name for name, _ in RUBIO_READINGS]
+    for i, (scheme, _, holds) in enumerate(RUBIO_SCHEME_CLAIMS):
+        for combo, (zoh, *schemes) in cases.items():
+            key = ''.join(combo).lstrip('_') or 'ours'
+            out[f'reading.{key}.{scheme}.vs_zoh'] = percent(schemes[i] / zoh - 1)
+            out[f'reading.{key}.{scheme}'] = 'agrees' if holds(schemes[i], zoh) else 'disagrees'
+        verdicts = {c: holds(j[1 + i], j[0]) for c, j in cases.items()}
+        out[f'verdict.{scheme}'] = overall(verdicts, names).split()[0].lower()
     return out
