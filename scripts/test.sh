@@ -2,7 +2,9 @@
 # Installs everything (scripts/install.sh), checks style and types (ruff, mypy on
 # the packages under src/) and runs the whole test suite: unit tests of every
 # package and system tests that start real ROS 2 processes (on loopback, in
-# private domains). Extra arguments go to pytest (both runs).
+# private domains). Extra arguments go to pytest (both runs). Tests marked `slow` (the
+# docs' command lines that take minutes: test_docs_commands.py) are left out; run them
+# with `python -m pytest -m slow`.
 #
 # The unit tests run on every core (pytest-xdist; tests marked xdist_group share one worker,
 # so that the offline runs they cache are made once); the system tests one after the other,
@@ -17,5 +19,6 @@ cd "$root"
 pytest_part() {  # exit code 5: none of the chosen tests is of this part
     "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
 }
-pytest_part -m 'not system' -n auto --dist loadgroup "$@"
+# `slow`: the docs' long command lines (test_docs_commands.py); run them with -m slow.
+pytest_part -m 'not system and not slow' -n auto --dist loadgroup "$@"
 pytest_part -m system "$@"

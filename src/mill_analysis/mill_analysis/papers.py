@@ -720,4 +720,22 @@ def report(paper: str, records: Mapping[str, Any], parameters: Parameters | None
         return ''
     reading = READINGS.get(paper)
     head = reading(parameters) if reading and parameters else ''
+    if paper not in OWN_TRIPS:
+        head = '\n'.join(filter(None, [head, braked(records)]))
     return f'{head}\n{fn(records)}' if head else fn(records)
+
+
+# The reports that give a tripped run its trip themselves, instead of its figures.
+OWN_TRIPS = frozenset({'chavez_conde'})
+
+
+def braked(records: Mapping[str, Any]) -> str:
+    """One line per trip or brake a run's record holds: its figures after that are of a
+    braked axis, not of the law's tracking."""
+    return '\n'.join(
+        f'WARNING variant {name}: {event}; its figures after that are of a braked axis, '
+        'not of the law'
+        for name, rec in records.items()
+        for event in getattr(rec, 'events', ())
+        if 'trip' in event or 'braked' in event
+    )

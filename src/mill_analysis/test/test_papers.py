@@ -86,3 +86,15 @@ def test_every_report_names_the_settings_its_verdicts_rest_on() -> None:
         '(other: gpi_1ms 0.001)',
         "setting plant.friction_reversal, friction reversal (paper: not said): 'through'",
     ]
+
+
+def test_a_report_warns_of_a_run_that_tripped() -> None:
+    from types import SimpleNamespace
+
+    from mill_analysis.papers import braked
+
+    rec = SimpleNamespace(events=['x axis: following-error trip at t = 0.1 s, |e| = 5.1 mm > 5 mm'])
+    assert braked({'a': rec, 'b': SimpleNamespace(events=[])}) == (
+        'WARNING variant a: x axis: following-error trip at t = 0.1 s, |e| = 5.1 mm > 5 mm; '
+        'its figures after that are of a braked axis, not of the law'
+    )
