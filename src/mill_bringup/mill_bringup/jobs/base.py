@@ -12,16 +12,29 @@ differs between the kinds sits in one class per kind (mill_bringup.jobs.axis, .r
 - when the job is complete and when its last messages have arrived;
 - the record: from the messages of a run (or a bag), or from the offline simulation,
   sample by sample (`Simulation.step`), by the one loop in `simulate`;
-- the summary of a record, and the differences of two records of the same job;
-- the kind of record a run gives (RECORD, mill_analysis.records: named in its bag, `report`
-  reads the bag through it), and what to note before the paper's verdicts (PAPER_NOTE).
+- what happened to the machine (typed events, mill_analysis.events, parsed from the
+  /diagnostics statuses heard until the job ended: `Ending`), and which of them fail the job
+  (FAILING);
+- the summary of a record (one value, mill_analysis.summary: the text and summary.json print
+  from it), and the differences of two records of the same job;
+- the kind of record a run gives (RECORD, the kind object of mill_analysis.report.kinds: its
+  name goes in the bag, `report` reads the bag through the same object, and both summarise
+  with it), and what to note before the paper's verdicts (PAPER_NOTE).
+
+The state of a run (what the runner heard when the job ended) is not kept by the job: the
+runner takes it once, as an `Ending`, and hands it to `summary`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
+
+from mill_analysis.events import Event, Status
+from mill_analysis.report.kinds import RecordKind
+from mill_analysis.summary import Summary
 
 from mill_bringup.job_config import JobConfig, build
 from mill_bringup.recorded_steps import RecordedSteps
@@ -61,13 +74,33 @@ class MessageSource(Protocol):
         """Wall-clock arrival [ns, system clock] of each message of a timed topic."""
         ...
 
+    def statuses(self) -> Sequence[Status]:
+        """Every /diagnostics status of the machine heard so far, in order (its values)."""
+        ...
+
+
+@dataclass(frozen=True)
+class Ending:
+    """How a run ended, as the runner took it once when the job was complete (or the run
+    could not go on): the machine's statuses heard until then, the runner's own finding that
+    ended it (a drive gone silent, a stall, a node that died; None: the job completed), and
+    what the runner heard (for a job's figures of the messages' timing)."""
+
+    statuses: tuple[Status, ...] = ()
+    failure: Event | None = None
+    source: MessageSource | None = None
+
 
 class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
 
     KIND: ClassVar[str]
-    # The kind of record a run gives (mill_analysis.records): named in its bag, for `report`.
-    RECORD: ClassVar[str]
+    # The kind of record a run gives (mill_analysis.report.kinds): named in its bag, read by
+    # `report` through the same object, and summarised by it.
+    RECORD: ClassVar[RecordKind[Any]]
+    # The kinds of event (mill_analysis.events) that fail a run of this job (exit code 1);
+    # what the runner finds itself (Ending.failure) always does.
+    FAILING: ClassVar[tuple[str, ...]] = ()
     CLOCK: ClassVar[str]  # the role of the node that clocks the job (mill_bringup.catalogue)
     # How long to wait, after the job is complete, for its last messages [s].
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
@@ -164,9 +197,8 @@ class Job(ABC, Generic[R]):
         """While the run goes on: ScenarioError when the graph cannot make the job (a
         driver on another clock, a drive gone silent)."""
 
-    def failures(self, rec: R, problems: Sequence[str]) -> list[str]:
-        """What went wrong in a finished run that makes it fail (exit code 1): a realtime
-        axis that tripped or was braked. A lockstep trip is a result, not a failure."""
+    def events(self, statuses: Sequence[Status]) -> list[Event]:
+        """What the machine told of itself in these statuses (trips, stops, brakes)."""
         return []
 
     def settled(self, source: MessageSource) -> bool:
@@ -184,12 +216,9 @@ class Job(ABC, Generic[R]):
 
     # -- results ---------------------------------------------------------------------------
     @abstractmethod
-    def summary(self, rec: R, skip: float) -> str:
-        """Text summary of a record (metrics after `skip` seconds)."""
-
-    @abstractmethod
-    def summary_json(self, rec: R, skip: float) -> dict[str, Any]:
-        """The same as JSON-ready values."""
+    def summary(self, rec: R, skip: float, ending: Ending | None = None) -> Summary:
+        """The summary of a record (figures `skip` seconds after the job's path started), the
+        events of its ending with it (None: an offline run, whose record has its events)."""
 
     def foreign(self, rec: R) -> dict[str, int]:
         """Messages the record left out per topic: what the nodes drop (another sender, a

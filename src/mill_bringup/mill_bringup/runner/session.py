@@ -87,7 +87,7 @@ class Session:
                 sim_time=job.sim_time_stamps(),
                 # what `report` reads it as, and who sends each topic (what it leaves out)
                 notes={
-                    **records.bag_notes(job.RECORD),
+                    **records.bag_notes(job.RECORD.NAME),
                     **records.owners_note(job.owners(), job.scenario.namespace),
                 },
             )

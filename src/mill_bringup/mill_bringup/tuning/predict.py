@@ -100,6 +100,6 @@ def predict(
         float(rec.t[-1]),
         {m.axis: m.rms_error for m in metrics},
         {m.axis: m.max_error for m in metrics},
-        list(rec.events),
+        [e.text() for e in rec.events],
         list(overrides),
     )
