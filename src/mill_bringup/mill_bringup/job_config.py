@@ -44,8 +44,7 @@ from mill_observers.base import Observer
 from mill_observers.registry import OBSERVERS
 from mill_plant.models.base import AxisModel
 from mill_plant.registry import AXIS_MODELS
-from mill_trajectory.config import Job as TrajectoryJob
-from mill_trajectory.config import build_job
+from mill_trajectory.config import JobPath, build_job
 
 from mill_bringup.catalogue import (
     CONTROLLER,
@@ -180,14 +179,14 @@ class JobConfig:
         names = self.names_of(TRAJECTORY)
         return names[0] if len(names) == 1 else None
 
-    def trajectory_job(self) -> TrajectoryJob:
+    def trajectory_job(self) -> JobPath:
         """The trajectory node's job (path and end), built once."""
         if 'trajectory' not in self._built:
             name = self.trajectory
             if name is None:
                 raise ScenarioError(f'scenario {self.scenario}: an axis job has one trajectory')
             self._built['trajectory'] = build_job(self.values(name))
-        job: TrajectoryJob = self._built['trajectory']
+        job: JobPath = self._built['trajectory']
         return job
 
 

@@ -239,8 +239,9 @@ def run_nodes(
     ends at once once ROS was initialised (end_process).
     """
     argv = list(argv)
-    # Keep DDS on loopback unless the user chose otherwise (see README, Network).
-    for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE',):
+    # Keep DDS on loopback and repair lost samples within 100 ms (mill_common.env), unless
+    # the user chose otherwise (see README, Network).
+    for key in ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'FASTRTPS_DEFAULT_PROFILES_FILE'):
         os.environ.setdefault(key, ros_environment({})[key])
 
     import rclpy

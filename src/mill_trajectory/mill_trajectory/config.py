@@ -202,12 +202,12 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
 
 
 @dataclass(frozen=True)
-class Job:
+class JobPath:
     trajectory: Trajectory
     end_time: float  # the job is over at this time [s]
 
 
-def build_job(values: Mapping[str, Any]) -> Job:
+def build_job(values: Mapping[str, Any]) -> JobPath:
     """The job's path, checked against the travel (ValueError naming where it leaves it)."""
     node = TrajectoryNodeParams.from_node_values(values)
     override = FeedOverrideParams.from_node_values(values)
@@ -225,7 +225,7 @@ def build_job(values: Mapping[str, Any]) -> Job:
     end = path.end_time + node.settle_time
     if node.duration > 0:
         end = min(end, node.duration)
-    return Job(path, end)
+    return JobPath(path, end)
 
 
 def check_path_travel(path: Trajectory, travel: Travel, sample_period: float) -> None:

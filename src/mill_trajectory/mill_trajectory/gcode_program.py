@@ -11,14 +11,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from mill_common.declared import ParamSet, param
 from mill_common.parameters import ParameterError, number_list, positive
 
 from mill_trajectory.base import Trajectory, TrajectorySample
-from mill_trajectory.gcode import read_program
+from mill_trajectory.gcode import Setup, read_program, read_tool_table
 from mill_trajectory.gcode_words import GcodeError
 from mill_trajectory.override_limit import RESERVE, OverrideLimit
 from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
@@ -52,6 +52,14 @@ def _file(value: Any) -> str | None:
     return None if isinstance(value, str) and value.strip() else 'must name a G-code file'
 
 
+def _text(value: Any) -> str | None:
+    return None if isinstance(value, str) else 'must be a string'
+
+
+def _offsets(value: Any) -> str | None:
+    return number_list(24)(value)
+
+
 @dataclass(frozen=True)
 class GcodeParams(ParamSet):
     """The part program and the machine's limits it is planned within."""
@@ -69,6 +77,31 @@ class GcodeParams(ParamSet):
         'G54 work offset: machine position of the program zero x, y, z',
         number_list(3),
         unit='m',
+    )
+    work_offsets: list[float] = param(
+        [0.0] * 24,
+        'G55, G56, G57, G58, G59, G59.1, G59.2, G59.3 work offsets: x, y, z of each program '
+        'zero, one after the other (24 numbers); G10 L2/L20 may change them',
+        _offsets,
+        unit='m',
+    )
+    home: list[float] = param(
+        [0.0, 0.0, 0.0],
+        'the G28 position, machine coordinates (LinuxCNC #5161-5163)',
+        number_list(3),
+        unit='m',
+    )
+    home2: list[float] = param(
+        [0.0, 0.0, 0.0],
+        'the G30 position, machine coordinates (LinuxCNC #5181-5183)',
+        number_list(3),
+        unit='m',
+    )
+    tool_table: str = param(
+        '',
+        'LinuxCNC tool table file (lines "T1 P1 Z+12.5 D6.0 ;comment", lengths in mm) for T, '
+        'M6 and G43 H; empty: no table, every tool has zero offsets',
+        _text,
     )
     max_velocity: list[float] = param(
         DEFAULT_VELOCITY, 'per-axis velocity limit', _positive3, unit='m/s'
@@ -95,8 +128,15 @@ class GcodeTrajectory(Trajectory):
 
     PARAMS: ClassVar[type[GcodeParams]] = GcodeParams
 
-    def __init__(self, planned: PlannedPath, override_limit: OverrideLimit | None = None) -> None:
+    def __init__(
+        self,
+        planned: PlannedPath,
+        override_limit: OverrideLimit | None = None,
+        messages: tuple[str, ...] = (),
+    ) -> None:
         self.planned = planned
+        # The program's (MSG, ...) and tool changes, 'file:line:column: text', in order.
+        self.messages = messages
         self.end_time = planned.end_time
         # How fast a feed override may change on it (None: no override, or no limit binds).
         self.override_limit = override_limit
@@ -127,13 +167,30 @@ class GcodeTrajectory(Trajectory):
                 machine.velocity, machine.acceleration, machine.jerk, o
             )
         try:
-            moves = read_program(v.file, xyz(v.start), xyz(v.work_offset))
+            table = v.tool_table.strip()
+            others = v.work_offsets
+            setup = Setup(
+                work_offsets=((0.0, 0.0, 0.0), *(xyz(others[i : i + 3]) for i in range(0, 24, 3))),
+                home=xyz(v.home),
+                home2=xyz(v.home2),
+                tools=read_tool_table(table) if table else None,
+                tool_table=table,
+            )
+        except GcodeError as exc:
+            raise ParameterError('tool_table', v.tool_table, str(exc)) from None
+        try:
+            moves = read_program(v.file, xyz(v.start), xyz(v.work_offset), setup)
+            # The planner has one path tolerance: the tightest of the machine's and the
+            # program's G64 P (arc chords take each move's own, toolpath.pieces_of).
+            tolerances = [m.tolerance for m in moves if m.tolerance]
+            limits = replace(limits, tolerance=min([limits.tolerance, *tolerances]))
             pieces, wheres = pieces_of(moves, limits.tolerance)
             check_travel(pieces, wheres, travel)
             planned = plan(pieces, limits)
         except (GcodeError, PlanError) as exc:
             raise ParameterError('file', v.file, str(exc)) from None
-        return cls(planned, override_limit)
+        messages = tuple(f'{m.where}: {m.message}' for m in moves if m.message)
+        return cls(planned, override_limit, messages)
 
     def sample(self, t: float) -> TrajectorySample:
         return self.planned.sample(t)

@@ -1,8 +1,10 @@
 """G-code moves to the planner's straight pieces, and the machine's travel. ROS-free.
 
-An arc becomes chords whose sagitta is at most half the path tolerance, so that chords
-and corner blends (the other half, mill_trajectory.planner) stay within the tolerance of
-the programmed arc. A helix climbs linearly in its angle.
+An arc becomes chords whose sagitta is at most half the path tolerance (the machine's, or
+the program's G64 P where smaller), so that chords and corner blends (the other half,
+mill_trajectory.planner) stay within the tolerance of the programmed arc. A helix climbs
+linearly in its angle. A move in exact stop mode (G61, G61.1, canned cycles) ends at rest;
+a message moves nothing.
 """
 
 from __future__ import annotations
@@ -66,17 +68,23 @@ def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], lis
     pieces: list[Piece] = []
     wheres: list[Where] = []
     for m in moves:
+        if m.kind == 'message':  # nothing moves
+            continue
         if m.kind in ('dwell', 'stop', 'spindle'):
             pieces.append(Piece(m.start, m.end, dwell=m.duration, rest=True, spindle=m.spindle))
             wheres.append(m.where)
             continue
         speed = math.inf if m.feed is None else m.feed
         here = m.start
-        ends = arc_points(m, tolerance) if m.kind == 'arc' else [m.end]
+        chord = min(tolerance, m.tolerance) if m.tolerance else tolerance  # G64 P
+        ends = arc_points(m, chord) if m.kind == 'arc' else [m.end]
         for p in ends:
             pieces.append(Piece(here, p, speed, spindle=m.spindle))
             wheres.append(m.where)
             here = p
+        if m.exact_stop:  # G61, G61.1, canned cycles: at rest at the move's end
+            pieces.append(Piece(m.end, m.end, rest=True, spindle=m.spindle))
+            wheres.append(m.where)
     return pieces, wheres
 
 

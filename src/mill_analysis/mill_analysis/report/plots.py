@@ -1,7 +1,7 @@
 """The figures of a report, one PNG each; several runs side by side (one column per run).
 
 `plot_all` draws every figure the runs' data allow and returns their (file, caption)
-for report.md. `figures` lists them in report order, each a `Job` whose `make` draws
+for report.md. `figures` lists them in report order, each a `Plot` whose `make` draws
 it: one function per figure (`per_axis_figure` with a `draw_*` per quantity for the
 time plots, `cutting_force_figure`, `contour_figure`, `spectrum_figure`,
 `loop_timing_figure`), all laid out by `_layout`. For long runs (`workers` > 1)
@@ -47,7 +47,7 @@ Draw = Callable[['Axes', RunReport, int], str]  # one axis (index i) of a run; -
 
 
 @dataclass(frozen=True)
-class Job:
+class Plot:
     """One figure of the report, drawn when `make` is called (by `render`)."""
 
     name: str  # file name in the output directory
@@ -94,12 +94,12 @@ def plot_all(reports: list[RunReport], out: Path, workers: int = 1) -> list[tupl
     return render(figures(reports), out, workers)
 
 
-def figures(reports: list[RunReport]) -> list[Job]:
+def figures(reports: list[RunReport]) -> list[Plot]:
     """The figures of a report, in the order of report.md; none is drawn yet."""
     zoom_ms = f'{ZOOM * 1e3:g} ms'
 
-    def per_axis(name: str, caption: str, title: str, draw: Draw) -> Job:
-        return Job(name, caption, partial(per_axis_figure, reports, title, draw))
+    def per_axis(name: str, caption: str, title: str, draw: Draw) -> Plot:
+        return Plot(name, caption, partial(per_axis_figure, reports, title, draw))
 
     jobs = [
         per_axis(
@@ -122,25 +122,25 @@ def figures(reports: list[RunReport]) -> list[Job]:
             f'ξ, ξ̂ and ξ̂ − ξ over {zoom_ms} while cutting',
             draw_disturbance_zoom,
         ),
-        Job('cutting_force.png', 'Cutting forces', partial(cutting_force_figure, reports)),
+        Plot('cutting_force.png', 'Cutting forces', partial(cutting_force_figure, reports)),
     ]
     axes = reports[0].run.axes
     if 'x' in axes and 'y' in axes:
         jobs.append(
-            Job(
+            Plot(
                 'contour.png',
                 'Programmed path, measured contour and contour error',
                 partial(contour_figure, reports),
             )
         )
-    jobs.append(Job('error_spectrum.png', 'Error spectrum', partial(spectrum_figure, reports)))
+    jobs.append(Plot('error_spectrum.png', 'Error spectrum', partial(spectrum_figure, reports)))
     with_wall = [r for r in reports if r.run.state_wall_ns is not None]
     if with_wall:
-        jobs.append(Job('loop_timing.png', 'Loop timing', partial(loop_timing_figure, with_wall)))
+        jobs.append(Plot('loop_timing.png', 'Loop timing', partial(loop_timing_figure, with_wall)))
     realtime = [r for r in reports if r.run.realtime]
     if realtime:
         jobs.append(
-            Job(
+            Plot(
                 'command_latency.png',
                 'State → command latency (realtime)',
                 partial(latency_figure, realtime),
@@ -500,12 +500,12 @@ def latency_figure(reports: list[RunReport]) -> Figure:
 # -- rendering -------------------------------------------------------------------------------
 
 
-_JOBS: list[tuple[Job, Path]] = []
+_PLOTS: list[tuple[Plot, Path]] = []
 
 
 def _render(i: int) -> str | None:
     """Draw one figure; the reason it could not be drawn, if it could not (one line)."""
-    job, out = _JOBS[i]
+    job, out = _PLOTS[i]
     try:
         fig = job.make()
         try:
@@ -517,11 +517,11 @@ def _render(i: int) -> str | None:
     return None
 
 
-def render(jobs: list[Job], out: Path, workers: int) -> list[tuple[str, str]]:
+def render(jobs: list[Plot], out: Path, workers: int) -> list[tuple[str, str]]:
     """Draw and save the figures, in `workers` forked processes if more than one; a figure
     the data cannot make is left out and said so on stderr."""
-    global _JOBS  # read by the forked workers
-    _JOBS = [(job, out) for job in jobs]
+    global _PLOTS  # read by the forked workers
+    _PLOTS = [(job, out) for job in jobs]
     try:
         if workers > 1 and len(jobs) > 1:
             import multiprocessing
@@ -531,7 +531,7 @@ def render(jobs: list[Job], out: Path, workers: int) -> list[tuple[str, str]]:
         else:
             problems = [_render(i) for i in range(len(jobs))]
     finally:
-        _JOBS = []
+        _PLOTS = []
     for problem in problems:
         if problem:
             print(f'report: {problem}', file=sys.stderr)

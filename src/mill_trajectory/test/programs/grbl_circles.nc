@@ -1,0 +1,17 @@
+(grbl post: no tool changer, no coolant)
+G90 G94
+G17
+G21
+G0 Z5
+G1 F300
+M3 S12000
+G0 X20 Y10
+G1 Z-1
+G2 I-10 J0
+G3 I-10 J0
+G1 Z-2 F150
+G2 X0 Y10 I-10 J0 F300
+G0 Z5
+M5
+G0 X0 Y0
+M30
