@@ -63,10 +63,11 @@ class Event:
             raise ValueError(f'no kind of event {self.kind!r} (known: {", ".join(KINDS)})')
 
     def text(self) -> str:
-        """One line: 'y axis: trip at t = 1.2345 s: |e| = 2.001 mm > 2 mm: braked'."""
+        """One line: 'y axis: trip at t = 1.2345 s (y_controller): following error |e| =
+        2.001 mm > 2 mm: braked'."""
         who = f'{self.axis} axis: ' if self.axis else ''
         when = f' at t = {self.time:.4f} s' if math.isfinite(self.time) else ''
-        name = 'following-error trip' if self.kind == TRIP else self.kind.replace('_', ' ')
+        name = self.kind.replace('_', ' ')
         by = f' ({self.source})' if self.source else ''
         return f'{who}{name}{when}{by}' + (f': {self.detail}' if self.detail else '')
 
@@ -131,7 +132,7 @@ def trip_detail(error: float, limit: float, cause: str = '') -> str:
     """What a trip event says besides its time: the error and the limit, or its cause."""
     if cause:
         return f'{cause}: braked'
-    return f'|e| = {1e3 * abs(error):.3f} mm > {1e3 * limit:g} mm: braked'
+    return f'following error |e| = {1e3 * abs(error):.3f} mm > {1e3 * limit:g} mm: braked'
 
 
 def _number(text: str | None) -> float:

@@ -43,8 +43,8 @@ def test_a_controller_trip_is_read_from_its_values_not_its_message() -> None:
     (event,) = events_of([status, status], START)  # told twice: one event
     assert event == Event('y', TRIP, event.time, event.detail, 'y_controller')
     assert event.time == pytest.approx(1.25, abs=1e-6)
-    assert event.detail == '|e| = 2.100 mm > 2 mm: braked'
-    assert event.text().startswith('y axis: following-error trip at t = 1.2500 s (y_controller)')
+    assert event.detail == 'following error |e| = 2.100 mm > 2 mm: braked'
+    assert event.text().startswith('y axis: trip at t = 1.2500 s (y_controller): following error')
     # running: no trip
     running = Status(START, 'y_controller: following error', 0, 'axis y: running', {'axis': 'y'})
     assert events_of([running], START) == []

@@ -47,7 +47,9 @@ def tracking_run(n: int = 3001, approach: float = 0.0, error: float = 20e-6) -> 
 
 def test_the_text_and_the_json_agree_because_the_text_prints_the_value() -> None:
     rec = tracking_run()
-    rec.events = [Event('y', TRIP, 2.5, '|e| = 2.100 mm > 2 mm: braked', 'y_controller')]
+    rec.events = [
+        Event('y', TRIP, 2.5, 'following error |e| = 2.100 mm > 2 mm: braked', 'y_controller')
+    ]
     drive = DriveFigures(
         'the drive',
         {
@@ -72,7 +74,7 @@ def test_the_text_and_the_json_agree_because_the_text_prints_the_value() -> None
     assert back == summary
     text = summary.text()
     assert 'x 20 / 5 (4.00x)' in text and 'WARNING: x tracked more than 2x worse' in text
-    assert 'y axis: following-error trip at t = 2.5000 s (y_controller)' in text
+    assert 'y axis: trip at t = 2.5000 s (y_controller): following error' in text
     assert 'ticked more than half a period late 3 times of 600 (0.50 %)' in text
     assert [e['kind'] for e in data['failures']] == ['trip']
     assert [m['axis'] for m in data['metrics']] == ['x', 'y', 'z']

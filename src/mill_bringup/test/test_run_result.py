@@ -49,7 +49,7 @@ def result(events: list[Event] = (), failing: tuple[str, ...] = (), **kw: Any) -
     return RunResult(**values)
 
 
-TRIPPED = Event('x', TRIP, 0.5, '|e| = 2.100 mm > 2 mm: braked', 'x_controller')
+TRIPPED = Event('x', TRIP, 0.5, 'following error |e| = 2.100 mm > 2 mm: braked', 'x_controller')
 
 
 def test_the_exit_code_tells_a_failed_job_from_an_incomplete_record() -> None:
@@ -58,8 +58,8 @@ def test_the_exit_code_tells_a_failed_job_from_an_incomplete_record() -> None:
     failed = result([TRIPPED], failing=(TRIP,), missing_samples={'mill/x/state': 2})
     assert failed.exit_code == JOB_FAILED == 1
     assert format_result(failed).splitlines()[0] == (
-        'FAILED: x axis: following-error trip at t = 0.5000 s (x_controller): '
-        '|e| = 2.100 mm > 2 mm: braked'
+        'FAILED: x axis: trip at t = 0.5000 s (x_controller): '
+        'following error |e| = 2.100 mm > 2 mm: braked'
     )
     # a lockstep trip is the job's result, not a failure of the run
     assert result([TRIPPED]).exit_code == GOOD
