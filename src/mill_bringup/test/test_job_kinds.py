@@ -242,3 +242,21 @@ def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_to
     steps.heard(topics.CUTTING_FORCE, 0)
     steps.heard(topics.GROUND_TRUTH, 0)
     assert steps.through == -1 and steps.behind() == [topics.joint_command('z')]
+
+
+def test_the_graph_plan_is_what_the_runner_hears_of_the_job_as_prepared() -> None:
+    """The runner's session and start read one value of the graph (jobs.base.GraphPlan)."""
+    from mill_common import topics
+
+    lockstep = job_for(scenario.load('slotting'))
+    lockstep.prepare_graph(monitored=True)
+    plan = lockstep.graph_plan()
+    assert plan.steps is not None and plan.sim_time and not plan.late and not plan.timed
+    assert dict(plan.kept) == lockstep.monitor_topics()
+    assert plan.upstream == tuple(lockstep.upstream_topics())
+    realtime = _realtime_slotting()
+    realtime.prepare_graph(monitored=True)
+    plan = realtime.graph_plan()
+    assert plan.steps is None and not plan.sim_time
+    assert plan.late == {topics.REFERENCE} and topics.joint_command('x') in plan.timed
+    assert plan.late_after == tuple(topics.state(a) for a in 'xyz')

@@ -91,6 +91,24 @@ class Ending:
     source: MessageSource | None = None
 
 
+@dataclass(frozen=True)
+class GraphPlan:
+    """What the runner starts and hears of a job's graph, as the job prepared it: the topics
+    that must have a publisher before the clock node starts, those it keeps (to build the
+    record) and those a bag records besides, whose arrival it times, those it subscribes to
+    late (once each of `late_after` has a message), the recorder's handshake with the clock
+    node, and whether the graph runs on sim time (Job.graph_plan)."""
+
+    upstream: tuple[str, ...]
+    kept: Mapping[str, str]  # topic -> message type
+    recorded: Mapping[str, str]
+    timed: frozenset[str]
+    late: frozenset[str]
+    late_after: tuple[str, ...]
+    steps: RecordedSteps | None
+    sim_time: bool
+
+
 class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
 
@@ -150,6 +168,20 @@ class Job(ABC, Generic[R]):
     ) -> None:
         """Adjust the scenario before launch in this layout (the clock node waits for the
         monitor too; if `recorded`, for the recorder where it can)."""
+
+    def graph_plan(self) -> GraphPlan:
+        """What the runner starts and hears of the graph as prepare_graph left it."""
+        late, after = self.late_topics()
+        return GraphPlan(
+            upstream=tuple(self.upstream_topics()),
+            kept=self.monitor_topics(),
+            recorded=self.recorded_topics(),
+            timed=frozenset(self.timed_topics()),
+            late=frozenset(late),
+            late_after=tuple(after),
+            steps=self.recorded_steps(),
+            sim_time=self.sim_time_stamps(),
+        )
 
     def recorded_steps(self) -> RecordedSteps | None:
         """The recorder's handshake with the clock node, if the graph as prepared has one."""

@@ -33,7 +33,7 @@ def run(job: Job[Any], run_dir: Path, options: RunOptions | None = None) -> RunR
     options = options or RunOptions()
     launch = plan(job, options)
     try:
-        with Session(job, run_dir, options, launch.restartable) as session:
+        with Session(job, run_dir, options, launch.restartable, launch.graph) as session:
             began = time.monotonic()
             failure = None
             timing: Timing
