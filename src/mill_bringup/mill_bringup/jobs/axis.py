@@ -41,7 +41,7 @@ from mill_bringup.axis_simulation import AxisSimulation
 from mill_bringup.catalogue import CONTROLLER, PLANT
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.axis_nodes import JOINT_STATE, WRENCH_STAMPED, AxisNodes, axis_summary
-from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, Job, MessageSource
+from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
 from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
@@ -166,7 +166,20 @@ class AxisJob(Job[RunRecord]):
             wanted = self.scenario.overrides.setdefault(self.plant, {})
             wanted.setdefault('recorder_window', RECORDER_WINDOW)
 
+    def graph_plan(self) -> GraphPlan:
+        return GraphPlan(
+            upstream=tuple(self.upstream_topics()),
+            kept=self.monitor_topics(),
+            recorded=self.recorded_topics(),
+            timed=frozenset(),
+            late=frozenset(),
+            late_after=(),
+            steps=self.recorded_steps(),
+            sim_time=self.sim_time_stamps(),
+        )
+
     def recorded_steps(self) -> RecordedSteps | None:
+        """The recorder's handshake with the plant, if the graph as prepared has one."""
         return self.nodes.recorded_steps(self.scenario)
 
     def _servo_cycles(self, layout: str) -> bool:

@@ -169,48 +169,9 @@ class Job(ABC, Generic[R]):
         """Adjust the scenario before launch in this layout (the clock node waits for the
         monitor too; if `recorded`, for the recorder where it can)."""
 
+    @abstractmethod
     def graph_plan(self) -> GraphPlan:
         """What the runner starts and hears of the graph as prepare_graph left it."""
-        late, after = self.late_topics()
-        return GraphPlan(
-            upstream=tuple(self.upstream_topics()),
-            kept=self.monitor_topics(),
-            recorded=self.recorded_topics(),
-            timed=frozenset(self.timed_topics()),
-            late=frozenset(late),
-            late_after=tuple(after),
-            steps=self.recorded_steps(),
-            sim_time=self.sim_time_stamps(),
-        )
-
-    def recorded_steps(self) -> RecordedSteps | None:
-        """The recorder's handshake with the clock node, if the graph as prepared has one."""
-        return None
-
-    @abstractmethod
-    def upstream_topics(self) -> list[str]:
-        """Topics that must have a publisher before the clock node starts."""
-
-    @abstractmethod
-    def monitor_topics(self) -> dict[str, str]:
-        """Topic -> message type the monitor keeps (serialized) to build the record."""
-
-    def recorded_topics(self) -> dict[str, str]:
-        """Topics of the contract a bag records besides the monitored ones."""
-        return {}
-
-    def timed_topics(self) -> set[str]:
-        """Topics whose messages' arrival times the monitor keeps (latency)."""
-        return set()
-
-    def late_topics(self) -> tuple[set[str], list[str]]:
-        """Topics the monitor subscribes to only once it has a message of each of the
-        second (mill_bringup.monitor.Monitor, late); none by default."""
-        return set(), []
-
-    def sim_time_stamps(self) -> bool:
-        """Whether the graph runs on sim time (the bag's log time is then the stamp)."""
-        return True
 
     def started_ns(self) -> int | None:
         """When the job started on the system clock, if the graph says so (realtime); else

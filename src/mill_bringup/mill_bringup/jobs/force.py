@@ -29,7 +29,7 @@ from mill_models.force_process import ForceProcessModel
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.job_config import JobConfig
-from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, Job, MessageSource
+from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
@@ -110,6 +110,18 @@ class ForceJob(Job[ForceRecord]):
         if monitored:  # the force process waits for the runner too (as AxisJob's plant)
             plant.setdefault('recorder_window', RECORDER_WINDOW)
 
+    def graph_plan(self) -> GraphPlan:
+        return GraphPlan(
+            upstream=(topics.FEED_OVERRIDE, topics.REFERENCE),
+            kept=dict(FORCE_TOPICS),
+            recorded={},
+            timed=frozenset(),
+            late=frozenset(),
+            late_after=(),
+            steps=self.recorded_steps(),
+            sim_time=True,
+        )
+
     def recorded_steps(self) -> RecordedSteps | None:
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
@@ -123,12 +135,6 @@ class ForceJob(Job[ForceRecord]):
             topics.CUTTING_FORCE_TRACE: 1,
         }
         return RecordedSteps(stepped, self.period, window)
-
-    def upstream_topics(self) -> list[str]:
-        return [topics.FEED_OVERRIDE, topics.REFERENCE]
-
-    def monitor_topics(self) -> dict[str, str]:
-        return dict(FORCE_TOPICS)
 
     def progress(self, source: MessageSource) -> float:
         ns = source.latest_stamp_ns(topics.CUTTING_FORCE)

@@ -29,7 +29,7 @@ from mill_bringup.catalogue import PLANT
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.axis import WALL_CLOCK_NS
 from mill_bringup.jobs.axis_nodes import WRENCH_STAMPED, AxisNodes, axis_summary
-from mill_bringup.jobs.base import Ending, Job, MessageSource
+from mill_bringup.jobs.base import Ending, GraphPlan, Job, MessageSource
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
@@ -121,6 +121,19 @@ class RealtimeAxisJob(Job[RunRecord]):
             self.scenario.overrides.setdefault(self.trajectory, {}).setdefault(
                 'min_subscribers', readers
             )
+
+    def graph_plan(self) -> GraphPlan:
+        late, after = self.late_topics()
+        return GraphPlan(
+            upstream=tuple(self.upstream_topics()),
+            kept=self.monitor_topics(),
+            recorded=self.recorded_topics(),
+            timed=frozenset(self.timed_topics()),
+            late=frozenset(late),
+            late_after=tuple(after),
+            steps=self.recorded_steps(),
+            sim_time=False,
+        )
 
     def recorded_steps(self) -> RecordedSteps | None:
         return self.nodes.recorded_steps(self.scenario)
