@@ -124,3 +124,30 @@ def test_a_run_a_dead_drive_stopped_writes_its_summary_too(
     lines = [line for line in err.splitlines() if line.startswith('run_scenario:')]
     assert lines == [f'run_scenario: error: {said}']  # one line, as before
     assert math.isnan(data['real_time_factor']) or data['real_time_factor'] >= 0
+
+
+def test_what_stopped_a_run_is_its_typed_failure() -> None:
+    from types import SimpleNamespace
+
+    from mill_analysis.events import NODE_DIED, RUN_ERROR, STALL
+    from mill_bringup.graph import GraphError
+    from mill_bringup.jobs.realtime import DriveSilent
+    from mill_bringup.runner.options import RunError, RunFailed
+    from mill_bringup.runner.run import failure_of
+
+    class Job:
+        def progress(self, source: object) -> float:
+            return 2.5
+
+    session = SimpleNamespace(monitor=None)
+    died = failure_of(GraphError('node x_controller exited with code 3'), Job(), session)
+    assert (died.kind, died.time, died.detail) == (
+        NODE_DIED,
+        2.5,
+        'node x_controller exited with code 3',
+    )
+    assert failure_of(RunFailed(STALL, 'the run stalled'), Job(), session).kind == STALL
+    assert failure_of(RunError('no publisher appeared'), Job(), session).kind == RUN_ERROR
+    silent = Event('y', DRIVE_SILENT, 4.0, 'the drive went silent')
+    assert failure_of(DriveSilent(silent), Job(), session) is silent
+    assert str(DriveSilent(silent)) == 'the drive went silent'  # the line the runner prints
