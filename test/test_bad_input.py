@@ -73,7 +73,11 @@ def test_controller_rejects_bad_changes_at_run_time(start_node) -> None:
         _assert_rejected(params.set('axis', 'y'), 'axis')  # read-only
         undeclared = params.set('pd.omega', 20.0)
         _assert_rejected(undeclared, 'pd.omega=20.0 (did you mean pd.omega_c?)')
+        # Issue 37: a gain of a law that does not run, which it cannot be built with.
+        overflow = params.set('gpi.omega_n', 1e300)
+        _assert_rejected(overflow, 'gpi.omega_n=1e+300: gpi (not the running law): OverflowError')
         assert params.get('pd.omega_c', 'controller', 'axis') == before
+        assert params.get('gpi.omega_n') == {'gpi.omega_n': 80.0}
         assert controller.alive()
 
         assert params.set('pd.omega_c', 20.0).successful

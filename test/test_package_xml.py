@@ -13,7 +13,9 @@ What a package needs:
   catalogue), and the message packages of the topics the runner's monitor subscribes to by
   type name (mill_bag.recorder.message_class).
 
-A Python library without a rosdep key (PIP_ONLY) is installed from requirements.txt. A
+Every Python library is declared by its rosdep key, all in one table (PYTHON_KEYS): the
+keys of rosdistro's rosdep/python.yaml, and those it lacks defined in this workspace's
+rosdep/mill.yaml (a test checks that each is, with the pip package that provides it). A
 test that imports a package which itself test_depends on this one cannot declare it: colcon
 orders packages by every kind of dependency and refuses the cycle. Nothing may be declared
 that the package does not need (a stale dependency hides a missing one), but for the
@@ -34,7 +36,8 @@ from test.test_import_graph import imports_of, module_name
 
 SRC = Path(__file__).resolve().parents[1] / 'src'
 PACKAGES = sorted(p.parent.name for p in SRC.glob('*/package.xml'))
-# Python libraries by their rosdep keys (rosdistro's rosdep/python.yaml).
+# Python libraries (top-level import name) by their rosdep keys: those of rosdistro's
+# rosdep/python.yaml (checked there), else of this workspace's rosdep/mill.yaml (LOCAL_KEYS).
 PYTHON_KEYS = {
     'numpy': 'python3-numpy',
     'scipy': 'python3-scipy',
@@ -44,18 +47,22 @@ PYTHON_KEYS = {
     'tqdm': 'python3-tqdm',
     'pytest': 'python3-pytest',
     'hypothesis': 'python3-hypothesis',
+    'rosbags': 'python3-rosbags-pip',  # rosdistro: pip rosbags
+    'mcap_ros2': 'mcap-ros2-support',  # rosdistro: pip mcap-ros2-support
+    'mcap': 'python3-mcap-pip',  # not in rosdistro: rosdep/mill.yaml, pip mcap
 }
-# No rosdep key: installed from requirements.txt (pip).
-PIP_ONLY = {'rosbags', 'mcap', 'mcap_ros2'}
+# The keys rosdistro lacks: defined in rosdep/mill.yaml, with the pip package of each.
+LOCAL_KEYS = {'python3-mcap-pip': 'mcap'}
+ROSDEP_FILE = SRC.parent / 'rosdep' / 'mill.yaml'
 WORKSPACE_TESTS = 'test'  # the workspace's test/ package (its conftest), not a dependency
 # Declared, not imported: provided through another dependency, left to the package's owners.
 KNOWN_UNUSED = {('mill_common', 'std_msgs')}  # sensor_msgs brings it (JointState's header)
 
 
 def key_of(module: str) -> str | None:
-    """The rosdep key that provides a module (None: the standard library, pip only)."""
+    """The rosdep key that provides a module (None: the standard library, the workspace)."""
     top = module.split('.')[0]
-    if top in sys.stdlib_module_names or top in PIP_ONLY or top == WORKSPACE_TESTS:
+    if top in sys.stdlib_module_names or top == WORKSPACE_TESTS:
         return None
     return PYTHON_KEYS.get(top, top)
 
@@ -170,6 +177,21 @@ def test_the_checker_sees_imports_in_functions_launch_files_and_python_m(tmp_pat
     tree = ast.parse("cmd = [sys.executable, '-m', 'mill_analysis.report', bag]\n")
     assert run_modules(tree) == {'mill_analysis.report'}
     assert key_of('yaml') == 'python3-yaml' and key_of('launch_ros.actions') == 'launch_ros'
-    assert key_of('os.path') is None and key_of('rosbags.rosbag2') is None
+    assert key_of('os.path') is None and key_of('rosbags.rosbag2') == 'python3-rosbags-pip'
+    assert key_of('mcap.writer') == 'python3-mcap-pip'
     run, _ = needed('mill_bringup')
     assert {'launch', 'launch_ros', 'lifecycle_msgs', 'mill_plant', 'rosgraph_msgs'} <= set(run)
+
+
+def test_every_key_rosdistro_lacks_is_defined_in_the_workspace_rosdep_file() -> None:
+    import yaml
+
+    rules = yaml.safe_load(ROSDEP_FILE.read_text())
+    assert set(rules) == set(LOCAL_KEYS) <= set(PYTHON_KEYS.values())
+    for key, package in LOCAL_KEYS.items():
+        for os_name in ('debian', 'ubuntu', 'fedora', 'osx'):
+            assert rules[key][os_name] == {'pip': {'packages': [package]}}, (key, os_name)
+    # and requirements.txt, which the venv is installed from, names each pip package too
+    required = (SRC.parent / 'requirements.txt').read_text()
+    for package in [*LOCAL_KEYS.values(), 'rosbags', 'mcap-ros2-support']:
+        assert f'\n{package}' in required, package

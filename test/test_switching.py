@@ -144,21 +144,27 @@ def test_switch_to_a_law_that_joins_the_observer_model_mid_job(ros_env) -> None:
 
 @pytest.mark.system
 def test_a_trip_stays_latched_whatever_else_is_set(ros_env) -> None:
-    """Issue 21: only ~/reset_trip or setting following_error_limit clears a trip; a law
-    switch (or any other parameter) leaves the axis braked."""
+    """Issues 21 and 34: ~/reset_trip alone clears a trip; a law switch, a gain, or a new
+    following_error_limit (it changes the limit only) leave the axis braked."""
+    from std_srvs.srv import Trigger
+
     with running_job(ros_env, 'slotting', '--controller', 'pd', '--duration', '4') as job:
         # without the observer's estimate every axis trips within about 85 ms
         assert job.spin_until(lambda: any(math.isnan(u) for u in job.commands.values()), 120)
         assert job.controller.set('controller', 'adrc').successful
         assert job.controller.set('pd.omega_c', 15.0).successful
+        assert job.controller.set('following_error_limit', 1.0).successful
         asked = max(job.commands)
         assert job.spin_until(lambda: max(job.commands) > asked + 50_000_000, 60)
         after = [u for ns, u in job.commands.items() if ns > asked]
-        assert after and all(math.isnan(u) for u in after), 'a law switch cleared the trip'
-        assert job.controller.set('following_error_limit', 1.0).successful  # clears it
+        assert after and all(math.isnan(u) for u in after), 'a parameter write cleared the trip'
+        client = job.node.create_client(Trigger, '/x_controller/reset_trip')
+        assert client.wait_for_service(timeout_sec=60)
+        future = client.call_async(Trigger.Request())
+        assert job.spin_until(future.done, 60) and future.result().message == 'trip cleared'
         cleared = max(job.commands)
-        # Commands sent before the limit was set may still be on their way to this test (a
-        # busy machine): wait for the first one computed after it, however late it comes.
+        # Commands sent before the reset may still be on their way to this test (a busy
+        # machine): wait for the first one computed after it, however late it comes.
         assert job.spin_until(
             lambda: any(math.isfinite(u) for ns, u in job.commands.items() if ns > cleared), 120
-        ), 'setting following_error_limit did not clear the trip'
+        ), 'reset_trip did not clear the trip'

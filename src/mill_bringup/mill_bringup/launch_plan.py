@@ -14,13 +14,18 @@ tested here without a ROS install that has `launch`:
 - log_level: every node's `--log-level`;
 - layout: which nodes share a process (mill_bringup.layout: processes, per_axis, single;
   empty: what the scenario says). Nodes that share one run in `mill_container`, which gets
-  the same namespace, parameter file and arguments; each node keeps its name.
+  the same namespace, parameter file and arguments; each node keeps its name;
+- private_clock: `true` remaps /clock to NAMESPACE/clock for every node of the launch, as
+  `run_scenario --private-clock` does, so that two simulated machines launched in one
+  domain under two namespaces each keep their own clock; it needs a namespace (empty: the
+  scenario's `private_clock`).
 
 Every node gets one parameter file (written by `write_parameters`) with its merged values
 keyed `/**/NAME`, so they apply under the namespace whatever the keys of the scenario and
-of params_file. The node that clocks the job (plant or force process) is required: its exit
-ends the launch with its exit code. The `job_watch` node ends the launch when the
-trajectory reports the job done.
+of params_file, and the scenario's `mill_scenario: launch:` list, from which mill_container
+learns what each of its nodes is. The node that clocks the job (plant or force process) is
+required: its exit ends the launch with its exit code. The `job_watch` node ends the launch
+when the trajectory reports the job done.
 """
 
 from __future__ import annotations
@@ -35,6 +40,7 @@ from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
 from mill_bringup.scenario import (
     LAYOUTS,
+    SCENARIO_KEY,
     NodeLaunch,
     Scenario,
     ScenarioError,
@@ -50,6 +56,7 @@ if TYPE_CHECKING:  # the job's modules load only when a plan is made
 
 TIMINGS = ('lockstep', 'realtime')
 LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
+SWITCHES = {'true': True, 'false': False, '': None}  # a boolean argument; '': the scenario's
 # The node that ends the launch once the job is done (mill_bringup.job_watch).
 JOB_WATCH = NodeLaunch('job_watch', 'mill_bringup', 'job_watch')
 
@@ -72,7 +79,7 @@ ARGUMENTS = (
         'namespace',
         '',
         "machine namespace of every node, e.g. machine2; empty: the scenario's, else /. "
-        '/clock and /diagnostics stay global',
+        '/diagnostics stays global, and /clock unless private_clock is true',
     ),
     Argument(
         'params_file',
@@ -90,6 +97,13 @@ ARGUMENTS = (
         'layout',
         '',
         'which nodes share a process: ' + ', '.join(LAYOUTS) + "; empty: the scenario's",
+    ),
+    Argument(
+        'private_clock',
+        '',
+        'true: remap /clock to NAMESPACE/clock for every node (needs a namespace), so that '
+        'machines launched in one domain under two namespaces keep their own clocks; empty: '
+        "the scenario's",
     ),
 )
 # What runs the nodes a layout puts together (mill_bringup.container).
@@ -128,6 +142,7 @@ def plan(
     timing: str = '',
     log_level: str = 'info',
     layout: str = '',
+    private_clock: str = '',
 ) -> Plan:
     """The nodes a launch of this scenario starts; ScenarioError (one line) for bad input."""
     from mill_bringup.jobs.registry import job_for
@@ -143,17 +158,28 @@ def plan(
         set_timing(scen, timing)  # what run_scenario --timing sets, the same way
     if log_level not in LOG_LEVELS:
         raise ScenarioError(f'log_level must be one of {", ".join(LOG_LEVELS)}, got {log_level!r}')
+    if private_clock.lower() not in SWITCHES:
+        raise ScenarioError(f'private_clock must be true or false, got {private_clock!r}')
+    switch = SWITCHES[private_clock.lower()]
+    if switch is not None:
+        scen.private_clock = switch
+    if scen.private_clock and scen.namespace == topics.ROOT:
+        raise ScenarioError('a private clock needs a namespace (namespace:=NAME)')
     # The job's configuration: every value and cross-node rule checked before anything
     # starts, and the graph (exactly one clock node).
     job = job_for(scen)
+    chosen = check_layout(layout) if layout else scen.layout
+    job.prepare_graph(monitored=False, layout=chosen)  # what the layout changes (no monitor)
     clocks = {n.name for n in job.clock_nodes}
     remappings = []
     if scen.private_clock and scen.namespace != topics.ROOT:
         remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
-    out = Plan(scen, parameters=scen.node_parameters(), config=job.config)
-    processes = layout_processes(
-        scen, check_layout(layout) if layout else scen.layout, config=job.config
-    )
+    # What mill_container reads to tell which class each of its nodes is (the runner gives
+    # it the scenario file itself).
+    launch = [f'{n.name} {n.package} {n.executable}' for n in scen.nodes]
+    entry = {SCENARIO_KEY: {'ros__parameters': {'launch': launch}}}
+    out = Plan(scen, parameters={**entry, **scen.node_parameters()}, config=job.config)
+    processes = layout_processes(scen, chosen, config=job.config)
     for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
         first = process.nodes[0]
         out.nodes.append(

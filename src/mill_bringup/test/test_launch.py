@@ -25,6 +25,7 @@ from mill_bringup import launch_plan
 
 ROOT = Path(__file__).resolve().parents[3]
 LAUNCH_FILE = ROOT / 'src' / 'mill_bringup' / 'launch' / 'scenario.launch.py'
+USER_GUIDE = ROOT / 'docs' / 'user-guide.md'
 SCENARIOS = sorted(p.stem for p in (ROOT / 'config').glob('*.yaml'))
 
 
@@ -36,10 +37,21 @@ def _console_scripts() -> dict[tuple[str, str], str]:
     return out
 
 
-def test_arguments_are_the_documented_ones() -> None:
-    names = [a.name for a in launch_plan.ARGUMENTS]
-    assert names == ['scenario', 'namespace', 'params_file', 'timing', 'log_level', 'layout']
-    assert all(len(a.description) > 20 for a in launch_plan.ARGUMENTS)
+def documented_arguments() -> dict[str, str]:
+    """The launch-argument table of docs/user-guide.md: name -> its default column."""
+    text = USER_GUIDE.read_text()
+    section = text[text.index('## With a full ROS 2 install') :]
+    table = section[section.index('| argument | default | meaning |') :].split('\n\n')[0]
+    rows = [line.split('|')[1:3] for line in table.splitlines()[2:]]
+    return {name.strip().strip('`'): default.strip() for name, default in rows}
+
+
+def test_the_user_guide_lists_exactly_the_arguments_the_launch_declares() -> None:
+    documented = documented_arguments()
+    assert list(documented) == [a.name for a in launch_plan.ARGUMENTS]
+    for a in launch_plan.ARGUMENTS:  # a default is quoted as it is; none is said in words
+        assert (f'`{a.default}`' in documented[a.name]) is bool(a.default), a.name
+        assert len(a.description) > 20
 
 
 @pytest.mark.parametrize('name', SCENARIOS)
@@ -59,7 +71,9 @@ def test_every_planned_node_is_an_executable_of_its_package(name: str, tmp_path:
     clock = 'force_process_node' if name == 'rubio' else 'plant_node'
     assert required == sorted([clock, 'job_watch'])
     written = parse_yaml(path.read_text())
-    assert set(written) == {f'/**/{n.name}' for n in plan.scenario.nodes}
+    assert set(written) == {'mill_scenario'} | {f'/**/{n.name}' for n in plan.scenario.nodes}
+    lines = written['mill_scenario']['ros__parameters']['launch']
+    assert lines == [f'{n.name} {n.package} {n.executable}' for n in plan.scenario.nodes]
 
 
 def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
@@ -75,6 +89,7 @@ def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
     assert written['/**/x_controller']['ros__parameters']['pd.omega_c'] == 20.0
     assert written['/**/y_controller']['ros__parameters']['pd.omega_c'] == 12.0  # the file's
     assert written['/**/plant']['ros__parameters']['substeps'] == 8
+    del written['mill_scenario']  # the nodes' names and kinds (for mill_container)
     for entry in written.values():
         # what run_scenario --timing realtime sets: no sim time, one sample of delay
         assert entry['ros__parameters']['timing'] == 'realtime'
@@ -94,6 +109,23 @@ def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
     plan = launch_plan.plan(str(path))
     assert {n.namespace for n in plan.nodes} == {'/m2'}
     assert all(n.remappings == [('/clock', '/m2/clock')] for n in plan.nodes)
+    # private_clock:=false overrides the scenario's
+    plan = launch_plan.plan(str(path), private_clock='false')
+    assert all(n.remappings == [] for n in plan.nodes)
+
+
+@pytest.mark.parametrize('layout', ['processes', 'single'])
+def test_private_clock_remaps_clock_into_the_namespace_for_every_process(layout: str) -> None:
+    # Issue 34: two machines launched side by side in one domain each hear their own plant.
+    plans = {
+        m: launch_plan.plan('slotting', m, layout=layout, private_clock='true')
+        for m in ('machine_a', 'machine_b')
+    }
+    for m, plan in plans.items():
+        assert [n.remappings for n in plan.nodes] == [[('/clock', f'/{m}/clock')]] * len(plan.nodes)
+        argv = launched_argv(plan.nodes[0])
+        assert argv[-2:] == ['-r', f'/clock:=/{m}/clock']
+    assert all(n.remappings == [] for n in launch_plan.plan('slotting', 'machine_a').nodes)
 
 
 @pytest.mark.parametrize(
@@ -105,6 +137,8 @@ def test_a_private_clock_scenario_remaps_clock(tmp_path: Path) -> None:
         ({'scenario': 'nope'}, "no scenario 'nope'"),
         ({'params_file': 'missing.yaml'}, 'params_file missing.yaml: No such file'),
         ({'layout': 'pairs'}, "layout must be one of processes, per_axis, single, got 'pairs'"),
+        ({'private_clock': 'yes'}, "private_clock must be true or false, got 'yes'"),
+        ({'private_clock': 'true'}, r'a private clock needs a namespace \(namespace:=NAME\)'),
     ],
 )
 def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> None:
@@ -112,6 +146,70 @@ def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> 
     with pytest.raises(ScenarioError, match=message) as info:
         launch_plan.plan(**args)
     assert '\n' not in str(info.value)
+
+
+def launched_argv(node: launch_plan.NodePlan) -> list[str]:
+    """The command line launch_ros starts a Node action with: its executable, its
+    arguments, then --ros-args: the ROS arguments, the node name (none for a container),
+    the namespace, the parameter files and the remappings."""
+    argv = [node.executable, *node.nodes, '--ros-args', *node.ros_arguments]
+    if not node.nodes:
+        argv += ['-r', f'__node:={node.name}']
+    argv += ['-r', f'__ns:={node.namespace}']
+    for f in node.parameters:
+        argv += ['--params-file', f]
+    for rule in node.remappings:
+        argv += ['-r', f'{rule[0]}:={rule[1]}']
+    return argv
+
+
+@pytest.mark.parametrize(
+    ('layout', 'containers'),
+    [
+        (
+            'per_axis',
+            [
+                ['x_observer', 'x_controller'],
+                ['y_observer', 'y_controller'],
+                ['z_observer', 'z_controller'],
+            ],
+        ),
+        ('single', [[n.name for n in launch_plan.load('slotting').nodes]]),
+    ],
+)
+def test_each_container_of_a_layout_finds_its_nodes_in_the_launch_arguments(
+    tmp_path: Path, layout: str, containers: list[list[str]]
+) -> None:
+    # Issue 34: mill_container ended with `no --params-file has a mill_scenario:
+    # ros__parameters: launch: list naming the nodes` (rc 2, and 3 from the plant that waited
+    # for them): the launch gave it the merged parameters only.
+    from mill_bringup.container import makers
+    from mill_common.param_sources import params_files
+
+    plan = launch_plan.plan('slotting', 'machine_a', layout=layout)
+    launch_plan.write_parameters(plan, str(tmp_path))
+    started = [n for n in plan.nodes if n.nodes]
+    assert [list(n.nodes) for n in started] == containers
+    for node in started:
+        argv = launched_argv(node)
+        built = makers(list(node.nodes), params_files(argv))
+        assert [name for name, _make in built] == list(node.nodes)
+
+
+@pytest.mark.parametrize(
+    ('layout', 'readers'), [('processes', None), ('per_axis', 1), ('single', 1)]
+)
+def test_the_plant_waits_for_the_readers_its_layout_gives_it(
+    tmp_path: Path, layout: str, readers: int | None
+) -> None:
+    # An observer and its controller in one process count as one reader of the states: the
+    # plant of a per_axis launch waited for 2 and ended after its startup timeout (rc 3).
+    plan = launch_plan.plan('slotting', layout=layout)
+    written = yaml.safe_load(launch_plan.write_parameters(plan, str(tmp_path)).read_text())
+    assert written['/**/plant']['ros__parameters'].get('min_subscribers') == readers
+    for axis_node in ('x_observer', 'x_controller'):  # no monitor to wait for: their defaults
+        assert 'min_subscribers' not in written[f'/**/{axis_node}']['ros__parameters']
+    assert plan.scenario.parameters('plant')['min_subscribers'] == (readers or 2)
 
 
 def test_layouts_start_containers_that_keep_the_node_names(tmp_path: Path) -> None:
@@ -260,7 +358,7 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     values = {a.name: a.default for a in launch_plan.ARGUMENTS}
-    values.update(namespace='machine2', log_level='warn')
+    values.update(namespace='machine2', log_level='warn', private_clock='true')
     for name, mod in _stand_ins(values).items():
         monkeypatch.setitem(sys.modules, name, mod)
     monkeypatch.setattr('tempfile.tempdir', str(tmp_path))
@@ -280,12 +378,13 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
 
     actions = opaque.kwargs['function'](object())
     nodes = [a.kwargs for a in actions if type(a).__name__ == 'Node']
-    plan = launch_plan.plan('slotting', 'machine2', log_level='warn')
+    plan = launch_plan.plan('slotting', 'machine2', log_level='warn', private_clock='true')
     assert [(n['package'], n['executable'], n['name']) for n in nodes] == [
         (p.package, p.executable, p.name) for p in plan.nodes
     ]
     assert all(n['arguments'] == [] for n in nodes)
     assert all(n['namespace'] == '/machine2' for n in nodes)
+    assert all(n['remappings'] == [('/clock', '/machine2/clock')] for n in nodes)
     assert all(n['ros_arguments'] == ['--log-level', 'warn'] for n in nodes)
     assert all(Path(n['parameters'][0]).is_file() for n in nodes)
     handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']

@@ -1,17 +1,18 @@
 """The parameters nodes share, declared once as ParamSets (ROS-free).
 
-mill_common.parameters keeps `input_watch_specs()`, `realtime_specs()` and
-`axis_node_specs()` for the node configs that list (name, ParamSpec) pairs; they are the
-`named_specs()` of the sets here.
+`input_watch_specs()`, `realtime_specs()` and `axis_node_specs()` give the node configs
+that list (name, ParamSpec) pairs the `named_specs()` of the sets here.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from mill_common.declared import ParamSet, param
 from mill_common.parameters import (
+    ParamSpec,
     WholeAtLeast,
     in_range,
     non_negative,
@@ -138,3 +139,35 @@ class AxisNodeParams(InputWatch, RealtimeScheduling):
         non_negative_int,
         read_only=True,
     )
+
+
+def input_watch_specs() -> list[tuple[str, ParamSpec]]:
+    """How long a node's inputs may be silent (mill_common.input_guard)."""
+    return InputWatch.named_specs()
+
+
+def realtime_specs() -> list[tuple[str, ParamSpec]]:
+    """The real-time scheduling of a node's process (mill_common.realtime_setup)."""
+    return RealtimeScheduling.named_specs()
+
+
+def axis_node_specs() -> list[tuple[str, ParamSpec]]:
+    """Parameters every per-axis node (controller, observer) has."""
+    return AxisNodeParams.named_specs()
+
+
+def check_design_period(values: Mapping[str, Any] | AxisNodeParams) -> None:
+    """ValueError (one line) when gains designed for one sample period would run at another.
+
+    values: a node's values (a mapping) or its typed set (node_params.AxisNodeParams).
+    """
+    if isinstance(values, Mapping):
+        designed, period = values['design_period'], values['sample_period']
+    else:
+        designed, period = values.design_period, values.sample_period
+    if designed and abs(designed - period) > 1e-12 * designed:
+        raise ValueError(
+            f'the gains were designed for T = {1e3 * designed:g} ms (design_period) and the '
+            f'node runs at T = {1e3 * period:g} ms: give gains for this rate, or the tuning '
+            'rule (observer eso with eso.omega_o 0, pd.omega_c 0) and design_period 0'
+        )

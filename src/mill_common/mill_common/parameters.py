@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 if TYPE_CHECKING:
-    from mill_common.node_params import AxisNodeParams
+    pass
 
 Check = Callable[[Any], 'str | None']
 
@@ -377,44 +377,6 @@ def check_gain_and_period(input_gain: float, sample_period: float) -> tuple[floa
     if reason:
         raise ParameterError('sample_period', sample_period, reason)
     return b, float(sample_period)
-
-
-def input_watch_specs() -> list[tuple[str, ParamSpec]]:
-    """How long a node's inputs may be silent (mill_common.input_guard)."""
-    from mill_common.node_params import InputWatch
-
-    return InputWatch.named_specs()
-
-
-def realtime_specs() -> list[tuple[str, ParamSpec]]:
-    """The real-time scheduling of a node's process (mill_common.realtime_setup)."""
-    from mill_common.node_params import RealtimeScheduling
-
-    return RealtimeScheduling.named_specs()
-
-
-def axis_node_specs() -> list[tuple[str, ParamSpec]]:
-    """Parameters every per-axis node (controller, observer) has."""
-    from mill_common.node_params import AxisNodeParams
-
-    return AxisNodeParams.named_specs()
-
-
-def check_design_period(values: Mapping[str, Any] | AxisNodeParams) -> None:
-    """ValueError (one line) when gains designed for one sample period would run at another.
-
-    values: a node's values (a mapping) or its typed set (node_params.AxisNodeParams).
-    """
-    if isinstance(values, Mapping):
-        designed, period = values['design_period'], values['sample_period']
-    else:
-        designed, period = values.design_period, values.sample_period
-    if designed and abs(designed - period) > 1e-12 * designed:
-        raise ValueError(
-            f'the gains were designed for T = {1e3 * designed:g} ms (design_period) and the '
-            f'node runs at T = {1e3 * period:g} ms: give gains for this rate, or the tuning '
-            'rule (observer eso with eso.omega_o 0, pd.omega_c 0) and design_period 0'
-        )
 
 
 def algorithm_specs(classes: Iterable[type[Plugin]]) -> list[tuple[str, ParamSpec]]:

@@ -8,9 +8,11 @@ refuses each end the node with one line naming the parameter. Each parameter is 
 statically typed, with the range and constraint text its check gives (`ros2 param
 describe`). A change at run time is coerced (an integer for a double), checked by ROS
 against the declared type and range, validated by the spec and then applied by the node's
-`apply` callback; if any of them refuses, the change is rejected with its reason and the
-node keeps its previous configuration; so is a name the node does not declare, with the
-closest one it has.
+`apply` callback, which builds the node's cores from the full set of would-be values; if
+any of them refuses, or the cores cannot be built (a ValueError or an ArithmeticError such
+as an OverflowError: mill_common.build_check), the change is rejected with its reason in one
+line and the node keeps its previous configuration and cores; so is a name the node does
+not declare, with the closest one it has.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from rclpy.exceptions import ParameterNotDeclaredException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
+from mill_common.build_check import BUILD_ERRORS, build_failure
 from mill_common.param_sources import parameter_sources, params_file_miss, params_files
 from mill_common.parameters import (
     ParameterError,
@@ -107,6 +110,31 @@ def descriptor(spec: ParamSpec) -> ParameterDescriptor:
     return d
 
 
+def declare_with_value(node: Node, name: str, value: Any, spec: ParamSpec) -> None:
+    """Declare `name` statically typed, holding `value`, also when it is an empty list.
+
+    rclpy takes a declared parameter's type from its value, and reads [] as a byte array;
+    declared by type alone, the parameter would be "not set", and rclpy's GetParameters
+    answers no value at all for a request that names one unset parameter (`ros2 param dump`
+    then shows `ros__parameters: {}`). So an empty list is declared by its type, writable,
+    then given [] as a value of that type (before the node's set-callbacks are registered),
+    and a read-only one gets its read-only descriptor last.
+    """
+    full = descriptor(spec)
+    if value != []:
+        node.declare_parameter(name, value, full, ignore_override=True)
+        return
+    kind = Parameter.Type(ROS_TYPES[value_type(spec)])
+    writable = descriptor(spec)
+    writable.read_only = False
+    node.declare_parameter(name, kind, writable, ignore_override=True)
+    (result,) = node.set_parameters([Parameter(name, kind, [])])
+    if not result.successful:
+        raise ParameterError(name, [], result.reason)
+    if full.read_only:
+        node.set_descriptor(name, full)
+
+
 class NodeParameters:
     """Owns a node's validated parameter values; `apply(values)` rebuilds the node's cores."""
 
@@ -119,28 +147,20 @@ class NodeParameters:
         self._node = node
         self._specs = dict(specs)
         self._apply = apply
-        # The names being set while `apply` runs (all of them at start-up): a node may act
-        # on a name set to the value it had (setting following_error_limit clears a trip).
-        self.setting: frozenset[str] = frozenset(self._specs)
         self._check_files()
         given = self._given_values()
         values: dict[str, Any] = {}
         for name, spec in specs:
             value = validate(spec, given.get(name, spec.default), name)
-            # The value is checked already: the override is not read a second time. rclpy
-            # takes a static type from the value, and cannot tell it for an empty list:
-            # such a parameter is declared with its type and no value (`ros2 param get`
-            # says "not set"); the node holds [].
-            kind = ROS_TYPES[value_type(spec)]
-            initial = value if value != [] else Parameter.Type(kind)
-            node.declare_parameter(name, initial, descriptor(spec), ignore_override=True)
+            # The value is checked already: the override is not read a second time.
+            declare_with_value(node, name, value, spec)
             values[name] = value
         try:
             apply(values)
         except ParameterError:
             raise
-        except ValueError as exc:
-            raise ParameterError('configuration', '', str(exc)) from exc
+        except BUILD_ERRORS as exc:
+            raise ParameterError('configuration', '', build_failure(exc)) from exc
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
@@ -216,18 +236,22 @@ class NodeParameters:
             try:
                 candidate[param.name] = validate(spec, _plain(param.value), param.name)
             except ParameterError as exc:
-                self._node.get_logger().warning(f'rejected: {exc}')
-                return SetParametersResult(successful=False, reason=str(exc))
+                return self._refuse(str(exc))
             changed.append(param.name)
         if not changed:
             return SetParametersResult(successful=True)
-        self.setting = frozenset(changed)
         try:
             self._apply(candidate)
-        except ValueError as exc:  # ParameterError is a ValueError
-            self._node.get_logger().warning(f'rejected: {exc}')
-            return SetParametersResult(successful=False, reason=str(exc))
+        except ParameterError as exc:
+            return self._refuse(str(exc))
+        except BUILD_ERRORS as exc:  # the cores cannot be built: the old ones run on
+            asked = ', '.join(f'{name}={candidate[name]!r}' for name in changed)
+            return self._refuse(f'{asked}: {build_failure(exc)}')
         self.values = candidate
         for name in changed:
             self._node.get_logger().info(f'parameter {name} = {candidate[name]!r}')
         return SetParametersResult(successful=True)
+
+    def _refuse(self, reason: str) -> SetParametersResult:
+        self._node.get_logger().warning(f'rejected: {reason}')
+        return SetParametersResult(successful=False, reason=reason)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import os
 
 import pytest
-from mill_common.parameters import ParameterError, realtime_specs, validate
+from mill_common.node_params import realtime_specs
+from mill_common.parameters import ParameterError, validate
 
 from mill_common import realtime_setup
 

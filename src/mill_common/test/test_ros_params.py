@@ -122,3 +122,74 @@ def test_a_params_file_with_nothing_for_the_node_is_refused(
     command_line(['x', '--ros-args', *args], ('x_controller', 'y_controller'))
     node = start('x_controller', '/', *args)
     assert NodeParameters(node, SPECS, lambda values: None).values == {'pd.omega_c': 12.0}
+
+
+def _get_all_parameters(node) -> dict[str, object]:
+    """Every listed name of `node` through its own ListParameters and GetParameters
+    services, as `ros2 param dump` asks: name -> value (None where no value came back)."""
+    from rcl_interfaces.srv import GetParameters, ListParameters
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import parameter_value_to_python
+
+    context = node.context
+    probe = Node('probe', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    executor.add_node(probe)
+    try:
+        base = node.get_fully_qualified_name()
+
+        def call(kind, suffix, request):
+            client = probe.create_client(kind, f'{base}/{suffix}')
+            assert client.wait_for_service(timeout_sec=10), suffix
+            future = client.call_async(request)
+            executor.spin_until_future_complete(future, timeout_sec=10)
+            assert future.done(), suffix
+            return future.result()
+
+        names = list(call(ListParameters, 'list_parameters', ListParameters.Request()).result.names)
+        values = call(GetParameters, 'get_parameters', GetParameters.Request(names=names)).values
+        got = [parameter_value_to_python(v) for v in values]
+        return dict(zip(names, got + [None] * (len(names) - len(got)), strict=True))
+    finally:
+        executor.remove_node(node)
+        executor.shutdown()
+        probe.destroy_node()
+
+
+def test_get_parameters_answers_every_name_also_an_empty_list(start, command_line) -> None:
+    # rclpy answers a GetParameters request with no value at all when one name is unset:
+    # `ros2 param dump` showed `ros__parameters: {}` for every node with an empty list.
+    from mill_common.node_params import realtime_specs
+    from mill_common.parameters import StringList, number_list
+    from mill_common.ros_params import NodeParameters
+    from rcl_interfaces.msg import ParameterType
+    from rclpy.parameter import Parameter
+
+    command_line([])
+    specs = [
+        *SPECS,
+        *realtime_specs(),  # cpu_affinity: [] and read-only
+        ('topics', ParamSpec('topics', [], 'topics', StringList('topic names'))),
+        ('gains', ParamSpec('gains', [], 'gains', number_list())),
+    ]
+    node = start('x_controller', '/')
+    params = NodeParameters(node, specs, lambda values: None)
+    got = _get_all_parameters(node)
+    assert set(got) >= {'pd.omega_c', 'cpu_affinity', 'topics', 'gains', 'use_sim_time'}
+    assert {n: v for n, v in got.items() if v is None} == {}
+    assert got['pd.omega_c'] == 12.0 and got['realtime_priority'] == 0
+    assert got['cpu_affinity'] == [] and got['topics'] == [] and got['gains'] == []
+    # typed as declared, read-only as declared
+    types = {n: node.get_parameter(n).type_ for n in ('cpu_affinity', 'topics', 'gains')}
+    assert types == {
+        'cpu_affinity': Parameter.Type.INTEGER_ARRAY,
+        'topics': Parameter.Type.STRING_ARRAY,
+        'gains': Parameter.Type.DOUBLE_ARRAY,
+    }
+    assert node.describe_parameter('cpu_affinity').read_only
+    assert node.describe_parameter('cpu_affinity').type == ParameterType.PARAMETER_INTEGER_ARRAY
+    assert not node.set_parameters([Parameter('cpu_affinity', value=[0])])[0].successful
+    assert node.set_parameters([Parameter('topics', value=['/a'])])[0].successful
+    assert params.values['topics'] == ['/a'] and params.values['cpu_affinity'] == []

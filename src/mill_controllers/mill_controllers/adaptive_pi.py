@@ -68,7 +68,7 @@ from mill_common.parameters import (
 from mill_common.signals import AxisReference, ControlInputs, Estimate, FopdtEstimate
 from mill_models.rls import RLS_PARAMETERS, RlsEstimator
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import AxisController, saturate
 from mill_controllers.phase_margin import DESIGN_RULES, design_pi
 
 # Hatwesh 2013 Table 1, x axis.
@@ -238,7 +238,7 @@ class _VelocityPi(AxisController):
         # PI: u(k) = K_p e(k) + I(k),  I(k) = I(k−1) + K_i T e(k)
         i_new = self._i + ki * self._T * e
         u = kp * e + i_new
-        u_sat = min(self._limit, max(-self._limit, u))
+        u_sat = saturate(u, self._limit)
         if u_sat == u or e * (u - u_sat) <= 0.0:  # conditional integration
             self._i = i_new
         self._u = u_sat

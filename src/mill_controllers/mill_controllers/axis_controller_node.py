@@ -12,9 +12,12 @@ state whose estimate has arrived, the reference interpolated at its stamp, nothi
 Each joined sample goes to the ROS-free AxisControlLoop (mill_controllers.control_loop):
 delay aim, law, following-error trip — the object the offline simulator steps too. The
 command goes out on mill/<axis>/joint_command (effort NaN: brake); a trip latches until
-`~/reset_trip` (std_srvs/Trigger) or `following_error_limit` is set; `controller` and gains
-switch without a bump; a law's internal estimates go to mill/<axis>/controller_state. In
-a composed process the axis's observer hands over each sample at once (a servo cycle).
+`~/reset_trip` (std_srvs/Trigger), whatever parameter is set meanwhile (a new
+`following_error_limit` changes the limit only); `controller` and gains switch without a
+bump, and a change whose law cannot be built (that of a law that does not run too) is
+refused while the old law runs on; a law's internal estimates go to
+mill/<axis>/controller_state. In a composed process the axis's observer hands over each
+sample at once (a servo cycle).
 """
 
 from __future__ import annotations
@@ -49,7 +52,12 @@ from std_srvs.srv import Trigger
 from mill_common import topics
 from mill_controllers.axis_reports import AxisReports
 from mill_controllers.base import BASE_INPUTS, AxisController
-from mill_controllers.config import build_controller, build_loop, parameter_specs
+from mill_controllers.config import (
+    build_controller,
+    build_loop,
+    check_other_laws,
+    parameter_specs,
+)
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.controller_inputs import CLOCK_INPUT, INPUTS, REFERENCE_INPUT, owners
 from mill_controllers.sample_join import SampleJoin
@@ -124,6 +132,7 @@ class AxisControllerNode(Node):
             self._loop = build_loop(values)
             return
         law = build_controller(values)  # raises, with the reason, before anything changes
+        check_other_laws(values, self.params.values)  # a law to switch to later builds too
         for slot in law.required_inputs():
             if slot not in BASE_INPUTS and slot not in self._seen:
                 source = INPUTS[slot]
@@ -138,9 +147,7 @@ class AxisControllerNode(Node):
             self._law_name = values['controller']  # params.values changes after we return
             self._join.require(joined(law))
         loop.switch.set_blend_time(values['sample_period'], values['blend_time'])
-        if 'following_error_limit' in self.params.setting:  # the one way but the service
-            cleared = loop.set_limit(values['following_error_limit'])
-            self._log_reset(cleared, 'setting following_error_limit')
+        loop.set_limit(values['following_error_limit'])  # a trip stays: ~/reset_trip alone
         self._step_due()
 
     # -- take and check ------------------------------------------------------------------

@@ -15,6 +15,7 @@ rely on is declared here, with defaults a law overrides only where it differs:
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any, ClassVar, TypeVar
@@ -29,6 +30,13 @@ C = TypeVar('C', bound='AxisController')
 
 # The inputs every law gets (fields of ControlInputs joined by stamp).
 BASE_INPUTS: tuple[str, ...] = ('position', 'estimate', 'reference')
+
+
+def saturate(value: float, limit: float) -> float:
+    """`value` clipped to ±limit; NaN stays NaN (min/max would turn it into a limit): a law
+    whose gains or states are not finite gives no command, and the loop asks for the brake
+    (mill_controllers.control_loop) instead of sending a full-scale one."""
+    return value if math.isnan(value) else min(limit, max(-limit, value))
 
 
 class AxisController(Configured, ABC):

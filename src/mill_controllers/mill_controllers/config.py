@@ -2,20 +2,24 @@
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+from mill_common.build_check import BUILD_ERRORS, build_failure, changed_choices
 from mill_common.declared import ParamSet, param
+from mill_common.node_params import axis_node_specs, check_design_period
 from mill_common.parameters import (
     ParamSpec,
     algorithm_values,
-    axis_node_specs,
-    check_design_period,
     non_negative,
     non_negative_int,
     positive_or_inf,
     text,
 )
+from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
@@ -51,7 +55,7 @@ class ControllerNodeParams(ParamSet):
         0.005,
         'following-error trip: |measured position - reference| above this latches a '
         'brake request (effort NaN: the drive brakes the axis) until reset by the '
-        'reset_trip service or by setting this parameter [m]; .inf disables it',
+        'reset_trip service (a new limit leaves a trip latched) [m]; .inf disables it',
         positive_or_inf,
     )
     max_state_gap: int = param(
@@ -75,13 +79,48 @@ def input_gain(values: dict[str, Any]) -> float:
 
 
 def build_controller(values: dict[str, Any]) -> AxisController:
+    """The law `controller` names, built from the values and tried on two samples at rest;
+    ValueError or ArithmeticError (mill_common.build_check) if it cannot be built: a float
+    overflow, a singular design, numpy's overflow, division by zero or invalid value, or a
+    law whose command is not finite (its derived gains are not)."""
     cls = CONTROLLERS.get(values['controller'])
     check_design_period(values)
     params = cls.PARAMS.from_values(algorithm_values(cls, values))
     if cls.PARAMS.rule_fields():  # a 0 stands for the tuning rule's value at this rate, delay
         rule = loop_tuning(values['sample_period'], values['command_delay'])
         params = params.tuned({'omega_c': rule.omega_c, 'omega_o': rule.omega_o})
-    return cls.from_params(input_gain(values), values['sample_period'], params)
+    with np.errstate(over='raise', divide='raise', invalid='raise'):
+        law = cls.from_params(input_gain(values), values['sample_period'], params)
+        if not law.needs_model:  # (a law that needs the observer's model gets it at run time)
+            _try_at_rest(law, values['controller'], values['sample_period'])
+    return law
+
+
+def _try_at_rest(law: AxisController, name: str, sample_period: float) -> None:
+    """ValueError unless a copy of `law` commands a finite value on the axis at rest at the
+    reference, then 1 mm from it (a non-finite gain times a zero error is not finite)."""
+    trial = copy.deepcopy(law)
+    at_rest = Estimate(0.0, 0.0, 0.0)
+    for k, y in enumerate((0.0, 1e-3)):
+        u = trial.compute(
+            ControlInputs(k * sample_period, y, AxisReference(0.0, 0.0, 0.0), at_rest)
+        )
+        if not math.isfinite(u):
+            raise ValueError(
+                f'{name} cannot run with these values: it commands {u} on an axis at rest '
+                f'{1e3 * y:g} mm from its reference'
+            )
+
+
+def check_other_laws(values: dict[str, Any], old: dict[str, Any]) -> None:
+    """A change of the gains of a law that does not run: a candidate of that law built with
+    the would-be values (ValueError, ArithmeticError naming it if it cannot be built), so
+    that a later switch to it cannot fail on them."""
+    for name in changed_choices(CONTROLLERS, values, old):
+        try:
+            build_controller({**values, 'controller': name})
+        except BUILD_ERRORS as exc:
+            raise ValueError(f'{name} (not the running law): {build_failure(exc)}') from exc
 
 
 def build_loop(values: dict[str, Any]) -> AxisControlLoop:

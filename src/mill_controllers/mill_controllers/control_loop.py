@@ -86,9 +86,9 @@ class AxisControlLoop:
         position last measured."""
         return self._rearm(self.trip.reset())
 
-    def set_limit(self, limit: float) -> Trip | None:
-        """A new following-error limit, which clears a trip as reset_trip does."""
-        return self._rearm(self.trip.set_limit(limit))
+    def set_limit(self, limit: float) -> None:
+        """A new following-error limit; a latched trip stays latched (reset_trip clears it)."""
+        self.trip.set_limit(limit)
 
     def _rearm(self, cleared: Trip | None) -> Trip | None:
         if cleared is not None and cleared.cause and math.isfinite(self.last_position):

@@ -24,6 +24,7 @@ from mill_common.declared import param
 from mill_common.parameters import ParameterError, non_negative, positive
 from mill_common.signals import ControlInputs
 
+from mill_controllers.base import saturate
 from mill_controllers.pd_law import AdrcController, PdGains
 
 
@@ -112,7 +113,7 @@ class ExcitationController(AdrcController):
             sign = -math.copysign(1.0, v)
         self._excitation = sign * self.amplitude
         limit = self.torque_limit
-        return min(limit, max(-limit, hold + self._excitation))
+        return saturate(hold + self._excitation, limit)
 
     def status(self) -> dict[str, float]:
         return {'excitation': self._excitation}

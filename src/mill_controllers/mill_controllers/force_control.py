@@ -29,14 +29,8 @@ from dataclasses import dataclass, replace
 from typing import Any, ClassVar, Protocol
 
 from mill_common.declared import ParamSet, param
-from mill_common.parameters import (
-    ParamSpec,
-    algorithm_values,
-    input_watch_specs,
-    number,
-    one_of,
-    positive,
-)
+from mill_common.node_params import input_watch_specs
+from mill_common.parameters import ParamSpec, algorithm_values, number, one_of, positive
 from mill_common.registry import Registry
 from mill_common.timebase import sample_index, sample_stamp_ns
 from mill_models.force_process import ForceProcessModel

@@ -63,7 +63,7 @@ from mill_common.declared import param
 from mill_common.parameters import non_negative, one_of, positive
 from mill_common.signals import AxisReference, ControlInputs
 
-from mill_controllers.base import AxisController, check_gain_and_period
+from mill_controllers.base import AxisController, check_gain_and_period, saturate
 from mill_controllers.pd_law import TorqueLimited
 
 DISCRETISATIONS = ('zoh', 'continuous')
@@ -253,7 +253,7 @@ class GpiController(AxisController):
 
     def _finish(self, accel: float) -> float:
         """Torque from the commanded b·τ, clipped; remembered as the applied torque."""
-        tau = min(self._limit, max(-self._limit, accel / self._b))
+        tau = saturate(accel / self._b, self._limit)
         self._u_prev = tau
         return tau
 

@@ -20,7 +20,7 @@ from mill_common.declared import ParamSet, param
 from mill_common.parameters import ParameterError, non_negative, positive, positive_or_inf
 from mill_common.signals import ControlInputs
 
-from mill_controllers.base import AxisController, check_gain_and_period
+from mill_controllers.base import AxisController, check_gain_and_period, saturate
 
 # 5 N·m: about the peak torque of the ~0.75 kW AC servo that drives a small mill's ball
 # screw. The paper's cut needs well under 1 N·m with the realistic cutting-energy reading,
@@ -116,7 +116,7 @@ class _PdLaw(AxisController):
             - self._alpha0 * (y - ref.position)
             - xi_hat
         ) / self._b
-        return min(self._limit, max(-self._limit, tau))
+        return saturate(tau, self._limit)
 
 
 class AdrcController(_PdLaw):

@@ -3,9 +3,10 @@
 Every sample the controller's following error e = measured position − reference is
 compared with the axis's limit. The first |e| above it latches a trip: from then on the
 controller sends no torque but the brake request (a non-finite effort, which the drive
-answers by braking the axis: velocity 0, position held) until the trip is reset — by the
-node's `reset_trip` service or by setting its `following_error_limit` again. The trip
-remembers when and with which error it happened, for /diagnostics and the log.
+answers by braking the axis: velocity 0, position held) until the trip is reset, by the
+node's `reset_trip` service alone: a new `following_error_limit` changes the limit only, and
+a tripped axis stays braked. The trip remembers when and with which error it happened, for
+/diagnostics and the log.
 
 The same latch takes a stop the loop decides on another ground (`stop`, with its cause): a
 gap in the states long enough that the drive has stopped the axis (mill_controllers.
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 BRAKE = math.nan  # the effort that asks the drive to brake the axis
 
 
-RESET = '(reset: ~/reset_trip or set following_error_limit)'
+RESET = '(reset: ~/reset_trip)'
 
 
 @dataclass(frozen=True)
@@ -74,9 +75,9 @@ class FollowingErrorTrip:
         trip, self.trip = self.trip, None
         return trip
 
-    def set_limit(self, limit: float) -> Trip | None:
-        """A new limit (setting it, to any value, clears a trip: returns the one cleared)."""
+    def set_limit(self, limit: float) -> None:
+        """A new limit for the samples to come; a latched trip stays latched (reset alone
+        clears it)."""
         if not limit > 0.0:
             raise ValueError(f'following_error_limit must be > 0 (inf: no trip), got {limit!r}')
         self.limit = limit
-        return self.reset()

@@ -58,7 +58,12 @@ def test_the_trip_uses_the_error_at_the_states_own_stamp_and_latches() -> None:
     assert bad.tripped and math.isnan(bad.effort)
     again = lp.step(7 * DT, 2e-3, est, refs((7 * DT, 2e-3), (8 * DT, 2e-3)))
     assert math.isnan(again.effort) and not again.tripped  # latched, reported once
-    assert lp.trip.set_limit(5e-3) is not None and not lp.trip.tripped
+    lp.set_limit(5e-3)  # a new limit (2 mm is within it) leaves the trip latched
+    held = lp.step(8 * DT, 2e-3, est, refs((8 * DT, 0.0), (9 * DT, 0.0)))
+    assert math.isnan(held.effort) and lp.trip.limit == 5e-3 and lp.trip.tripped
+    assert lp.reset_trip() is not None
+    back = lp.step(9 * DT, 2e-3, est, refs((9 * DT, 0.0), (10 * DT, 0.0)))
+    assert math.isfinite(back.effort) and not back.tripped  # 2 mm < the new 5 mm
 
 
 def test_a_gap_in_the_states_trips_and_a_reset_re_arms_holding_the_measured_position() -> None:

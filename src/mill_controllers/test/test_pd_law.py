@@ -149,3 +149,15 @@ def test_infinite_gains_are_refused_but_infinite_limit_is_not() -> None:
 def test_bad_input_gain_is_refused(b: float) -> None:
     with pytest.raises(ParameterError, match='input_gain'):
         AdrcController(b, 1e-3)
+
+
+def test_a_non_finite_gain_gives_no_command_not_a_full_scale_one() -> None:
+    # ω_c = 1e300: α0 = ω_c² is inf in float arithmetic; the clip must not turn inf·0 = NaN
+    # into -torque_limit (the loop brakes on a non-finite command; the node refuses the gain).
+    from mill_controllers.base import saturate
+
+    ctrl = PdController(B, 1e-3, PdGains(omega_c=1e300))
+    at_ref = ControlInputs(0.0, 0.0, AxisReference(0.0, 0.0, 0.0), Estimate(0.0, 0.0, 0.0))
+    assert math.isnan(ctrl.compute(at_ref))
+    assert [saturate(u, 5.0) for u in (7.0, -7.0, 2.5, math.inf)] == [5.0, -5.0, 2.5, 5.0]
+    assert math.isnan(saturate(math.nan, 5.0))

@@ -2,19 +2,16 @@
 
 from __future__ import annotations
 
+import copy
+import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+from mill_common.build_check import BUILD_ERRORS, build_failure, changed_choices
 from mill_common.declared import ParamSet, param
-from mill_common.parameters import (
-    ParamSpec,
-    algorithm_values,
-    axis_node_specs,
-    check_design_period,
-    non_negative,
-    number,
-    text,
-)
+from mill_common.node_params import axis_node_specs, check_design_period
+from mill_common.parameters import ParamSpec, algorithm_values, non_negative, number, text
 from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
@@ -67,12 +64,45 @@ def build_observer(values: dict[str, Any]) -> Observer:
 
 
 def build_observer_loop(values: dict[str, Any]) -> ObserverLoop:
-    """The observer's per-sample step, as the node and the offline simulator run it."""
+    """The observer's per-sample step, as the node and the offline simulator run it, tried
+    on three samples; ValueError or ArithmeticError (mill_common.build_check) if it cannot
+    be built: a float overflow, a singular design, numpy's overflow, division by zero or
+    invalid value, or estimates that are not finite (its derived gains are not)."""
     own = ObserverNodeParams.from_node_values(values)
-    return ObserverLoop(
-        build_observer(values),
-        values['command_delay'],
-        values['sample_period'],
-        own.blend_time,
-        own.hold_torque,
-    )
+    with np.errstate(over='raise', divide='raise', invalid='raise'):
+        loop = ObserverLoop(
+            build_observer(values),
+            values['command_delay'],
+            values['sample_period'],
+            own.blend_time,
+            own.hold_torque,
+        )
+        _try_at_rest(loop, values['observer'])
+    return loop
+
+
+def _try_at_rest(loop: ObserverLoop, name: str) -> None:
+    """ValueError unless a copy of `loop` estimates finite values for an axis at rest, then
+    measured 1 mm away, with no command (a non-finite gain times a zero error is not
+    finite)."""
+    trial = copy.deepcopy(loop)
+    acted = None
+    for y in (0.0, 1e-3, 1e-3):
+        est = trial.step(y, acted)
+        acted = 0.0
+        if not all(math.isfinite(v) for v in (est.position, est.velocity, est.disturbance)):
+            raise ValueError(
+                f'{name} cannot run with these values: it estimates {est} for an axis at '
+                f'rest, measured at {1e3 * y:g} mm'
+            )
+
+
+def check_other_observers(values: dict[str, Any], old: dict[str, Any]) -> None:
+    """A change of the gains of an observer that does not run: a candidate of it built with
+    the would-be values (ValueError naming it if it cannot be built), so that a later
+    switch to it cannot fail on them."""
+    for name in changed_choices(OBSERVERS, values, old):
+        try:
+            build_observer_loop({**values, 'observer': name})
+        except BUILD_ERRORS as exc:
+            raise ValueError(f'{name} (not the running observer): {build_failure(exc)}') from exc

@@ -47,7 +47,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from mill_observers.config import build_observer_loop, parameter_specs
+from mill_observers.config import build_observer_loop, check_other_observers, parameter_specs
 from mill_observers.observer_loop import ObserverLoop
 from mill_observers.registry import OBSERVERS
 
@@ -118,7 +118,9 @@ class ObserverNode(Node):
                     f'{values["observer"]} estimates the disturbance in {units[1]} but the running '
                     f'{old} in {units[0]}: the controller cannot use both'
                 )
-        loop = build_observer_loop(values)
+        loop = build_observer_loop(values)  # raises, with the reason, before anything changes
+        if self._loop is not None:
+            check_other_observers(values, self.params.values)  # to switch to later
         # A rebuilt observer starts from the next measurement, its estimate continuing.
         self._loop = loop if self._loop is None else self._loop.replace(loop)
         self._commands.clear()

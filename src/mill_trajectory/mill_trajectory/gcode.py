@@ -39,14 +39,14 @@ from mill_trajectory.gcode_words import (
     Block,
     GcodeError,
     Key,
+    Move,
     OWord,
     Parameters,
+    Point,
     Where,
     Word,
     read_block,
 )
-
-Point = tuple[float, float, float]
 
 # G20 inch, G21 mm: length [m] = value / divisor; mm divides by 1000 so that X-105 is -0.105
 # exactly as the float a YAML file gives for -0.105. Codes are ten times the G number.
@@ -91,27 +91,6 @@ ITERATIONS = 100_000  # loop passes (while, do, repeat) in one run of a program
 CALL_DEPTH = 10  # subroutine calls nested at most (as LinuxCNC)
 _COMMENTS = r'(?:\s*\([^)]*\))*\s*'
 _OWORD_LINE = re.compile(rf'^{_COMMENTS}/?{_COMMENTS}(?:[nN][\s\d.]*)?{_COMMENTS}[oO]')
-
-
-@dataclass(frozen=True)
-class Move:
-    """One step of the program. kind: rapid, line, arc, dwell, stop (come to rest), spindle
-    (come to rest; the spindle changes to `spindle`) or message (nothing moves)."""
-
-    kind: str
-    start: Point
-    end: Point
-    where: Where
-    feed: float | None = None  # line, arc [m/s]
-    center: Point | None = None  # arc, in the plane (the normal coordinate is start's)
-    plane: tuple[int, int, int] = (0, 1, 2)
-    sweep: float = 0.0  # arc: signed angle about the normal [rad], > 0 counter-clockwise
-    duration: float = 0.0  # dwell [s]
-    spindle: float = 0.0  # spindle speed during this move [rev/min], signed; 0 off
-    coolant: str = ''  # '', 'mist', 'flood' or 'mist+flood'
-    message: str = ''  # stop (why: a tool change), message
-    tolerance: float | None = None  # path tolerance from G64 P [m]; None: the machine's
-    exact_stop: bool = False  # G61/G61.1 and canned cycles: the move ends at rest
 
 
 @dataclass(frozen=True)

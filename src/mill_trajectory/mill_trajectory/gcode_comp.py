@@ -25,12 +25,8 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
 
-from mill_trajectory.gcode_words import GcodeError, Where
-
-if TYPE_CHECKING:
-    from mill_trajectory.gcode import Move
+from mill_trajectory.gcode_words import GcodeError, Move, Where
 
 Vec = tuple[float, float]
 TINY = 1e-12  # [m]: shorter is no XY motion

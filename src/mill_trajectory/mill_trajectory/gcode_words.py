@@ -504,3 +504,27 @@ def _oword(reader: _Reader, where: Where) -> OWord:
 def words_of(line: str, file: str, number: int) -> list[Word]:
     """The words of one line without parameters (comments dropped)."""
     return read_block(line, file, number).words
+
+
+Point = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Move:
+    """One step of the program. kind: rapid, line, arc, dwell, stop (come to rest), spindle
+    (come to rest; the spindle changes to `spindle`) or message (nothing moves)."""
+
+    kind: str
+    start: Point
+    end: Point
+    where: Where
+    feed: float | None = None  # line, arc [m/s]
+    center: Point | None = None  # arc, in the plane (the normal coordinate is start's)
+    plane: tuple[int, int, int] = (0, 1, 2)
+    sweep: float = 0.0  # arc: signed angle about the normal [rad], > 0 counter-clockwise
+    duration: float = 0.0  # dwell [s]
+    spindle: float = 0.0  # spindle speed during this move [rev/min], signed; 0 off
+    coolant: str = ''  # '', 'mist', 'flood' or 'mist+flood'
+    message: str = ''  # stop (why: a tool change), message
+    tolerance: float | None = None  # path tolerance from G64 P [m]; None: the machine's
+    exact_stop: bool = False  # G61/G61.1 and canned cycles: the move ends at rest

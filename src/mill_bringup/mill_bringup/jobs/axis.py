@@ -144,12 +144,16 @@ class AxisJob(Job[RunRecord]):
     ) -> None:
         # The monitor listens to every state topic too: the plant waits for it (controller,
         # observer, monitor), so that the first samples reach the record. A controller that
-        # shares its observer's process takes the states from it (a servo cycle).
-        if monitored:
-            readers = 2 if self._servo_cycles(layout) else 3
+        # shares its observer's process takes the states from it (a servo cycle), and the
+        # plant counts the two as one reader: without a monitor (the launch file) that one
+        # is all it gets, and waiting for its default 2 it never started.
+        servo = self._servo_cycles(layout)
+        if monitored or servo:
+            readers = (2 if servo else 3) if monitored else 1
             self.scenario.overrides.setdefault(self.plant, {}).setdefault(
                 'min_subscribers', readers
             )
+        if monitored:
             # An axis node answers only once the monitor hears it too (at the start, and when
             # --respawn starts it again mid-job): the estimate goes to the controller and the
             # monitor, the command to the plant, the observer and the monitor. A command sent
