@@ -8,8 +8,7 @@ in, never from the status's prose:
 - a drive's status (`<node>: lockstep` / `realtime`) counts per axis the stops it made
   (`<axis>.stops`, why in `<axis>.stopped`): each new one a `stopped`; the brake requests it
   took (`<axis>.invalid_commands`, a NaN command: a tripped controller sends one every
-  period): the first of a series (a rise after a status where the count stood still) a
-  `braked`; and what the machine reports wrong (`<axis>.fault`): a `fault`;
+  period): the first a `braked`; and what the machine reports wrong (`<axis>.fault`): a `fault`;
 - a drive's ownership status (`<node>: ownership`, with `foreign_messages`): a
   `foreign_publisher`, once per drive (what it said in the detail).
 
@@ -159,7 +158,6 @@ def events_of(
     trips: set[tuple[str, float]] = set()
     counted: dict[tuple[str, str], int] = {}  # (node, key) -> the count told so far
     faults: dict[tuple[str, str], str] = {}
-    rising: set[tuple[str, str]] = set()  # brake-request counts that rose at the last status
     foreign: set[str] = set()  # drives that told of a foreign publisher
     for s in statuses:
         at = (s.stamp_ns - start_ns) * 1e-9
@@ -192,16 +190,13 @@ def events_of(
                 out += [Event(axis, STOPPED, at, why, s.node) for _ in range(n - was)]
                 counted[(s.node, key)] = max(n, was)
             elif field == 'invalid_commands':
-                # A series of brake requests (a tripped controller sends one every period)
-                # is one event: the count rises after a status where it had not.
-                n, was = _count(value), counted.get((s.node, key), 0)
-                if n > was and (s.node, key) not in rising:
+                # The first brake request of the axis: a tripped controller sends one every
+                # period, and a status (once a second, and at each stop) cannot tell one
+                # series of them from the next.
+                n = _count(value)
+                if n > 0 and (s.node, key) not in counted:
+                    counted[(s.node, key)] = n
                     out.append(Event(axis, BRAKED, at, 'brake request (invalid command)', s.node))
-                if n > was:
-                    rising.add((s.node, key))
-                else:
-                    rising.discard((s.node, key))
-                counted[(s.node, key)] = max(n, was)
             elif field == 'fault' and value and faults.get((s.node, axis)) != value:
                 faults[(s.node, axis)] = value
                 out.append(Event(axis, FAULT, at, value, s.node))

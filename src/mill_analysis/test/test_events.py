@@ -64,6 +64,10 @@ def test_the_drive_counts_give_one_event_per_new_stop_brake_and_fault() -> None:
         drive(2.0, x__stops=1, x__stopped='no fresh command', x__invalid_commands=3),
         drive(3.0, x__stops=1, x__stopped='', x__invalid_commands=7, x__fault='overtravel'),
         drive(3.5, x__stops=3, x__stopped='speed limit', x__fault='overtravel'),
+        # brake requests again after a status where their count stood still: still the
+        # axis's one `braked` (a status cannot tell one series of them from the next)
+        drive(4.0, x__stops=3, x__invalid_commands=7),
+        drive(4.5, x__stops=3, x__invalid_commands=9),
     ]
     got = [(e.axis, e.kind, round(e.time, 6), e.detail) for e in events_of(statuses, START)]
     assert got == [
