@@ -7,8 +7,9 @@ once against this interface (and `report` against the kind of record a job names
 differs between the kinds sits in one class per kind (mill_bringup.jobs.axis, .realtime,
 .force):
 
-- which node clocks the job (it starts last, once the others are heard), which topics
-  must have a publisher before it starts, and which topics the monitor keeps;
+- which node clocks the job (it starts last, once the others are heard), and its graph
+  plan (`GraphPlan`: which topics must have a publisher before it starts, which the monitor
+  keeps, records, times and subscribes to late, the recorder's handshake);
 - when the job is complete and when its last messages have arrived;
 - the record: from the messages of a run (or a bag), or from the offline simulation,
   sample by sample (`Simulation.step`), by the one loop in `simulate`;
