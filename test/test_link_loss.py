@@ -9,9 +9,10 @@ commanding when the link returns. A probe next to the drive, in its namespace, w
 every state it publishes and every command that reaches it. Mid-job the link is cut for 1 s
 and, in a second run, for 5 s. The contract (mill_plant.motion_guard, docs/reliability.md):
 
-- the drive stops every axis (brakes it) within `brake_after` ticks of its last fresh
-  command, and within |v|·H + hold_deviation + ½·Δa·T² of where it stood at the last state
-  its controller answered (v: its speed then, H: the time to the stop, Δa: how much the
+- the drive stops every axis (brakes it) within its window H(v) of its last fresh command
+  (mill_common.hold_window: 0.5 s at rest, (excursion − hold_deviation)/|v| at speed), and
+  within |v|·H + hold_deviation + ½·Δa·T² <= excursion + ½·Δa·T² of where it stood at the
+  last state its controller answered (v: its speed then, H: the time to the stop, Δa: how much the
   forces on the axis change in a period — here at most the load's step and swing and a
   reversal of friction, over the smallest effective mass);
 - when the link returns the controllers command again, and no axis moves: the first
@@ -29,13 +30,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from mill_common.hold_window import HoldWindow
 
 from test.test_realtime_driver import MACHINE, MASS, TOLD
 from test.two_hosts import TwoHosts, finish, wait_for_progress
 
 PERIOD = 0.004  # [s]
-BRAKE_AFTER = 10  # the drive's default
-HOLD_DEVIATION = 0.0005  # [m] the drive's default
+WINDOW = HoldWindow()  # the drive's defaults
+HOLD_DEVIATION = WINDOW.hold_deviation  # [m]
 # The forces on an axis that can change within a period: the load (150 N) coming or going, its
 # 80 N swing, a reversal of the 60 N of friction; over the smallest effective mass.
 DELTA_A = (150.0 + 2 * 80.0 + 2 * 60.0) / min(MASS.values())
@@ -171,10 +173,29 @@ def run_with_cut(
     return code, said, read_probe(probe_log), down, back
 
 
-def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> dict[str, float]:
+WINDOW_STOP = re.compile(
+    r'axis (\w): stopped: no fresh command for \d+ ms of its ticks '
+    r'\(the window at (rest|[\d.]+ mm/s): (\d+) ms\)'
+)
+
+
+def drive_windows(said: str) -> dict[str, tuple[float, float]]:
+    """Per axis the drive stopped on its window: (its speed [m/s], the window [s]) as the
+    drive said them in its log (its speed is its own measurement at the last fresh command)."""
+    out = {}
+    for axis, at, window in WINDOW_STOP.findall(said):
+        speed = 0.0 if at == 'rest' else float(at.split()[0]) * 1e-3
+        out[axis] = (speed, int(window) * 1e-3)
+    return out
+
+
+def check_stops(
+    seen: dict, down: int, back: int, until: int | None = None, said: str = ''
+) -> dict[str, float]:
     """Every axis stopped within the contract's ticks and distance, and stayed put from then
     to `until` (default: the probe's end) though commands came; where each stopped."""
     out = {}
+    windows = drive_windows(said)
     for axis in AXES:
         states = sorted((s, x) for _, s, x in seen['state'][axis] if until is None or s < until)
         commands = [(arrived, s) for arrived, s, _ in seen['command'][axis]]
@@ -190,16 +211,22 @@ def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> d
         moving = [s for s, x in states if s >= last and x != final]
         stop = next(s for s in ticks if s > (moving[-1] if moving else last))
         assert stop < back, (axis, 'the axis was still moving when the link returned')
-        # In time: within brake_after ticks after the first tick that had no fresh command
+        # In time: within the window H(v) after the first tick that had no fresh command
         # (the tick after the last answered state, or the one after it if that command came
-        # in the same period).
-        assert ticks.index(stop) <= BRAKE_AFTER + 2, (axis, ticks.index(stop))
+        # in the same period), v the drive's own measure of the speed at its last fresh
+        # command (one period of a quantised position: not the v_end above), as it said it
+        # when the window stopped the axis (the motion guard stops it sooner).
+        if axis in windows:
+            speed, window = windows[axis]
+            assert abs(window - WINDOW.hold_time(speed)) <= 1e-3, (axis, window, speed)
+            assert (stop - last) * 1e-9 <= window + 2 * PERIOD, (axis, stop - last, window)
         # In distance: on course at v_end until the stop, plus the window and a period's
         # change of the forces.
         held = (stop - last) * 1e-9
         bound = abs(v_end) * held + HOLD_DEVIATION + 0.5 * DELTA_A * PERIOD**2
         moved = abs(final - x_end)
         assert moved <= bound, (axis, moved, bound, v_end, held)
+        assert moved <= WINDOW.excursion + 0.5 * DELTA_A * PERIOD**2, (axis, moved)
         # Nothing moved after the link returned.
         after = [x for s, x in states if s > back]
         assert after and all(x == final for x in after), axis
@@ -207,9 +234,10 @@ def check_stops(seen: dict, down: int, back: int, until: int | None = None) -> d
     return out
 
 
-# Controllers that know nothing of the outage, as in the attack that found it: no gap trip,
-# and a following-error limit of 50 mm, so that they command on when the link returns.
-UNAWARE = ('*_controller.max_state_gap=0', '*_controller.following_error_limit=0.05')
+# Controllers that know nothing of the outage, as in the attack that found it: they do not
+# listen to the drive's word (no gap trip), and a following-error limit of 50 mm, so that
+# they command on when the link returns.
+UNAWARE = ('*_controller.gap_trip=false', '*_controller.following_error_limit=0.05')
 
 RESET = """
 import rclpy
@@ -230,7 +258,7 @@ def test_a_one_second_cut_stops_the_axes_and_no_returning_command_releases_them(
     hosts: TwoHosts, tmp_path: Path
 ) -> None:
     code, said, seen, down, back = run_with_cut(hosts, tmp_path, 1.0, UNAWARE)
-    check_stops(seen, down, back)
+    check_stops(seen, down, back, said=(tmp_path / 'plant.log').read_text())
     for axis in AXES:  # the controllers commanded again, valid commands all
         again = [u for arrived, _, u in seen['command'][axis] if arrived > back]
         assert again and all(math.isfinite(u) for u in again), axis
@@ -243,11 +271,12 @@ def test_a_one_second_cut_stops_the_axes_and_no_returning_command_releases_them(
 def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axes_stand(
     hosts: TwoHosts, tmp_path: Path
 ) -> None:
-    """The default controllers (gap trip at 10 periods): each trips on the gap (its brake
-    request acknowledges the stop); the operator resets them; each re-arms holding where its
-    axis stands and the drive releases the axes, which stay there. The limit is 5 mm: across
-    this link the trajectory can start up to a second before the drive has the first
-    commands (docs/reliability.md, known limitations), and y's path runs at 3 mm/s."""
+    """The default controllers: each trips when the drive's state says it has stopped the
+    axis (its brake request acknowledges the stop); the operator resets them; each re-arms
+    holding where its axis stands and the drive releases the axes, which stay there. The
+    limit is 5 mm: across this link the trajectory can start up to a second before the drive
+    has the first commands (docs/reliability.md, known limitations), and y's path runs at
+    3 mm/s."""
     reset_log = tmp_path / 'reset.log'
     reset_at: list[int] = []
 
@@ -262,8 +291,8 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
     limit = ('*_controller.following_error_limit=0.005',)
     code, said, seen, down, back = run_with_cut(hosts, tmp_path, 1.0, limit, after=reset)
     assert reset_log.read_text().count('trip cleared') == 3, reset_log.read_text()
-    stood = check_stops(seen, down, back, until=reset_at[0] - 10**9)
     plant_log = (tmp_path / 'plant.log').read_text()
+    stood = check_stops(seen, down, back, until=reset_at[0] - 10**9, said=plant_log)
     for axis in AXES:
         assert f'axis {axis}: fresh commands: released' in plant_log, axis
         # Re-armed where it stood, not thrown at the reference (y's is 15 mm and more away
@@ -272,7 +301,10 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
         # observer restarted from its estimate under way).
         later = [x for _, s, x in seen['state'][axis] if s > reset_at[0]]
         assert later and max(abs(x - stood[axis]) for x in later) <= 0.5e-3, axis
-    trips = re.findall(r'FAILED: (\w) axis: trip at .*\((?:\w)_controller\): no state for', said)
+    trips = re.findall(
+        r'FAILED: (\w) axis: trip at .*\(\w_controller\): .*the drive says it has stopped the axis',
+        said,
+    )
     assert sorted(set(trips)) == list(AXES), said[-3000:]
     assert 'following error |e|' not in said, said[-3000:]  # none before the cut, none after
     assert code == 1, said[-3000:]
@@ -281,6 +313,6 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
 @pytest.mark.system
 def test_a_five_second_cut_stops_the_axes_and_ends_the_job(hosts: TwoHosts, tmp_path: Path) -> None:
     code, said, seen, down, back = run_with_cut(hosts, tmp_path, 5.0, UNAWARE)
-    check_stops(seen, down, back)
+    check_stops(seen, down, back, said=(tmp_path / 'plant.log').read_text())
     assert code == 1, said[-3000:]
     assert 'the drive went silent' in said, said[-3000:]

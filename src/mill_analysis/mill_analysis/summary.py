@@ -95,6 +95,12 @@ class DriveFigures:
     axes: Mapping[str, Mapping[str, float]]
     overruns: int  # ticks more than half a period late
     ticks: int  # ticks while active (0: the driver does not say)
+    # its own stalls (ticks that woke more than stall_report_ms late, monotonic clock): how
+    # many, the longest [ms] and its line (which process, when)
+    stalls: int = 0
+    longest_stall_ms: float = 0.0
+    longest_stall: str = ''
+    stall_report_ms: str = '?'  # as the drive says it
 
     def lines(self) -> list[str]:
         out = [
@@ -114,6 +120,12 @@ class DriveFigures:
             out.append(
                 f'WARNING: the drive ticked more than half a period late {self.overruns} times'
                 f'{of}: this machine does not hold the sample rate in this layout'
+            )
+        if self.stalls:
+            out.append(
+                f'WARNING: the drive stalled {self.stalls} times by more than '
+                f'{self.stall_report_ms} ms (monotonic), the longest: {self.longest_stall}; '
+                'its own stalls, not late commands'
             )
         return out
 
@@ -229,6 +241,12 @@ class AxisSummary:
             out['drive'] = {a: dict(f) for a, f in self.drive.axes.items()}
             out['drive_source'] = self.drive.source
             out['drive_overruns'], out['drive_ticks'] = self.drive.overruns, self.drive.ticks
+            out['drive_stalls'] = {
+                'count': self.drive.stalls,
+                'longest_ms': self.drive.longest_stall_ms,
+                'longest': self.drive.longest_stall,
+                'report_ms': self.drive.stall_report_ms,
+            }
             out['start_stamp_ns'] = self.start_stamp_ns
         return out
 
@@ -238,8 +256,16 @@ class AxisSummary:
         c = d['contour_error']
         drive = None
         if 'drive' in d:
+            stalls = d.get('drive_stalls') or {}
             drive = DriveFigures(
-                d['drive_source'], d['drive'], int(d['drive_overruns']), int(d['drive_ticks'])
+                d['drive_source'],
+                d['drive'],
+                int(d['drive_overruns']),
+                int(d['drive_ticks']),
+                stalls=int(stalls.get('count', 0)),
+                longest_stall_ms=float(stalls.get('longest_ms', 0.0)),
+                longest_stall=str(stalls.get('longest', '')),
+                stall_report_ms=str(stalls.get('report_ms', '?')),
             )
         force = d.get('force_control')
         return cls(

@@ -70,7 +70,7 @@ def test_each_axis_gets_its_model_and_the_reason_in_the_table() -> None:
     assert y.line('y').startswith('y: two-mass model: a resonance at ')
 
 
-def test_the_command_line_writes_both_models_and_tune_refuses_the_two_mass_axis(
+def test_the_command_line_writes_both_models_and_tune_reads_the_two_mass_axis(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     run = SimpleNamespace(record=two_axis_record(), dt_ns=1_000_000)
@@ -91,7 +91,7 @@ def test_the_command_line_writes_both_models_and_tune_refuses_the_two_mass_axis(
     )
     printed = capsys.readouterr().out
     assert code == 0
-    assert 'tune designs for rigid axes only: y need a design for their two_mass model' in printed
+    assert 'next: tune ' in printed
     data = yaml.safe_load(out.read_text())['axes']
     assert data['x']['model'] == RIGID and data['x']['stribeck']['present'] is False
     assert data['x']['backlash']['present'] is False
@@ -101,11 +101,26 @@ def test_the_command_line_writes_both_models_and_tune_refuses_the_two_mass_axis(
     assert data['y']['reason'].startswith('two-mass model: a resonance at ')
     lo, hi = data['y']['excitation_band']
     assert lo < 1.0 and hi < 100.0  # the job's 10 ms bits: nothing from 100 Hz up
-    with pytest.raises(
-        machine_file.MachineFileError,
-        match=r'axis y: a two_mass model \(two-mass '
-        r'model: a resonance at .* Hz.*\): tune designs for rigid axes only',
-    ):
+    # the slow fit (the rigid one at the response's delay) has the whole axis's gain and
+    # friction: M2's y has 30 N of Coulomb friction on 70.9 kg
+    assert data['y']['delay'] == 1
+    assert data['y']['b'] == pytest.approx(im.M2_Y.input_gain, rel=0.02)
+    assert data['y']['beta'] == pytest.approx(im.M2_Y.coulomb / im.M2_Y.mass, rel=0.05)
+    back = machine_file.read(out)
+    y = back.structure['y']
+    assert y.model == TWO_MASS and y.two_mass is not None and y.response is not None
+    assert y.two_mass.resonance_hz == pytest.approx(data['y']['two_mass']['resonance_hz'])
+    # the measured response beside the file, bin for bin
+    assert machine_file.response_path(out).exists()
+    assert y.response.response.h.shape == y.response.response.coherence.shape
+    assert y.response.response.f[-1] == pytest.approx(500.0)
+    assert back.axes['y'].b.value == pytest.approx(data['y']['b'])
+    # a two-mass axis without the slow fit is refused, saying why
+    del data['y']['b']
+    raw = yaml.safe_load(out.read_text())
+    del raw['axes']['y']['b']
+    out.write_text(yaml.safe_dump(raw))
+    with pytest.raises(machine_file.MachineFileError, match=r'axis y: a two_mass model .*'):
         machine_file.read(out)
 
 

@@ -10,7 +10,12 @@ from mill_analysis.events import Status
 from mill_analysis.record import RunRecord
 from mill_bringup.cli import set_timing
 from mill_bringup.jobs.base import Ending
-from mill_bringup.jobs.realtime import RealtimeAxisJob, drive_figures, drive_ticks
+from mill_bringup.jobs.realtime import (
+    RealtimeAxisJob,
+    drive_figures,
+    drive_stalls,
+    drive_ticks,
+)
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.tuning.prediction_file import prediction_path
 from mill_common.timebase import job_steps
@@ -104,3 +109,21 @@ def test_a_run_that_starts_with_an_approach_is_compared_with_the_prediction_afte
     # prediction: never compared.
     before = job.summary(rec, 1.0, Ending())
     assert before.predictions[0].note.endswith('not compared')
+
+
+def test_the_drives_own_stalls_are_said_as_what_they_were() -> None:
+    """A drive that reports its stalls (ticks that woke late on the monotonic clock): their
+    number and the longest, with which process and when, as the drive said it."""
+    scen = scenario.load('slotting')
+    set_timing(scen, 'realtime')
+    job = job_for(scen)
+    assert isinstance(job, RealtimeAxisJob)
+    assert drive_stalls({}) == (0, 0.0, '')  # a driver that does not report them
+    line = 'drive plant (pid 4242) stalled 112 ms (monotonic) at 22:31:07.015 UTC'
+    drive = {'stalls': '2', 'longest_stall_ms': '112.0', 'longest_stall': line}
+    assert drive_stalls(drive) == (2, 112.0, line)
+    figures = drive_figures(job.axes, drive | {'stall_report_ms': '50.0'})
+    assert figures.lines()[-1] == (
+        f'WARNING: the drive stalled 2 times by more than 50.0 ms (monotonic), the longest: '
+        f'{line}; its own stalls, not late commands'
+    )

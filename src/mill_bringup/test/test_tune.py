@@ -92,10 +92,15 @@ def test_the_parameter_file_holds_the_design_and_the_run_is_set_beside_the_predi
 ) -> None:
     path = write(tmp_path, x=axis(), y=axis(b=21.0), z=axis(b=17.0, gamma=2.7))
     out = tmp_path / 'tuned.yaml'
-    assert tune([str(path), '-o', str(out), '--scenario', 'commissioning']) == 0
+    argv = [str(path), '-o', str(out), '--scenario', 'commissioning']
+    assert tune([*argv, '--min-following-error', '0.0002', '--max-velocity', '0.05']) == 0
     printed = capsys.readouterr().out
     assert 'phase margin' in printed and '30°' in printed
+    assert (tmp_path / 'tuned.bode.png').stat().st_size > 10_000  # the loops' Bode plot
     params = yaml.safe_load(out.read_text())
+    x = params['/**/x_controller']['ros__parameters']
+    assert (x['following_error_limit'], x['min_following_error']) == (0.001, 0.0002)
+    assert x['max_velocity'] == 0.05
     z = params['/**/z_observer']['ros__parameters']
     assert z['hold_torque'] == pytest.approx(2.7 / 17.0)
     assert z['eso.omega_o'] == pytest.approx(300.0)  # 0.75 / ((1 + 3/2) · 1 ms)

@@ -22,12 +22,15 @@ sample at once (a servo cycle).
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, owner_check
+from mill_common.hold_window import StallWatch, drive_word
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
@@ -64,6 +67,8 @@ from mill_controllers.sample_join import SampleJoin
 from mill_controllers.switching import SwitchRecord
 from mill_controllers.trip import Trip
 
+WATCH_NS = 20_000_000  # the period of the process's own stall watch (realtime)
+
 
 def joined(law: AxisController) -> tuple[str, ...]:
     """The inputs joined by stamp: every one the law needs but the reference."""
@@ -87,6 +92,14 @@ class AxisControllerNode(Node):
         self._waiting_since: float | None = None
         self._reported_switch: SwitchRecord | None = None
         self._commanded: Callable[[int, float], None] | None = None  # the observer's, in a cycle
+        # What the drive said of the axis in each state not yet stepped (its effort: NaN
+        # stopped), and this process's own stalls (a steady watch timer, realtime only).
+        self._said: dict[int, bool | None] = {}
+        self._stalls = StallWatch(WATCH_NS, round(v['stall_report'] * 1e9))
+        self._stepped_mono: int | None = None
+        self._gaps = 0
+        self._gap_reported = 0.0
+        self._drive_reason = ''  # the drive's last stop of this axis, as it said it
         self._pub = data_publisher(self, JointState, topics.joint_command(axis), DATA_QOS)
         self._state_pub = data_publisher(
             self, JointState, topics.controller_state(axis), DATA_QOS, True
@@ -114,7 +127,14 @@ class AxisControllerNode(Node):
                 self, source.message, topic, source.decode, on_msg, qos, on_bad
             )
         self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
-        self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.create_timer(2.0, self._report_waiting, clock=steady)
+        if not self.timing.WAITS_FOR_INPUTS:  # realtime: who stalled, when a gap comes
+            self.create_timer(WATCH_NS * 1e-9, self._watch_self, clock=steady)
+            # The drive's reason for a stop it declares (its axis status), for the trip.
+            self._drive_status = topics.status_name(self._owners[CLOCK_INPUT], f'{axis} axis')
+            self._machine = topics.machine_id(self.get_namespace())
+            self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diagnostics, 20)
         self.get_logger().info(
             f'axis {axis}: controller {v["controller"]}, timing {v["timing"]}, commands on '
             f'{self.resolve_topic_name(topics.joint_command(axis))}, following-error limit '
@@ -180,6 +200,8 @@ class AxisControllerNode(Node):
             return
         if slot == CLOCK_INPUT and not self._readers_ready():
             return  # the plant offers the step again
+        if slot == CLOCK_INPUT:
+            self._said[ns] = drive_word(msg.effort)
         self._seen.add(slot)
         again = self.timing.is_offered_again(stamps, ns)
         stamps.accept(ns)
@@ -209,8 +231,9 @@ class AxisControllerNode(Node):
         self._commanded = commanded
         return self.serve
 
-    def serve(self, ns: int, position: float, estimate: Estimate) -> None:
-        """A sample the observer took (its sender and stamp checked) and estimated."""
+    def serve(self, ns: int, position: float, estimate: Estimate, said: bool | None = None) -> None:
+        """A sample the observer took (its sender and stamp checked) and estimated; said:
+        what the drive said of the axis in that state (mill_common.hold_window.drive_word)."""
         join = self._join
         for slot in (CLOCK_INPUT, 'estimate'):
             self.guard.heard(self._topics[slot])
@@ -222,6 +245,7 @@ class AxisControllerNode(Node):
         self._seen.update((CLOCK_INPUT, 'estimate'))
         for slot in (CLOCK_INPUT, 'estimate'):
             self._stamps[slot].accept(ns)
+        self._said[ns] = said
         join.offer(CLOCK_INPUT, ns, position)
         join.offer('estimate', ns, estimate)
         self._step_due()
@@ -243,7 +267,26 @@ class AxisControllerNode(Node):
         loop = self.loop
         self._waiting_since = None
         y, est = inputs['position'], inputs['estimate']
-        cmd = loop.step(ns, y, est, self._join.references, inputs.get('model'))
+        said = self._said.pop(ns, None)
+        for old in [at for at in self._said if at < ns]:
+            del self._said[old]  # states the timing dropped
+        if said is False:
+            self._drive_reason = ''  # running: a later stop comes with its own reason
+        mono, last = time.monotonic_ns(), self._stepped_mono
+        self._stepped_mono = mono
+        cmd = loop.step(
+            ns,
+            y,
+            est,
+            self._join.references,
+            inputs.get('model'),
+            drive_stopped=said,
+            drive_reason=self._drive_reason if said else '',
+            own_stall_ns=self._stalls.within(last, mono) if last is not None else 0,
+            mono_ns=mono - last if last is not None else None,
+        )
+        if cmd.gap:
+            self._gap(ns, cmd.gap)
         self._last_command = joint_state_bytes(
             ns, (self.axis,), effort=(cmd.effort,), sender=self._name
         )
@@ -266,6 +309,30 @@ class AxisControllerNode(Node):
             self._reported_switch = record
             blend = self.params.values['blend_time']
             self.reports.switched(ns, self._law_name, record, blend)
+
+    # -- gaps and this process's own stalls ---------------------------------------------
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        for status in msg.status:
+            ours = status.name == self._drive_status and status.hardware_id == self._machine
+            if ours and ': stopped: ' in status.message:
+                self._drive_reason = status.message.split(': stopped: ', 1)[1]
+
+    def _watch_self(self) -> None:
+        self._stalls.wake(time.monotonic_ns(), time.time_ns())
+
+    def _gap(self, ns: int, text: str) -> None:
+        """A gap between two states (not a trip): WARN at most once a second, with the count."""
+        self._gaps += 1
+        now = time.monotonic()
+        if now - self._gap_reported < 1.0:
+            return
+        self._gap_reported = now
+        message = (
+            f'axis {self.axis} {self.timing.when(ns)}: {text} ({self._name}, pid {os.getpid()}; '
+            f'{self._gaps} gaps so far)'
+        )
+        values = {'gaps': self._gaps, 'own_stalls': self._stalls.count}
+        self.guard.diagnostics.report(ns, DiagnosticStatus.WARN, 'state gaps', message, values)
 
     # -- trip, switch, waiting: the log and /diagnostics ---------------------------------
     def _trip_status(self) -> tuple[bytes, str, str, dict[str, object]]:

@@ -9,13 +9,16 @@ from typing import Any
 
 import numpy as np
 from mill_common.build_check import BUILD_ERRORS, build_failure, changed_choices
-from mill_common.declared import ParamSet, param
+from mill_common.declared import param
+from mill_common.hold_window import HoldWindow
 from mill_common.node_params import axis_node_specs, check_design_period
 from mill_common.parameters import (
+    ParameterError,
     ParamSpec,
     algorithm_values,
+    boolean,
     non_negative,
-    non_negative_int,
+    positive,
     positive_or_inf,
     text,
 )
@@ -24,12 +27,18 @@ from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
 from mill_controllers.base import AxisController
+from mill_controllers.command_shaping import (
+    BacklashParams,
+    CommandFilterParams,
+    CommandShaping,
+    FrictionCompensationParams,
+)
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.registry import CONTROLLERS
 
 
 @dataclass(frozen=True)
-class ControllerNodeParams(ParamSet):
+class ControllerNodeParams(HoldWindow):
     """The controller node's own parameters (beside every per-axis node's and the laws')."""
 
     controller: str = param('adrc', 'control law (see README: algorithms)', CONTROLLERS.check())
@@ -58,20 +67,67 @@ class ControllerNodeParams(ParamSet):
         'reset_trip service (a new limit leaves a trip latched) [m]; .inf disables it',
         positive_or_inf,
     )
-    max_state_gap: int = param(
-        10,
-        'realtime: a gap of this many sample periods or more between two states means '
-        "the drive has stopped the axis (set it to the drive's brake_after): the "
-        'controller trips; reset, it re-arms holding the position it measures and '
-        'takes the reference up again once it comes within half the following-error '
-        'limit; 0: off',
-        non_negative_int,
+    gap_trip: bool = param(
+        True,
+        'realtime: trip when the drive says in its state that it has stopped the axis (and, '
+        'from a driver that does not say, after a gap of the window H(v) of the hold '
+        'parameters excursion, max_hold, hold_deviation, which the drive declares the '
+        'same); a shorter gap is reported, never tripped on; reset, the controller re-arms '
+        'holding the position it measures and takes the reference up again once it comes '
+        'within half the following-error limit; false: never (it knows nothing of the '
+        "drive's stops)",
+        boolean,
+        read_only=True,
+    )
+    min_following_error: float = param(
+        0.0,
+        'the following-error limit at rest, growing linearly with the reference speed to '
+        'following_error_limit at max_velocity (LinuxCNC MIN_FERROR and FERROR); 0 = the '
+        'fixed following_error_limit at every speed',
+        non_negative,
+        unit='m',
+        read_only=True,
+    )
+    max_velocity: float = param(
+        0.1,
+        'the reference speed at which the following-error limit reaches '
+        'following_error_limit (used only with min_following_error > 0)',
+        positive,
+        unit='m/s',
         read_only=True,
     )
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.min_following_error > self.following_error_limit:
+            raise ParameterError(
+                'min_following_error',
+                self.min_following_error,
+                f'above following_error_limit = {self.following_error_limit!r}',
+            )
+
+
+SHAPING = (CommandFilterParams, FrictionCompensationParams, BacklashParams)
+
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
-    return axis_node_specs() + ControllerNodeParams.named_specs() + CONTROLLERS.parameter_specs()
+    shaping = [spec for cls in SHAPING for spec in cls.named_specs()]
+    return (
+        axis_node_specs()
+        + ControllerNodeParams.named_specs()
+        + shaping
+        + CONTROLLERS.parameter_specs()
+    )
+
+
+def build_shaping(values: dict[str, Any]) -> CommandShaping:
+    """The command shaping the values ask for (inactive when all are at their defaults)."""
+    return CommandShaping(
+        values['sample_period'],
+        CommandFilterParams.from_node_values(values),
+        FrictionCompensationParams.from_node_values(values),
+        BacklashParams.from_node_values(values),
+    )
 
 
 def input_gain(values: dict[str, Any]) -> float:
@@ -131,5 +187,8 @@ def build_loop(values: dict[str, Any]) -> AxisControlLoop:
         values['following_error_limit'],
         values['command_delay'],
         values['blend_time'],
-        values['max_state_gap'],
+        HoldWindow.from_node_values(values) if values['gap_trip'] else None,
+        values['min_following_error'],
+        values['max_velocity'],
+        build_shaping(values),
     )

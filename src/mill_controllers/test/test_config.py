@@ -22,12 +22,18 @@ def test_the_node_parameters_are_declared_once_each() -> None:
     assert len(names) == len(set(names))
     own = [name for name, _ in ControllerNodeParams.named_specs()]
     assert own == [
+        'excursion',
+        'max_hold',
+        'hold_deviation',
+        'stall_report',
         'controller',
         'blend_time',
         'observer_node',
         'trajectory_node',
         'following_error_limit',
-        'max_state_gap',
+        'gap_trip',
+        'min_following_error',
+        'max_velocity',
     ]
     assert all(name in names for name in own)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from mill_common.hold_window import HoldWindow
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AxisReference, Estimate
 from mill_common.timing import Lockstep, Realtime
@@ -66,39 +67,87 @@ def test_the_trip_uses_the_error_at_the_states_own_stamp_and_latches() -> None:
     assert math.isfinite(back.effort) and not back.tripped  # 2 mm < the new 5 mm
 
 
-def test_a_gap_in_the_states_trips_and_a_reset_re_arms_holding_the_measured_position() -> None:
+def test_a_drive_declared_stop_trips_with_its_reason_and_a_reset_re_arms_where_it_stands() -> None:
     from mill_common.signals import ControlInputs
 
-    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, max_state_gap=10)
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, window=HoldWindow())
     est = Estimate(0.0, 0.0, 0.0)
 
     def ramp(k: int) -> tuple[float, ReferenceBuffer]:  # a path at 100 mm/s, tracked
         return 0.1 * k * T, refs((k * DT, 0.1 * k * T))
 
-    for k in (0, 1, 2, 3, 4, 13):  # 9 periods from 4 to 13: the drive still holds
-        cmd = lp.step(k * DT, ramp(k)[0], est, ramp(k)[1])
+    for k in (0, 1, 2, 3, 4):
+        cmd = lp.step(k * DT, ramp(k)[0], est, ramp(k)[1], drive_stopped=False)
         assert not cmd.tripped and math.isfinite(cmd.effort), k
-    stood = ramp(13)[0]  # the drive stopped the axis here
-    gap = lp.step(23 * DT, stood, est, ramp(23)[1])  # 10 periods: the drive has stopped
-    assert gap.tripped and math.isnan(gap.effort)
+    stood = ramp(13)[0]  # the drive stopped the axis here, and says so in its next state
+    reason = 'no fresh command for 4 ms of its ticks (the window at 100.0 mm/s: 5 ms)'
+    stop = lp.step(23 * DT, stood, est, ramp(23)[1], drive_stopped=True, drive_reason=reason)
+    assert stop.tripped and math.isnan(stop.effort)
     assert lp.trip.trip is not None
-    assert 'no state for 10.0 ms (10 periods): the drive has stopped the axis' in (
-        lp.trip.trip.describe('x', 'at t = 0.023 s')
-    )
+    assert (
+        'the drive says it has stopped the axis (effort NaN in its state): ' + reason
+    ) in lp.trip.trip.describe('x', 'at t = 0.023 s')
     # Reset: the reference is 1.1 mm away by now. The loop holds where the axis stands: a
-    # small command, not the one that throws the axis at the reference.
+    # small command, not the one that throws the axis at the reference. The drive still
+    # says stopped until the re-arm reaches it: that is no new stop.
     assert lp.reset_trip() is not None and lp.hold == stood
-    held = lp.step(24 * DT, stood, est, ramp(24)[1])
+    held = lp.step(24 * DT, stood, est, ramp(24)[1], drive_stopped=True)
     law = make_controller('pd', B, T, {})
     thrown = law.compute(ControlInputs(0.024, stood, AxisReference(ramp(24)[0], 0, 0), est))
     assert not held.tripped and abs(held.effort) < 0.01 * abs(thrown)
     # A reference that comes within half the limit of the held position is taken up again.
-    cmd = lp.step(25 * DT, stood, est, refs((25 * DT, stood + 0.4e-3)))
+    cmd = lp.step(25 * DT, stood, est, refs((25 * DT, stood + 0.4e-3)), drive_stopped=False)
     assert lp.hold is None and not cmd.tripped and cmd.effort > 0.1 * thrown
+    # A new stop, once the drive had released the axis: a trip again.
+    again = lp.step(26 * DT, stood, est, refs((26 * DT, stood)), drive_stopped=True)
+    assert again.tripped
+
+
+def test_a_gap_shorter_than_the_window_is_reported_not_tripped() -> None:
+    """The drive froze 15 ms: no state for 18 ms. It did not stop the axis (it says so), and
+    the gap is reported with its length and whose stall it was, never as a stop."""
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, window=HoldWindow())
+    est = Estimate(0.0, 0.0, 0.0)
+    assert not lp.step(0, 0.0, est, refs((0, 0.0)), drive_stopped=False).gap
+    cmd = lp.step(18 * DT, 0.0, est, refs((18 * DT, 0.0)), drive_stopped=False, mono_ns=18 * DT)
+    assert not cmd.tripped and math.isfinite(cmd.effort)
+    assert 'a gap of 18.0 ms' in cmd.gap and 'the states stopped arriving' in cmd.gap
+    # Its own process slept: said so.
+    cmd = lp.step(140 * DT, 0.0, est, refs((140 * DT, 0.0)), False, own_stall_ns=118 * DT)
+    assert not cmd.tripped and "this controller's own process stalled 118 ms" in cmd.gap
+    # Even a gap longer than any window: the drive did not say it stopped the axis.
+    cmd = lp.step(1140 * DT, 0.0, est, refs((1140 * DT, 0.0)), drive_stopped=False)
+    assert not cmd.tripped and cmd.gap
+
+
+def test_a_driver_that_does_not_say_is_judged_by_the_window_at_the_estimated_speed() -> None:
+    window = HoldWindow()
+    v = 0.016  # (1 mm - 0.5 mm) / 16 mm/s = 31.25 ms
+    est = Estimate(0.0, v, 0.0)
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1.0, window=window)
+    lp.step(0, 0.0, est, refs((0, 0.0)))
+    cmd = lp.step(31 * DT, 0.0, est, refs((31 * DT, 0.0)))  # shorter: a gap, reported
+    assert not cmd.tripped and cmd.gap
+    cmd = lp.step(63 * DT, 0.0, est, refs((63 * DT, 0.0)))  # 32 ms: beyond the window
+    assert cmd.tripped and lp.trip.trip is not None
+    assert "beyond the drive's window of 31.2 ms at 16.0 mm/s" in lp.trip.trip.cause
+    # At rest the window is max_hold.
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1.0, window=window)
+    rest = Estimate(0.0, 0.0, 0.0)
+    lp.step(0, 0.0, rest, refs((0, 0.0)))
+    assert not lp.step(499 * DT, 0.0, rest, refs((499 * DT, 0.0))).tripped
+    assert lp.step(1000 * DT, 0.0, rest, refs((1000 * DT, 0.0))).tripped
+
+
+def test_without_a_window_no_gap_trips() -> None:
+    lp = loop()
+    lp.step(0, 0.0, Estimate(0.0, 0.0, 0.0), refs((0, 0.0)))
+    cmd = lp.step(10**9, 0.0, Estimate(0.0, 0.0, 0.0), refs((10**9, 0.0)), drive_stopped=True)
+    assert not cmd.tripped and not cmd.gap
 
 
 def test_a_following_error_trip_reset_goes_back_to_the_reference() -> None:
-    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, max_state_gap=10)
+    lp = AxisControlLoop(make_controller('pd', B, T, {}), T, 1e-3, window=HoldWindow())
     est = Estimate(0.0, 0.0, 0.0)
     assert lp.step(0, 0.0, est, refs((0, 2e-3))).tripped
     lp.reset_trip()

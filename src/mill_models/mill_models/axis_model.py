@@ -10,14 +10,21 @@
 - the friction at low speed (mill_models.friction_id): breakaway and Stribeck friction,
   from the stops.
 
-The choice, in this order: a resonance → 'two_mass' (the FRF's model); backlash → 'none'
-(a rigid model would hide the lost motion at every reversal); a refused rigid fit → 'none';
-else 'rigid', with its low-speed friction. `reason` says why in one line, naming the effect.
+The choice, in this order: a resonance → 'two_mass' (the FRF's model); backlash → 'rigid'
+with the backlash beside it (`tune` compensates the lost motion at reversals and predicts
+with the gap; without a rigid fit, 'none'); a refused rigid fit → 'none'; else 'rigid',
+with its low-speed friction. `reason` says why in one line, naming the effect.
+
+A two-mass axis whose rigid fit was refused (its resonance makes the delay ambiguous) gets
+the rigid fit again with the delay its response shows (`slow`): over the stretches of steady
+sliding the resonance hardly acts, and that fit gives the whole axis's gain, friction and
+load, which the loop `tune` designs for it needs beside the two-mass model.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -59,6 +66,12 @@ class AxisModel:
     response: FrfAnalysis | None = None  # the frequency response and its models
     friction: StribeckFriction | None = None  # low-speed friction (needs the rigid fit)
     backlash: Backlash | None = None
+    slow: AxisIdentification | None = None  # a two-mass axis's rigid fit at its known delay
+
+    @property
+    def fit(self) -> AxisIdentification | None:
+        """The rigid fit, else the slow one: gain, friction and load of the whole axis."""
+        return self.rigid if self.rigid is not None else self.slow
 
     @property
     def two_mass(self) -> TwoMassModel | None:
@@ -101,9 +114,20 @@ def identify_structure(
         return AxisModel(model, why, rigid, error, response, friction, backlash)
 
     if response is not None and response.two_mass is not None:
-        return choose(TWO_MASS, f'two-mass model: {response.reason}')
+        chosen = choose(TWO_MASS, f'two-mass model: {response.reason}')
+        if rigid is not None:
+            return chosen
+        # the resonance leaves more than the encoder's noise: that is the two-mass model's
+        known = replace(s.fit, delay=round(response.two_mass.delay / T), max_noise=math.inf)
+        try:
+            return replace(chosen, slow=identify_axis(x, u, T, known))
+        except IdentificationError:
+            return chosen
     if backlash is not None and backlash.present:
-        return choose(NONE, backlash.reason)
+        if rigid is None:
+            return choose(NONE, backlash.reason)
+        # the rigid model with the gap beside it: `tune` compensates and predicts with both
+        return choose(RIGID, f'rigid with {backlash.reason}')
     if rigid is None:
         why = error
         if (

@@ -58,6 +58,8 @@ class FitSettings:
     delay_contrast: float = 2.0  # the second-best delay's residual must be this × the best
     max_rejected: float = 0.2  # of the windows may fit far worse than the others
     max_noise: float = 3.0  # the fit's RMS residual may be this × the measurement's noise
+    delay: int | None = None  # the delay when known (a two-mass axis's, from its response):
+    # only it is fitted, and no other delay is asked to fit worse
 
 
 @dataclass(frozen=True)
@@ -200,12 +202,14 @@ def identify_axis(
     if not (np.isfinite(x).all() and np.isfinite(u).all()):
         raise IdentificationError('the record has missing or non-finite samples')
     fit, held = split_windows(x, T, s)
+    if s.delay is not None and not 0 <= s.delay < s.max_delay:
+        raise IdentificationError(f'the delay given, {s.delay}, is not within 0-{s.max_delay - 1}')
     results = [_robust_fit(x, u, T, fit, d) for d in range(s.max_delay + 1)]
     rss = [r.rss for r in results]
-    d = int(np.argmin(rss))
+    d = int(np.argmin(rss)) if s.delay is None else s.delay
     chosen = results[d]
     best, theta, A, n = chosen.rss, chosen.theta, chosen.A, chosen.n
-    second = min(r for i, r in enumerate(rss) if i != d)
+    second = min(r for i, r in enumerate(rss) if i != d) if s.delay is None else math.inf
     if d == s.max_delay:
         raise IdentificationError(
             f'no delay within 0-{s.max_delay} samples fits (the best is the largest tried): '

@@ -175,6 +175,66 @@ def run(
     return Record(xs, us, T, tables, motors, bits)
 
 
+def track(
+    m: Machine,
+    command,  # (k, y) -> u [N·m]: the controller answering the measurement y of sample k
+    samples: int,
+    T: float,
+    cut: np.ndarray | None = None,  # force on the table against +x per sample [N]
+    start: float = 0.0,
+    sub: int = 20,
+) -> np.ndarray:
+    """The machine closed by `command` for `samples` periods (a controller of a role package
+    is passed in as a function: this module cannot import one); the measured positions.
+    The same physics as `run`, with a cutting force on the table (on the one mass when
+    rigid)."""
+    h = T / sub
+    q = m.resolution
+    rigid = m.table_mass == 0.0
+    m1 = m.mass if rigid else m.motor_mass
+    m2 = m.table_mass
+    fs = m.coulomb if m.static is None else m.static
+    half_gap = 0.5 * m.backlash
+    x1 = x2 = start
+    v1 = v2 = 0.0
+    if not rigid and m.backlash > 0.0:
+        x1 = start + half_gap
+    pending = [0.0] * m.delay
+    ys = np.empty(samples)
+    for k in range(samples):
+        y1 = round(x1 / q) * q
+        y2 = round((x1 if rigid else x2) / q) * q
+        y = y2 if m.measure == 'table' else y1
+        ys[k] = y
+        u = command(k, y)
+        if not math.isfinite(u):
+            ys[k + 1 :] = math.nan
+            break
+        pending.append(u)
+        force = pending.pop(0) / LEAD
+        f_cut = float(cut[k]) if cut is not None and math.isfinite(cut[k]) else 0.0
+        for _ in range(sub):
+            if rigid:
+                x1, v1 = _slide(m, x1, v1, force - f_cut - m.load, m1, h, fs)
+                continue
+            rel = x1 - x2
+            if half_gap > 0.0:
+                over = rel - math.copysign(half_gap, rel) if abs(rel) > half_gap else 0.0
+                spring = m.stiffness * over + (m.damping * (v1 - v2) if over != 0.0 else 0.0)
+            else:
+                spring = m.stiffness * rel + m.damping * (v1 - v2)
+            table = spring - f_cut - m.load
+            if m.friction_side == 'motor':
+                x1, v1 = _slide(m, x1, v1, force - spring, m1, h, fs)
+                v2 += h * (table - m.guide_damping * v2) / m2
+                x2 += h * v2
+            else:
+                v1 += h * (force - spring) / m1
+                x1 += h * v1
+                x2, v2 = _slide(m, x2, v2, table, m2, h, fs)
+    return ys
+
+
 def _slide(
     m: Machine, x: float, v: float, drive: float, mass: float, h: float, fs: float
 ) -> tuple[float, float]:

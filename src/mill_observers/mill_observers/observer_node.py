@@ -26,6 +26,7 @@ from typing import Any
 
 from mill_common.checks import Rejected, joint_values, owner_check
 from mill_common.codec import decode_joint_state
+from mill_common.hold_window import drive_word
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
@@ -52,6 +53,10 @@ from mill_observers.observer_loop import ObserverLoop
 from mill_observers.registry import OBSERVERS
 
 MAX_COAST = 100  # periods the model runs on without a state before it just resumes
+
+
+# The controller of a servo cycle: (stamp, position, estimate, what the drive said).
+Servo = Callable[[int, float, Estimate, bool | None], None]
 
 
 class ObserverNode(Node):
@@ -83,8 +88,11 @@ class ObserverNode(Node):
         )
         # A controller of this axis in this process, handed each sample at once (its servo
         # cycle: mill_bringup.container connects them): (stamp, position, estimate).
-        self.servo: Callable[[int, float, Estimate], None] | None = None
-        self._served: tuple[int, float, Estimate] | None = None
+        self.servo: Servo | None = None
+        self._served: tuple[int, float, Estimate, bool | None] | None = None
+        # What the drive said of the axis in each state not yet stepped (mill_common.
+        # hold_window.drive_word), handed on to the controller of a servo cycle.
+        self._said: dict[int, bool | None] = {}
         self.guard = InputGuard(
             self,
             lambda: self.params.values['input_warn_time'],
@@ -173,6 +181,8 @@ class ObserverNode(Node):
             return  # the plant offers the step again
         self._stamps['state'].accept(got[0])
         self._states[got[0]] = got[1]
+        if self.servo is not None:
+            self._said[got[0]] = drive_word(msg.effort)
         self._advance()
 
     def _on_command(self, msg: JointState) -> None:
@@ -180,7 +190,7 @@ class ObserverNode(Node):
         if got is not None:
             self.commanded(*got)
 
-    def serve(self, servo: Callable[[int, float, Estimate], None]) -> None:
+    def serve(self, servo: Servo) -> None:
         """A servo cycle (mill_bringup.container): hand each estimated sample to this axis's
         controller in this process at once; its commands come back through `commanded`."""
         self.servo = servo
@@ -217,8 +227,11 @@ class ObserverNode(Node):
             est = loop.step(y, acted, missed, late)
             self._last_ns, self._stalled_since = ns, None
             if self.servo is not None:  # the command first; the estimate when idle
-                self._served = (ns, y, est)
-                self.servo(ns, y, est)
+                said = self._said.pop(ns, None)
+                for old in [at for at in self._said if at < ns]:
+                    del self._said[old]  # states the timing dropped
+                self._served = (ns, y, est, said)
+                self.servo(ns, y, est, said)
             self._last_estimate = joint_state_bytes(
                 ns,
                 (self.axis,),

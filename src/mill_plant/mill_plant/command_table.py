@@ -4,13 +4,20 @@ Every command names the state it answers by its stamp. The drive front end
 (mill_plant.drive_node) offers each accepted command here and asks, per period:
 
 - lockstep: `complete(stamp)` — has every axis answered the state of this step?
-- real time: `take(now)` at each tick — the newest command of every axis (zero-order
+- real time: `take(ns, speeds)` at each tick — the newest command of every axis (zero-order
   hold: a command stays applied until a newer one arrives). A command is fresh if it
   arrived since the last tick; a tick without a fresh command counts as late (from the
-  axis's first command on: before it the job has not started), and after
-  `brake_after` late ticks in a row the axis is stopped: braked (NaN) and latched. The
-  longest such run is kept: scattered late ticks cost little, a long run stops the axis.
-  The drive's motion guard (mill_plant.motion_guard) stops an axis the same way (`stop`).
+  axis's first command on: before it the job has not started). The controller's silence is
+  counted over the ticks the drive has actually published, each at most one period: a drive
+  that itself slept 300 ms published no state in that time, so no answer is missing (the
+  answer to its last state may wait unread in its queue), and its own stall is reported as
+  such (mill_plant.drive_cycle), never as the controller's lateness. The drive holds the last
+  command while that silence, one period more, stays within the window H(v) of
+  mill_common.hold_window at the axis's speed v at its last fresh command (`max_hold` at
+  rest, shorter at speed: the blind run stays within `excursion`); at the tick that would
+  exceed it the axis is stopped: braked (NaN) and latched. The longest run of late ticks is
+  kept: scattered late ticks cost little, a long silence stops the axis. The drive's motion
+  guard (mill_plant.motion_guard) stops an axis the same way (`stop`).
 
 A stopped axis stays braked when commands return: the first command that arrives after an
 outage comes from a controller that knows nothing of it. It is released only by an explicit
@@ -27,7 +34,10 @@ histogram (mill_plant.latency_histogram) whose report does not grow with the run
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+
+from mill_common.hold_window import HoldWindow
 
 from mill_plant.latency_histogram import LatencyHistogram
 
@@ -38,7 +48,9 @@ class AxisCommands:
     stamp: int = -1  # stamp of the state it answers [ns]
     fresh: bool = False  # arrived since the last tick
     late_in_row: int = 0
-    longest_late_run: int = 0  # most late ticks in a row (a brake comes at brake_after)
+    longest_late_run: int = 0  # most late ticks in a row
+    waited_ns: int = 0  # the silence since the last fresh command, over the drive's ticks
+    longest_wait_ns: int = 0
     ticks: int = 0
     late: int = 0
     braked: bool = True  # before the first command an axis is held braked
@@ -57,10 +69,12 @@ class Tick:
 
 
 class CommandTable:
-    def __init__(self, axes: list[str], brake_after: int) -> None:
+    def __init__(self, axes: list[str], window: HoldWindow, period_ns: int) -> None:
         self.axes = list(axes)
-        self.brake_after = brake_after
+        self.window = window
+        self.period_ns = period_ns
         self.by_axis = {a: AxisCommands() for a in self.axes}
+        self.last_tick_ns: int | None = None
 
     def offer(self, axis: str, stamp: int, value: float, arrived_ns: int | None = None) -> bool:
         """An accepted command; False if it is not newer than the one held (dropped)."""
@@ -85,7 +99,13 @@ class CommandTable:
         return [c.value for c in self.by_axis.values()]
 
     # -- real time -----------------------------------------------------------------------------
-    def take(self) -> Tick:
+    def take(self, ns: int, speeds: Mapping[str, float] | None = None) -> Tick:
+        """The tick at stamp ns: what to apply. speeds: per axis, its speed at its last
+        fresh command [m/s] (mill_plant.motion_guard; left out: at rest)."""
+        # The time this tick asked of the controllers: at most one period, whatever the drive
+        # itself slept since its last tick (then it published nothing to answer).
+        last, self.last_tick_ns = self.last_tick_ns, ns
+        asked = self.period_ns if last is None else min(max(ns - last, 0), self.period_ns)
         efforts: list[float] = []
         resumed: list[str] = []
         stopped: list[str] = []
@@ -97,7 +117,7 @@ class CommandTable:
             c.ticks += 1
             if c.fresh:
                 c.fresh = False
-                c.late_in_row = 0
+                c.late_in_row = c.waited_ns = 0
                 if c.stopped and c.acknowledged and math.isfinite(c.value):
                     self._release(c)  # re-armed by its owner: brake request, then a command
                 if c.stopped and not c.returned:
@@ -110,8 +130,18 @@ class CommandTable:
                 c.late += 1
                 c.late_in_row += 1
                 c.longest_late_run = max(c.longest_late_run, c.late_in_row)
-                if not c.stopped and c.late_in_row >= self.brake_after:
-                    self.stop(axis, f'no fresh command for {self.brake_after} periods')
+                c.waited_ns += asked
+                c.longest_wait_ns = max(c.longest_wait_ns, c.waited_ns)
+                speed = (speeds or {}).get(axis, 0.0)
+                hold_ns = round(self.window.hold_time(speed) * 1e9)
+                # Holding on for one more period would exceed the window: stop now.
+                if not c.stopped and c.waited_ns + self.period_ns > hold_ns:
+                    at = f'{1e3 * abs(speed):.1f} mm/s' if speed else 'rest'
+                    self.stop(
+                        axis,
+                        f'no fresh command for {1e-6 * c.waited_ns:.0f} ms of its ticks '
+                        f'(the window at {at}: {1e-6 * hold_ns:.0f} ms)',
+                    )
                     stopped.append(axis)
             efforts.append(math.nan if c.braked else c.value)
         return Tick(efforts, resumed, stopped, returned)
@@ -131,7 +161,7 @@ class CommandTable:
         if not c.stopped:
             return False
         self._release(c)
-        c.braked, c.late_in_row = True, 0
+        c.braked, c.late_in_row, c.waited_ns = True, 0, 0
         return True
 
     @staticmethod
@@ -152,6 +182,10 @@ class CommandTable:
 
     def longest_late_run(self, axis: str) -> int:
         return self.by_axis[axis].longest_late_run
+
+    def longest_wait(self, axis: str) -> float:
+        """The longest silence of the axis's commands, over the drive's ticks [s]."""
+        return 1e-9 * self.by_axis[axis].longest_wait_ns
 
     def latency_stats(self, axis: str) -> dict[str, float]:
         """Median, p99 and max state → command latency [s] of an axis (to 1 µs)."""

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mill_common.declared import ParamSet, param
+from mill_common.hold_window import HoldWindow
 from mill_common.node_params import RealtimeScheduling
 from mill_common.parameters import (
     ParamSpec,
@@ -13,7 +14,6 @@ from mill_common.parameters import (
     in_range,
     non_negative_int,
     one_of,
-    positive_int,
 )
 
 from mill_common import topics
@@ -45,7 +45,7 @@ class RecorderWindow(ParamSet):
 
 
 @dataclass(frozen=True)
-class DriveParams(RealtimeScheduling, RecorderWindow):
+class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
     """The drive front end's own parameters (timing, watchdog, owners), whatever its backend."""
 
     timing: str = param(
@@ -71,26 +71,11 @@ class DriveParams(RealtimeScheduling, RecorderWindow):
         non_negative_int,
         read_only=True,
     )
-    brake_after: int = param(
-        10,
-        'realtime: periods in a row without a fresh command after which the axis is '
-        "stopped (braked until re-armed: the controller's brake request then a valid "
-        'command, or ~/release)',
-        positive_int,
-    )
     speed_limit: float = param(
         0.5,
         'realtime: an axis faster than this over a period is stopped (braked until '
         "re-armed), fresh commands or not [m/s]; set it to the machine's rapid traverse",
         in_range(1e-4, 100.0),
-    )
-    hold_deviation: float = param(
-        0.0005,
-        'realtime: while its commands are late, an axis holds the last one only within '
-        'this distance of where it stood at its last fresh command, else it is stopped '
-        '(braked until re-armed)',
-        in_range(1e-6, 0.1),
-        unit='m',
     )
     command_report_time: float = param(
         0.5,

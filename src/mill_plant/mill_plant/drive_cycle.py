@@ -18,20 +18,26 @@ reports; its cycle says when a period runs and what counts as late:
 - `RealtimeCycle`: every sample period of wall time it reads the positions, publishes them
   stamped with the acquisition time on the system clock, and applies the newest command of
   each axis (zero-order hold). A command must answer a state this drive published. A
-  period without a fresh command counts as late; after `brake_after` late periods in a row,
-  or when its motion leaves what the drive allows (mill_plant.motion_guard: a speed limit,
-  and while commands are late a window around where they ended), the axis is stopped:
-  braked, and released only by a re-arm (the owner's brake request then a valid command)
-  or the operator (~/release), never by the first command that returns
-  (mill_plant.command_table). Ticks more than half a period late (the
-  machine does not hold the rate) are counted and reported. A simulated machine keeps the
-  wall clock as a real one does: after each tick it moves one period on, and a tick that
-  comes late first moves it by what passed beyond that.
+  period without a fresh command counts as late, and the controller's silence is counted
+  over the ticks this drive published (its own stall asked nothing of the controllers);
+  when it would outlast the window H(v) of mill_common.hold_window (`max_hold` at rest,
+  shorter at speed: the axis runs blind at most `excursion`), or when its motion leaves
+  what the drive allows (mill_plant.motion_guard: a speed limit, and while commands are
+  late a window around where they ended), the axis is stopped: braked, and released only
+  by a re-arm (the owner's brake request then a valid command) or the operator
+  (~/release), never by the first command that returns (mill_plant.command_table). Every
+  state says whether the drive has stopped its axis (`effort` NaN). Ticks more than half a
+  period late (the machine does not hold the rate) are counted and reported; a tick that
+  wakes more than `stall_report` late on the monotonic clock is the drive's own stall,
+  reported as such ("drive plant (pid …) stalled 112 ms (monotonic) at …"). A simulated
+  machine keeps the wall clock as a real one does: after each tick it moves one period on,
+  and a tick that comes late first moves it by what passed beyond that.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import time
 from abc import ABC, abstractmethod
 from collections import deque
@@ -41,6 +47,7 @@ from typing import Any, ClassVar, Protocol
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
 from mill_common.codec import encode_clock
+from mill_common.hold_window import HoldWindow, Stall, StallWatch
 from mill_common.lockstep import Action, LockstepWatchdog, RecorderGate
 from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp
 from mill_common.timebase import seconds
@@ -74,7 +81,7 @@ class Drive(Protocol):
     active: bool
     reports: DriveReports  # its axis events and its status
 
-    def publish_states(self, ns: int) -> list[float]: ...
+    def publish_states(self, ns: int, say_stops: bool = False) -> list[float]: ...
     def spindle_known(self, ns: int) -> bool: ...
     def write(self, ns: int, efforts: list[float]) -> None: ...
     def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
@@ -83,6 +90,7 @@ class Drive(Protocol):
     def end(self, code: int, message: str) -> None: ...
     def add_timer(self, timer: Any) -> None: ...
     def get_logger(self) -> Any: ...
+    def get_name(self) -> str: ...
     def trigger_activate(self) -> Any: ...
     def create_publisher(self, *args: Any, **kwargs: Any) -> Any: ...
     def create_subscription(self, *args: Any, **kwargs: Any) -> Any: ...
@@ -325,6 +333,11 @@ class RealtimeCycle(DriveCycle):
         v = d.params.values
         self._guard = MotionGuard(d.axes, v['speed_limit'], v['hold_deviation'])
         self.stops = dict.fromkeys(d.axes, 0)  # times each axis was stopped
+        # The drive's own stalls: ticks that woke late on the monotonic clock.
+        self._stalls = StallWatch(d.dt_ns, round(v['stall_report'] * 1e9))
+        self._stalls_reported = 0
+        self._worst_new: Stall | None = None  # the longest since the last report
+        self._window_values = self._window_key()
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         d.add_timer(d.create_timer(d.dt, self._tick, clock=wall))
 
@@ -345,6 +358,14 @@ class RealtimeCycle(DriveCycle):
         if d.backend is None:
             return
         ns = time.time_ns()  # acquisition time on the system clock
+        if d.active:  # its own stalls while it drives (the watch starts afresh when active)
+            stall = self._stalls.wake(time.monotonic_ns(), ns)
+            if stall is not None and (
+                self._worst_new is None or stall.length_ns > self._worst_new.length_ns
+            ):
+                self._worst_new = stall
+        else:
+            self._stalls.last_ns = None
         behind = ns - self._moved_to
         if self._moved_to and behind > d.dt_ns // CATCH_UP:  # a late tick: it moved on
             d.advance(self._moved_to, behind * 1e-9, self._held)
@@ -353,12 +374,12 @@ class RealtimeCycle(DriveCycle):
             self.active_ticks += 1
             if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
                 self.overruns += 1
-        positions = d.publish_states(ns)
+        positions = d.publish_states(ns, say_stops=True)
         self._recent.append(ns)
         held: Collection[str] = d.axes  # inactive: every axis held braked, as expected
         if d.active:
             self._guard_motion(ns, positions)
-            tick = d.table.take()
+            tick = d.table.take(ns, {a: self._guard.speed(a) for a in d.axes})
             efforts = tick.efforts
             held = [a for a, c in d.table.by_axis.items() if c.stamp < 0]  # none came yet
             for axis in tick.stopped:
@@ -438,6 +459,18 @@ class RealtimeCycle(DriveCycle):
             )
             d.get_logger().warning(text)
             d.reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
+        if self._worst_new is not None and now >= d.reports.next_status:
+            new = self._stalls.count - self._stalls_reported
+            self._stalls_reported = self._stalls.count
+            stall, self._worst_new = self._worst_new, None
+            more = f' (longest of {new} in the last second)' if new > 1 else ''
+            text = (
+                f'{self.stalled(stall)}{more}: the drive did not run, so no state went out and '
+                'no command was missing for it'
+            )
+            d.get_logger().warning(text)
+            d.reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
+        self._refresh_window()
         now_ns = time.time_ns()
         report_time = d.params.values['command_report_time']
         for axis, c in d.table.by_axis.items():
@@ -455,18 +488,46 @@ class RealtimeCycle(DriveCycle):
             elif quiet < report_time and axis in self._missing:
                 self._missing.discard(axis)
 
+    def stalled(self, stall: Stall) -> str:
+        """'drive plant (pid 123) stalled 112 ms (monotonic) at 12:00:01.234 UTC'."""
+        who = f'drive {self.drive.get_name()} (pid {os.getpid()})'
+        return f'{stall.describe(who)} {self.when(stall.wall_ns)}'
+
+    def _window_key(self) -> tuple[float, ...]:
+        v = self.drive.params.values
+        return tuple(v[s.name] for s in HoldWindow.specs())
+
+    def _refresh_window(self) -> None:
+        """Parameters of the window set at run time take effect (a pair that contradicts
+        itself is refused in the log, the window kept)."""
+        key = self._window_key()
+        if key == self._window_values:
+            return
+        self._window_values = key
+        try:
+            self.drive.table.window = HoldWindow.from_node_values(self.drive.params.values)
+        except ValueError as exc:
+            self.drive.get_logger().error(f'hold window kept as it was: {exc}')
+
     def stamp_now(self) -> int:
         return time.time_ns()
 
     def status_values(self) -> dict[str, object]:
         table = self.drive.table
         values: dict[str, object] = {'overruns': self.overruns, 'active_ticks': self.active_ticks}
+        longest = self._stalls.longest
+        values['pid'] = os.getpid()
+        values['stalls'] = self._stalls.count
+        values['longest_stall_ms'] = 1e-6 * longest.length_ns if longest else 0.0
+        values['longest_stall'] = self.stalled(longest) if longest else ''
+        values['stall_report_ms'] = 1e-6 * self._stalls.threshold_ns
         stopped = table.stop_reasons()
         for axis in self.drive.axes:
             values[f'{axis}.stops'] = self.stops[axis]
             values[f'{axis}.stopped'] = stopped.get(axis, '')
             values[f'{axis}.late_fraction'] = table.late_fraction(axis)
             values[f'{axis}.longest_late_run'] = table.longest_late_run(axis)
+            values[f'{axis}.longest_wait_ms'] = 1e3 * table.longest_wait(axis)
             for key, v in table.latency_stats(axis).items():
                 values[f'{axis}.latency_{key}_ms'] = 1e3 * v
         return values

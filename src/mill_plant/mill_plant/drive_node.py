@@ -6,8 +6,10 @@ report faults). It is a managed lifecycle node: `configure` builds the backend a
 topics, `activate` starts applying commands, `deactivate` brakes every axis; with
 `autostart` (the default) it does both by itself. When it steps is its `timing`
 (mill_plant.drive_cycle): lockstep (the plant is the clock of a simulation) or realtime
-(the wall clock, zero-order hold; an axis is stopped after `brake_after` late periods or
-on a motion the drive does not allow, and released only by a re-arm or `~/release`).
+(the wall clock, zero-order hold; an axis is stopped when its commands stay away longer
+than the window H(v) of mill_common.hold_window, or on a motion the drive does not allow,
+and released only by a re-arm or `~/release`; every state it publishes says whether it has
+stopped the axis: `effort` NaN).
 
 What command it takes, from whom, is its intake's decision (mill_plant.command_intake); a
 command it drops is counted and reported (a rate-limited WARN `<node>: inputs` on
@@ -32,8 +34,9 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
 from mill_common.codec import encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
+from mill_common.hold_window import HoldWindow
 from mill_common.node_main import request_exit
-from mill_common.parameters import ParamSpec
+from mill_common.parameters import ParameterError, ParamSpec
 from mill_common.ros import from_stamp, joint_state_bytes
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
@@ -108,7 +111,13 @@ class DriveNode(LifecycleNode):
         owners = dict(zip(MACHINE_AXES, v['command_owners'], strict=True))
         self.owners = {a: owners[a] for a in self.axes}
         self.ownership = Ownership(self, self.owners)
-        self.table = CommandTable(self.axes, v['brake_after'])
+        try:
+            window = HoldWindow.from_node_values(v)
+        except ParameterError as exc:
+            self.get_logger().error(f'cannot configure the machine: {exc}')
+            return TransitionCallbackReturn.FAILURE
+        self.table = CommandTable(self.axes, window, self.dt_ns)
+        self._written: list[float] = [math.nan] * len(self.axes)
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
@@ -235,14 +244,28 @@ class DriveNode(LifecycleNode):
         return self.owners[axis] or 'its controller'
 
     # -- one period: states out, efforts in ------------------------------------------------
-    def publish_states(self, ns: int) -> list[float]:
-        """Read and publish the positions of sample ns; returns them."""
+    def publish_states(self, ns: int, say_stops: bool = False) -> list[float]:
+        """Read and publish the positions of sample ns; returns them.
+
+        say_stops (realtime): each state's `effort` says whether the drive has stopped the
+        axis (NaN: stopped, braked until re-armed) or else the effort it applied over the
+        period that ends now (0 while the brake holds the axis before its first command):
+        a controller trips on the drive's word, never on a guess from a gap.
+        """
         assert self.backend is not None
         name = self._name
         positions = self.backend.read()
         publishers = self.io.states
-        for axis, y in zip(self.axes, positions, strict=True):
-            publishers[axis].publish(joint_state_bytes(ns, (axis,), position=(y,), sender=name))
+        if say_stops:
+            table = self.table.by_axis
+            for axis, y, u in zip(self.axes, positions, self._written, strict=True):
+                said = math.nan if table[axis].stopped else (u if math.isfinite(u) else 0.0)
+                publishers[axis].publish(
+                    joint_state_bytes(ns, (axis,), position=(y,), effort=(said,), sender=name)
+                )
+        else:
+            for axis, y in zip(self.axes, positions, strict=True):
+                publishers[axis].publish(joint_state_bytes(ns, (axis,), position=(y,), sender=name))
         # The cutting force of sample ns depends on its state, not on its commands: sent
         # with the states, a force controller can answer within the sample.
         force_pub = self.io.force
@@ -257,6 +280,7 @@ class DriveNode(LifecycleNode):
         assert self.backend is not None
         backend = self.backend
         backend.write(efforts)
+        self._written = efforts
         if self.spindle is not None:  # with the efforts: what the step ns -> ns + T does
             backend.spindle(self.spindle.at(ns))
             self.spindle.forget_before(ns)

@@ -14,10 +14,13 @@ The drive reads every axis's position at each tick and asks `check` which axes t
   window.
 
 So when the command stream ends at speed v, the axis stops within v·H + `hold_deviation`
-of where it was (H: the hold, at most `brake_after` periods, after which
-mill_plant.command_table stops the axis), plus what a change of its acceleration moves it
-in one period beyond the extrapolation (½·Δa·T²: 0.5 mm for Δa = 10 m/s² at T = 10 ms,
-5 µm at 1 ms), plus the stopping distance of the machine's brake (zero in the simulation).
+of where it was (H: the hold, at most H(v) = min(max_hold, (excursion − hold_deviation)/|v|)
+of mill_common.hold_window, after which mill_plant.command_table stops the axis: so within
+`excursion`; v is `speed(axis)`, the speed at its last fresh command), plus what a change
+of its acceleration moves it in one period beyond the extrapolation (½·Δa·T²: 0.5 mm for
+Δa = 10 m/s² at T = 10 ms, 5 µm at 1 ms), plus the stopping distance of the machine's
+brake (zero in the simulation), plus how far it moves while the drive itself does not run
+(a stall of the drive's own process: the amplifier holds what it was given).
 The extrapolation takes the ticks a period apart.
 """
 
@@ -101,6 +104,11 @@ class MotionGuard:
         if len(xs) == 2:
             return 2 * xs[1] - xs[0]
         return xs[-1]
+
+    def speed(self, axis: str) -> float:
+        """The axis's speed at its last fresh command [m/s] (0 when not known)."""
+        anchor = self.by_axis[axis].anchor
+        return anchor[2] if anchor is not None else 0.0
 
     def moved(self, axis: str) -> float:
         """How far the axis is from where it stood at its last fresh command [m] (NaN: not

@@ -5,9 +5,10 @@ the mill topics with enough motion), chooses each axis's model (mill_models.axis
 rigid fit, its frequency response, backlash, low-speed friction), prints the tables, plots
 model against measurement on held-out data and writes the machine model that `tune` reads.
 Every axis says which model it got and why. An axis whose record shows a resonance gets the
-two-mass model (written to the file, which `tune` then refuses: it designs for rigid axes
-only); any axis the record cannot give a model gets one line saying why and no model file is
-written (exit 1); bad options and unreadable bags one line (exit 2 / 1).
+two-mass model, written to the file with its slow rigid fit (gain, friction and load at the
+delay its response shows), for which `tune` designs; any axis the record cannot give a
+model gets one line saying why and no model file is written (exit 1); bad options and
+unreadable bags one line (exit 2 / 1).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 
 from mill_bag.errors import BagError
 from mill_common.one_line_parser import OneLineParser, positive
-from mill_models.axis_model import NONE, RIGID, StructureSettings
+from mill_models.axis_model import NONE, RIGID, TWO_MASS, StructureSettings
 from mill_models.identification import FitSettings
 
 from mill_analysis.identify import machine_file
@@ -77,9 +78,9 @@ def main(argv: list[str] | None = None) -> int:
         print('identify: no machine model written', file=sys.stderr)
         return 1
     fits = {
-        a: (m.rigid, x, u)
+        a: (m.fit, x, u)
         for a, (m, x, u) in structures.items()
-        if m.model == RIGID and m.rigid is not None
+        if m.model in (RIGID, TWO_MASS) and m.fit is not None
     }
     models = {a: f[0] for a, f in fits.items()}
     run_dir = Path(args.bag).resolve().parent
@@ -95,8 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     others = [a for a in chosen if a not in models]
     if others:
         print(
-            f'tune designs for rigid axes only: {", ".join(others)} need a design for their '
-            f'{", ".join(sorted({chosen[a].model for a in others}))} model'
+            f'tune cannot design for {", ".join(others)}: a two-mass model without the rigid '
+            f'fit at its delay (its gain, friction and load)'
         )
     else:
         print(f'next: tune {out} (docs/bring-up.md)')

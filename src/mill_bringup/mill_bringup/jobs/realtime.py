@@ -307,7 +307,17 @@ def drive_figures(
     else:
         source = 'the commands as the runner received them'
     overruns, ticks = drive_ticks(drive)
-    return DriveFigures(source, out, overruns, ticks)
+    stalls, longest_ms, longest = drive_stalls(drive)
+    return DriveFigures(
+        source,
+        out,
+        overruns,
+        ticks,
+        stalls=stalls,
+        longest_stall_ms=longest_ms,
+        longest_stall=longest,
+        stall_report_ms=drive.get('stall_report_ms', '?'),
+    )
 
 
 def drive_ticks(drive: Mapping[str, str]) -> tuple[int, int]:
@@ -315,3 +325,14 @@ def drive_ticks(drive: Mapping[str, str]) -> tuple[int, int]:
     approach and the hold included; 0 from a driver that does not report them), both from
     its last status."""
     return int(float(drive.get('overruns', '0'))), int(float(drive.get('active_ticks', '0')))
+
+
+def drive_stalls(drive: Mapping[str, str]) -> tuple[int, float, str]:
+    """The drive's own stalls (ticks that woke more than its `stall_report` late, on the
+    monotonic clock): how many, the longest [ms] and its line (which process, when), from its
+    last status (0 from a driver that does not report them)."""
+    return (
+        int(float(drive.get('stalls', '0'))),
+        float(drive.get('longest_stall_ms', '0')),
+        drive.get('longest_stall', ''),
+    )
