@@ -361,8 +361,8 @@ def test_every_node_survives_a_stream_of_bad_messages(ros_env, tmp_path) -> None
     for path in (out / 'logs').glob('*.log'):
         assert 'Traceback' not in path.read_text(), path.name
 
-    # Exit code 1 only because foreign messages were seen.
-    assert code == 1, text[-3000:]
+    # Exit code 3 (a good job, its record not intact) only because foreign messages were seen.
+    assert code == 3, text[-3000:]
     assert 'foreign messages were seen' in text, text[-3000:]
     assert summary['missing_samples'] == {}
     assert any(p.startswith('plant: ownership') for p in summary['problems'])

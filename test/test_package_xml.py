@@ -98,7 +98,8 @@ def by_name() -> dict[str, set[str]]:
         scen = scenario.load(path.stem)
         for variant in [scen, *(scen.variant(name) for name in scen.variants)]:
             job = job_for(variant)
-            types |= {*job.monitor_topics().values(), *job.recorded_topics().values()}
+            plan = job.graph_plan()
+            types |= {*plan.kept.values(), *plan.recorded.values()}
     needs |= {t.split('/')[0] for t in types}
     return {'mill_bringup': needs}
 

@@ -47,3 +47,15 @@ def job_start(statuses: list[Any]) -> int | None:
                 if 'start_stamp_ns' in values:
                     return int(values['start_stamp_ns'])
     return None
+
+
+def job_approach(statuses: list[Any]) -> float:
+    """How long a realtime job's approach to its path's start lasted [s], from the
+    trajectory's status (`approach_s`; 0: none, or a lockstep job)."""
+    for array in reversed(statuses):
+        for status in array.status:
+            if topics.part_of(status.name) == topics.JOB_STATUS:
+                values = status_values(status)
+                if 'approach_s' in values:
+                    return float(values['approach_s'])
+    return 0.0

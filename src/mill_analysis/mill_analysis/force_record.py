@@ -28,6 +28,7 @@ from mill_common.timebase import sample_stamp_ns, time_ns
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 
+from mill_analysis.events import Event
 from mill_analysis.records import missing_ranges
 from mill_common import topics
 
@@ -60,6 +61,7 @@ class ForceRecord:
     held_samples: int = 0
     j_c: float = math.nan
     gaps: dict[str, list[tuple[int, int]]] = field(default_factory=dict)  # missing, per topic
+    events: list[Event] = field(default_factory=list)  # what the machine told (events)
 
     @classmethod
     def empty(cls, n: int, period: float) -> ForceRecord:

@@ -1,7 +1,8 @@
 """Every figure computed from a run, each defined once with its window and NaN rule. ROS-free.
 
 In the manner of python-control's `step_info`: plain functions of arrays, used by the run
-summaries (text and JSON), `report`, the papers' verdicts and `tune`'s prediction.
+summaries (mill_analysis.summary: the text, the JSON and `report` print from it), the
+papers' verdicts and `tune`'s prediction.
 
 - NaN rule: a sample that is not finite (not measured, lost) is left out of every figure;
   a figure over no finite sample is NaN, never 0.
@@ -89,16 +90,18 @@ class ContourMetrics:
     rms_error: float  # RMS contour error after the skip [m]
 
 
-def contour_error(record: RunRecord) -> Contour | None:
+def contour_error(record: RunRecord, path_from: float = -math.inf) -> Contour | None:
     """The contour error: for each sample, the distance from the measured position to the
     programmed path, the polyline through every reference position of the run, in the space
     of the run's axes (those with a measured position; 3-D for x, y, z). It is the distance
     to the nearest point of the path, not to the reference of the same instant: a tool that
     lags along its path has a tracking error but no contour error; a corner cut short has
     one. What a machinist measures on the part. None for a run without a measured axis.
+    path_from: the path's references from this time on [s] (a realtime job's approach to the
+    path's start, before it, is no part of the programmed path).
     """
     cols = [i for i in range(len(AXES)) if np.isfinite(record['position'][:, i]).any()]
-    ref = record['reference'][:, cols]
+    ref = record['reference'][:, cols][record.t >= path_from]
     if not cols or not np.isfinite(ref).all(axis=1).any():
         return None
     distance, near = distance_to_path(ref, record['position'][:, cols])
@@ -117,28 +120,3 @@ def summarize_contour(
         return None
     after = contour.distance[record.t >= skip]
     return ContourMetrics(contour.axes, peak(after), rms(after))
-
-
-def summary_text(record: RunRecord, skip: float) -> str:
-    """The summary a run prints: per-axis metrics and the contour error."""
-    return format_summary(summarize(record, skip), skip, summarize_contour(record, skip))
-
-
-def format_summary(
-    metrics: list[AxisMetrics], skip: float, contour: ContourMetrics | None = None
-) -> str:
-    lines = [
-        f'axis   max |e| [mm]   RMS e [mm]   RMS(xi_hat - xi) [m/s^2]   RMS xi [m/s^2]'
-        f'   (t >= {skip:g} s)'
-    ]
-    for m in metrics:
-        lines.append(
-            f'{m.axis:>4}   {m.max_error * 1e3:12.6f}   {m.rms_error * 1e3:10.6f}'
-            f'   {m.rms_disturbance_error:24.6f}   {m.rms_disturbance:14.6f}'
-        )
-    if contour is not None:
-        lines.append(
-            f'contour error (distance to the programmed {"-".join(contour.axes)} path): '
-            f'max {contour.max_error * 1e3:.6f} mm, RMS {contour.rms_error * 1e3:.6f} mm'
-        )
-    return '\n'.join(lines)

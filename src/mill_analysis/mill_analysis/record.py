@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from mill_common.signals import AXES
 
+from mill_analysis.events import Event
 from mill_analysis.record_checks import Drops
 
 SIGNALS = (
@@ -37,7 +38,8 @@ class RunRecord:
 
     t: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
-    events: list[str] = field(default_factory=list)  # what happened besides the signals
+    # What happened besides the signals (mill_analysis.events): a trip, a stop, a brake.
+    events: list[Event] = field(default_factory=list)
     # Messages left out per topic: what the nodes drop (mill_analysis.record_checks): sent by
     # another node than the topic's owner, a stamp they refuse, or malformed; and why.
     foreign: dict[str, int] = field(default_factory=dict)

@@ -40,7 +40,8 @@ from mill_common.timebase import job_steps, time_ns
 from mill_common.timing import Lockstep
 
 from mill_analysis import records
-from mill_analysis.bag_status import job_end, job_start, plant_status
+from mill_analysis.bag_status import job_approach, job_end, job_start, plant_status
+from mill_analysis.events import events_of, statuses_of
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_analysis.record import RunRecord
 from mill_analysis.record_checks import Intake, Received, arrival_order, drop_lines, subset
@@ -293,6 +294,8 @@ class BagRun:
     command_latency_ms: dict[str, np.ndarray] = field(default_factory=dict)
     unanswered: dict[str, float] = field(default_factory=dict)
     longest_unanswered: dict[str, int] = field(default_factory=dict)
+    # A realtime job's move from where the axes stood to its path's start [s] (0: none)
+    approach: float = 0.0
 
     @property
     def held(self) -> tuple[int, float]:
@@ -460,7 +463,11 @@ def read_run(
                 'job status on /diagnostics)'
             )
         owners = records.owners(bag.custom_data, ns)
-        return _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
+        run = _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
+        # What the machine told (trips, stops, brakes), as the runner takes it
+        run.record.events = events_of(statuses_of(statuses), start_ns)
+        run.approach = job_approach(statuses)
+        return run
     diffs = np.diff(stamps)
     dt_ns = int(np.gcd.reduce(diffs[diffs > 0])) if (diffs > 0).any() else 0
     if dt_ns <= 0:
@@ -477,6 +484,7 @@ def read_run(
     listened = subset(raw, record_topics(axes))
     owners = records.owners(bag.custom_data, ns)
     record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, progress, owners)
+    record.events = events_of(statuses_of(statuses))  # as the runner takes them
     # Wall-clock arrival of each sample of the first axis, where the storage has
     # a wall time besides the (sim) stamp: our recorder's and rosbag2's publish_time.
     wall = None

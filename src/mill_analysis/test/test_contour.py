@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 from mill_analysis.contour import distance_to_path
-from mill_analysis.metrics import contour_error, format_summary, summarize, summarize_contour
+from mill_analysis.metrics import contour_error, summarize, summarize_contour
 from mill_analysis.record import RunRecord
+from mill_analysis.summary import axis_summary
 
 from mill_analysis import contour
 
@@ -123,7 +124,7 @@ def test_a_tool_off_its_path_by_d_has_contour_error_d() -> None:
     assert c.rms_error == pytest.approx(4e-6, rel=1e-9)
     full = contour_error(rec)
     assert full is not None and full.distance.shape == rec.t.shape
-    text = format_summary(summarize(rec, 1.0), 1.0, c)
+    text = axis_summary(rec, 1.0).text()
     assert text.splitlines()[-1] == (
         'contour error (distance to the programmed x-y-z path): max 0.004000 mm, RMS 0.004000 mm'
     )

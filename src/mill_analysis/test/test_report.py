@@ -16,6 +16,7 @@ from mill_analysis.report.analysis import amplitude_at, amplitude_spectrum, anal
 from mill_analysis.report.plots import contour_planes
 from mill_analysis.report.text import feed_text
 from mill_analysis.run_record import read_run, record_topics
+from mill_analysis.summary import axis_summary
 from mill_bag.types import STRING, typestore
 from mill_bag.writer import BagWriter
 
@@ -29,7 +30,7 @@ def test_feed_override_is_reported_when_the_bag_has_it(foreign_bag) -> None:
     run = read_run(path)
     values = [v for _, v in run.feed_override]
     assert values == [1.0 - 0.2 * k / run.n for k in range(0, run.n, 100)]
-    text = feed_text(analyse(run, 'f', 0.1, 0.1, [60.0]))
+    text = feed_text(analyse(run, 'f', axis_summary(run.record, 0.1), 0.1, [60.0]))
     assert text == (
         f'feed override: {len(values)} messages, min {min(values):.3f}, '
         f'mean {sum(values) / len(values):.3f}, max 1.000'
@@ -114,7 +115,7 @@ def test_report_prints_and_writes_the_contour_error_of_the_bag(foreign_bag, tmp_
 
 def test_the_side_view_is_drawn_when_the_path_moves_in_z(foreign_bag) -> None:
     path, _ = foreign_bag('mcap')
-    report = analyse(read_run(path), 'f', 0.1, 0.1, [60.0])
+    report = analyse(run := read_run(path), 'f', axis_summary(run.record, 0.1), 0.1, [60.0])
     assert contour_planes(report) == [(0, 1), (1, 2)]  # z falls 0.4 mm over y's 1.2 mm
     report.run.record['reference'][:, 2] = 0.02  # a flat path: the top view only
     assert contour_planes(report) == [(0, 1)]

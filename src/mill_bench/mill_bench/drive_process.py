@@ -23,7 +23,7 @@ from mill_bringup.catalogue import PLANT
 from mill_bringup.cli import set_duration, set_timing, set_tuning
 from mill_bringup.graph import Graph, cpu_seconds
 from mill_bringup.jobs.base import MessageSource
-from mill_bringup.jobs.realtime import RealtimeAxisJob
+from mill_bringup.jobs.realtime import RealtimeAxisJob, drive_figures, drive_ticks
 from mill_bringup.layout import Process
 from mill_bringup.runner.options import RunError
 from mill_bringup.scenario import Scenario
@@ -105,6 +105,8 @@ class HopTimedJob(RealtimeAxisJob):
         self._drive_cpu = drive_cpu
         self._cpu_at: list[float] = []
         self._listener: MessageSource | None = None
+        # The drive's status with its figures: its first after the job's end (settled)
+        self.drive: dict[str, str] = {}
         self.hops: Mapping[str, Mapping[str, tuple[float, float]]] = {}
 
     def timed_topics(self) -> set[str]:
@@ -121,6 +123,8 @@ class HopTimedJob(RealtimeAxisJob):
         done = super().complete(source)
         if done and len(self._cpu_at) == 1:
             self._cpu_at.append(self._drive_cpu())
+        if done and (status := source.status(self.drive_status)) is not None:
+            self.drive = status  # at the job's end, until its first status after it
         return done
 
     @property
@@ -155,11 +159,11 @@ class HopTimedJob(RealtimeAxisJob):
     ) -> RatePoint:
         """The run's figures: the drive's from its status (`drive`, read as the job reads
         it), the hops, and the CPU per tick given."""
-        overruns, ticks = self.overruns()
+        overruns, ticks = drive_ticks(self.drive)
         return RatePoint(
             case,
             rate,
-            self.drive_figures(),
+            drive_figures(self.axes, self.drive).axes,
             overruns,
             ticks,
             self.hops,

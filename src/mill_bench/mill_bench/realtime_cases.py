@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from mill_bringup.graph import cpu_seconds
+from mill_bringup.jobs.realtime import drive_ticks
 from mill_bringup.lifecycle_client import activate
 from mill_bringup.runner.options import RunError, RunOptions
 from mill_bringup.runner.run import run
@@ -55,7 +56,11 @@ def hardware(scen: Scenario, layout: str, rate: float, run_dir: Path, domain_id:
         )
         result = run(job, run_dir / 'graph', options)
     return job.point(
-        layout, rate, job.drive_cpu_ms_per_tick(), result.cpu_ms_per_step, result.failures
+        layout,
+        rate,
+        job.drive_cpu_ms_per_tick(),
+        result.cpu_ms_per_step,
+        [f.text() for f in result.failures],
     )
 
 
@@ -118,7 +123,7 @@ def floor(scen: Scenario, rate: float, duration: float, run_dir: Path, domain_id
             job.hops = hops.hop_latencies(
                 hops.timed_messages(monitor, job.timed_topics()), job.axes
             )
-    ticks = job.overruns()[1]
+    ticks = drive_ticks(job.drive)[1]
     per_tick = [1e3 * (b - a) / ticks if ticks else math.nan for a, b in zip(*cpu_at, strict=True)]
     return job.point(FLOOR, rate, per_tick[0], per_tick[1], ())
 

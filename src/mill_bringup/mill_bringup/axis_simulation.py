@@ -12,6 +12,7 @@ import math
 from typing import Protocol
 
 import numpy as np
+from mill_analysis.events import TRIP, Event, trip_detail
 from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, axis_index
@@ -224,9 +225,9 @@ class AxisSimulation:
         if self.feed is not None:
             rows = np.array(self.feed.rows, dtype=float)
             self.rec.force_control = rows.reshape(-1, len(FORCE_CONTROL))
+        # Each controller's trip, as its status on /diagnostics tells it (mill_analysis.events)
         self.rec.events = [
-            f'{AXES[i]} axis: following-error trip at t = {trip.time:.4f} s, '
-            f'|e| = {1e3 * abs(trip.error):.3f} mm > {1e3 * trip.limit:g} mm: braked'
+            Event(AXES[i], TRIP, trip.time, trip_detail(trip.error, trip.limit, trip.cause))
             for i, loop in sorted(self.controllers.items())
             if (trip := loop.trip.trip) is not None
         ]

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from mill_analysis.events import Status, statuses_of
 from mill_analysis.record_checks import Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
@@ -139,7 +140,12 @@ class Monitor(Node):
             )
         for topic, msgtype in kept.items():
             self._keep(topic, msgtype)
-        self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, 100)
+        # Every status kept, as every sample (RECORD_QOS): the job's events (a trip, a stop)
+        # are parsed from them, and a KEEP_LAST reader drops the oldest while the runner is
+        # short of CPU.
+        self.create_subscription(
+            DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, RECORD_QOS
+        )
         if self.recorder is not None:
             # The rest of the contract, subscribed before the graph starts so that the
             # first step is recorded (and kept: the record counts it); discovery adds any
@@ -256,6 +262,11 @@ class Monitor(Node):
                     level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
                     return values | {'message': s.message, 'level': str(level)}
         return None
+
+    def statuses(self) -> list[Status]:
+        """Every /diagnostics status of this machine heard so far, in order, with its values
+        (mill_analysis.events reads them)."""
+        return statuses_of(self.diagnostics, self.get_namespace())
 
     def problems(self) -> list[str]:
         """Every WARN or ERROR status heard on /diagnostics, once each, in order."""

@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
             wall = time.monotonic() - t0
             if name:
                 print(f'variant {name}:')
-            print(job.summary(rec, args.skip))
+            print(job.summary(rec, args.skip).text())
             print(f'{job.sim_time:.3f} s simulated in {wall:.2f} s wall')
     except ScenarioError as exc:
         print(f'offline_sim: error: {exc}', file=sys.stderr)

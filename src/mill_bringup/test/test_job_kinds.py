@@ -6,7 +6,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import pytest
+from mill_analysis.events import Status
+from mill_analysis.record import RunRecord
 from mill_bringup.cli import set_timing
+from mill_bringup.jobs.base import Ending
 from mill_bringup.jobs.registry import JOB_KINDS, job_for
 from mill_bringup.runner.cli import paper_text
 
@@ -15,7 +18,7 @@ from mill_bringup import scenario
 
 
 def test_every_job_kind_names_its_kind_of_record() -> None:
-    assert {kind.KIND: kind.RECORD for kind in JOB_KINDS} == {
+    assert {kind.KIND: kind.RECORD.NAME for kind in JOB_KINDS} == {
         'axis': records.AXIS,
         'axis-realtime': records.AXIS_REALTIME,
         'force': records.FORCE,
@@ -163,31 +166,54 @@ def test_a_drive_silent_while_the_runner_stalls_again_and_again_is_found() -> No
     assert clock.ns - last == 6 * S  # the fifth look: 4 × 1 s counted
 
 
+def _trip(axis: str, at_s: float) -> Status:
+    values = {
+        'axis': axis,
+        'following_error_limit_m': '0.002',
+        'trip_time_s': repr(at_s),
+        'trip_error_m': '0.0025',
+    }
+    return Status(round(at_s * S), f'{axis}_controller: following error', 2, '(prose)', values)
+
+
+def _drive(at_s: float, **values: str) -> Status:
+    named = {k.replace('__', '.'): v for k, v in values.items()}
+    return Status(round(at_s * S), 'plant: realtime', 0, 'running', named)
+
+
+def _failures(job, heard: list[Status]) -> list[tuple[str, str]]:
+    """The failures of a run whose runner heard these statuses until the job ended (what
+    collect puts in the record, and the summary fails)."""
+    rec = RunRecord.empty(0, 0.001)
+    rec.events = job.events(heard)
+    return [(e.axis, e.kind) for e in job.summary(rec, 1.0, Ending(tuple(heard))).failures]
+
+
 def test_a_realtime_trip_or_brake_while_the_job_ran_fails_it() -> None:
     job = _realtime_slotting()
-    trip = 'y_controller: following error: axis y: following-error trip at 08:00:00.000 UTC'
-    brake = 'plant: z axis: axis z: braked: no fresh command for 10 periods'
-    other = 'plant: realtime: sample rate not held: 3 ticks came late'
+    job.start_ns = 1_767_000_000 * S
+    t0 = job.start_ns / S
+    other = Status(job.start_ns, 'plant: realtime', 1, 'sample rate not held', {'overruns': '3'})
+    trip = _trip('y', t0 + 2.0)
+    brake = _drive(t0 + 2.5, z__invalid_commands='4', z__stops='0')
     done = {'trajectory: job': {'state': 'done', 'time': '4.0', 'end_time': '4.0'}}
-    source = Source({}, done)
-    source.heard = [other, trip, brake]
-    assert job.complete(source)
-    source.heard.append('plant: x axis: axis x: braked: no fresh command for 10 periods')
-    # what came after the job's end (the graph stopping) is not the job's
-    assert job.failures(None, source.problems()) == [trip, brake]
+    assert job.complete(Source({}, done))
+    # Only the statuses heard until the job ended are the job's: the runner takes them once
+    # then (what comes after, as the graph stops, is not the job's).
+    assert _failures(job, [other, trip, brake]) == [('y', 'trip'), ('z', 'braked')]
+    events = job.events([trip])
+    assert events[0].time == pytest.approx(2.0, abs=1e-6)  # the job's time
     lockstep = job_for(scenario.load('slotting'))
-    assert lockstep.failures(None, [trip]) == []  # a simulation's trip is its result
+    assert _failures(lockstep, [_trip('y', 2.0)]) == []  # a simulation's trip is its result
 
 
 def test_a_stop_the_drive_counted_fails_the_job_when_its_report_was_lost() -> None:
     job = _realtime_slotting()
-    done = {
-        'trajectory: job': {'state': 'done', 'time': '4.0', 'end_time': '4.0'},
-        'plant: realtime': {'x.stops': '0', 'y.stops': '1', 'y.stopped': 'no fresh command'},
-    }
-    assert job.complete(Source({}, done))  # no stop heard: the link carried no report
-    (line,) = job.failures(None, [])
-    assert line == 'plant: y axis: stopped by the drive 1 time(s) (now: no fresh command)'
+    job.start_ns = 0
+    heard = [_drive(4.0, x__stops='0', y__stops='1', y__stopped='no fresh command')]
+    assert _failures(job, heard) == [('y', 'stopped')]  # no report of the stop: the count
+    (event,) = job.events(heard)
+    assert event.text() == 'y axis: stopped at t = 4.0000 s (plant): no fresh command'
 
 
 def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_topic() -> None:
@@ -216,3 +242,21 @@ def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_to
     steps.heard(topics.CUTTING_FORCE, 0)
     steps.heard(topics.GROUND_TRUTH, 0)
     assert steps.through == -1 and steps.behind() == [topics.joint_command('z')]
+
+
+def test_the_graph_plan_is_what_the_runner_hears_of_the_job_as_prepared() -> None:
+    """The runner's session and start read one value of the graph (jobs.base.GraphPlan)."""
+    from mill_common import topics
+
+    lockstep = job_for(scenario.load('slotting'))
+    lockstep.prepare_graph(monitored=True)
+    plan = lockstep.graph_plan()
+    assert plan.steps is not None and plan.sim_time and not plan.late and not plan.timed
+    assert dict(plan.kept) == lockstep.monitor_topics()
+    assert plan.upstream == tuple(lockstep.upstream_topics())
+    realtime = _realtime_slotting()
+    realtime.prepare_graph(monitored=True)
+    plan = realtime.graph_plan()
+    assert plan.steps is None and not plan.sim_time
+    assert plan.late == {topics.REFERENCE} and topics.joint_command('x') in plan.timed
+    assert plan.late_after == tuple(topics.state(a) for a in 'xyz')

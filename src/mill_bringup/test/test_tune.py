@@ -8,9 +8,8 @@ from pathlib import Path
 import pytest
 import yaml
 from mill_analysis.identify import machine_file
-from mill_analysis.metrics import AxisMetrics
 from mill_bringup.tuning.cli import main as tune
-from mill_bringup.tuning.prediction_file import against_prediction, prediction_path
+from mill_bringup.tuning.prediction_file import compare, prediction_path
 from mill_models.identification import AxisIdentification, Interval
 
 from mill_bringup import scenario
@@ -109,10 +108,17 @@ def test_the_parameter_file_holds_the_design_and_the_run_is_set_beside_the_predi
     pred = yaml.safe_load(prediction_path(out).read_text())
     scen = scenario.load('commissioning')
     scenario.apply_params_file(scen, str(out))
-    metrics = [AxisMetrics(a, 0.0, 3.0 * pred['rms_error'][a], 0.0, 0.0) for a in 'xyz']
-    lines = against_prediction(scen, metrics, pred['end'])
+    skips = []
+
+    def measured(skip: float) -> dict[str, float]:
+        skips.append(skip)  # the prediction's window
+        return {a: 3.0 * pred['rms_error'][a] for a in 'xyz'}
+
+    (compared,) = compare(scen, pred['end'], measured)
+    lines = compared.lines()
     assert '(3.00x)' in lines[0] and lines[1].startswith('WARNING: x, y, z tracked')
-    assert 'not compared' in against_prediction(scen, metrics, pred['end'] / 2)[0]
+    assert skips == [pred['skip']]
+    assert 'not compared' in compare(scen, pred['end'] / 2, measured)[0].lines()[0]
 
 
 def test_an_observer_whose_loop_has_too_little_margin_is_refused(tmp_path, capsys) -> None:

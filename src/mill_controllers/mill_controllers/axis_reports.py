@@ -25,12 +25,15 @@ class AxisReports:
     ) -> tuple[bytes, str, str, dict[str, object]]:
         """The following-error status: running, or the trip (level, part, message, values)."""
         values: dict[str, object] = {
+            'axis': self.axis,  # read by mill_analysis.events
             'following_error_limit_m': trip.limit,
             'late_references': late_references,
         }
         if trip.trip is None:
             return DiagnosticStatus.OK, TRIP_PART, f'axis {self.axis}: running', values
         values.update({'trip_time_s': trip.trip.time, 'trip_error_m': trip.trip.error})
+        if trip.trip.cause:
+            values['trip_cause'] = trip.trip.cause
         text = trip.trip.describe(self.axis, self._when(trip.trip.time))
         return DiagnosticStatus.ERROR, TRIP_PART, text, values
 

@@ -229,6 +229,8 @@ class TrajectoryNode(Node):
         schedule = self._schedule
         if isinstance(schedule, WallClockReference) and schedule.t0 is not None:
             values['start_stamp_ns'] = schedule.t0
+            if schedule.approach is not None:  # the move to the path's start, before it
+                values['approach_s'] = schedule.approach.duration
         if level is None:
             level = DiagnosticStatus.WARN if problem else DiagnosticStatus.OK
         message = problem or f'job {state}'

@@ -1,9 +1,9 @@
 """The numbers of a report: per run and axis metrics, error spectra, windowed RMS, loop timing.
 
-Pure numpy on a BagRun (mill_analysis.run_record): max |e|, RMS e and the RMS of
-xi_hat - xi and of xi come from `mill_analysis.metrics.summarize`, the contour error from
-`mill_analysis.metrics.contour_error`, the code the runner prints its summary with; the rest
-is computed here over t >= skip.
+Pure numpy on a BagRun (mill_analysis.run_record): max |e|, RMS e, the RMS of xi_hat - xi
+and of xi and the contour error come from the run's summary (mill_analysis.summary, the
+value the runner prints its summary from); the rest is computed here over the summary's
+window.
 """
 
 from __future__ import annotations
@@ -16,16 +16,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from mill_common.signals import AXES
 
-from mill_analysis.metrics import (
-    AxisMetrics,
-    Contour,
-    ContourMetrics,
-    contour_error,
-    peak,
-    rms,
-    summarize,
-    summarize_contour,
-)
+from mill_analysis.metrics import Contour, ContourMetrics, contour_error, peak, rms
+from mill_analysis.summary import AxisFigures, AxisSummary
 
 if TYPE_CHECKING:
     from mill_analysis.run_record import BagRun
@@ -86,7 +78,7 @@ def amplitude_at(x: np.ndarray, dt: float, freq: float) -> float:
 @dataclass
 class AxisReport:
     axis: str
-    summary: AxisMetrics
+    summary: AxisFigures
     max_window_rms_error: float  # [m]
     max_disturbance_error: float  # max |xi_hat - xi| [m/s^2]
     error_amplitude: dict[float, float]  # |E(f)| [m]
@@ -109,12 +101,16 @@ class RunReport:
     loop: dict[str, float] = field(default_factory=dict)
     feed: dict[str, float] | None = None
     read_seconds: float = 0.0
+    figures: AxisSummary | None = None  # the run's summary (what the runner prints)
     contour: Contour | None = None  # per sample (the plots)
-    contour_summary: ContourMetrics | None = None  # over t >= skip
 
     @property
-    def summary(self) -> list[AxisMetrics]:
+    def summary(self) -> list[AxisFigures]:
         return [a.summary for a in self.axes]
+
+    @property
+    def contour_summary(self) -> ContourMetrics | None:
+        return None if self.figures is None else self.figures.contour
 
 
 def _finite(x: np.ndarray) -> np.ndarray:
@@ -126,28 +122,30 @@ def _stat(fn: Callable[[np.ndarray], Any], x: np.ndarray) -> float:
     return float(fn(x)) if x.size else math.nan
 
 
-def analyse(run: BagRun, label: str, skip: float, window: float, freqs: list[float]) -> RunReport:
+def analyse(
+    run: BagRun, label: str, summary: AxisSummary, window: float, freqs: list[float]
+) -> RunReport:
     rec = run.record
     dt_s = run.dt_ns / 1e9
-    after = rec.t >= skip
+    after = summary.window.mask(rec.t)
     t = rec.t[after]
     e = rec.tracking_error[after]
     d = rec.disturbance_error[after]
     tau = rec['torque'][after]
     force = rec['force'][after]
     width = max(1, round(window / dt_s))
-    summary = {m.axis: m for m in summarize(rec, skip)}
+    figures = {m.axis: m for m in summary.axes}
     axes = []
     for axis in run.axes:
         i = AXES.index(axis)
-        if axis not in summary:
+        if axis not in figures:
             continue
         _, ei = finite_segment(t, e[:, i])
         _, di = finite_segment(t, d[:, i])
         axes.append(
             AxisReport(
                 axis=axis,
-                summary=summary[axis],
+                summary=figures[axis],
                 max_window_rms_error=max_window_rms(e[:, i], width),
                 max_disturbance_error=peak(d[:, i]),
                 error_amplitude={f: amplitude_at(ei, dt_s, f) for f in freqs},
@@ -159,10 +157,9 @@ def analyse(run: BagRun, label: str, skip: float, window: float, freqs: list[flo
                 force_max=peak(force[:, i]),
             )
         )
-    report = RunReport(label, run, skip, window, freqs, axes)
+    report = RunReport(label, run, summary.skip, window, freqs, axes, figures=summary)
     report.loop = loop_timing(run)
-    report.contour = contour_error(rec)
-    report.contour_summary = summarize_contour(rec, skip, report.contour)
+    report.contour = contour_error(rec, summary.approach)
     if run.feed_override:
         values = np.array([v for _, v in run.feed_override])
         report.feed = {

@@ -8,6 +8,12 @@ as its job status says.
 
 Bags of kinds that share a REPORT go side by side in one report (lockstep and realtime axis
 runs do); the presentation (table, report.md, plots) is that of the first bag's kind.
+
+The kinds are the one registry of the kinds of record (`KINDS`): each job kind of
+mill_bringup names its kind of record by the object (Job.RECORD), the runner writes its
+NAME into the bag and summarises its record with its `summarize`, and `report` reads the bag
+back through the same object and summarises with the same `summarize`
+(mill_analysis.summary).
 """
 
 from __future__ import annotations
@@ -25,12 +31,14 @@ from mill_bag.reader import open_bag
 from mill_common.progress import Progress
 
 from mill_analysis import records
-from mill_analysis.force_record import ForceBagRun, is_force_bag, read_force_run
+from mill_analysis.force_record import ForceBagRun, ForceRecord, is_force_bag, read_force_run
+from mill_analysis.record import RunRecord
 from mill_analysis.report.analysis import RunReport, analyse
 from mill_analysis.report.force import force_figure, force_markdown, force_table
 from mill_analysis.report.plots import plot_all
 from mill_analysis.report.text import markdown, text_table
 from mill_analysis.run_record import read_run
+from mill_analysis.summary import AxisSummary, ForceSummary, axis_summary, force_summary
 
 R = TypeVar('R')
 Figures = list[tuple[str, str]]  # (file name, title) of each plot written
@@ -53,6 +61,11 @@ class RecordKind(ABC, Generic[R]):
 
     NAME: ClassVar[str]  # mill_analysis.records
     REPORT: ClassVar[str]  # kinds with the same REPORT share one (e.g. 'axis-job')
+
+    @abstractmethod
+    def summarize(self, record: Any, skip: float, **context: Any) -> AxisSummary | ForceSummary:
+        """The summary of a record of this kind (mill_analysis.summary), what the runner and
+        `report` print; context: what the kind's summary takes besides the record."""
 
     @abstractmethod
     def read(self, bag: Path, label: str, options: ReportOptions) -> R:
@@ -110,6 +123,11 @@ class AxisRecords(RecordKind[RunReport]):
     REPORT = 'axis-job'
     REALTIME: ClassVar[bool | None] = None  # None: told by the bag's job status
 
+    def summarize(self, record: RunRecord, skip: float, **context: Any) -> AxisSummary:
+        """mill_analysis.summary.axis_summary: approach, failing, predictions, force_control,
+        drive, start_stamp_ns."""
+        return axis_summary(record, skip, **context)
+
     def read(self, bag: Path, label: str, options: ReportOptions) -> RunReport:
         t0 = time.monotonic()
         progress = BagProgress(label, options.quiet)
@@ -122,7 +140,8 @@ class AxisRecords(RecordKind[RunReport]):
                 f'{bag}: no samples at t >= {options.skip:g} s '
                 f'(the run lasts {run.record.t[-1]:g} s)'
             )
-        report = analyse(run, label, options.skip, options.window, options.freqs)
+        summary = self.summarize(run.record, options.skip, approach=run.approach)
+        report = analyse(run, label, summary, options.window, options.freqs)
         report.read_seconds = time.monotonic() - t0
         return report
 
@@ -161,6 +180,11 @@ class ForceRecords(RecordKind[ForceRun]):
     NAME = records.FORCE
     REPORT = 'force-job'
 
+    def summarize(self, record: ForceRecord, skip: float, **context: Any) -> ForceSummary:
+        """mill_analysis.summary.force_summary of the record's J_c, override and β; context:
+        events."""
+        return force_summary(record.j_c, record.override, record.beta, **context)
+
     def read(self, bag: Path, label: str, options: ReportOptions) -> ForceRun:
         return label, read_force_run(bag, options.namespace)
 
@@ -174,8 +198,11 @@ class ForceRecords(RecordKind[ForceRun]):
         return force_figure(list(runs), out)
 
 
+LOCKSTEP_AXIS = LockstepAxisRecords()
+REALTIME_AXIS = RealtimeAxisRecords()
+FORCE = ForceRecords()
 KINDS: dict[str, RecordKind[Any]] = {
-    kind.NAME: kind for kind in (LockstepAxisRecords(), RealtimeAxisRecords(), ForceRecords())
+    kind.NAME: kind for kind in (LOCKSTEP_AXIS, REALTIME_AXIS, FORCE)
 }
 
 
@@ -190,4 +217,4 @@ def kind_of(path: Path) -> RecordKind[Any]:
                 f'({", ".join(KINDS)})'
             )
         return KINDS[name]
-    return ForceRecords() if is_force_bag(records.bag_counts(bag)) else AxisRecords()
+    return FORCE if is_force_bag(records.bag_counts(bag)) else AxisRecords()

@@ -7,7 +7,6 @@ import math
 
 import numpy as np
 
-from mill_analysis.metrics import format_summary
 from mill_analysis.report.analysis import RunReport
 
 
@@ -30,7 +29,9 @@ def text_table(reports: list[RunReport]) -> str:
         lines.append(
             f'== {r.label}: {r.run.bag.path} ({r.run.extent()}, T = {r.run.dt_ns / 1e6:g} ms)'
         )
-        lines.append(format_summary(r.summary, r.skip, r.contour_summary))
+        if r.figures is not None:  # the runner's summary block, printed by the same code
+            lines += r.figures.figure_lines()
+            lines += [e.text() for e in r.figures.events]
         head = f'axis   max RMS_{r.window:g}s e [um]'
         for f in r.freqs:
             head += f'   |E({hz(f)})| [um]'

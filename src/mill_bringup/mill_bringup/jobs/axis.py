@@ -23,43 +23,42 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from mill_analysis.metrics import summarize, summarize_contour, summary_text
+from mill_analysis.events import Event, Status
 from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.record_checks import subset
+from mill_analysis.report import kinds
 from mill_analysis.run_record import record_from_raw
+from mill_analysis.summary import AxisSummary, DepthStretch
 from mill_bag.types import decode
-from mill_common.timebase import job_steps, period_ns, seconds
+from mill_common.timebase import job_steps, seconds
 from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
 
-from mill_analysis import records
-from mill_bringup.axis_simulation import AxisSimulation, build_axis_loops
-from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
+from mill_bringup.axis_simulation import AxisSimulation
+from mill_bringup.catalogue import CONTROLLER, PLANT
 from mill_bringup.job_config import JobConfig
-from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
+from mill_bringup.jobs.axis_nodes import JOINT_STATE, WRENCH_STAMPED, AxisNodes, axis_summary
+from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
 from mill_bringup.layout import processes
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
-from mill_bringup.tuning.prediction_file import against_prediction
 from mill_common import topics
 
-JOINT_STATE = 'sensor_msgs/msg/JointState'
 # A stamp beyond this is a wall-clock time (2001 on), not a simulation's sim time [ns].
 WALL_CLOCK_NS = 10**18
-JOINT_TRAJECTORY = 'trajectory_msgs/msg/JointTrajectory'
-WRENCH_STAMPED = 'geometry_msgs/msg/WrenchStamped'
 
 
 class AxisJob(Job[RunRecord]):
     KIND = 'axis'
-    RECORD = records.AXIS
+    RECORD = kinds.LOCKSTEP_AXIS
     CLOCK = PLANT
     SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
+    # A lockstep trip is a result (the offline twin trips alike), not a failure of the run.
+    FAILING = ()
 
     @classmethod
     def runs(cls, config: JobConfig) -> bool:
@@ -68,25 +67,16 @@ class AxisJob(Job[RunRecord]):
     def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
         super().__init__(scen, config)  # every node's parameters valid, the rules kept
         c = self.config
-        plants, trajectories = c.names_of(PLANT), c.names_of(TRAJECTORY)
-        if len(plants) != 1 or len(trajectories) != 1:
-            raise ScenarioError(
-                f'scenario {scen.name}: an axis job has one plant and one trajectory'
-            )
-        self.plant, self.trajectory = plants[0], trajectories[0]
-        build_axis_loops(c)  # the axes' cores build
+        self.nodes = AxisNodes(scen, c)  # shared with the realtime job
+        self.plant, self.trajectory = self.nodes.plant, self.nodes.trajectory
+        self.dt_ns, self.axes = self.nodes.dt_ns, self.nodes.axes
+        self.state_owner, self.force_controller = (
+            self.nodes.state_owner,
+            self.nodes.force_controller,
+        )
         tv = c.values(self.trajectory)
-        self.dt_ns = period_ns(c.sample_period)
         self.end_time = c.trajectory_job().end_time
         self._samples = job_steps(self.end_time, self.dt_ns)
-        self.axes = list(c.axes)
-        # Who publishes the states: the plant, or the driver the controllers are told of.
-        controllers = [n for n in c.nodes if n.kind.per_axis]
-        self.state_owner = controllers[0].values['plant_node'] if controllers else self.plant
-        forces = c.names_of(FORCE_CONTROLLER)
-        if len(forces) > 1:
-            raise ScenarioError(f'scenario {scen.name}: more than one force controller')
-        self.force_controller = forces[0] if forces else ''
         # With a feed override the job ends when its path ends: a length the run finds.
         self.override = bool(tv['feed_override.enabled'])
         self.lockstep = self.override and bool(tv['feed_override.lockstep'])
@@ -180,21 +170,21 @@ class AxisJob(Job[RunRecord]):
             wanted = self.scenario.overrides.setdefault(self.plant, {})
             wanted.setdefault('recorder_window', RECORDER_WINDOW)
 
+    def graph_plan(self) -> GraphPlan:
+        return GraphPlan(
+            upstream=tuple(self.upstream_topics()),
+            kept=self.monitor_topics(),
+            recorded=self.recorded_topics(),
+            timed=frozenset(),
+            late=frozenset(),
+            late_after=(),
+            steps=self.recorded_steps(),
+            sim_time=self.sim_time_stamps(),
+        )
+
     def recorded_steps(self) -> RecordedSteps | None:
-        # The plant's values as prepare_graph left them (it sets recorder_window).
-        window = self.scenario.parameters(self.plant)['recorder_window']
-        if not window:
-            return None
-        # A step is whole with its states, estimates, commands and cutting force, and the
-        # ground truth of the step before if the plant publishes it.
-        stepped = {topics.state(a): 0 for a in self.axes}
-        for axis in self.axes:
-            stepped[topics.estimate(axis)] = 0
-            stepped[topics.joint_command(axis)] = 0
-        stepped[topics.CUTTING_FORCE] = 0
-        if self.config.node(self.plant).values['publish_ground_truth']:
-            stepped[topics.GROUND_TRUTH] = 1
-        return RecordedSteps(stepped, seconds(self.dt_ns), window)
+        """The recorder's handshake with the plant, if the graph as prepared has one."""
+        return self.nodes.recorded_steps(self.scenario)
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""
@@ -210,23 +200,10 @@ class AxisJob(Job[RunRecord]):
         return False
 
     def upstream_topics(self) -> list[str]:
-        # The monitor cannot see from the plant whether an observer's estimates or a
-        # controller's commands reach it: the plant starts once it has matched their publishers.
-        out = [topics.estimate(a) for a in self.axes] + [topics.REFERENCE]
-        out += [topics.joint_command(a) for a in self.axes]
-        return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
+        return self.nodes.upstream_topics()
 
     def monitor_topics(self) -> dict[str, str]:
-        out = {}
-        for axis in self.axes:
-            out[topics.state(axis)] = JOINT_STATE
-            out[topics.estimate(axis)] = JOINT_STATE
-            out[topics.joint_command(axis)] = JOINT_STATE
-        out[topics.REFERENCE] = JOINT_TRAJECTORY
-        out[topics.GROUND_TRUTH] = JOINT_STATE
-        if self.force_controller:
-            out[topics.FORCE_CONTROL_STATE] = JOINT_STATE
-        return out
+        return self.nodes.monitor_topics()
 
     def recorded_topics(self) -> dict[str, str]:
         # Only when recorded: the plant publishes the force to a listener only (it costs).
@@ -273,56 +250,21 @@ class AxisJob(Job[RunRecord]):
 
     def owners(self) -> dict[str, str]:
         """The node each per-axis topic must come from (header.frame_id)."""
-        out = {}
-        for node in self.config.nodes:
-            if not node.kind.per_axis:
-                continue
-            axis = node.values['axis']
-            topic = topics.joint_command(axis) if node.kind.role == CONTROLLER else None
-            out[topic or topics.estimate(axis)] = node.name
-        for axis in self.axes:
-            out[topics.state(axis)] = self.state_owner
-        out[topics.REFERENCE] = self.trajectory
-        return out
+        return self.nodes.owners()
+
+    def events(self, statuses: Sequence[Status]) -> list[Event]:
+        return self.nodes.events(statuses)  # sim time: the job's own
 
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> AxisSimulation:
         return AxisSimulation(self, times)
 
     # -- results ---------------------------------------------------------------------------
-    def summary(self, rec: RunRecord, skip: float) -> str:
-        text = '\n'.join(
-            [
-                summary_text(rec, skip),
-                *against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1])),
-                *rec.events,
-            ]
+    def summary(self, rec: RunRecord, skip: float, ending: Ending | None = None) -> AxisSummary:
+        stretches = None if rec.force_control is None else depth_stretches(rec.force_control)
+        return axis_summary(
+            self.RECORD, self.scenario, rec, skip, self.FAILING, ending, force_control=stretches
         )
-        if rec.force_control is None or not len(rec.force_control):
-            return text
-        lines = [
-            'force control, per constant depth of cut told (second half of each stretch, '
-            'where the force has settled):',
-            f'{"depth [mm]":>10} {"from [s]":>9} {"to [s]":>8} {"instants":>9} '
-            f'{"force [N]":>10} {"reference [N]":>14} {"override":>9}',
-        ]
-        for s in depth_stretches(rec.force_control):
-            lines.append(
-                f'{s.depth:10.3f} {s.start:9.3f} {s.end:8.3f} {s.instants:9d} '
-                f'{s.force:10.1f} {s.reference:14.1f} {s.override:9.4f}'
-            )
-        return text + '\n' + '\n'.join(lines)
-
-    def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
-        out: dict[str, Any] = {
-            'metrics': [vars(m) for m in summarize(rec, skip)],
-            'contour_error': vars(c) if (c := summarize_contour(rec, skip)) else None,
-            'events': rec.events,
-        }
-        if rec.force_control is not None:
-            out['force_control'] = [vars(s) for s in depth_stretches(rec.force_control)]
-            out['job_end_time'] = float(rec.t[-1])
-        return out
 
     def foreign(self, rec: RunRecord) -> dict[str, int]:
         return dict(rec.foreign)
@@ -354,19 +296,6 @@ def max_difference(a: np.ndarray, b: np.ndarray) -> float:
     diff[np.isnan(a) & np.isnan(b)] = 0.0
     diff[np.isnan(diff)] = np.inf
     return float(diff.max()) if diff.size else 0.0
-
-
-@dataclass(frozen=True)
-class DepthStretch:
-    """Control instants at one depth of cut, averaged over the second half of the stretch."""
-
-    depth: float  # [mm]
-    start: float  # first instant at this depth [s]
-    end: float  # last instant [s]
-    instants: int
-    force: float  # mean force the law used [N]
-    reference: float  # mean reference [N]
-    override: float  # mean override [-]
 
 
 def depth_stretches(rows: np.ndarray, min_instants: int = 10) -> list[DepthStretch]:

@@ -7,21 +7,35 @@ once against this interface (and `report` against the kind of record a job names
 differs between the kinds sits in one class per kind (mill_bringup.jobs.axis, .realtime,
 .force):
 
-- which node clocks the job (it starts last, once the others are heard), which topics
-  must have a publisher before it starts, and which topics the monitor keeps;
+- which node clocks the job (it starts last, once the others are heard), and its graph
+  plan (`GraphPlan`: which topics must have a publisher before it starts, which the monitor
+  keeps, records, times and subscribes to late, the recorder's handshake);
 - when the job is complete and when its last messages have arrived;
 - the record: from the messages of a run (or a bag), or from the offline simulation,
   sample by sample (`Simulation.step`), by the one loop in `simulate`;
-- the summary of a record, and the differences of two records of the same job;
-- the kind of record a run gives (RECORD, mill_analysis.records: named in its bag, `report`
-  reads the bag through it), and what to note before the paper's verdicts (PAPER_NOTE).
+- what happened to the machine (typed events, mill_analysis.events, parsed from the
+  /diagnostics statuses heard until the job ended: `Ending`), and which of them fail the job
+  (FAILING);
+- the summary of a record (one value, mill_analysis.summary: the text and summary.json print
+  from it), and the differences of two records of the same job;
+- the kind of record a run gives (RECORD, the kind object of mill_analysis.report.kinds: its
+  name goes in the bag, `report` reads the bag through the same object, and both summarise
+  with it), and what to note before the paper's verdicts (PAPER_NOTE).
+
+The state of a run (what the runner heard when the job ended) is not kept by the job: the
+runner takes it once, as an `Ending`, and hands it to `summary`.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
+
+from mill_analysis.events import Event, Status
+from mill_analysis.report.kinds import RecordKind
+from mill_analysis.summary import Summary
 
 from mill_bringup.job_config import JobConfig, build
 from mill_bringup.recorded_steps import RecordedSteps
@@ -61,13 +75,51 @@ class MessageSource(Protocol):
         """Wall-clock arrival [ns, system clock] of each message of a timed topic."""
         ...
 
+    def statuses(self) -> Sequence[Status]:
+        """Every /diagnostics status of the machine heard so far, in order (its values)."""
+        ...
+
+
+@dataclass(frozen=True)
+class Ending:
+    """How a run ended, as the runner took it once when the job was complete (or the run
+    could not go on): the machine's statuses heard until then, the runner's own finding that
+    ended it (a drive gone silent, a stall, a node that died; None: the job completed), and
+    what the runner heard (for a job's figures of the messages' timing)."""
+
+    statuses: tuple[Status, ...] = ()
+    failure: Event | None = None
+    source: MessageSource | None = None
+
+
+@dataclass(frozen=True)
+class GraphPlan:
+    """What the runner starts and hears of a job's graph, as the job prepared it: the topics
+    that must have a publisher before the clock node starts, those it keeps (to build the
+    record) and those a bag records besides, whose arrival it times, those it subscribes to
+    late (once each of `late_after` has a message), the recorder's handshake with the clock
+    node, and whether the graph runs on sim time (Job.graph_plan)."""
+
+    upstream: tuple[str, ...]
+    kept: Mapping[str, str]  # topic -> message type
+    recorded: Mapping[str, str]
+    timed: frozenset[str]
+    late: frozenset[str]
+    late_after: tuple[str, ...]
+    steps: RecordedSteps | None
+    sim_time: bool
+
 
 class Job(ABC, Generic[R]):
     """One scenario configuration, checked: its samples, its graph, its record."""
 
     KIND: ClassVar[str]
-    # The kind of record a run gives (mill_analysis.records): named in its bag, for `report`.
-    RECORD: ClassVar[str]
+    # The kind of record a run gives (mill_analysis.report.kinds): named in its bag, read by
+    # `report` through the same object, and summarised by it.
+    RECORD: ClassVar[RecordKind[Any]]
+    # The kinds of event (mill_analysis.events) that fail a run of this job (exit code 1);
+    # what the runner finds itself (Ending.failure) always does.
+    FAILING: ClassVar[tuple[str, ...]] = ()
     CLOCK: ClassVar[str]  # the role of the node that clocks the job (mill_bringup.catalogue)
     # How long to wait, after the job is complete, for its last messages [s].
     SETTLE_TIMEOUT: ClassVar[float] = 5.0
@@ -118,34 +170,9 @@ class Job(ABC, Generic[R]):
         """Adjust the scenario before launch in this layout (the clock node waits for the
         monitor too; if `recorded`, for the recorder where it can)."""
 
-    def recorded_steps(self) -> RecordedSteps | None:
-        """The recorder's handshake with the clock node, if the graph as prepared has one."""
-        return None
-
     @abstractmethod
-    def upstream_topics(self) -> list[str]:
-        """Topics that must have a publisher before the clock node starts."""
-
-    @abstractmethod
-    def monitor_topics(self) -> dict[str, str]:
-        """Topic -> message type the monitor keeps (serialized) to build the record."""
-
-    def recorded_topics(self) -> dict[str, str]:
-        """Topics of the contract a bag records besides the monitored ones."""
-        return {}
-
-    def timed_topics(self) -> set[str]:
-        """Topics whose messages' arrival times the monitor keeps (latency)."""
-        return set()
-
-    def late_topics(self) -> tuple[set[str], list[str]]:
-        """Topics the monitor subscribes to only once it has a message of each of the
-        second (mill_bringup.monitor.Monitor, late); none by default."""
-        return set(), []
-
-    def sim_time_stamps(self) -> bool:
-        """Whether the graph runs on sim time (the bag's log time is then the stamp)."""
-        return True
+    def graph_plan(self) -> GraphPlan:
+        """What the runner starts and hears of the graph as prepare_graph left it."""
 
     def started_ns(self) -> int | None:
         """When the job started on the system clock, if the graph says so (realtime); else
@@ -164,9 +191,8 @@ class Job(ABC, Generic[R]):
         """While the run goes on: ScenarioError when the graph cannot make the job (a
         driver on another clock, a drive gone silent)."""
 
-    def failures(self, rec: R, problems: Sequence[str]) -> list[str]:
-        """What went wrong in a finished run that makes it fail (exit code 1): a realtime
-        axis that tripped or was braked. A lockstep trip is a result, not a failure."""
+    def events(self, statuses: Sequence[Status]) -> list[Event]:
+        """What the machine told of itself in these statuses (trips, stops, brakes)."""
         return []
 
     def settled(self, source: MessageSource) -> bool:
@@ -184,12 +210,9 @@ class Job(ABC, Generic[R]):
 
     # -- results ---------------------------------------------------------------------------
     @abstractmethod
-    def summary(self, rec: R, skip: float) -> str:
-        """Text summary of a record (metrics after `skip` seconds)."""
-
-    @abstractmethod
-    def summary_json(self, rec: R, skip: float) -> dict[str, Any]:
-        """The same as JSON-ready values."""
+    def summary(self, rec: R, skip: float, ending: Ending | None = None) -> Summary:
+        """The summary of a record (figures `skip` seconds after the job's path started), the
+        events of its ending with it (None: an offline run, whose record has its events)."""
 
     def foreign(self, rec: R) -> dict[str, int]:
         """Messages the record left out per topic: what the nodes drop (another sender, a

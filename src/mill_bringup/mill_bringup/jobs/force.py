@@ -13,22 +13,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import Any
+from dataclasses import replace
 
 import numpy as np
 from mill_analysis.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
 from mill_analysis.force_record import record_from_messages as force_record_from_messages
+from mill_analysis.report import kinds
+from mill_analysis.summary import ForceSummary
 from mill_common.parameters import algorithm_values
 from mill_common.timebase import sample_stamp_ns
 from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import ForceControlDesigner, RstDesignParams
 from mill_models.force_process import ForceProcessModel
 
-from mill_analysis import records
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.job_config import JobConfig
-from mill_bringup.jobs.base import RECORDER_WINDOW, Job, MessageSource
+from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
 from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
@@ -50,7 +51,7 @@ def _only(scen: Scenario, role: str) -> str:
 
 class ForceJob(Job[ForceRecord]):
     KIND = 'force'
-    RECORD = records.FORCE
+    RECORD = kinds.FORCE
     CLOCK = FORCE_PROCESS
 
     def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
@@ -109,6 +110,18 @@ class ForceJob(Job[ForceRecord]):
         if monitored:  # the force process waits for the runner too (as AxisJob's plant)
             plant.setdefault('recorder_window', RECORDER_WINDOW)
 
+    def graph_plan(self) -> GraphPlan:
+        return GraphPlan(
+            upstream=(topics.FEED_OVERRIDE, topics.REFERENCE),
+            kept=dict(FORCE_TOPICS),
+            recorded={},
+            timed=frozenset(),
+            late=frozenset(),
+            late_after=(),
+            steps=self.recorded_steps(),
+            sim_time=True,
+        )
+
     def recorded_steps(self) -> RecordedSteps | None:
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
@@ -122,12 +135,6 @@ class ForceJob(Job[ForceRecord]):
             topics.CUTTING_FORCE_TRACE: 1,
         }
         return RecordedSteps(stepped, self.period, window)
-
-    def upstream_topics(self) -> list[str]:
-        return [topics.FEED_OVERRIDE, topics.REFERENCE]
-
-    def monitor_topics(self) -> dict[str, str]:
-        return dict(FORCE_TOPICS)
 
     def progress(self, source: MessageSource) -> float:
         ns = source.latest_stamp_ns(topics.CUTTING_FORCE)
@@ -182,20 +189,11 @@ class ForceJob(Job[ForceRecord]):
         return ForceLoopSimulation(law, self.model, loop, keep_trace=True)
 
     # -- results ---------------------------------------------------------------------------
-    def summary(self, rec: ForceRecord, skip: float) -> str:
-        return (
-            f'J_c (Rubio 2013 eq. 14) = {rec.j_c:.6g} N²·s; override: mean '
-            f'{np.nanmean(rec.override):.4f}, range [{np.nanmin(rec.override):.4f}, '
-            f'{np.nanmax(rec.override):.4f}]; active β: '
-            + ', '.join(f'{b:g}' for b in dict.fromkeys(rec.beta.tolist()))
-        )
-
-    def summary_json(self, rec: ForceRecord, skip: float) -> dict[str, Any]:
-        return {
-            'j_c': rec.j_c,
-            'mean_override': float(np.nanmean(rec.override)),
-            'beta_switches': int(np.count_nonzero(np.diff(rec.beta))),
-        }
+    def summary(self, rec: ForceRecord, skip: float, ending: Ending | None = None) -> ForceSummary:
+        summary: ForceSummary = self.RECORD.summarize(rec, skip, events=rec.events)
+        if ending is not None and ending.failure is not None:
+            summary = replace(summary, failures=(ending.failure,))
+        return summary
 
     def differences(self, rec: ForceRecord, other: ForceRecord) -> dict[str, float]:
         out = {}

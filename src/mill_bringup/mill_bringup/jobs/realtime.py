@@ -1,6 +1,7 @@
 """The three-axis job on the wall clock: the drive keeps its own time (timing realtime).
 
-The same graph as the lockstep axis job (mill_bringup.jobs.axis), with every node's
+The same graph as the lockstep axis job (mill_bringup.jobs.axis: both hold its nodes and
+topics, jobs.axis_nodes, and neither inherits from the other), with every node's
 `timing` realtime and no sim time: the drive ticks every sample period, stamps its states
 with the system clock and holds the newest command; the trajectory starts the job once it
 hears every axis (first moving there from where the axes stand) and says so on /diagnostics
@@ -16,19 +17,22 @@ import time
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from mill_analysis.metrics import summarize, summary_text
+from mill_analysis.events import BRAKED, DRIVE_SILENT, STOPPED, TRIP, Event, Status
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_analysis.record import RunRecord
+from mill_analysis.report import kinds
+from mill_analysis.summary import DRIVE_FIGURES, AxisSummary, DriveFigures
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
-from mill_analysis import records
+from mill_bringup.catalogue import PLANT
 from mill_bringup.job_config import JobConfig
-from mill_bringup.jobs.axis import JOINT_STATE, WALL_CLOCK_NS, AxisJob
-from mill_bringup.jobs.base import MessageSource
+from mill_bringup.jobs.axis import WALL_CLOCK_NS
+from mill_bringup.jobs.axis_nodes import WRENCH_STAMPED, AxisNodes, axis_summary
+from mill_bringup.jobs.base import Ending, GraphPlan, Job, MessageSource
+from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
-from mill_bringup.tuning.prediction_file import against_prediction
 from mill_common import topics
 
 # No state this long after the start: the drive is gone (the runner itself may go without
@@ -36,20 +40,26 @@ from mill_common import topics
 DRIVE_SILENCE_NS = 3_000_000_000
 # The runner checks every 50 ms; a gap this long between two checks is the runner's own.
 RUNNER_STALL_NS = 1_000_000_000
-DRIVE_FIGURES = (
-    'late_fraction',
-    'longest_late_run',
-    'latency_median_ms',
-    'latency_p99_ms',
-    'latency_max_ms',
-)
 
 
-class RealtimeAxisJob(AxisJob):
+class DriveSilent(ScenarioError):
+    """The drive sent no state for too long: the job cannot go on (its event)."""
+
+    def __init__(self, event: Event) -> None:
+        super().__init__(event.detail)
+        self.event = event
+
+
+class RealtimeAxisJob(Job[RunRecord]):
     KIND = 'axis-realtime'
-    RECORD = records.AXIS_REALTIME
+    RECORD = kinds.REALTIME_AXIS
+    CLOCK = PLANT
+    SETTLE_TIMEOUT = 1.0  # the ground truth and force of the final step
     HAS_OFFLINE_TWIN = False
     BRAKE_AT_END = True  # the drive keeps running on its own clock: brake it first
+    # On a machine an axis that tripped, or that the drive stopped or braked, did not
+    # complete the job.
+    FAILING = (TRIP, STOPPED, BRAKED)
     PAPER_NOTE = (
         "note: a realtime run: the paper's experiment is the lockstep run at its own sample "
         "rate; these figures also depend on how this machine kept the wall clock's rate, and "
@@ -61,7 +71,13 @@ class RealtimeAxisJob(AxisJob):
         return bool(config.of_role(cls.CLOCK)) and config.timing == 'realtime'
 
     def __init__(self, scen: Scenario, config: JobConfig | None = None) -> None:
-        super().__init__(scen, config)
+        super().__init__(scen, config)  # every node's parameters valid, the rules kept
+        self.nodes = AxisNodes(scen, self.config)  # shared with the lockstep job
+        self.plant, self.trajectory = self.nodes.plant, self.nodes.trajectory
+        self.dt_ns, self.axes = self.nodes.dt_ns, self.nodes.axes
+        self.state_owner = self.nodes.state_owner
+        # the path; once started, the approach move before it too (the trajectory says)
+        self.end_time = self.config.trajectory_job().end_time
         lockstep = [
             n.name for n in self.config.nodes if n.values.get('timing', 'lockstep') != 'realtime'
         ]
@@ -77,24 +93,22 @@ class RealtimeAxisJob(AxisJob):
                 f'positions, the plant drives {", ".join(self.axes)}: set '
                 f'{self.trajectory}.axes to the same axes'
             )
+        # Following the run: the job's start and end as the trajectory reports them, and
+        # the drive's silence as `check` counts it.
         self.start_ns: int | None = None
         self._checked_ns = -1  # when `check` last looked (system clock)
         self._quiet_ns: dict[str, int] = {}  # per axis: time awake without a state
         self.clock_ns = time.time_ns  # the system clock the arrivals are taken on
-        self.drive: dict[str, str] = {}
-        self._source: MessageSource | None = None
-        self.received: dict[str, dict[str, float]] = {}  # per axis, as the runner saw it
-        self._problems_at_end: list[str] | None = None
-        self._drive_at_end: dict[str, str] | None = None
-
-    @property
-    def sim_time(self) -> float:
-        return self.end_time  # the path, and once started the approach move before it
 
     @property
     def samples(self) -> int:
         return job_steps(self.end_time, self.dt_ns)
 
+    @property
+    def sim_time(self) -> float:
+        return self.end_time
+
+    # -- the distributed run ---------------------------------------------------------------
     def prepare_graph(
         self, monitored: bool, layout: str = LAYOUTS[0], recorded: bool = False
     ) -> None:
@@ -108,16 +122,30 @@ class RealtimeAxisJob(AxisJob):
                 'min_subscribers', readers
             )
 
+    def graph_plan(self) -> GraphPlan:
+        late, after = self.late_topics()
+        return GraphPlan(
+            upstream=tuple(self.upstream_topics()),
+            kept=self.monitor_topics(),
+            recorded=self.recorded_topics(),
+            timed=frozenset(self.timed_topics()),
+            late=frozenset(late),
+            late_after=tuple(after),
+            steps=self.recorded_steps(),
+            sim_time=False,
+        )
+
+    def recorded_steps(self) -> RecordedSteps | None:
+        return self.nodes.recorded_steps(self.scenario)
+
+    def upstream_topics(self) -> list[str]:
+        return self.nodes.upstream_topics()
+
     def monitor_topics(self) -> dict[str, str]:
-        out = super().monitor_topics()
-        for axis in self.axes:
-            out[topics.joint_command(axis)] = JOINT_STATE
-        return out
+        return self.nodes.monitor_topics()
 
     def recorded_topics(self) -> dict[str, str]:
-        return {
-            k: v for k, v in super().recorded_topics().items() if k not in self.monitor_topics()
-        }
+        return {topics.CUTTING_FORCE: WRENCH_STAMPED}
 
     def sim_time_stamps(self) -> bool:
         return False
@@ -173,32 +201,12 @@ class RealtimeAxisJob(AxisJob):
             quiet = min(since, self._quiet_ns.get(axis, 0) + awake)
             self._quiet_ns[axis] = quiet
             if quiet > DRIVE_SILENCE_NS:
-                raise ScenarioError(
+                detail = (
                     f'the drive went silent: nothing on {topics.state(axis)} from '
                     f'{self.state_owner} for {quiet / 1e9:.1f} s'
                 )
-
-    def failures(self, rec: RunRecord, problems: Sequence[str]) -> list[str]:
-        """Every axis that tripped or was braked while the job ran (what happens after its
-        end, as the graph stops, is not the job's): on a machine, the job did not complete."""
-        parts = ('following error', *(f'{axis} axis' for axis in self.axes))
-        heard = problems if self._problems_at_end is None else self._problems_at_end
-        out = [
-            p
-            for p in heard
-            if any(f': {part}: ' in p for part in parts) and ('trip' in p or 'braked' in p)
-        ]
-        # The drive's own count: its report of a stop may be lost with the link that failed.
-        drive = self.drive if self._drive_at_end is None else self._drive_at_end
-        for axis in self.axes:
-            stops = int(float(drive.get(f'{axis}.stops', '0')))
-            if stops and not any(f': {axis} axis: ' in p and 'stopped' in p for p in out):
-                why = drive.get(f'{axis}.stopped') or 'released since'
-                out.append(
-                    f'{self.state_owner}: {axis} axis: stopped by the drive {stops} time(s) '
-                    f'(now: {why})'
-                )
-        return out
+                at = (now - quiet - self.start_ns) * 1e-9
+                raise DriveSilent(Event(axis, DRIVE_SILENT, at, detail))
 
     def complete(self, source: MessageSource) -> bool:
         status = self._job(source)
@@ -206,104 +214,125 @@ class RealtimeAxisJob(AxisJob):
             return False
         if status.get('state') == 'refused':
             raise ScenarioError(f'the trajectory refused the job: {status["message"]}')
-        drive = source.status(topics.status_name(self.state_owner, topics.DRIVE_STATUSES[1]))
-        if drive is not None:
-            self.drive = drive
-        self._source = source
-        done = status.get('state') == 'done'
-        if done:
-            self._problems_at_end = source.problems()
-            self._drive_at_end = dict(self.drive)
-        return done
+        return status.get('state') == 'done'
 
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[RunRecord, dict[str, int]]:
-        if self.start_ns is None:
-            raise ScenarioError('the job never started (no start_stamp_ns from the trajectory)')
+        if self.start_ns is None:  # the run stopped before the job started: no sample
+            return RunRecord.empty(0, seconds(self.dt_ns)), {}
         rec, missing = realtime_record(raw, self.axes, self.start_ns, self.end_time, self.owners())
-        if self._source is not None:
-            source = self._source
-            arrivals = {t: source.arrival_ns(t) for t in self.timed_topics()}
-            timing = command_timing(rec, raw, arrivals, self.axes, self.start_ns)
-            self.received = {axis: t.figures() for axis, t in timing.items()}
         return rec, {t: m for t, m in missing.items() if m}
 
+    def owners(self) -> dict[str, str]:
+        return self.nodes.owners()
+
+    def events(self, statuses: Sequence[Status]) -> list[Event]:
+        # the controllers' trips on the system clock, the drive's statuses stamped on it
+        return self.nodes.events(statuses, self.start_ns or 0)
+
+    def foreign(self, rec: RunRecord) -> dict[str, int]:
+        return dict(rec.foreign)
+
+    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
+        return rec.drops.reasons()
+
+    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
+        return dict(rec.gaps)
+
+    # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> Any:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
-    def drive_figures(self) -> dict[str, dict[str, float]]:
-        """Per axis: late fraction, most late periods in a row and latency median/p99/max
-        [ms], from the drive's status (NaN where it does not report one);
-        a driver that does not report them: as the runner received the commands."""
-        out = {}
-        for axis in self.axes:
-            if f'{axis}.late_fraction' in self.drive or axis not in self.received:
-                out[axis] = {f: float(self.drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
-            else:
-                out[axis] = dict(self.received[axis])
-        return out
+    def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
+        raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
-    def figures_source(self) -> str:
-        """Where drive_figures come from, for the summary."""
-        if any(f'{a}.late_fraction' in self.drive for a in self.axes) or not self.received:
-            return 'the drive'
-        return 'the commands as the runner received them'
+    # -- results ---------------------------------------------------------------------------
+    @property
+    def drive_status(self) -> str:
+        """The name of the drive's status with its figures (`plant: realtime`)."""
+        return topics.status_name(self.state_owner, topics.DRIVE_STATUSES[1])
 
-    def overruns(self) -> tuple[int, int]:
-        """The drive's ticks more than half a period late, and its ticks while active (the
-        approach and the hold included; 0 from a driver that does not report them), both from
-        its last status."""
-        return (
-            int(float(self.drive.get('overruns', '0'))),
-            int(float(self.drive.get('active_ticks', '0'))),
+    def summary(self, rec: RunRecord, skip: float, ending: Ending | None = None) -> AxisSummary:
+        """Figures from `skip` s after the approach (the trajectory says how long it took),
+        with the drive's figures from its last status before the job's end (as the runner
+        received the commands, from a driver that does not report them)."""
+        statuses = ending.statuses if ending is not None else ()
+        drive = last_values(statuses, self.drive_status)
+        received: dict[str, dict[str, float]] = {}
+        source = ending.source if ending is not None else None
+        if source is not None and self.start_ns is not None and len(rec.t):
+            timed = self.timed_topics()
+            raw = {t: source.messages(t) for t in timed}
+            arrivals = {t: source.arrival_ns(t) for t in timed}
+            timing = command_timing(rec, raw, arrivals, self.axes, self.start_ns)
+            received = {axis: t.figures() for axis, t in timing.items()}
+        job = last_values(statuses, topics.status_name(self.trajectory, topics.JOB_STATUS))
+        return axis_summary(
+            self.RECORD,
+            self.scenario,
+            rec,
+            skip,
+            self.FAILING,
+            ending,
+            approach=float(job.get('approach_s', 0.0)),
+            drive=drive_figures(self.axes, drive, received),
+            start_stamp_ns=self.start_ns,
         )
 
-    def stalls(self) -> tuple[int, float, str]:
-        """The drive's own stalls (ticks that woke more than its `stall_report` late, on the
-        monotonic clock): how many, the longest [ms] and its line (which process, when),
-        from its last status (0 from a driver that does not report them)."""
-        return (
-            int(float(self.drive.get('stalls', '0'))),
-            float(self.drive.get('longest_stall_ms', '0')),
-            self.drive.get('longest_stall', ''),
-        )
 
-    def summary(self, rec: RunRecord, skip: float) -> str:
-        lines = [
-            summary_text(rec, skip),
-        ]
-        if len(rec.t):  # none: the drive's states never reached the runner
-            lines += against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1]))
-        lines.append(
-            'axis   periods without a fresh command   in a row   state->command latency [ms]: '
-            f'median    p99     max   (from {self.figures_source()})'
-        )
-        for axis, f in self.drive_figures().items():
-            lines.append(
-                f'{axis:>4}   {100 * f["late_fraction"]:30.2f} %   {f["longest_late_run"]:8.0f}   '
-                f'{f["latency_median_ms"]:27.3f} {f["latency_p99_ms"]:7.3f} '
-                f'{f["latency_max_ms"]:7.3f}'
-            )
-        overruns, ticks = self.overruns()
-        if overruns:
-            of = f' of {ticks} ({100 * overruns / ticks:.2f} %)' if ticks else ''
-            lines.append(
-                f'WARNING: the drive ticked more than half a period late {overruns} times{of}: '
-                'this machine does not hold the sample rate in this layout'
-            )
-        stalls, _longest, line = self.stalls()
-        if stalls:
-            over = self.drive.get('stall_report_ms', '?')
-            lines.append(
-                f'WARNING: the drive stalled {stalls} times by more than {over} ms (monotonic), '
-                f'the longest: {line}; its own stalls, not late commands'
-            )
-        return '\n'.join(lines)
+def last_values(statuses: Sequence[Status], name: str) -> dict[str, str]:
+    """The values of the newest status of this name ({}: none heard)."""
+    for s in reversed(statuses):
+        if s.name == name:
+            return dict(s.values)
+    return {}
 
-    def summary_json(self, rec: RunRecord, skip: float) -> dict[str, Any]:
-        out = super().summary_json(rec, skip)
-        out['drive'] = self.drive_figures()
-        out['drive_overruns'], out['drive_ticks'] = self.overruns()
-        stalls, longest, line = self.stalls()
-        out['drive_stalls'] = {'count': stalls, 'longest_ms': longest, 'longest': line}
-        out['start_stamp_ns'] = self.start_ns
-        return out
+
+def drive_figures(
+    axes: Sequence[str],
+    drive: Mapping[str, str],
+    received: Mapping[str, Mapping[str, float]] | None = None,
+) -> DriveFigures:
+    """Per axis: late fraction, most late periods in a row and latency median/p99/max
+    [ms], from the drive's status (NaN where it does not report one); a driver that does not
+    report them: as the runner received the commands (`received`)."""
+    received = received or {}
+    out = {}
+    for axis in axes:
+        if f'{axis}.late_fraction' in drive or axis not in received:
+            out[axis] = {f: float(drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
+        else:
+            out[axis] = dict(received[axis])
+    if any(f'{a}.late_fraction' in drive for a in axes) or not received:
+        source = 'the drive'
+    else:
+        source = 'the commands as the runner received them'
+    overruns, ticks = drive_ticks(drive)
+    stalls, longest_ms, longest = drive_stalls(drive)
+    return DriveFigures(
+        source,
+        out,
+        overruns,
+        ticks,
+        stalls=stalls,
+        longest_stall_ms=longest_ms,
+        longest_stall=longest,
+        stall_report_ms=drive.get('stall_report_ms', '?'),
+    )
+
+
+def drive_ticks(drive: Mapping[str, str]) -> tuple[int, int]:
+    """The drive's ticks more than half a period late, and its ticks while active (the
+    approach and the hold included; 0 from a driver that does not report them), both from
+    its last status."""
+    return int(float(drive.get('overruns', '0'))), int(float(drive.get('active_ticks', '0')))
+
+
+def drive_stalls(drive: Mapping[str, str]) -> tuple[int, float, str]:
+    """The drive's own stalls (ticks that woke more than its `stall_report` late, on the
+    monotonic clock): how many, the longest [ms] and its line (which process, when), from its
+    last status (0 from a driver that does not report them)."""
+    return (
+        int(float(drive.get('stalls', '0'))),
+        float(drive.get('longest_stall_ms', '0')),
+        drive.get('longest_stall', ''),
+    )

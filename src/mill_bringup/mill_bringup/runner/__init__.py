@@ -18,8 +18,10 @@ The same steps for every kind of job (mill_bringup.jobs), one module each:
              nothing happening for --stall-timeout ends the run
     collect  stop the graph, close the bag, build the record from the monitor's messages;
              the RunResult (the job's summary, wall time, real-time factor, memory)
-    result   RunResult and its text
-    run      run(job, run_dir, options): plan, start, follow, collect
+    result   RunResult and its text; the exit code (0 good and complete, 1 the job failed,
+             3 a good job whose record is incomplete)
+    run      run(job, run_dir, options): plan, start, follow, collect; however the run ends
+             once its graph started (a drive gone silent, a node that died), a RunResult
     cli      the run_scenario command: checks every variant's scenario before anything
              starts, runs each, prints its summary and the paper's verdicts; logs and
              summary.json go to the run directory (--output)

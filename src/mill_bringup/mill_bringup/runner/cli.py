@@ -19,10 +19,19 @@ from mill_bringup.cli import add_scenario_arguments, load_scenario, run_paramete
 from mill_bringup.jobs.base import Job
 from mill_bringup.jobs.registry import job_for
 from mill_bringup.runner.options import RunError, RunOptions
-from mill_bringup.runner.result import format_result
+from mill_bringup.runner.result import (
+    GOOD,
+    JOB_FAILED,
+    RECORD_INCOMPLETE,
+    format_result,
+)
 from mill_bringup.runner.run import run
 from mill_bringup.scenario import Scenario, ScenarioError, check_layout
 from mill_common import topics
+
+# run_scenario's exit codes, from the least to the most severe: 0 good and complete, 3 a good
+# job with an incomplete record, 1 the job failed (2: usage, argparse; 130: interrupted)
+SEVERITY = (GOOD, RECORD_INCOMPLETE, JOB_FAILED)
 
 
 def _apply_namespace(
@@ -43,6 +52,11 @@ def parser() -> argparse.ArgumentParser:
         description='Start every node of a scenario (each in its own process, or as --layout '
         'says), run the job in '
         'lockstep and print its results.',
+        epilog='exit codes: 0 the job went well and its record is complete; 1 the job failed '
+        '(an axis tripped, stopped or braked on a machine, the drive went silent, a node died, '
+        'the run could not go on) or could not start; 2 usage; 3 the job went well but the '
+        "runner's record of it is incomplete (samples missing, foreign messages); 130 "
+        'interrupted. Each run writes summary.json, however it ends.',
     )
     add_scenario_arguments(parser)
     parser.add_argument('--output', type=Path, help='run directory (default runs/NAME-TIME)')
@@ -171,7 +185,7 @@ def main(argv: list[str] | None = None) -> int:
     for signum in STOP_SIGNALS:
         signal.signal(signum, interrupt_once)
     records: dict[str, Any] = {}
-    intact, failed = True, False
+    code = GOOD
     try:
         release_stop_signals()  # held since the first line (mill_common.executable)
         scen, runs = load_scenario(args)
@@ -196,12 +210,15 @@ def main(argv: list[str] | None = None) -> int:
                 print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
             result = run(job, variant_dir, run_options(args, bags[name]))
             records[name] = result.record
-            intact = intact and result.intact
-            failed = failed or bool(result.failures)
+            code = max(code, result.exit_code, key=SEVERITY.index)
+            # every ending writes its summary, a run stopped by a dead drive included
             (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
             if name:
                 print(f'variant {name}:')
             print(format_result(result))
+            if result.error is not None:  # the run stopped: the next variants do not run
+                print(f'run_scenario: error: {result.error}', file=sys.stderr)
+                return JOB_FAILED
     except (ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
         return 1
@@ -213,16 +230,14 @@ def main(argv: list[str] | None = None) -> int:
     if text:
         print(text)
         (run_dir / 'paper.txt').write_text(text + '\n')
-    if failed:
+    if code == JOB_FAILED:
         print(
             'run_scenario: error: the job failed on the machine (see FAILED above)', file=sys.stderr
         )
-        return 1
-    if not intact:
+    elif code == RECORD_INCOMPLETE:
         print(
-            'run_scenario: error: the record is incomplete or foreign messages were seen '
-            '(see above)',
+            "run_scenario: the job went well, but the runner's record of it is incomplete or "
+            'foreign messages were seen (see above)',
             file=sys.stderr,
         )
-        return 1
-    return 0
+    return code

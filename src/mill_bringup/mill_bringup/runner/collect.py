@@ -9,11 +9,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from mill_analysis.events import FOREIGN, events_of
 from mill_bag.reader import open_bag
 from mill_bag.writer import counts_note
 
 from mill_analysis import records
-from mill_bringup.jobs.base import Job, simulate
+from mill_bringup.jobs.base import Ending, Job, simulate
 from mill_bringup.lifecycle_client import deactivate
 from mill_bringup.lost_samples import split_lost
 from mill_bringup.runner.follow import Timing
@@ -38,12 +39,16 @@ class Collected:
     missing_from_bag: dict[str, int]  # per topic, received but not in the bag
     peak_rss_mb: dict[str, float]  # per process of the graph
     peak_pss_mb: float  # graph + runner
+    foreign_publishers: list[str]  # what the drives said of foreign publishers they ignored
 
 
-def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
-    """Wait for the job's last messages, brake, stop the graph, close the bag; the record."""
+def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending) -> Collected:
+    """Wait for the job's last messages (unless the run stopped), brake, stop the graph,
+    close the bag; the record, with the events the machine told until the job ended."""
     monitor, graph = session.monitor, session.graph
-    if monitor.steps is not None:  # the handshake says when the last messages are in
+    if ending.failure is not None:
+        pass  # nothing more is coming: what arrived is the record
+    elif monitor.steps is not None:  # the handshake says when the last messages are in
         monitor.finish_recording(job.samples)  # the plant stops where the bag can wait
         _catch_up(session)
     else:
@@ -62,6 +67,9 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
         _drain(session)
     try:
         record, gaps = job.record(monitor.raw)
+        # What the machine told until the job ended (or the run stopped), in the record as
+        # the offline simulator and a bag's reader put it there.
+        record.events = job.events(ending.statuses)
         missing, lost = split_lost(gaps, job.owners(), graph.restarted_nodes())
         if recorder is not None:  # the bag says what its run lacks, as the summary does
             ns = monitor.get_namespace()
@@ -72,7 +80,11 @@ def collect(session: Session, job: Job[Any], options: RunOptions) -> Collected:
     ranges = {t: r for t, r in job.gaps(record).items() if t in missing}
     short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
-    return Collected(record, missing, ranges, lost, problems, bag, short, peak, session.peak_pss_mb)
+    # A foreign publisher on the drive's topics, told at any time: the record is not intact.
+    foreign = [e.text() for e in events_of(monitor.statuses()) if e.kind == FOREIGN]
+    return Collected(
+        record, missing, ranges, lost, problems, bag, short, peak, session.peak_pss_mb, foreign
+    )
 
 
 def _missing_from_bag(session: Session, options: RunOptions) -> dict[str, int]:
@@ -124,7 +136,12 @@ def _close_bag(session: Session, options: RunOptions) -> dict[str, Any] | None:
 
 
 def result(
-    job: Job[Any], options: RunOptions, domain_id: str, timing: Timing, collected: Collected
+    job: Job[Any],
+    options: RunOptions,
+    domain_id: str,
+    timing: Timing,
+    collected: Collected,
+    ending: Ending,
 ) -> RunResult:
     """The run's figures and the job's summary of its record (and the offline comparison)."""
     peak = dict(collected.peak_rss_mb)
@@ -146,19 +163,19 @@ def result(
         missing_samples=collected.missing,
         missing_ranges=collected.missing_ranges,
         missing_from_bag=collected.missing_from_bag,
-        summary=job.summary_json(record, options.skip),
-        text=job.summary(record, options.skip),
+        summary=job.summary(record, options.skip, ending),
         problems=collected.problems,
         foreign=job.foreign(record),
         dropped=job.dropped(record),
         lost_with_restarts=collected.lost,
-        failures=job.failures(record, collected.problems),
+        foreign_publishers=collected.foreign_publishers,
+        error=None if ending.failure is None else ending.failure.detail,
         bag=collected.bag,
         record=record,
     )
     if out.bag is not None:
         sim = job.sim_time
         out.bag['bytes_per_sim_second'] = out.bag['size_bytes'] / sim if sim > 0 else None
-    if options.compare_offline:
+    if options.compare_offline and ending.failure is None:
         out.differences = job.differences(record, simulate(job))
     return out

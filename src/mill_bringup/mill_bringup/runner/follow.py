@@ -12,8 +12,10 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+from mill_analysis.events import STALL
+
 from mill_bringup.jobs.base import Job
-from mill_bringup.runner.options import RunError, RunOptions
+from mill_bringup.runner.options import RunError, RunFailed, RunOptions
 from mill_bringup.runner.session import Session
 
 
@@ -23,6 +25,11 @@ class Timing:
 
     wall: float  # from the job's first step (or its own start) to its end [s]
     cpu_ms_per_step: dict[str, float]  # per process, the runner included
+
+
+def stopped(began: float) -> Timing:
+    """The timing of a run that could not go on: its wall time since it began, no CPU."""
+    return Timing(max(time.monotonic() - began, 1e-9), {})
 
 
 def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
@@ -50,7 +57,9 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
             continue
         limit = _stall_limit(session, options, now)
         if now - last_change > limit:
-            raise RunError(f'the run stalled: no new sample for {limit:g} s{_waiting(session)}')
+            raise RunFailed(
+                STALL, f'the run stalled: no new sample for {limit:g} s{_waiting(session)}'
+            )
         # Over the first half second the factor means nothing (one step in a microsecond).
         elapsed = now - t_first
         rtf = f'real-time factor {reached / elapsed:.2f}' if elapsed >= 0.5 else ''

@@ -10,6 +10,15 @@ class RunError(RuntimeError):
     """The run could not complete; str() says why."""
 
 
+class RunFailed(RunError):
+    """The run could not go on for a reason the runner found itself (mill_analysis.events:
+    a stall); `kind` says which."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+
+
 @dataclass(frozen=True)
 class RunOptions:
     """The options of one run of a job (mill_bringup.runner.run.run).

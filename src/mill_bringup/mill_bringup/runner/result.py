@@ -1,11 +1,20 @@
-"""What a run gives: RunResult (figures of the run and of its job) and its text."""
+"""What a run gives: RunResult (figures of the run and of its job) and its text.
+
+A run ends in one of three ways (run_scenario's exit codes, README "A real machine"):
+`failures` (a trip, a stop or a brake the job counts as a failure, a drive gone silent, a
+node that died, a run that could not go on): the job failed, exit code 1; else not
+`intact` (a sample missing from the record or the bag, a foreign message or publisher):
+the job went well but the runner's record of it is incomplete, exit code 3; else 0.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 from typing import Any
 
+from mill_analysis.events import Event
 from mill_analysis.record_checks import drop_lines
+from mill_analysis.summary import Summary
 from mill_bag.intake import describe as describe_drops
 
 from mill_analysis import records
@@ -26,8 +35,7 @@ class RunResult:
     peak_pss_mb: float  # graph + runner, sampled once a second (RSS counts libraries per process)
     domain_id: str
     missing_samples: dict[str, int]  # per topic, not counting lost_with_restarts
-    summary: dict[str, Any]  # the job's own figures (jobs.base.Job.summary_json)
-    text: str  # the job's summary as text
+    summary: Summary  # the job's own figures and events (jobs.base.Job.summary)
     problems: list[str] = field(default_factory=list)  # WARN/ERROR heard on /diagnostics
     foreign: dict[str, int] = field(default_factory=dict)  # messages left out per topic
     # ... per topic and reason: (messages, the first one's reason) (Job.dropped)
@@ -38,34 +46,59 @@ class RunResult:
     missing_from_bag: dict[str, int] = field(default_factory=dict)
     # samples a killed node was sending when it died, per topic (mill_bringup.lost_samples)
     lost_with_restarts: dict[str, int] = field(default_factory=dict)
-    # what made the job fail (a realtime axis that tripped or was braked): exit code 1
-    failures: list[str] = field(default_factory=list)
+    # what the drives said of foreign publishers on their topics (ignored)
+    foreign_publishers: list[str] = field(default_factory=list)
+    error: str | None = None  # what stopped the run before the job completed
     differences: dict[str, float] | None = None  # against the offline run
     bag: dict[str, Any] | None = None
     record: Any = field(default=None, repr=False)
 
     @property
+    def text(self) -> str:
+        """The job's summary as text (printed from the summary)."""
+        return self.summary.text()
+
+    @property
+    def failures(self) -> list[Event]:
+        """What made the job fail (exit code 1): the summary's failures (a realtime axis
+        that tripped, was stopped or braked; what stopped the run)."""
+        return list(self.summary.failures)
+
+    @property
     def intact(self) -> bool:
         """No sample missing from the record or the bag, nothing foreign in the record or in
         the drive's graph."""
-        owned = not any('ownership' in p for p in self.problems)
         complete = not self.missing_samples and not self.missing_from_bag
-        return complete and not self.foreign and owned
+        return complete and not self.foreign and not self.foreign_publishers
+
+    @property
+    def exit_code(self) -> int:
+        """0 a good job, its record complete; 1 the job failed; 3 a good job whose record is
+        incomplete (run_scenario's exit codes)."""
+        if self.failures:
+            return JOB_FAILED
+        return GOOD if self.intact else RECORD_INCOMPLETE
 
     @property
     def offline_max_difference(self) -> float | None:
         return None if self.differences is None else max(self.differences.values(), default=0.0)
 
     def to_json(self) -> dict[str, Any]:
-        d = {k: v for k, v in vars(self).items() if k not in ('record', 'summary', 'text')}
-        d.update(self.summary)
+        d = {k: v for k, v in vars(self).items() if k not in ('record', 'summary')}
+        d.update(self.summary.to_json())  # its failures among them
+        d['exit_code'] = self.exit_code
         d['offline_max_difference'] = self.offline_max_difference
         d['total_peak_rss_mb'] = sum(self.peak_rss_mb.values())
         return d
 
 
+GOOD = 0  # the job went well and the record is complete
+JOB_FAILED = 1  # a trip, a stop, a brake, a drive gone silent, a node that died
+RECORD_INCOMPLETE = 3  # the job went well, but the runner's record of it lacks something
+
+
 def format_result(r: RunResult) -> str:
-    lines = [f'FAILED: {f}' for f in r.failures]
+    lines = [f'FAILED: {f.text()}' for f in r.failures]
     lines += [
         f'scenario {r.scenario}: {r.samples} samples, {r.sim_time:.3f} s of machine time',
         r.text,

@@ -22,7 +22,7 @@ from mill_common.progress import Progress
 
 from mill_analysis import records
 from mill_bringup.graph import Graph
-from mill_bringup.jobs.base import Job
+from mill_bringup.jobs.base import GraphPlan, Job
 from mill_bringup.runner.options import RunError, RunOptions
 from mill_common import topics
 
@@ -34,9 +34,16 @@ class Session:
     """Monitor, executor and graph of one run, made on entering, released on leaving."""
 
     def __init__(
-        self, job: Job[Any], run_dir: Path, options: RunOptions, restartable: list[str]
+        self,
+        job: Job[Any],
+        run_dir: Path,
+        options: RunOptions,
+        restartable: list[str],
+        graph: GraphPlan | None = None,
     ) -> None:
         self.job = job
+        # what the monitor hears (default: the job's plan of its graph as it stands)
+        self.plan = graph if graph is not None else job.graph_plan()
         self.options = options
         self.run_dir = run_dir
         self.restartable = restartable
@@ -84,10 +91,10 @@ class Session:
         if options.record_bag is not None:
             record = RecordOptions(
                 Path(options.record_bag),
-                sim_time=job.sim_time_stamps(),
+                sim_time=self.plan.sim_time,
                 # what `report` reads it as, and who sends each topic (what it leaves out)
                 notes={
-                    **records.bag_notes(job.RECORD),
+                    **records.bag_notes(job.RECORD.NAME),
                     **records.owners_note(job.owners(), job.scenario.namespace),
                 },
             )
@@ -95,17 +102,17 @@ class Session:
         self._stop = install_stop_handlers()
         try:
             rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
-            late, late_after = job.late_topics()
+            plan = self.plan
             self._monitor = Monitor(
-                job.monitor_topics(),
+                plan.kept,
                 record,
-                job.recorded_topics(),
+                plan.recorded,
                 namespace=job.scenario.namespace,
                 remappings=job.scenario.remappings(),
-                timed=job.timed_topics(),
-                late=late,
-                late_after=late_after,
-                steps=job.recorded_steps(),
+                timed=plan.timed,
+                late=plan.late,
+                late_after=plan.late_after,
+                steps=plan.steps,
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)

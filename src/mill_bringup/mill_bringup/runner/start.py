@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from mill_bringup.jobs.base import Job
+from mill_bringup.jobs.base import GraphPlan, Job
 from mill_bringup.layout import Process, processes
 from mill_bringup.lifecycle_client import activate
 from mill_bringup.runner.options import RunError, RunOptions
@@ -33,6 +33,7 @@ class Launch:
     held: list[NodeLaunch]  # clock nodes in a container: they wait for `activate`
     restartable: list[str]  # processes --respawn may start again (none holds a clock)
     given: dict[str, dict[str, Any]]  # overrides of the nodes this run changes, as they were
+    graph: GraphPlan  # what the runner starts and hears of the graph, as prepared for the run
 
     def restore(self, job: Job[Any]) -> None:
         """Put the overrides back: the next run of the scenario may differ."""
@@ -75,6 +76,7 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
         held=held,
         restartable=[p.name for p in planned if not clock_names & set(p.node_names)],
         given=given,
+        graph=job.graph_plan(),
     )
 
 
@@ -82,7 +84,7 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
     """Every node, the clock node last; held and external clock nodes activated."""
     monitor, graph = session.monitor, session.graph
     graph.launch(launch.first)
-    upstream = job.upstream_topics()
+    upstream = launch.graph.upstream
     deadline = time.monotonic() + options.startup_timeout
     while any(monitor.count_publishers(t) < 1 for t in upstream):
         if time.monotonic() > deadline:

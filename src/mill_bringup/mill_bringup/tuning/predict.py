@@ -118,7 +118,7 @@ def predict(
     T = float(scen.parameters(plant)['sample_period'])
     rms = {m.axis: m.rms_error for m in metrics}
     peak = {m.axis: m.max_error for m in metrics}
-    events = list(rec.events)
+    events = [e.text() for e in rec.events]  # mill_analysis.events, as printed
     pitch = scen.parameters(plant)['pitch']
     for axis, structure in model.structure.items():
         if axis not in model.axes or axis not in rms or not needs_structure(structure):

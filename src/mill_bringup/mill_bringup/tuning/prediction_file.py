@@ -2,18 +2,21 @@
 
 It sits next to the parameter file as NAME.prediction.yaml (what the job should track on the
 identified machine, run offline); a run given that parameter file (`--params-file`) prints its
-own RMS tracking error beside the prediction, and a warning where it is more than WORSE times.
+own RMS tracking error beside the prediction (mill_analysis.summary.PredictionComparison), both
+over the job's window after the approach a realtime job starts with, and a warning where it
+is more than mill_analysis.summary.WORSE times.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import yaml
-from mill_analysis.metrics import AxisMetrics
+from mill_analysis.summary import PredictionComparison
 
 from mill_bringup.scenario import Scenario
 
@@ -64,43 +67,35 @@ def read_prediction(params_file: str | Path) -> dict[str, Any] | None:
     return data if ok else None
 
 
-WORSE = 2.0  # a run this many times the predicted RMS error is reported as a warning
-
-
-def against_prediction(scen: Scenario, metrics: list[AxisMetrics], end: float) -> list[str]:
-    """Lines putting a run's RMS tracking error beside tune's prediction, for every
-    parameter file of the run that has one (none: no lines)."""
-    lines = []
+def compare(
+    scen: Scenario, end: float, measured: Callable[[float], Mapping[str, float]]
+) -> list[PredictionComparison]:
+    """A run beside tune's prediction, for every parameter file of the run that has one
+    (none: no comparison). end: the run's last sample after its approach [s] (the job's
+    path alone, as the prediction ran it); measured(skip): the run's RMS e per axis over
+    the job's window from `skip` s after its path started (the prediction's skip)."""
+    out = []
     for path in scen.params_files:
         data = read_prediction(path)
         if data is None:
             continue
         if data.get('scenario') != scen.name:
-            lines.append(f'tune predicted {data.get("scenario")!r}, not {scen.name}: not compared')
+            note = f'tune predicted {data.get("scenario")!r}, not {scen.name}: not compared'
+            out.append(PredictionComparison(str(path), note=note))
             continue
         period = float(data.get('sample_period', 0.0))
         # a realtime record ends on the drive's tick, within a period of the job's end
         if not math.isclose(float(data.get('end', -1.0)), end, abs_tol=1.5 * period):
-            lines.append(
+            note = (
                 f'tune predicted {data["scenario"]} to t = {data.get("end")} s, this run ends at '
                 f'{end:g} s: not compared'
             )
+            out.append(PredictionComparison(str(path), note=note))
             continue
-        cells, worse = [], []
-        for m in metrics:
-            predicted = data['rms_error'].get(m.axis)
-            if not predicted:
-                continue
-            ratio = m.rms_error / predicted
-            cells.append(f'{m.axis} {1e6 * m.rms_error:.3g} / {1e6 * predicted:.3g} ({ratio:.2f}x)')
-            if not ratio <= WORSE:
-                worse.append(m.axis)
+        rms = measured(float(data.get('skip', 0.0)))
+        predicted = {a: float(v) for a, v in data['rms_error'].items() if v and a in rms}
         given = ' '.join(f'-p {o}' for o in data.get('overrides') or [])
-        source = f'{path}, predicted with {given}' if given else path
-        lines.append(f'RMS e [µm] measured / predicted by tune ({source}): ' + ', '.join(cells))
-        if worse:
-            lines.append(
-                f'WARNING: {", ".join(worse)} tracked more than {WORSE:g}x worse than predicted: '
-                'the machine is not the one identified (re-identify: docs/bring-up.md)'
-            )
-    return lines
+        source = f'{path}, predicted with {given}' if given else str(path)
+        kept = {a: rms[a] for a in rms if a in predicted}
+        out.append(PredictionComparison(source, kept, predicted))
+    return out
