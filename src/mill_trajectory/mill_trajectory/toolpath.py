@@ -16,6 +16,8 @@ from mill_trajectory.gcode_words import GcodeError, Where
 from mill_trajectory.planner import Piece
 
 AXIS_NAMES = 'xyz'
+SAG_SHARE = 0.25  # of the tolerance a chord may leave its arc by
+CHORD_ANGLE = 0.02  # [rad] an arc's chords turn at most this much
 
 
 @dataclass(frozen=True)
@@ -42,9 +44,11 @@ def arc_points(move: Move, tolerance: float) -> list[Point]:
     s, e, c = move.start, move.end, move.center
     r0 = math.hypot(s[a] - c[a], s[b] - c[b])
     r1 = math.hypot(e[a] - c[a], e[b] - c[b])
-    # Chord angle whose sagitta r(1 − cos(θ/2)) is half the tolerance.
-    cos_half = max(1.0 - 0.5 * tolerance / max(r0, r1), -1.0)
-    step = 2.0 * math.acos(cos_half)
+    # Chord angle whose sagitta r(1 − cos(θ/2)) is a quarter of the tolerance, and at most
+    # CHORD_ANGLE: the planner blends many chords at once, and the finer they turn the less
+    # their corners add to the jerk of the curve they make.
+    cos_half = max(1.0 - SAG_SHARE * tolerance / max(r0, r1), -1.0)
+    step = min(2.0 * math.acos(cos_half), CHORD_ANGLE)
     count = max(1, math.ceil(abs(move.sweep) / step)) if step > 0 else 1
     start_angle = math.atan2(s[b] - c[b], s[a] - c[a])
     points: list[Point] = []
@@ -61,6 +65,18 @@ def arc_points(move: Move, tolerance: float) -> list[Point]:
     return points
 
 
+def chord_sag(move: Move, count: int) -> float:
+    """How far `count` chords of an arc leave it [m], at most: the sagitta of the larger
+    radius, plus the slight spiral of an end off the circle (mill_trajectory.gcode)."""
+    assert move.center is not None
+    a, b, _ = move.plane
+    s, e, c = move.start, move.end, move.center
+    r0 = math.hypot(s[a] - c[a], s[b] - c[b])
+    r1 = math.hypot(e[a] - c[a], e[b] - c[b])
+    half = 0.5 * abs(move.sweep) / count
+    return max(r0, r1) * (1.0 - math.cos(half)) + abs(r1 - r0) / count
+
+
 def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], list[Where]]:
     """The planner's pieces and, for each, the line of the move it comes from."""
     pieces: list[Piece] = []
@@ -73,8 +89,9 @@ def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], lis
         speed = math.inf if m.feed is None else m.feed
         here = m.start
         ends = arc_points(m, tolerance) if m.kind == 'arc' else [m.end]
+        sag = chord_sag(m, len(ends)) if m.kind == 'arc' else 0.0
         for p in ends:
-            pieces.append(Piece(here, p, speed, spindle=m.spindle))
+            pieces.append(Piece(here, p, speed, spindle=m.spindle, sag=sag))
             wheres.append(m.where)
             here = p
     return pieces, wheres
