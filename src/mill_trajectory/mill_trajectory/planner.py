@@ -417,8 +417,8 @@ def _corner_speeds(c: _Chain, limits: Limits) -> tuple[np.ndarray, np.ndarray, n
         a_c = np.where(plane, acc, np.inf).min(axis=1)
         j_c = np.where(plane, jerk, np.inf).min(axis=1)
         curve = np.minimum(np.sqrt(a_c / kappa), np.cbrt(j_c / kappa**2))
+        curve = np.where(bent & (nd < GENTLE), curve, np.inf)
         w = np.where(bent, np.minimum(alone, CURVE_SHARE * curve), np.inf)
-        curve = np.where(bent, curve, np.inf)
     w = np.nan_to_num(w, nan=np.inf, posinf=np.inf)
     return w, kappa, np.nan_to_num(curve, nan=np.inf, posinf=np.inf)
 
@@ -439,21 +439,28 @@ def _cut(c: _Chain, limits: Limits) -> _Chain:
     corner_out = np.concatenate((w, [np.inf]))
     tol = limits.tolerance
 
-    def room(speed: np.ndarray, turn: np.ndarray) -> np.ndarray:
+    def room(speed: np.ndarray, turn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The corner piece's length and the time of the ramp to the cap after it."""
         with np.errstate(divide='ignore', invalid='ignore'):
             ramp = transition_times((c.cap - speed)[:, None] * c.dirs, limits)
             corner = tol / (DEVIATION * speed * np.maximum(turn, 1e-300))
             out = 1.25 * speed * (0.5 * (np.minimum(corner, ramp * 4) + ramp))
-        return np.nan_to_num(out, nan=0.0, posinf=0.0)
+        return np.nan_to_num(out, nan=0.0, posinf=0.0), ramp
 
     turn = np.linalg.norm(c.dirs[1:] - c.dirs[:-1], axis=1)
     turn_in = np.concatenate(([0.0], turn))
     turn_out = np.concatenate((turn, [0.0]))
     slow_in = moving & (corner_in < 0.98 * c.cap)
     slow_out = moving & (corner_out < 0.98 * c.cap)
-    a = np.where(slow_in, room(np.minimum(corner_in, c.cap), turn_in), 0.0)
-    b = np.where(slow_out, room(np.minimum(corner_out, c.cap), turn_out), 0.0)
-    fits = (a + b <= 0.8 * c.length) & (a + b > 0.0)
+    a, ramp_a = room(np.minimum(corner_in, c.cap), turn_in)
+    b, ramp_b = room(np.minimum(corner_out, c.cap), turn_out)
+    a, b = np.where(slow_in, a, 0.0), np.where(slow_out, b, 0.0)
+    ramps = np.where(slow_in, ramp_a, 0.0) + np.where(slow_out, ramp_b, 0.0)
+    # The rest must hold its ramps up to the cap and down again (else no cut: the whole
+    # piece at its corners' speed costs little more than ramps that never reach the cap).
+    with np.errstate(invalid='ignore'):
+        middle = np.nan_to_num(0.5 * c.cap * ramps, nan=np.inf)
+    fits = (a + b + middle <= c.length) & (a + b > 0.0)
     a, b = np.where(fits, a, 0.0), np.where(fits, b, 0.0)
     if not fits.any():
         return c
@@ -580,8 +587,13 @@ def _ramp_rates(
         kl = k.tolist()
         dl = ds.tolist()
 
-        def one(v: float, kk: float) -> float:
-            return float(rate(np.array([v]), np.array([kk]))[0])
+        def one(v: float, kk: float) -> float:  # rate() of one piece, without numpy
+            if kk <= 0.0:
+                return RAMP_SHARE * acc
+            by_acc = acc * math.sqrt(max(1.0 - (v * v * kk / acc) ** 2, 0.0))
+            room = max(jerk - v**3 * kk * kk, 0.0)
+            by_jerk = room / (3.0 * v * kk) if v > 0.0 else math.inf
+            return RAMP_SHARE * max(min(by_acc, by_jerk), 1e-3 * acc)
 
         for i in range(len(q) - 1):  # speeding up
             lim = q[i] + 2.0 * one(math.sqrt(q[i]), max(kl[i], kl[i + 1])) * dl[i]
