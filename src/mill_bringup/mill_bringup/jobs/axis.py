@@ -113,6 +113,8 @@ class AxisJob(Job[RunRecord]):
         self.dt_ns = period_ns(pv['sample_period'])
         job = build_job(tv)
         self.end_time = job.end_time
+        # A G-code program's planned feed, for the summary ('' for other paths).
+        self.feed_summary = getattr(job.trajectory, 'feed_summary', '')
         check_following_band(scen, job.trajectory, tv)
         self._samples = job_steps(self.end_time, self.dt_ns)
         self.axes = list(pv['axes'])
@@ -342,6 +344,7 @@ class AxisJob(Job[RunRecord]):
         text = '\n'.join(
             [
                 summary_text(rec, skip),
+                *([self.feed_summary] if self.feed_summary else []),
                 *against_prediction(self.scenario, summarize(rec, skip), float(rec.t[-1])),
                 *rec.events,
             ]
