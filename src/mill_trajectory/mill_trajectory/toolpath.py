@@ -1,8 +1,10 @@
 """G-code moves to the planner's straight pieces, and the machine's travel. ROS-free.
 
-An arc becomes chords whose sagitta is at most half the path tolerance, so that chords
-and corner blends (the other half, mill_trajectory.planner) stay within the tolerance of
-the programmed arc. A helix climbs linearly in its angle.
+An arc becomes chords that turn by at most CHORD_ANGLE and whose sagitta is at most a
+quarter of the path tolerance; each chord carries its sagitta (Piece.sag), and the planner
+keeps its blends within the tolerance less it, so that chords and blends stay within the
+tolerance of the programmed arc (mill_trajectory.planner). Fine chords are what lets the
+planner blend a curve at the speed its radius allows. A helix climbs linearly in its angle.
 """
 
 from __future__ import annotations
