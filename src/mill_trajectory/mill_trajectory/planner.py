@@ -25,21 +25,29 @@ path's time. Per axis, then:
   T ≈ √(56·δ/κ)/u on a curvature κ leaves a circle by δ, and the corners' jerk averages out)
   the sums are polynomials between the windows' boundaries: they are evaluated between
   every two boundaries at points close enough that a bound on the next derivative
-  (Σ 60|ΔV_i|/T³ for the acceleration, Σ 360|ΔV_i|/T⁴ for the jerk, the acceleration for
-  the position) adds at most a known margin, and the distance to the pieces (the path
-  tolerance, LinuxCNC G64 P) with it. A piece near a check that fails is slowed by the
-  factor the check asks for (acceleration ∝ u², jerk ∝ u³), or its transitions shortened
-  (deviation); the check is repeated until none fails.
+  (Σ 60|ΔV_i|/T³ for the acceleration, Σ 360|ΔV_i|/T⁴ for the jerk) adds at most 1 % of the
+  limit. The distance to the pieces the sharp path runs on within the windows (the path
+  tolerance, LinuxCNC G64 P) is measured at the same points, plus what the motion between
+  two points can add: the acceleration bound·step²/8, and a chord cutting a corner of turn
+  |Δd| by its length·|Δd|/4 (an estimate, not a bound, for chords longer than the pieces);
+  a single transition in an interval counts as it does alone. A check that fails slows the
+  pieces under it by the factor it asks for (acceleration ∝ u², jerk ∝ u³), or lengthens
+  its transitions (if the tolerance has room: the sums fall as T grows), or shortens them
+  (deviation); the checks are repeated until none fails.
 
 Look-ahead: the whole chain is planned before it runs. Speeds start at their caps (the feed,
-each axis's velocity limit along the piece's direction), a corner's speed is computed
-directly: the fastest at which its own transition meets the tolerance, and on a curve
-(κ = |d_b − d_a| over the mean length of its pieces) √(A/κ) and (J/κ²)^⅓. A straight piece
-slowed by a corner at one of its ends is cut there: a short piece runs at the corner's speed
-and the rest at the feed, so that the corner slows only its neighbourhood. The start and
-end are junctions with rest; an acceleration or jerk limit of inf is no limit (with both inf,
-the velocity steps at each corner, as the straight cuts of Beltrán 2013 eq. (19)-(22), and
-pieces are not cut).
+each axis's velocity limit along the piece's direction); a sharp corner's speed is computed
+directly, the fastest at which its own transition meets the tolerance, and a curve's (a
+junction turning by |d_b − d_a| < GENTLE, κ = |d_b − d_a| over the mean length of its
+pieces) at CURVE_SHARE of min(√(A/κ), (J/κ²)^⅓). Speeds then ramp between these: u² changes
+from piece to piece by at most 2·a·(the distance between their middles), running minima
+forwards and backwards, with a the share of the acceleration a curve leaves (u²κ of the
+acceleration and u³κ² of the jerk taken, and speeding up by a_t adding 3·u·a_t·κ to the
+jerk). A straight piece slowed by a corner at one of its ends is cut there, if the rest
+holds the ramps up to its cap: a short piece runs at the corner's speed and the rest at the
+feed, so that the corner slows only its neighbourhood. The start and end are junctions with
+rest; an acceleration or jerk limit of inf is no limit (with both inf, the velocity steps at
+each corner, as the straight cuts of Beltrán 2013 eq. (19)-(22), and pieces are not cut).
 
 The spindle (signed speed [rev/min], None: not programmed) is a piece's; it changes only at
 a rest (mill_trajectory.gcode), and rests of different spindles are not merged. A sample
