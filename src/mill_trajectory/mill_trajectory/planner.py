@@ -14,9 +14,10 @@ s is symmetric, so each transition's position error ΔV_j·T_j·E(x_j) (E(x) = �
 x − 1/2), at most 5/64 at x = 1/2) vanishes once it ends: the planned path takes the sharp
 path's time. Per axis, then:
 
-- velocity: if |T_a − T_b| ≤ 2τ_k around every piece k (enforced by lengthening the shorter
-  transition), the window starts and ends are in order and v(t) is a convex combination of
-  the pieces' velocities, each within the axis limit and the feed: guaranteed, any program;
+- velocity: if |T_a − T_b| ≤ 2τ_k around every piece k (enforced by shortening the longer
+  transition toward the shorter, and where it may not, lengthening the shorter), the window
+  starts and ends are in order and v(t) is a convex combination of the pieces' velocities,
+  each within the axis limit and the feed: guaranteed, any program;
 - acceleration Σ ΔV_j s'(x_j)/T_j and jerk Σ ΔV_j s''(x_j)/T_j² are continuous. A transition
   that overlaps no other peaks at 15/8·|ΔV_i|/T and (10/√3)·|ΔV_i|/T²: T ≥ the shortest
   transition for ΔV (transition_times) keeps it within the limits; it leaves the corner by
@@ -510,13 +511,21 @@ def _running_max(x: np.ndarray, group: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(x + off) - off
 
 
-def _in_order(T: np.ndarray, tau: np.ndarray, rest: np.ndarray) -> np.ndarray:
-    """Lengthen transitions until |T_a − T_b| ≤ 2τ around every moving piece (the windows
-    then start and end in order); a rest parts the chain."""
+def _in_order(T: np.ndarray, t_min: np.ndarray, tau: np.ndarray, rest: np.ndarray) -> np.ndarray:
+    """Transitions with |T_a − T_b| ≤ 2τ around every moving piece (the windows then start
+    and end in order); a rest parts the chain. A longer transition is first shortened toward
+    its neighbour's (down to its shortest, t_min), and where its shortest still differs too
+    much, the neighbour lengthened."""
     group = np.cumsum(rest)[:-1]  # junction j follows piece j
     clock = np.cumsum(np.where(rest, 0.0, tau))[:-1]  # junction times within a group
+    back_group = (group[-1] - group)[::-1]
+    # Lower envelope: T_j ≤ T_k + 2|c_j − c_k|.
+    T = np.minimum(T, -_running_max(-(T - 2.0 * clock), group) + 2.0 * clock)
+    T = np.minimum(T, -_running_max(-(T + 2.0 * clock)[::-1], back_group)[::-1] - 2.0 * clock)
+    T = np.maximum(T, t_min)
+    # Upper envelope: T_j ≥ T_k − 2|c_j − c_k|.
     T = np.maximum(T, _running_max(T + 2.0 * clock, group) - 2.0 * clock)
-    back = _running_max((T - 2.0 * clock)[::-1], (group[-1] - group)[::-1])[::-1]
+    back = _running_max((T - 2.0 * clock)[::-1], back_group)[::-1]
     return np.maximum(T, back + 2.0 * clock)
 
 
@@ -551,8 +560,10 @@ def _settle(c: _Chain, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
         own = np.maximum(t_min, target * scale)
         with np.errstate(divide='ignore'):
             tau = np.where(moving, c.length / np.where(moving, u, 1.0), 0.0)
-        T = _in_order(own, tau, c.rest)
-        short = t_min < T  # may be shortened: longer than its shortest
+        T = _in_order(own, t_min, tau, c.rest)
+        # May be shortened: longer than its shortest, and not held up by a neighbour's
+        # (_in_order; a piece between them slowed parts them).
+        short = (t_min < T) & (own >= T)
         free = np.where(shrunk, 1.0, MAX_STRETCH / scale)  # how much longer it may get
         slow, shorter, longer = _check(c, u, T, short, free, tol, limits)
         if slow is None:
