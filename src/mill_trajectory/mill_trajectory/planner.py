@@ -91,6 +91,8 @@ MARGIN = 0.01  # share of a limit the sampling margin may take
 MAX_POINTS = 256  # per interval between window boundaries
 SAFETY = 0.995  # a slowed piece goes this much below what its check asks
 MAX_PASSES = 400
+PATIENCE = 20  # slowings of a piece before its steps are at least STUBBORN
+STUBBORN = 0.97
 MAX_STRETCH = 8.0  # a transition lengthened at most this many times its shortest
 PARALLEL = 1e-12  # |d_a − d_b| below this: the same direction
 ZERO_LENGTH = 1e-12  # [m]: a shorter move is no move
@@ -543,6 +545,7 @@ def _settle(c: _Chain, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
     gentle = np.isfinite(w) & (np.linalg.norm(c.dirs[1:] - c.dirs[:-1], axis=1) < GENTLE)
     scale = np.ones(len(w))  # a transition's length over what it started at
     shrunk = np.zeros(len(w), dtype=bool)  # shortened once: not lengthened again
+    times = np.zeros(len(u), dtype=int)  # how often each piece has been slowed
     u, step = _ramp_rates(u, c.length, kappa, curve, limits)
     centre = np.concatenate(([0.0], np.cumsum(step)))
     for _ in range(MAX_PASSES):
@@ -568,7 +571,11 @@ def _settle(c: _Chain, limits: Limits) -> tuple[np.ndarray, np.ndarray]:
         slow, shorter, longer = _check(c, u, T, short, free, tol, limits)
         if slow is None:
             return u, T
-        u = u * slow
+        # A piece slowed many times steps at least by STUBBORN: every pass then makes
+        # progress however little its check asks (the last few per cent of a curve's
+        # speed are settled in the first passes, as its checks ask).
+        times += slow < 1.0
+        u = u * np.where(times > PATIENCE, np.minimum(slow, STUBBORN), slow)
         scale = scale * shorter * np.minimum(longer, free)
         shrunk |= shorter < 1.0
     raise PlanError(f'no feed meets the limits after {MAX_PASSES} passes')
@@ -811,7 +818,7 @@ def _check_overlaps(
         jj = slice(lo[q], hi[q])
         if r_dev[q] < 0.7 and (r_acc[q] > 1.0 or r_jerk[q] > 1.0) and (free[jj] > 1.0).all():
             # Room to blend over longer: the sums fall as the transitions lengthen.
-            f_long = max(r_acc[q], r_jerk[q] ** 0.5) / SAFETY
+            f_long = max(r_acc[q], r_jerk[q] ** 0.5, 1.0 / STUBBORN) / SAFETY
             longer[jj] = np.maximum(longer[jj], f_long)
             continue
         f_speed = SAFETY * min(1.0, max(r_acc[q], 1.0) ** -0.5, max(r_jerk[q], 1.0) ** -(1 / 3))
