@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import itertools
 import math
-import re
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+from mill_common.signals import AXES
 
+from mill_analysis.events import TRIP
 from mill_analysis.metrics import peak, rms
 from mill_analysis.readings import overall
 from mill_analysis.record import RunRecord
@@ -44,7 +45,6 @@ READINGS: tuple[tuple[str, tuple[tuple[str, str], ...]], ...] = (
     ('c_t', (('', 'translational'), ('_ct_literal', 'literal, c_t/a²'))),
     ('the friction reversal', (('', 'through'), ('_stop', 'stop (default)'))),
 )
-TRIP = re.compile(r'x axis: following-error trip at t = ([-+0-9.e]+) s, \|e\| = ([-+0-9.e]+) mm')
 # "A high frequency from the discontinuity": the sliding law's RMS torque change per sample
 # at least this many times the GPI law's.
 CHATTER_FACTOR = 100.0
@@ -60,8 +60,9 @@ def trip(rec: RunRecord) -> tuple[float, float] | None:
     """When the x axis tripped on its following error and |e| there [s, mm]; None: never.
     After a trip the axis is braked: its figures are not the law's tracking."""
     for event in rec.events:
-        if m := TRIP.search(event):
-            return float(m.group(1)), float(m.group(2))
+        if event.kind == TRIP and event.axis == AXES[X] and math.isfinite(event.time):
+            k = min(int(np.searchsorted(rec.t, event.time - 1e-12)), len(rec.t) - 1)
+            return event.time, abs(float(rec.tracking_error[k, X])) * 1e3
     return None
 
 

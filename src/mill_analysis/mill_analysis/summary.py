@@ -160,6 +160,7 @@ class AxisSummary:
     job_end_time: float | None = None  # a job with a force controller: where its path ended
     drive: DriveFigures | None = None  # a realtime run's
     start_stamp_ns: int | None = None  # a realtime run's start on the system clock
+    planned_feed: str = ''  # a G-code program's: how much of its feed the plan holds
 
     # -- text --------------------------------------------------------------------------------
     def figure_lines(self) -> list[str]:
@@ -192,6 +193,8 @@ class AxisSummary:
 
     def lines(self) -> list[str]:
         out = self.figure_lines()
+        if self.planned_feed:
+            out.append(self.planned_feed)
         for p in self.predictions:
             out += p.lines()
         out += [e.text() for e in self.events]
@@ -248,6 +251,8 @@ class AxisSummary:
                 'report_ms': self.drive.stall_report_ms,
             }
             out['start_stamp_ns'] = self.start_stamp_ns
+        if self.planned_feed:
+            out['planned_feed'] = self.planned_feed
         return out
 
     @classmethod
@@ -282,6 +287,7 @@ class AxisSummary:
             job_end_time=d.get('job_end_time'),
             drive=drive,
             start_stamp_ns=d.get('start_stamp_ns'),
+            planned_feed=d.get('planned_feed', ''),
         )
 
 

@@ -23,7 +23,11 @@ def test_adaptive_feed_job_on_a_gcode_part() -> None:
     params = scen.parameters('trajectory')
     assert params['trajectory'] == 'gcode'
     assert params['gcode.start'] == [-0.075, -0.105, -0.005]
-    rec = simulate(job_for(scen))
+    job = job_for(scen)
+    rec = simulate(job)
+    # the summary says how much of the programmed feed the plan holds (lines only here)
+    (held,) = [line for line in job.summary(rec, 1.0).splitlines() if 'feed held' in line]
+    assert held.startswith('feed held: ') and held.endswith(' % of F on lines')
     deep, shallow = depth_stretches(rec.force_control)
     assert (deep.depth, shallow.depth) == (5.0, 2.0)
     # the law slows the feed in the deep cut and speeds it up in the shallow one

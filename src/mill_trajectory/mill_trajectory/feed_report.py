@@ -3,9 +3,9 @@
 For each block (one G-code move: a line, an arc, a rapid) of a planned program:
 
 - programmed F [m/s] (None for a rapid: as fast as the axes allow);
-- achieved peak speed [m/s]: the fastest planned speed of its pieces, which the planned
-  path reaches (mill_trajectory.planner: each piece runs at its speed between transitions
-  that never overlap);
+- achieved peak speed [m/s]: the fastest planned speed of its pieces (mill_trajectory.
+  planner), which the planned path reaches where a piece's transitions do not overlap; on
+  a curve of short chords the blended speed runs a little below it;
 - achieved mean speed [m/s]: its length over the time the plan spends on it (on the sharp
   timeline: each corner's transition is centred on the corner, so the plan's total time is
   the sum of these).

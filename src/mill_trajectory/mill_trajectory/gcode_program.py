@@ -18,11 +18,12 @@ from mill_common.declared import ParamSet, param
 from mill_common.parameters import ParameterError, number_list, positive
 
 from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.feed_report import block_feeds, feed_summary, pieces_by_block
 from mill_trajectory.gcode import Setup, read_program, read_tool_table
 from mill_trajectory.gcode_words import GcodeError
 from mill_trajectory.override_limit import RESERVE, OverrideLimit
 from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
-from mill_trajectory.toolpath import Travel, check_travel, pieces_of
+from mill_trajectory.toolpath import Travel, check_travel
 
 # A small machine (the Beltrán 2013 axes: 3.175 mm pitch screws, 10 N·m): 3 m/min,
 # 0.5 m/s², 10 m/s³ per axis, corners within 0.01 mm.
@@ -140,6 +141,9 @@ class GcodeTrajectory(Trajectory):
         self.end_time = planned.end_time
         # How fast a feed override may change on it (None: no override, or no limit binds).
         self.override_limit = override_limit
+        # 'feed held: N % of F on arcs, M % on lines' (mill_trajectory.feed_report), for
+        # the run's summary; '' unless read from a program.
+        self.feed_summary = ''
 
     @classmethod
     def from_parameters(
@@ -184,13 +188,15 @@ class GcodeTrajectory(Trajectory):
             # program's G64 P (arc chords take each move's own, toolpath.pieces_of).
             tolerances = [m.tolerance for m in moves if m.tolerance]
             limits = replace(limits, tolerance=min([limits.tolerance, *tolerances]))
-            pieces, wheres = pieces_of(moves, limits.tolerance)
-            check_travel(pieces, wheres, travel)
+            pieces, blocks = pieces_by_block(moves, limits.tolerance)
+            check_travel(pieces, [moves[b].where for b in blocks], travel)
             planned = plan(pieces, limits)
         except (GcodeError, PlanError) as exc:
             raise ParameterError('file', v.file, str(exc)) from None
         messages = tuple(f'{m.where}: {m.message}' for m in moves if m.message)
-        return cls(planned, override_limit, messages)
+        out = cls(planned, override_limit, messages)
+        out.feed_summary = feed_summary(block_feeds(moves, pieces, blocks, planned))
+        return out
 
     def sample(self, t: float) -> TrajectorySample:
         return self.planned.sample(t)

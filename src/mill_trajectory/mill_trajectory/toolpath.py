@@ -1,10 +1,13 @@
 """G-code moves to the planner's straight pieces, and the machine's travel. ROS-free.
 
-An arc becomes chords whose sagitta is at most half the path tolerance (the machine's, or
-the program's G64 P where smaller), so that chords and corner blends (the other half,
-mill_trajectory.planner) stay within the tolerance of the programmed arc. A helix climbs
-linearly in its angle. A move in exact stop mode (G61, G61.1, canned cycles) ends at rest;
-a message moves nothing.
+An arc becomes chords that turn by at most CHORD_ANGLE and whose sagitta is at most a
+quarter of the path tolerance; each chord carries its sagitta (Piece.sag), and the planner
+keeps its blends within the tolerance less it, so that chords and blends stay within the
+tolerance of the programmed arc (mill_trajectory.planner). Fine chords are what lets the
+planner blend a curve at the speed its radius allows. A helix climbs linearly in its angle.
+A move in exact stop mode (G61, G61.1, canned cycles) ends at rest; a message moves
+nothing. The chords follow the program's G64 P where it is smaller than the machine's
+tolerance.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ from mill_trajectory.gcode_words import GcodeError, Where
 from mill_trajectory.planner import Piece
 
 AXIS_NAMES = 'xyz'
+SAG_SHARE = 0.25  # of the tolerance a chord may leave its arc by
+CHORD_ANGLE = 0.02  # [rad] an arc's chords turn at most this much
 
 
 @dataclass(frozen=True)
@@ -44,9 +49,11 @@ def arc_points(move: Move, tolerance: float) -> list[Point]:
     s, e, c = move.start, move.end, move.center
     r0 = math.hypot(s[a] - c[a], s[b] - c[b])
     r1 = math.hypot(e[a] - c[a], e[b] - c[b])
-    # Chord angle whose sagitta r(1 − cos(θ/2)) is half the tolerance.
-    cos_half = max(1.0 - 0.5 * tolerance / max(r0, r1), -1.0)
-    step = 2.0 * math.acos(cos_half)
+    # Chord angle whose sagitta r(1 − cos(θ/2)) is a quarter of the tolerance, and at most
+    # CHORD_ANGLE: the planner blends many chords at once, and the finer they turn the less
+    # their corners add to the jerk of the curve they make.
+    cos_half = max(1.0 - SAG_SHARE * tolerance / max(r0, r1), -1.0)
+    step = min(2.0 * math.acos(cos_half), CHORD_ANGLE)
     count = max(1, math.ceil(abs(move.sweep) / step)) if step > 0 else 1
     start_angle = math.atan2(s[b] - c[b], s[a] - c[a])
     points: list[Point] = []
@@ -61,6 +68,18 @@ def arc_points(move: Move, tolerance: float) -> list[Point]:
         points.append((p[0], p[1], p[2]))
     points.append(e)
     return points
+
+
+def chord_sag(move: Move, count: int) -> float:
+    """How far `count` chords of an arc leave it [m], at most: the sagitta of the larger
+    radius, plus the slight spiral of an end off the circle (mill_trajectory.gcode)."""
+    assert move.center is not None
+    a, b, _ = move.plane
+    s, e, c = move.start, move.end, move.center
+    r0 = math.hypot(s[a] - c[a], s[b] - c[b])
+    r1 = math.hypot(e[a] - c[a], e[b] - c[b])
+    half = 0.5 * abs(move.sweep) / count
+    return max(r0, r1) * (1.0 - math.cos(half)) + abs(r1 - r0) / count
 
 
 def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], list[Where]]:
@@ -78,8 +97,9 @@ def pieces_of(moves: Sequence[Move], tolerance: float) -> tuple[list[Piece], lis
         here = m.start
         chord = min(tolerance, m.tolerance) if m.tolerance else tolerance  # G64 P
         ends = arc_points(m, chord) if m.kind == 'arc' else [m.end]
+        sag = chord_sag(m, len(ends)) if m.kind == 'arc' else 0.0
         for p in ends:
-            pieces.append(Piece(here, p, speed, spindle=m.spindle))
+            pieces.append(Piece(here, p, speed, spindle=m.spindle, sag=sag))
             wheres.append(m.where)
             here = p
         if m.exact_stop:  # G61, G61.1, canned cycles: at rest at the move's end

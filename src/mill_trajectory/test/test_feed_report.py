@@ -55,3 +55,18 @@ def test_blocks_keep_their_own_feed_and_the_summary_names_arcs_and_lines() -> No
     summary = feed_summary(feeds)
     assert summary.startswith(f'feed held: {100 * held_arcs:.0f} % of F on arcs, ')
     assert summary.endswith(' % on lines')
+
+
+def test_a_surfacing_raster_holds_most_of_its_feed_on_lines() -> None:
+    # 40 mm rows 0.5 mm apart at 20 mm/s: each 90 degree corner within 0.01 mm slows to
+    # ~2.3 mm/s, the rows are cut next to it and ramp back up; the step overs run whole.
+    rows = ['G21 G90 G17', 'G1 X0 Y0 F1200']
+    for k in range(10):
+        rows += [f'X{40 if k % 2 == 0 else 0}', f'Y{0.5 * (k + 1):g}']
+    feeds, _ = _report('\n'.join(rows) + '\nM30\n')
+    held = feed_held(feeds, 'line')
+    assert held is not None and 0.84 <= held < 0.95  # 0.79 before transitions overlapped
+    long_rows = [f for f in feeds if f.length > 0.039]
+    assert all(f.peak == pytest.approx(0.02, rel=1e-12) for f in long_rows)
+    # A row: 2 s at F, plus about 0.15 s for its two corners.
+    assert all(2.0 < f.time < 2.2 for f in long_rows)

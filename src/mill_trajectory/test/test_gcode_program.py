@@ -50,6 +50,8 @@ def test_slot_with_machine_limits_is_smooth_and_close_to_the_paper() -> None:
     assert np.abs(a).max() <= 0.5 and np.abs(np.diff(v, axis=0)).max() < 0.5 * 1e-3 * (1 + 1e-9)
     assert np.linalg.norm(v, axis=1).max() == pytest.approx(0.003, rel=1e-12)
     assert 160 / 3 < path.end_time < 160 / 3 + 0.5  # a little longer than 53.3 s
+    # The corner costs ~0.06 s of the 53.3 s at F: the summary's line rounds to 100 %.
+    assert path.feed_summary == 'feed held: 100 % of F on lines'
 
 
 def test_a_program_outside_the_travel_is_refused_naming_the_line(tmp_path: Path) -> None:

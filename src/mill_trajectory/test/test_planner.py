@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from mill_trajectory.planner import ZERO_LENGTH, Limits, Piece, plan
 
@@ -23,6 +23,26 @@ def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(p - (a + f * ab)))
 
 
+# Chains that once ran the planner out of passes (a corner held long by its neighbour's
+# transition; two overlapping transitions a fraction of a per cent over the jerk limit).
+@example(
+    points=[(0.0, 0.0, 0.0), (0.015625, 0.0, 0.0), (0.0, 0.0, 0.00390625), (-0.015625, 0.0, 0.0)],
+    feeds=[0.125] * 5,
+    velocity=(0.0625, 0.0625, 0.0625),
+    acceleration=(1.0, 1.0, 1.0),
+    jerk=(1.0, 1.0, 1.0),
+    tolerance=1e-06,
+    dwell=False,
+)
+@example(
+    points=[(0.0, 0.0, 0.015625), (0.015625, 0.0, 0.0), (0.0, 0.0, 0.0)],
+    feeds=[0.125] * 5,
+    velocity=(0.03125, 0.0625, 0.0625),
+    acceleration=(1.0, 1.0, 1.0),
+    jerk=(59.0, 1.0, 3.0),
+    tolerance=0.0008799284677263503,
+    dwell=False,
+)
 @settings(max_examples=40, deadline=None)
 @given(
     points=st.lists(point, min_size=2, max_size=6),

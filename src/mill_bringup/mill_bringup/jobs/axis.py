@@ -23,6 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -76,6 +77,8 @@ class AxisJob(Job[RunRecord]):
         )
         tv = c.values(self.trajectory)
         self.end_time = c.trajectory_job().end_time
+        # A G-code program's planned feed, for the summary ('' for other paths).
+        self.feed_summary: str = getattr(c.trajectory_job().trajectory, 'feed_summary', '')
         self._samples = job_steps(self.end_time, self.dt_ns)
         # With a feed override the job ends when its path ends: a length the run finds.
         self.override = bool(tv['feed_override.enabled'])
@@ -262,9 +265,10 @@ class AxisJob(Job[RunRecord]):
     # -- results ---------------------------------------------------------------------------
     def summary(self, rec: RunRecord, skip: float, ending: Ending | None = None) -> AxisSummary:
         stretches = None if rec.force_control is None else depth_stretches(rec.force_control)
-        return axis_summary(
+        summary = axis_summary(
             self.RECORD, self.scenario, rec, skip, self.FAILING, ending, force_control=stretches
         )
+        return replace(summary, planned_feed=self.feed_summary)
 
     def foreign(self, rec: RunRecord) -> dict[str, int]:
         return dict(rec.foreign)
