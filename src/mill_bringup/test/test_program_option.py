@@ -26,7 +26,7 @@ def test_adaptive_feed_job_on_a_gcode_part() -> None:
     job = job_for(scen)
     rec = simulate(job)
     # the summary says how much of the programmed feed the plan holds (lines only here)
-    (held,) = [line for line in job.summary(rec, 1.0).splitlines() if 'feed held' in line]
+    (held,) = [line for line in job.summary(rec, 1.0).text().splitlines() if 'feed held' in line]
     assert held.startswith('feed held: ') and held.endswith(' % of F on lines')
     deep, shallow = depth_stretches(rec.force_control)
     assert (deep.depth, shallow.depth) == (5.0, 2.0)
