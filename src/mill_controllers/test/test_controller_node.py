@@ -13,40 +13,18 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
+from mill_common.in_process import node_factory, set_one
 
 
 @pytest.fixture
 def controller(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., Any]]:
-    """controller(*ros_args) -> an AxisControllerNode `x_controller` in a context of its own."""
-    import rclpy
+    """controller(*ros_args) -> a AxisControllerNode `x_controller` in a context of its own."""
     from mill_controllers.axis_controller_node import AxisControllerNode
-
-    from mill_common import ros_params
 
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     monkeypatch.setenv('ROS_DOMAIN_ID', str(150 + os.getpid() % 10))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    nodes: list[Any] = []
-
-    def make(*ros_args: str) -> Any:
-        args = ['--ros-args', '-r', '__node:=x_controller', *ros_args]
-        nodes.append(AxisControllerNode(context=context, cli_args=args))
-        return nodes[-1]
-
-    yield make
-    for node in nodes:
-        node.destroy_node()
-    rclpy.try_shutdown(context=context)
-
-
-def set_one(node: Any, name: str, value: Any) -> Any:
-    """The result of setting one parameter, as `ros2 param set` gets it."""
-    from rclpy.parameter import Parameter
-
-    (result,) = node.set_parameters([Parameter(name, value=value)])
-    return result
+    with node_factory(AxisControllerNode, 'x_controller') as make:
+        yield make
 
 
 def refused(node: Any, name: str, value: Any) -> str:

@@ -10,39 +10,18 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
+from mill_common.in_process import node_factory, set_one
 
 
 @pytest.fixture
 def observer(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., Any]]:
-    """observer(*ros_args) -> an ObserverNode `x_observer` in a context of its own."""
-    import rclpy
+    """observer(*ros_args) -> a ObserverNode `x_observer` in a context of its own."""
     from mill_observers.observer_node import ObserverNode
-
-    from mill_common import ros_params
 
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     monkeypatch.setenv('ROS_DOMAIN_ID', str(150 + os.getpid() % 10))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    nodes: list[Any] = []
-
-    def make(*ros_args: str) -> Any:
-        args = ['--ros-args', '-r', '__node:=x_observer', *ros_args]
-        nodes.append(ObserverNode(context=context, cli_args=args))
-        return nodes[-1]
-
-    yield make
-    for node in nodes:
-        node.destroy_node()
-    rclpy.try_shutdown(context=context)
-
-
-def set_one(node: Any, name: str, value: Any) -> Any:
-    from rclpy.parameter import Parameter
-
-    (result,) = node.set_parameters([Parameter(name, value=value)])
-    return result
+    with node_factory(ObserverNode, 'x_observer') as make:
+        yield make
 
 
 @pytest.mark.parametrize(
