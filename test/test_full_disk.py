@@ -199,7 +199,7 @@ def test_the_recorder_on_a_full_disk_ends_with_one_line(start_node, small_disk):
         *('-p', f'topics:={[topics.state("x"), topics.CUTTING_FORCE]}'),
         params_file=False,
     )
-    with ros_node('fake_plant') as node:
+    with ros_node('fake_plant') as (node, _executor):
         plant = FakePlant(node)
         deadline = time.monotonic() + 120
         k = 0

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from mill_analysis.chavez_conde import chavez_conde
+from mill_analysis.events import BRAKED, STOPPED, TRIP, Event
 from mill_analysis.force_record import ForceRecord
 from mill_analysis.metrics import Window, peak, rms
 from mill_analysis.readings import overall
@@ -725,6 +726,9 @@ def report(paper: str, records: Mapping[str, Any], parameters: Parameters | None
     return f'{head}\n{fn(records)}' if head else fn(records)
 
 
+# A trip, a stop or a brake: after it an axis is braked, its figures are not the law's.
+STOP_KINDS = frozenset({TRIP, STOPPED, BRAKED})
+
 # The reports that give a tripped run its trip themselves, instead of its figures.
 OWN_TRIPS = frozenset({'chavez_conde'})
 
@@ -733,9 +737,9 @@ def braked(records: Mapping[str, Any]) -> str:
     """One line per trip or brake a run's record holds: its figures after that are of a
     braked axis, not of the law's tracking."""
     return '\n'.join(
-        f'WARNING variant {name}: {event}; its figures after that are of a braked axis, '
-        'not of the law'
+        f'WARNING variant {name}: {event.text()}; its figures after that are of a braked '
+        'axis, not of the law'
         for name, rec in records.items()
         for event in getattr(rec, 'events', ())
-        if 'trip' in event or 'braked' in event
+        if isinstance(event, Event) and event.kind in STOP_KINDS
     )
