@@ -91,10 +91,12 @@ def test_every_report_names_the_settings_its_verdicts_rest_on() -> None:
 def test_a_report_warns_of_a_run_that_tripped() -> None:
     from types import SimpleNamespace
 
+    from mill_analysis.events import FAULT, TRIP, Event
     from mill_analysis.papers import braked
 
-    rec = SimpleNamespace(events=['x axis: following-error trip at t = 0.1 s, |e| = 5.1 mm > 5 mm'])
+    trip = Event('x', TRIP, 0.1, '|e| = 5.1 mm > 5 mm', 'x_controller')
+    rec = SimpleNamespace(events=[trip, Event('y', FAULT, 0.2, 'encoder')])
     assert braked({'a': rec, 'b': SimpleNamespace(events=[])}) == (
-        'WARNING variant a: x axis: following-error trip at t = 0.1 s, |e| = 5.1 mm > 5 mm; '
+        'WARNING variant a: x axis: trip at t = 0.1000 s (x_controller): |e| = 5.1 mm > 5 mm; '
         'its figures after that are of a braked axis, not of the law'
     )

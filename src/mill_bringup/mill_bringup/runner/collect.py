@@ -17,7 +17,7 @@ from mill_analysis import records
 from mill_bringup.jobs.base import Ending, Job, simulate
 from mill_bringup.lifecycle_client import deactivate
 from mill_bringup.lost_samples import split_lost
-from mill_bringup.runner.follow import Timing
+from mill_bringup.runner.follow import WallTime
 from mill_bringup.runner.options import RunOptions
 from mill_bringup.runner.result import RunResult
 from mill_bringup.runner.session import Session
@@ -139,7 +139,7 @@ def result(
     job: Job[Any],
     options: RunOptions,
     domain_id: str,
-    timing: Timing,
+    timing: WallTime,
     collected: Collected,
     ending: Ending,
 ) -> RunResult:

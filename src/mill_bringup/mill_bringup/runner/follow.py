@@ -20,19 +20,19 @@ from mill_bringup.runner.session import Session
 
 
 @dataclass(frozen=True)
-class Timing:
+class WallTime:
     """How long the job took on the wall clock and what each process spent on it."""
 
     wall: float  # from the job's first step (or its own start) to its end [s]
     cpu_ms_per_step: dict[str, float]  # per process, the runner included
 
 
-def stopped(began: float) -> Timing:
+def stopped(began: float) -> WallTime:
     """The timing of a run that could not go on: its wall time since it began, no CPU."""
-    return Timing(max(time.monotonic() - began, 1e-9), {})
+    return WallTime(max(time.monotonic() - began, 1e-9), {})
 
 
-def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
+def follow(session: Session, job: Job[Any], options: RunOptions) -> WallTime:
     """Spin until the job is complete; its wall time and CPU per step."""
     graph = session.graph
     t_start = time.monotonic()
@@ -74,7 +74,7 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> Timing:
         name: 1e3 * (used - cpu_first.get(name, 0.0)) / steps
         for name, used in graph.cpu_by_process().items()
     }
-    return Timing(wall, cpu)
+    return WallTime(wall, cpu)
 
 
 def _silent_external(session: Session, job: Job[Any], options: RunOptions) -> str:

@@ -19,7 +19,7 @@ from mill_analysis.events import NODE_DIED, RUN_ERROR, Event
 from mill_bringup.graph import GraphError
 from mill_bringup.jobs.base import Ending, Job
 from mill_bringup.runner.collect import collect, result
-from mill_bringup.runner.follow import Timing, follow, stopped
+from mill_bringup.runner.follow import WallTime, follow, stopped
 from mill_bringup.runner.options import RunError, RunFailed, RunOptions
 from mill_bringup.runner.result import RunResult
 from mill_bringup.runner.session import Session
@@ -36,7 +36,7 @@ def run(job: Job[Any], run_dir: Path, options: RunOptions | None = None) -> RunR
         with Session(job, run_dir, options, launch.restartable, launch.graph) as session:
             began = time.monotonic()
             failure = None
-            timing: Timing
+            timing: WallTime
             try:
                 start(session, job, launch, options)
                 timing = follow(session, job, options)
