@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from geometry_msgs.msg import WrenchStamped
+from mill_analysis.bag_run import read_run
 from mill_analysis.force_record import read_force_run
 from mill_analysis.report.kinds import ForceRecords, kind_of
-from mill_analysis.run_record import read_run
 from mill_bringup.jobs.base import simulate
 from mill_bringup.jobs.registry import job_for
 from mill_common.ros import DATA_QOS, from_stamp, to_stamp

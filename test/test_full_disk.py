@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 import yaml
-from mill_analysis.run_record import read_run
+from mill_analysis.bag_run import read_run
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover

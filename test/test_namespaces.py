@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import pytest
-from mill_analysis.run_record import read_run
+from mill_analysis.bag_run import read_run
 from mill_bag.reader import open_bag
 
 from mill_common import topics

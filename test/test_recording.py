@@ -27,8 +27,8 @@ import pytest
 import rclpy
 import yaml
 from geometry_msgs.msg import WrenchStamped
+from mill_analysis.bag_run import read_run
 from mill_analysis.metrics import summarize, summarize_contour
-from mill_analysis.run_record import read_run
 from mill_bag.cdr import cdr_stamp_ns, joint_state_cdr
 from mill_bag.reader import open_bag
 from mill_bag.recover import recover
@@ -38,7 +38,7 @@ from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_common import topics
 from test.conftest import busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
@@ -208,11 +208,11 @@ def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, l
 def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())
     run = read_run(recorded_run['dir'] / 'bag')
-    assert records.named(run.bag.custom_data) == records.AXIS  # what the runner recorded
+    assert bag_meta.named(run.bag.custom_data) == bag_meta.AXIS  # what the runner recorded
     assert run.n == summary['samples'] == 2001
     assert run.missing == {} and summary['missing_samples'] == {}
     # counted and noted, and nothing lost: a lockstep run waits for its recorder
-    assert run.bag.noted_counts(records.MISSING_SAMPLES) == {}
+    assert run.bag.noted_counts(bag_meta.MISSING_SAMPLES) == {}
     from_bag = summarize(run.record, 1.0)
     assert [m.axis for m in from_bag] == [m['axis'] for m in summary['metrics']] == list(AXES)
     for m, ref in zip(from_bag, summary['metrics'], strict=True):
@@ -305,7 +305,7 @@ WATCHED = {
     '/parameter_events': 'rcl_interfaces/msg/ParameterEvent',
 }
 # The per-sample topics of the lockstep handshake: a killed runner's bag lacks at most the
-# plant's recorder_window steps of them (mill_bringup.recorded_steps).
+# plant's recorder_window steps of them (mill_bringup.bag_handshake).
 STEPPED = [
     *(Q(f(a)) for a in AXES for f in PER_AXIS),
     Q(topics.GROUND_TRUTH),
@@ -624,15 +624,15 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
     # this test is about; else an incomplete record of a good job ends with 3, as in lockstep.
     expected = 1 if summary['failures'] else 3 if missing else 0
     assert proc.returncode == expected == summary['exit_code'], proc.stderr[-3000:]
-    assert summary['kind'] == records.AXIS_REALTIME
+    assert summary['kind'] == bag_meta.AXIS_REALTIME
     bag = open_bag(out / 'bag')
-    assert bag.noted_counts(records.MISSING_SAMPLES) == {Q(t): n for t, n in missing.items()}
+    assert bag.noted_counts(bag_meta.MISSING_SAMPLES) == {Q(t): n for t, n in missing.items()}
     options = ReportOptions(skip=0.5, window=0.1, freqs=[], namespace=None, quiet=True)
     kind = kind_of(out / 'bag')
     report = kind.read(out / 'bag', 'rt', options)
     assert report.run.realtime and report.run.n > 0
     assert report.run.missing == missing
-    lines = records.loss_lines(missing)  # one per topic with a loss, none without
+    lines = bag_meta.loss_lines(missing)  # one per topic with a loss, none without
     assert len(lines) == sum(1 for n in missing.values() if n)
     printed = [line for line in proc.stdout.splitlines() if line.startswith('WARNING: ')]
     shown = [line for line in kind.table([report]).splitlines() if line.startswith('WARNING: ')]

@@ -1,5 +1,5 @@
 """What a run's /diagnostics say about its job: where it started and ended, the plant's
-last status. Read from the decoded DiagnosticArray messages of a bag (`run_record`). ROS-free.
+last status. Read from the decoded DiagnosticArray messages of a bag (`bag_run`). ROS-free.
 """
 
 from __future__ import annotations

@@ -28,8 +28,8 @@ from mill_common.timebase import sample_stamp_ns, time_ns
 from mill_models.quadrature import simpson
 from mill_models.reference_model import ContinuousReference
 
+from mill_analysis.bag_meta import missing_ranges
 from mill_analysis.events import Event
-from mill_analysis.records import missing_ranges
 from mill_common import topics
 
 # /mill/force_control/state: force used, reference, feed command, override, active β, depth

@@ -12,7 +12,7 @@ Samples missing. A realtime drive sends the state of every axis, and the ground 
 tick with the tick's stamp, and no listener makes it wait: a topic that lacks a tick another of
 these topics holds, between its own first and last, lost it on the way to the listener
 (`missing_ticks`), as a lockstep record lacks a sample of its grid
-(mill_analysis.run_record.build_record). Ticks lost on every one of them at once cannot be
+(mill_analysis.bag_run.build_record). Ticks lost on every one of them at once cannot be
 told from ticks the drive skipped (a late timer skips its periods) by the stamps alone.
 """
 
@@ -33,8 +33,8 @@ from mill_common.signals import AXES, AxisReference
 from mill_common.timebase import time_ns
 from mill_common.timing import Realtime
 
+from mill_analysis.node_intake import Drops, Intake, arrival_order, subset
 from mill_analysis.record import SIGNALS, RunRecord
-from mill_analysis.record_checks import Drops, Intake, arrival_order, subset
 from mill_common import topics
 
 JOINT_STATE = 'sensor_msgs/msg/JointState'
@@ -49,7 +49,7 @@ def _taken(
     raw: Mapping[str, Sequence[bytes]], owners: Mapping[str, str]
 ) -> tuple[dict[str, list[Any]], Drops]:
     """The decoded messages a realtime node would take, per topic, in the order they arrived
-    (mill_analysis.record_checks: its sender, its stamp not repeated nor in the past), and
+    (mill_analysis.node_intake: its sender, its stamp not repeated nor in the past), and
     what was left out."""
     intake = Intake(Realtime(1), owners, stepped=(), history=[topics.REFERENCE])
     out: dict[str, list[Any]] = {t: [] for t in raw}

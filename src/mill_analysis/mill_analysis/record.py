@@ -1,7 +1,7 @@
 """The record of one run: its signals on the sample grid, and what was left out. ROS-free.
 
 The offline simulator fills a RunRecord directly; the distributed run fills it from the
-messages it received (mill_analysis.run_record, realtime_record); mill_analysis.metrics
+messages it received (mill_analysis.bag_run, realtime_record); mill_analysis.metrics
 computes every figure from it.
 """
 
@@ -13,7 +13,7 @@ import numpy as np
 from mill_common.signals import AXES
 
 from mill_analysis.events import Event
-from mill_analysis.record_checks import Drops
+from mill_analysis.node_intake import Drops
 
 SIGNALS = (
     'position',  # measured position [m]
@@ -40,7 +40,7 @@ class RunRecord:
     signals: dict[str, np.ndarray] = field(default_factory=dict)
     # What happened besides the signals (mill_analysis.events): a trip, a stop, a brake.
     events: list[Event] = field(default_factory=list)
-    # Messages left out per topic: what the nodes drop (mill_analysis.record_checks): sent by
+    # Messages left out per topic: what the nodes drop (mill_analysis.node_intake): sent by
     # another node than the topic's owner, a stamp they refuse, or malformed; and why.
     foreign: dict[str, int] = field(default_factory=dict)
     drops: Drops = field(default_factory=Drops)

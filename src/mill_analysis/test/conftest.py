@@ -1,4 +1,4 @@
-"""Bags of a mill run as another writer (rosbags) writes them, for run_record and report tests.
+"""Bags of a mill run as another writer (rosbags) writes them, for bag_run and report tests.
 
 The run is made up (`a_run`): every signal known at every sample, no simulation needed."""
 

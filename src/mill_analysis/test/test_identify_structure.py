@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 import yaml
 from mill_analysis.identify import cli, machine_file
-from mill_analysis.identify.fit_record import structure_record
+from mill_analysis.identify.fit_axes import structure_record
 from mill_analysis.identify.table import structure_table
 from mill_analysis.record import RunRecord
 from mill_models.axis_model import RIGID, TWO_MASS, StructureSettings

@@ -18,7 +18,7 @@ from mill_analysis.report.kinds import (
 )
 from mill_bag.errors import BagError
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_common import topics
 
 OPTIONS = ReportOptions(skip=0.1, window=0.1, freqs=[60.0], namespace=None, quiet=True)
@@ -34,17 +34,17 @@ def report(*args: str | Path) -> subprocess.CompletedProcess:
 
 
 def test_every_kind_of_record_has_its_reader() -> None:
-    assert sorted(records.NAMES) == sorted(
+    assert sorted(bag_meta.NAMES) == sorted(
         k.NAME for k in (LockstepAxisRecords, RealtimeAxisRecords, ForceRecords)
     )
-    assert records.bag_notes(records.FORCE) == {records.KEY: 'force'}
+    assert bag_meta.bag_notes(bag_meta.FORCE) == {bag_meta.KEY: 'force'}
     with pytest.raises(ValueError, match='no kind of record'):
-        records.bag_notes('axis-lockstep')
+        bag_meta.bag_notes('axis-lockstep')
 
 
 def test_a_bag_that_names_its_kind_is_read_as_that_kind(foreign_bag) -> None:
     # The job status has a start stamp, as a realtime job's: the bag's own word counts.
-    path, rec = foreign_bag('mcap', start_ns=0, notes=records.bag_notes(records.AXIS))
+    path, rec = foreign_bag('mcap', start_ns=0, notes=bag_meta.bag_notes(bag_meta.AXIS))
     kind = kind_of(path)
     assert isinstance(kind, LockstepAxisRecords)
     run = kind.read(path, 'run', OPTIONS).run
@@ -61,14 +61,14 @@ def test_a_bag_that_names_no_kind_is_told_by_its_job_status(foreign_bag) -> None
 
 
 def test_a_realtime_bag_without_its_start_is_refused(foreign_bag) -> None:
-    path, _ = foreign_bag('mcap', notes=records.bag_notes(records.AXIS_REALTIME))
+    path, _ = foreign_bag('mcap', notes=bag_meta.bag_notes(bag_meta.AXIS_REALTIME))
     assert isinstance(kind_of(path), RealtimeAxisRecords)
     with pytest.raises(BagError, match='a realtime run without its start'):
         kind_of(path).read(path, 'run', OPTIONS)
 
 
 def test_a_kind_report_does_not_know_is_one_line(foreign_bag, tmp_path: Path) -> None:
-    path, _ = foreign_bag('mcap', notes={records.KEY: 'spindle'})
+    path, _ = foreign_bag('mcap', notes={bag_meta.KEY: 'spindle'})
     with pytest.raises(BagError, match="kind 'spindle', which this report does not know"):
         kind_of(path)
     proc = report(path, '--out', tmp_path / 'out')
@@ -79,8 +79,8 @@ def test_a_kind_report_does_not_know_is_one_line(foreign_bag, tmp_path: Path) ->
 def test_bags_of_the_axis_and_the_force_job_do_not_share_a_report(
     foreign_bag, tmp_path: Path
 ) -> None:
-    axis, _ = foreign_bag('mcap', notes=records.bag_notes(records.AXIS))
-    force, _ = foreign_bag('sqlite3', notes=records.bag_notes(records.FORCE))
+    axis, _ = foreign_bag('mcap', notes=bag_meta.bag_notes(bag_meta.AXIS))
+    force, _ = foreign_bag('sqlite3', notes=bag_meta.bag_notes(bag_meta.FORCE))
     proc = report(axis, force, '--out', tmp_path / 'out')
     assert proc.returncode == 1
     assert proc.stderr == (
@@ -93,7 +93,7 @@ def test_report_names_every_topic_a_realtime_bag_lacks_samples_of(foreign_bag) -
     path, rec = foreign_bag(
         'mcap',
         start_ns=0,
-        notes=records.bag_notes(records.AXIS_REALTIME),
+        notes=bag_meta.bag_notes(bag_meta.AXIS_REALTIME),
         drop={topics.state('y'): {5, 6}, topics.GROUND_TRUTH: {7}},
     )
     kind = kind_of(path)
@@ -110,7 +110,7 @@ def test_report_names_every_topic_a_realtime_bag_lacks_samples_of(foreign_bag) -
 
 
 def test_a_bag_that_lost_nothing_says_nothing_of_losses(foreign_bag) -> None:
-    path, _ = foreign_bag('mcap', start_ns=0, notes=records.bag_notes(records.AXIS_REALTIME))
+    path, _ = foreign_bag('mcap', start_ns=0, notes=bag_meta.bag_notes(bag_meta.AXIS_REALTIME))
     kind = kind_of(path)
     run = kind.read(path, 'rt', OPTIONS)
     assert run.run.missing == {}
@@ -133,14 +133,14 @@ PER_SAMPLE = [
 ]
 
 
-@pytest.mark.parametrize('kind_name', [records.AXIS, records.AXIS_REALTIME])
+@pytest.mark.parametrize('kind_name', [bag_meta.AXIS, bag_meta.AXIS_REALTIME])
 def test_a_bag_cut_short_says_what_it_holds_and_lacks(foreign_bag, kind_name) -> None:
     # The recorder was killed after sample 199 of the job's 401 (0.4 s).
-    realtime = kind_name == records.AXIS_REALTIME
+    realtime = kind_name == bag_meta.AXIS_REALTIME
     path, _ = foreign_bag(
         'mcap',
         start_ns=0 if realtime else None,
-        notes=records.bag_notes(kind_name),
+        notes=bag_meta.bag_notes(kind_name),
         drop={t: range(200, 401) for t in [*PER_SAMPLE, topics.REFERENCE]},
     )
     kind = kind_of(path)
@@ -169,8 +169,8 @@ def test_a_bag_that_names_its_topics_owners_leaves_out_what_they_did_not_send(
     # The writer names no sender (frame_id ''): a bag that says the plant sends the states of
     # y has none of them from the plant.
     notes = {
-        **records.bag_notes(records.AXIS),
-        **records.owners_note({topics.state('y'): 'plant'}, '/'),
+        **bag_meta.bag_notes(bag_meta.AXIS),
+        **bag_meta.owners_note({topics.state('y'): 'plant'}, '/'),
     }
     path, rec = foreign_bag('mcap', notes=notes)
     run = kind_of(path).read(path, 'owned', OPTIONS).run
@@ -179,8 +179,8 @@ def test_a_bag_that_names_its_topics_owners_leaves_out_what_they_did_not_send(
     assert f'ERROR: {topics.state("y")}: {rec.t.size} messages left out of the record: ' in (
         '\n'.join(run.losses())
     )
-    assert records.owners(notes, '/') == {topics.state('y'): 'plant'}
+    assert bag_meta.owners(notes, '/') == {topics.state('y'): 'plant'}
     assert (
-        records.owners(notes, '/machine2') == {}
-        and records.owners({records.OWNERS: '['}, '/') == {}
+        bag_meta.owners(notes, '/machine2') == {}
+        and bag_meta.owners({bag_meta.OWNERS: '['}, '/') == {}
     )

@@ -11,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from mill_analysis.bag_run import read_run, record_topics
 from mill_analysis.metrics import contour_error, summarize_contour
 from mill_analysis.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
 from mill_analysis.report.plots import contour_planes
 from mill_analysis.report.text import feed_text
-from mill_analysis.run_record import read_run, record_topics
 from mill_analysis.summary import axis_summary
 from mill_bag.types import STRING, typestore
 from mill_bag.writer import BagWriter

@@ -9,7 +9,7 @@ when reading, parses their schema, channel and chunk records (decompression, CRC
 `rosbags` provides the message definitions, type hashes and the CDR decoder, and
 reads sqlite3 bags. This package adds the rosbag2 layout around them. It knows
 nothing of mill (no mill topic names, no runs); what a bag of a mill run means is
-`mill_analysis.run_record`.
+`mill_analysis.bag_run`.
 
 Modules (each imports only those above it):
 

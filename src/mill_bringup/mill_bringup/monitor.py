@@ -1,7 +1,7 @@
 """Monitor: the runner's node. Keeps the messages a job's record is built from, and records.
 
 Subscriptions take the serialized bytes (no Python message per sample while the run goes
-on), with the order they arrived in (mill_analysis.record_checks.Received: the record takes
+on), with the order they arrived in (mill_analysis.node_intake.Received: the record takes
 them through the nodes' checks in that order); the job decodes them once at the end with the
 same code that reads bags, so the runner's summary and the report of the run's bag are
 computed by the same code. Every topic of the job it records it also keeps: what the bag
@@ -12,7 +12,7 @@ rosbag2 bag: the monitor's own subscriptions feed it too, and it subscribes only
 rest (the job's other contract topics, /clock, /diagnostics, and whatever discovery finds).
 In lockstep it also acknowledges, on mill/recorded, after each write of the bag, the newest
 step whose stepped topics the bag's file holds whole, and the plant waits for that
-(mill_bringup.recorded_steps): nothing is lost, and a SIGKILL of the runner costs at most the
+(mill_bringup.bag_handshake): nothing is lost, and a SIGKILL of the runner costs at most the
 plant's `recorder_window` steps.
 Without a bag it acknowledges the steps it has heard whole, every ACK_PERIOD: a runner
 short of CPU slows the job down instead of losing samples of its record.
@@ -37,7 +37,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_analysis.events import Status, statuses_of
-from mill_analysis.record_checks import Received
+from mill_analysis.node_intake import Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
@@ -47,7 +47,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
 
-from mill_bringup.recorded_steps import RecordedSteps
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_common import topics
 
 # [s] between two writes of the runner's bag: the topics outside the lockstep handshake

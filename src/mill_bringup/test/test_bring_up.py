@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 import yaml
 from mill_analysis.identify import machine_file
-from mill_analysis.identify.fit_record import identify_record
+from mill_analysis.identify.fit_axes import identify_record
 from mill_analysis.metrics import summarize
 from mill_bringup.cli import set_duration, set_timing
 from mill_bringup.jobs.base import simulate

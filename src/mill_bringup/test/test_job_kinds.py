@@ -13,15 +13,15 @@ from mill_bringup.jobs.base import Ending
 from mill_bringup.jobs.registry import JOB_KINDS, job_for
 from mill_bringup.runner.cli import paper_text
 
-from mill_analysis import papers, records
+from mill_analysis import bag_meta, papers
 from mill_bringup import scenario
 
 
 def test_every_job_kind_names_its_kind_of_record() -> None:
     assert {kind.KIND: kind.RECORD.NAME for kind in JOB_KINDS} == {
-        'axis': records.AXIS,
-        'axis-realtime': records.AXIS_REALTIME,
-        'force': records.FORCE,
+        'axis': bag_meta.AXIS,
+        'axis-realtime': bag_meta.AXIS_REALTIME,
+        'force': bag_meta.FORCE,
     }
 
 
@@ -232,7 +232,7 @@ def test_every_axis_node_waits_for_the_runner_and_a_recorded_step_needs_every_to
             wanted = 3 if node.kind.role == CONTROLLER else 2
             assert scen.parameters(node.name)['min_subscribers'] == wanted, node.name
     assert {topics.joint_command(a) for a in 'xyz'} <= set(job.monitor_topics())
-    steps = job.recorded_steps()
+    steps = job.bag_handshake()
     assert steps is not None
     stepped = [f(a) for a in 'xyz' for f in (topics.state, topics.estimate, topics.joint_command)]
     for topic in [*stepped, topics.CUTTING_FORCE, topics.GROUND_TRUTH]:

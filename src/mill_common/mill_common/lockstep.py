@@ -85,7 +85,7 @@ class LockstepWatchdog:
 
 
 class RecorderGate:
-    """The clock node's side of the recorder handshake (mill_bringup.recorded_steps).
+    """The clock node's side of the recorder handshake (mill_bringup.bag_handshake).
 
     With a window of W samples, sample j goes out only once the recorder has acknowledged
     (on mill/recorded) sample j − W: however busy the machine, the clock node never runs

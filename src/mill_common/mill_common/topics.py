@@ -25,7 +25,7 @@ CUTTING_FORCE_TRACE = 'mill/cutting_force/trace'
 # Force controller: force used, reference, feed command, override, active β, depth.
 FORCE_CONTROL_STATE = 'mill/force_control/state'
 # The newest step a lockstep run's recorder holds whole (rosgraph_msgs/Clock): a plant with
-# `recorder_window` does not run further ahead of it (mill_bringup.recorded_steps).
+# `recorder_window` does not run further ahead of it (mill_bringup.bag_handshake).
 RECORDED = 'mill/recorded'
 CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'

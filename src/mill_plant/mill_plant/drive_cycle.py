@@ -14,7 +14,7 @@ reports; its cycle says when a period runs and what counts as late:
   the node ends with that message.
   With `recorder_window` W it also waits for the recorder: the states of step j go out only
   once step j − W has been acknowledged on mill/recorded, so that a busy recorder cannot
-  lose samples (mill_bringup.recorded_steps).
+  lose samples (mill_bringup.bag_handshake).
 - `RealtimeCycle`: every sample period of wall time it reads the positions, publishes them
   stamped with the acquisition time on the system clock, and applies the newest command of
   each axis (zero-order hold). A command must answer a state this drive published. A

@@ -21,11 +21,11 @@ from mill_common.one_line_parser import OneLineParser, positive
 from mill_models.axis_model import NONE, RIGID, TWO_MASS, StructureSettings
 from mill_models.identification import FitSettings
 
+from mill_analysis.bag_run import read_run
 from mill_analysis.identify import machine_file
-from mill_analysis.identify.fit_record import structure_record
+from mill_analysis.identify.fit_axes import structure_record
 from mill_analysis.identify.plot import plot
 from mill_analysis.identify.table import structure_table, table
-from mill_analysis.run_record import read_run
 
 
 def _parser() -> OneLineParser:

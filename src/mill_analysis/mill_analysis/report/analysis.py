@@ -1,6 +1,6 @@
 """The numbers of a report: per run and axis metrics, error spectra, windowed RMS, loop timing.
 
-Pure numpy on a BagRun (mill_analysis.run_record): max |e|, RMS e, the RMS of xi_hat - xi
+Pure numpy on a BagRun (mill_analysis.bag_run): max |e|, RMS e, the RMS of xi_hat - xi
 and of xi and the contour error come from the run's summary (mill_analysis.summary, the
 value the runner prints its summary from); the rest is computed here over the summary's
 window.
@@ -20,7 +20,7 @@ from mill_analysis.metrics import Contour, ContourMetrics, contour_error, peak, 
 from mill_analysis.summary import AxisFigures, AxisSummary
 
 if TYPE_CHECKING:
-    from mill_analysis.run_record import BagRun
+    from mill_analysis.bag_run import BagRun
 
 
 def max_window_rms(x: np.ndarray, width: int) -> float:

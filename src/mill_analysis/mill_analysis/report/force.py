@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 from mill_models.reference_model import ContinuousReference
 
+from mill_analysis.bag_meta import loss_lines
 from mill_analysis.force_record import ForceBagRun
-from mill_analysis.records import loss_lines
 
 
 def _samples(run: ForceBagRun) -> str:

@@ -1,6 +1,6 @@
 """How `report` reads, summarises and plots a bag: one RecordKind per kind of record.
 
-A bag of `run_scenario --record` names its kind of record (mill_analysis.records: the job
+A bag of `run_scenario --record` names its kind of record (mill_analysis.bag_meta: the job
 kind's); `kind_of` picks the RecordKind by that name. A bag that names none (the `recorder`
 node's, `ros2 bag record`'s) is told by its topics: the force stream and the force
 controller's state make a force job's bag; any other is an axis job's, lockstep or realtime
@@ -30,14 +30,14 @@ from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_common.progress import Progress
 
-from mill_analysis import records
+from mill_analysis import bag_meta
+from mill_analysis.bag_run import read_run
 from mill_analysis.force_record import ForceBagRun, ForceRecord, is_force_bag, read_force_run
 from mill_analysis.record import RunRecord
 from mill_analysis.report.analysis import RunReport, analyse
 from mill_analysis.report.force import force_figure, force_markdown, force_table
 from mill_analysis.report.plots import plot_all
 from mill_analysis.report.text import markdown, text_table
-from mill_analysis.run_record import read_run
 from mill_analysis.summary import AxisSummary, ForceSummary, axis_summary, force_summary
 
 R = TypeVar('R')
@@ -59,7 +59,7 @@ class RecordKind(ABC, Generic[R]):
     """How a bag of one kind of record is read and summarised (`read`, one bag) and shown
     (`table`, `markdown`, `plot`, every bag of the report)."""
 
-    NAME: ClassVar[str]  # mill_analysis.records
+    NAME: ClassVar[str]  # mill_analysis.bag_meta
     REPORT: ClassVar[str]  # kinds with the same REPORT share one (e.g. 'axis-job')
 
     @abstractmethod
@@ -160,14 +160,14 @@ class AxisRecords(RecordKind[RunReport]):
 class LockstepAxisRecords(AxisRecords):
     """A lockstep run: samples on the grid t = k T."""
 
-    NAME = records.AXIS
+    NAME = bag_meta.AXIS
     REALTIME = False
 
 
 class RealtimeAxisRecords(AxisRecords):
     """A realtime run: samples at the drive's stamps, with the commands' timing."""
 
-    NAME = records.AXIS_REALTIME
+    NAME = bag_meta.AXIS_REALTIME
     REALTIME = True
 
 
@@ -177,7 +177,7 @@ ForceRun = tuple[str, ForceBagRun]  # (label, run)
 class ForceRecords(RecordKind[ForceRun]):
     """The cutting-force job's bags (Rubio 2013): J_c of eq. (14) and the override."""
 
-    NAME = records.FORCE
+    NAME = bag_meta.FORCE
     REPORT = 'force-job'
 
     def summarize(self, record: ForceRecord, skip: float, **context: Any) -> ForceSummary:
@@ -209,7 +209,7 @@ KINDS: dict[str, RecordKind[Any]] = {
 def kind_of(path: Path) -> RecordKind[Any]:
     """The kind of record a bag holds: the one it names, else told by its topics."""
     bag = open_bag(path)
-    name = records.named(bag.custom_data)
+    name = bag_meta.named(bag.custom_data)
     if name is not None:
         if name not in KINDS:
             raise BagError(
@@ -217,4 +217,4 @@ def kind_of(path: Path) -> RecordKind[Any]:
                 f'({", ".join(KINDS)})'
             )
         return KINDS[name]
-    return FORCE if is_force_bag(records.bag_counts(bag)) else AxisRecords()
+    return FORCE if is_force_bag(bag_meta.bag_counts(bag)) else AxisRecords()

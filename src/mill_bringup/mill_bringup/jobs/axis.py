@@ -27,11 +27,11 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
+from mill_analysis.bag_run import record_from_raw
 from mill_analysis.events import Event, Status
+from mill_analysis.node_intake import subset
 from mill_analysis.record import FORCE_CONTROL, RunRecord
-from mill_analysis.record_checks import subset
 from mill_analysis.report import kinds
-from mill_analysis.run_record import record_from_raw
 from mill_analysis.summary import AxisSummary, DepthStretch
 from mill_bag.types import decode
 from mill_common.timebase import job_steps, seconds
@@ -39,12 +39,12 @@ from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
 
 from mill_bringup.axis_simulation import AxisSimulation
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.catalogue import CONTROLLER, PLANT
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.axis_nodes import JOINT_STATE, WRENCH_STAMPED, AxisNodes, axis_summary
 from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
 from mill_bringup.layout import processes
-from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
@@ -181,13 +181,13 @@ class AxisJob(Job[RunRecord]):
             timed=frozenset(),
             late=frozenset(),
             late_after=(),
-            steps=self.recorded_steps(),
+            steps=self.bag_handshake(),
             sim_time=self.sim_time_stamps(),
         )
 
-    def recorded_steps(self) -> RecordedSteps | None:
+    def bag_handshake(self) -> RecordedSteps | None:
         """The recorder's handshake with the plant, if the graph as prepared has one."""
-        return self.nodes.recorded_steps(self.scenario)
+        return self.nodes.bag_handshake(self.scenario)
 
     def _servo_cycles(self, layout: str) -> bool:
         """Whether an axis's observer and controller share a process in this layout."""

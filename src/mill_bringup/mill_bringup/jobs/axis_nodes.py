@@ -24,10 +24,10 @@ from mill_analysis.summary import (
 from mill_common.timebase import period_ns, seconds
 
 from mill_bringup.axis_simulation import build_axis_loops
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.catalogue import CONTROLLER, FORCE_CONTROLLER, PLANT, TRAJECTORY
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.base import Ending
-from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import Scenario, ScenarioError
 from mill_bringup.tuning.prediction_file import compare
 from mill_common import topics
@@ -82,7 +82,7 @@ class AxisNodes:
         out += [topics.joint_command(a) for a in self.axes]
         return out + ([topics.FEED_OVERRIDE] if self.force_controller else [])
 
-    def recorded_steps(self, scen: Scenario) -> RecordedSteps | None:
+    def bag_handshake(self, scen: Scenario) -> RecordedSteps | None:
         """The recorder's handshake with the plant, if its values (as the job prepared the
         graph) ask for one (recorder_window)."""
         window = scen.parameters(self.plant)['recorder_window']

@@ -37,8 +37,8 @@ from mill_analysis.events import Event, Status
 from mill_analysis.report.kinds import RecordKind
 from mill_analysis.summary import Summary
 
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.job_config import JobConfig, build
-from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, NodeLaunch, Scenario
 from mill_bringup.simulation import CoreTimer, Simulation, run_samples
 
@@ -216,7 +216,7 @@ class Job(ABC, Generic[R]):
 
     def foreign(self, rec: R) -> dict[str, int]:
         """Messages the record left out per topic: what the nodes drop (another sender, a
-        stamp they refuse, malformed; mill_analysis.record_checks)."""
+        stamp they refuse, malformed; mill_analysis.node_intake)."""
         return {}
 
     def dropped(self, rec: R) -> dict[str, list[tuple[int, str]]]:

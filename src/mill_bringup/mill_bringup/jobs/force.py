@@ -26,11 +26,11 @@ from mill_controllers.force_control import FORCE_CONTROLLERS, build_law
 from mill_controllers.model_reference import ForceControlDesigner, RstDesignParams
 from mill_models.force_process import ForceProcessModel
 
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.catalogue import FORCE_CONTROLLER, FORCE_PROCESS, TRAJECTORY, of_role
 from mill_bringup.force_loop import ForceLoopSimulation
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, MessageSource
-from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
@@ -118,11 +118,11 @@ class ForceJob(Job[ForceRecord]):
             timed=frozenset(),
             late=frozenset(),
             late_after=(),
-            steps=self.recorded_steps(),
+            steps=self.bag_handshake(),
             sim_time=True,
         )
 
-    def recorded_steps(self) -> RecordedSteps | None:
+    def bag_handshake(self) -> RecordedSteps | None:
         window = self.scenario.parameters(self.plant)['recorder_window']
         if not window:
             return None

@@ -25,12 +25,12 @@ from mill_analysis.summary import DRIVE_FIGURES, AxisSummary, DriveFigures
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.catalogue import PLANT
 from mill_bringup.job_config import JobConfig
 from mill_bringup.jobs.axis import WALL_CLOCK_NS
 from mill_bringup.jobs.axis_nodes import WRENCH_STAMPED, AxisNodes, axis_summary
 from mill_bringup.jobs.base import Ending, GraphPlan, Job, MessageSource
-from mill_bringup.recorded_steps import RecordedSteps
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
@@ -131,12 +131,12 @@ class RealtimeAxisJob(Job[RunRecord]):
             timed=frozenset(self.timed_topics()),
             late=frozenset(late),
             late_after=tuple(after),
-            steps=self.recorded_steps(),
+            steps=self.bag_handshake(),
             sim_time=False,
         )
 
-    def recorded_steps(self) -> RecordedSteps | None:
-        return self.nodes.recorded_steps(self.scenario)
+    def bag_handshake(self) -> RecordedSteps | None:
+        return self.nodes.bag_handshake(self.scenario)
 
     def upstream_topics(self) -> list[str]:
         return self.nodes.upstream_topics()

@@ -13,7 +13,7 @@ from mill_analysis.events import FOREIGN, events_of
 from mill_bag.reader import open_bag
 from mill_bag.writer import counts_note
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_bringup.jobs.base import Ending, Job, simulate
 from mill_bringup.lifecycle_client import deactivate
 from mill_bringup.lost_samples import split_lost
@@ -74,7 +74,7 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
         if recorder is not None:  # the bag says what its run lacks, as the summary does
             ns = monitor.get_namespace()
             absolute = {topics.qualify(t, ns): m for t, m in missing.items()}
-            recorder.note(records.MISSING_SAMPLES, counts_note(absolute))
+            recorder.note(bag_meta.MISSING_SAMPLES, counts_note(absolute))
     finally:
         bag = _close_bag(session, options)
     ranges = {t: r for t, r in job.gaps(record).items() if t in missing}
@@ -93,7 +93,7 @@ def _missing_from_bag(session: Session, options: RunOptions) -> dict[str, int]:
     does. Each message reaches the bag and the record by the same callback; this checks what
     was written."""
     ns = session.monitor.get_namespace()
-    written = records.bag_counts(open_bag(Path(str(options.record_bag))))
+    written = bag_meta.bag_counts(open_bag(Path(str(options.record_bag))))
     out = {}
     for topic, kept in session.monitor.raw.items():
         short = len(kept) - written.get(topics.qualify(topic, ns), 0)

@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mill_analysis.events import Event
-from mill_analysis.record_checks import drop_lines
+from mill_analysis.node_intake import drop_lines
 from mill_analysis.summary import Summary
 from mill_bag.intake import describe as describe_drops
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 
 
 @dataclass
@@ -107,7 +107,7 @@ def format_result(r: RunResult) -> str:
         f'peak RSS of the graph {sum(r.peak_rss_mb.values()):.0f} MB '
         f'({len(r.peak_rss_mb)} processes), {r.peak_pss_mb:.0f} MB in use together (PSS)',
     ]
-    lines += records.loss_lines(r.missing_samples, r.missing_ranges)
+    lines += bag_meta.loss_lines(r.missing_samples, r.missing_ranges)
     lines += [
         f'ERROR: {t}: the bag holds {n} messages fewer than the runner received'
         for t, n in r.missing_from_bag.items()

@@ -20,7 +20,7 @@ from mill_common.env import ros_environment
 from mill_common.executable import ignore_stop_signals
 from mill_common.progress import Progress
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_bringup.graph import Graph
 from mill_bringup.jobs.base import GraphPlan, Job
 from mill_bringup.runner.options import RunError, RunOptions
@@ -94,8 +94,8 @@ class Session:
                 sim_time=self.plan.sim_time,
                 # what `report` reads it as, and who sends each topic (what it leaves out)
                 notes={
-                    **records.bag_notes(job.RECORD.NAME),
-                    **records.owners_note(job.owners(), job.scenario.namespace),
+                    **bag_meta.bag_notes(job.RECORD.NAME),
+                    **bag_meta.owners_note(job.owners(), job.scenario.namespace),
                 },
             )
         self._previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}

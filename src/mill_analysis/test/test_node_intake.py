@@ -1,4 +1,4 @@
-"""The record takes what the nodes take (mill_analysis.record_checks): spoofed far-ahead states
+"""The record takes what the nodes take (mill_analysis.node_intake): spoofed far-ahead states
 with the owner's name, foreign senders and stamps in the past are left out, counted with their
 reason; a step's messages that reach the listener out of order are not; every topic, the
 commands too, counts its missing samples."""
@@ -9,14 +9,14 @@ import math
 
 import numpy as np
 from builtin_interfaces.msg import Duration
-from mill_analysis.record_checks import Drops, drop_lines
-from mill_analysis.run_record import build_record
+from mill_analysis.bag_run import build_record
+from mill_analysis.node_intake import Drops, drop_lines
 from mill_common.checks import Rejected
 from mill_common.timebase import time_ns
 from sensor_msgs.msg import JointState
 from trajectory_msgs.msg import JointTrajectory, JointTrajectoryPoint
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_common import topics
 
 T = 1_000_000  # 1 ms [ns]
@@ -137,17 +137,17 @@ def test_missing_commands_are_counted_and_named() -> None:
     rec, missing = record(lockstep(skip={COMMAND: range(0, 17)}))
     assert missing == {STATE: 0, ESTIMATE: 0, COMMAND: 17, REF: 0}
     assert rec.gaps == {COMMAND: [(0, 16)]}
-    assert records.loss_lines({COMMAND: 17}, rec.gaps) == [
+    assert bag_meta.loss_lines({COMMAND: 17}, rec.gaps) == [
         f'WARNING: {COMMAND}: samples missing in the record: 17 (k = 0–16)'
     ]
     assert math.isnan(rec['torque'][16, 0]) and rec['torque'][17, 0] == 17.0
 
 
 def test_missing_ranges_and_their_text() -> None:
-    assert records.missing_ranges({1, 2, 5}, 8) == [(0, 0), (3, 4), (6, 7)]
-    assert records.missing_ranges(set(range(4)), 4) == []
+    assert bag_meta.missing_ranges({1, 2, 5}, 8) == [(0, 0), (3, 4), (6, 7)]
+    assert bag_meta.missing_ranges(set(range(4)), 4) == []
     many = [(k, k) for k in range(0, 20, 2)]
-    assert records.format_ranges(many) == 'k = 0, 2, 4, 6, 8, 10 and 4 more runs'
+    assert bag_meta.format_ranges(many) == 'k = 0, 2, 4, 6, 8, 10 and 4 more runs'
 
 
 def test_drops_count_reasons_that_differ_only_in_numbers_together() -> None:

@@ -39,12 +39,12 @@ from mill_common.signals import AXES
 from mill_common.timebase import job_steps, time_ns
 from mill_common.timing import Lockstep
 
-from mill_analysis import records
+from mill_analysis import bag_meta
 from mill_analysis.bag_status import job_approach, job_end, job_start, plant_status
 from mill_analysis.events import events_of, statuses_of
+from mill_analysis.node_intake import Intake, Received, arrival_order, drop_lines, subset
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_analysis.record import RunRecord
-from mill_analysis.record_checks import Intake, Received, arrival_order, drop_lines, subset
 from mill_common import topics as topic_names
 
 # progress(phase, done, total): how far reading or decoding a bag has got (total None: unknown)
@@ -76,7 +76,7 @@ def build_record(
     RunRecord of n samples at t = k T.
 
     The one place where messages become signals: the runner's monitor and the bag reader
-    both call it. Each message goes through the nodes' checks (mill_analysis.record_checks:
+    both call it. Each message goes through the nodes' checks (mill_analysis.node_intake:
     its sender against `owners` {topic: node}, its stamp as the lockstep timing takes it,
     its content as the node reading the topic takes it: the joint there, the arrays long
     enough, the values finite, the reference's points on the grid; a command's NaN is a
@@ -229,7 +229,7 @@ def build_record(
     rec.foreign = intake.drops.per_topic()
     rec.drops = intake.drops
     missing = {t: n - len(ks) for t, ks in seen.items()}
-    rec.gaps = {t: records.missing_ranges(ks, n) for t, ks in seen.items() if len(ks) < n}
+    rec.gaps = {t: bag_meta.missing_ranges(ks, n) for t, ks in seen.items() if len(ks) < n}
     return rec, missing
 
 
@@ -308,7 +308,7 @@ class BagRun:
     def losses(self) -> list[str]:
         """What the bag lacks: a line per topic with samples missing (which ones, where
         known), and per topic with messages the nodes would drop, left out of the record."""
-        return records.loss_lines(self.missing, self.record.gaps) + drop_lines(
+        return bag_meta.loss_lines(self.missing, self.record.gaps) + drop_lines(
             self.record.drops.reasons()
         )
 
@@ -383,7 +383,7 @@ def read_run(
     machine in a bag of several. `progress(phase, done, total)` is called now and then, while
     the bag is read ('reading', messages; total from metadata.yaml, None if it has none)
     and while its messages are decoded ('decoding'). realtime: whether the bag holds a
-    realtime run, as it says (mill_analysis.records); None for a bag that does not say: a
+    realtime run, as it says (mill_analysis.bag_meta); None for a bag that does not say: a
     realtime job's status on /diagnostics tells its start stamp, a lockstep one's does not.
     """
     bag = open_bag(path)
@@ -462,7 +462,7 @@ def read_run(
                 f'{bag.path}: a realtime run without its start (no start_stamp_ns in the '
                 'job status on /diagnostics)'
             )
-        owners = records.owners(bag.custom_data, ns)
+        owners = bag_meta.owners(bag.custom_data, ns)
         run = _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
         # What the machine told (trips, stops, brakes), as the runner takes it
         run.record.events = events_of(statuses_of(statuses), start_ns)
@@ -482,7 +482,7 @@ def read_run(
         source = 'last sample of every state topic (no job status on /diagnostics)'
         notes.append('no job status on /diagnostics: every sample up to the last state is used')
     listened = subset(raw, record_topics(axes))
-    owners = records.owners(bag.custom_data, ns)
+    owners = bag_meta.owners(bag.custom_data, ns)
     record, missing = record_from_raw(listened, wanted_types, axes, n, dt_ns, progress, owners)
     record.events = events_of(statuses_of(statuses))  # as the runner takes them
     # Wall-clock arrival of each sample of the first axis, where the storage has

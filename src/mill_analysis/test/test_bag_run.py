@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
+from mill_analysis.bag_run import build_record, read_run, record_from_raw, record_topics
 from mill_analysis.metrics import summarize
+from mill_analysis.node_intake import Received, subset
 from mill_analysis.record import SIGNALS
-from mill_analysis.record_checks import Received, subset
-from mill_analysis.run_record import build_record, read_run, record_from_raw, record_topics
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_common.signals import AXES
@@ -120,7 +120,7 @@ def test_the_record_keeps_the_first_message_and_leaves_out_malformed_ones() -> N
 
 
 def test_a_repeated_answer_to_a_reoffered_sample_is_one_override() -> None:
-    from mill_analysis.run_record import _feed_values
+    from mill_analysis.bag_run import _feed_values
     from rclpy.serialization import serialize_message
 
     def override(stamp_ns: int, value: float) -> bytes:

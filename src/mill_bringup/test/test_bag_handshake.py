@@ -1,9 +1,9 @@
-"""The recorder's side of the lockstep handshake (mill_bringup.recorded_steps)."""
+"""The recorder's side of the lockstep handshake (mill_bringup.bag_handshake)."""
 
 from __future__ import annotations
 
 import pytest
-from mill_bringup.recorded_steps import RecordedSteps
+from mill_bringup.bag_handshake import RecordedSteps
 from mill_common.lockstep import RecorderGate
 from mill_common.timebase import sample_stamp_ns
 
