@@ -270,37 +270,6 @@ class AxisJob(Job[RunRecord]):
         )
         return replace(summary, planned_feed=self.feed_summary)
 
-    def foreign(self, rec: RunRecord) -> dict[str, int]:
-        return dict(rec.foreign)
-
-    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
-        return rec.drops.reasons()
-
-    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
-        return dict(rec.gaps)
-
-    def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
-        out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
-        if not np.isnan(rec['force']).all():  # recorded (--record): the plant's force too
-            out['cutting_force'] = max_difference(rec['force'], other['force'])
-        if rec.force_control is not None and other.force_control is not None:
-            a, b = rec.force_control, other.force_control
-            for i, name in enumerate(FORCE_CONTROL[1:], 1):
-                out[f'force_control.{name}'] = (
-                    max_difference(a[:, i], b[:, i]) if (a.shape == b.shape) else math.inf
-                )
-        return out
-
-
-def max_difference(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest |a − b| over all entries; 0 where both are NaN, inf where only one is."""
-    if a.shape != b.shape:
-        return math.inf
-    diff = np.abs(a - b)
-    diff[np.isnan(a) & np.isnan(b)] = 0.0
-    diff[np.isnan(diff)] = np.inf
-    return float(diff.max()) if diff.size else 0.0
-
 
 def depth_stretches(rows: np.ndarray, min_instants: int = 10) -> list[DepthStretch]:
     """Stretches of at least min_instants control instants told the same depth (to 1 µm)."""

@@ -229,20 +229,8 @@ class RealtimeAxisJob(Job[RunRecord]):
         # the controllers' trips on the system clock, the drive's statuses stamped on it
         return self.nodes.events(statuses, self.start_ns or 0)
 
-    def foreign(self, rec: RunRecord) -> dict[str, int]:
-        return dict(rec.foreign)
-
-    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
-        return rec.drops.reasons()
-
-    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
-        return dict(rec.gaps)
-
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> Any:
-        raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
-
-    def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
     # -- results ---------------------------------------------------------------------------
