@@ -27,8 +27,8 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from mill_analysis.bag_run import record_from_raw
 from mill_analysis.events import Event, Status
+from mill_analysis.lockstep_record import record_from_raw
 from mill_analysis.node_intake import subset
 from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.report import kinds
