@@ -26,6 +26,7 @@ setup(
             'offline_sim = mill_bringup.offline:main',
             'tune = mill_bringup.tuning.cli:main',
             'job_watch = mill_bringup.executables:job_watch',
+            'machine_view = mill_bringup.executables:machine_view',
             'mill_container = mill_bringup.executables:mill_container',
             'docs_figures = mill_bringup.docs_figures.cli:main',
             'docs_params = mill_bringup.docs_params:main',

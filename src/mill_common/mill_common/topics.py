@@ -31,6 +31,17 @@ FORCE_CONTROL_STATE = 'mill/force_control/state'
 # The newest step a lockstep run's recorder holds whole (rosgraph_msgs/Clock): a plant with
 # `recorder_window` does not run further ahead of it (mill_bringup.bag_handshake).
 RECORDED = 'mill/recorded'
+# For the viewers (RViz, Foxglove): the job's programmed path (nav_msgs/Path, transient
+# local, the trajectory publishes it once a job is loaded), the measured tool trace
+# (nav_msgs/Path, mill_bringup.machine_view), the machine's URDF (std_msgs/String,
+# transient local) and the axes' joint states (sensor_msgs/JointState, the drive's).
+PLANNED_PATH = 'mill/planned_path'
+TOOL_TRACE = 'mill/tool_trace'
+ROBOT_DESCRIPTION = 'robot_description'
+JOINT_STATES = 'joint_states'
+# What robot_state_publisher gives from them (absolute, as tf2 expects).
+TF = '/tf'
+TF_STATIC = '/tf_static'
 CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'
 
