@@ -86,47 +86,59 @@ def installed(package: str) -> bool:
 
 @dataclass(frozen=True)
 class Argument:
+    """A launch argument, declared once: the launch file declares it (its description is
+    what `--show-args` prints) and docs_params writes the user guide's table of it."""
+
     name: str
     default: str
     description: str
+    empty: str = 'none'  # what an empty default stands for, as the user guide says it
 
 
 ARGUMENTS = (
     Argument(
         'scenario',
         'slotting',
-        'scenario name (config/NAME.yaml) or path to a scenario file; its mill_scenario '
+        'scenario name (`config/NAME.yaml`) or path to a scenario file; its `mill_scenario` '
         'entry lists the nodes',
     ),
     Argument(
         'namespace',
         '',
-        "machine namespace of every node, e.g. machine2; empty: the scenario's, else /. "
-        '/diagnostics stays global, and /clock unless private_clock is true',
+        'machine namespace of every node, e.g. `machine2`; `/diagnostics` stays global, and '
+        '`/clock` unless `private_clock` is true',
+        "the scenario's, else `/`",
     ),
     Argument(
         'params_file',
         '',
-        'ROS 2 parameter file applied on top of the scenario (entries /**, NODE, /NODE or '
-        '/**/NODE)',
+        'ROS 2 parameter file applied on top of the scenario; entries `/**` (or another '
+        'wildcard such as `/**/x_*`) give each name to the nodes that declare it; `NODE`, '
+        '`/NODE` or `/**/NODE` must name a node of the scenario and hold only names it declares',
     ),
     Argument(
         'timing',
         '',
-        "lockstep or realtime, as run_scenario --timing sets it; empty: the scenario's",
+        '`lockstep` or `realtime`, given to every node as its `timing` parameter, as '
+        '`run_scenario --timing` sets it',
+        "the scenario's",
     ),
-    Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
+    Argument('log_level', 'info', '`--log-level` of every node: ' + ', '.join(LOG_LEVELS)),
     Argument(
         'layout',
         '',
-        'which nodes share a process: ' + ', '.join(LAYOUTS) + "; empty: the scenario's",
+        'which nodes share a process: ' + ', '.join(f'`{x}`' for x in LAYOUTS) + '; the nodes '
+        'a layout puts together run in one `mill_container` process and keep their names, '
+        'parameters and topics',
+        "the scenario's, else `processes`",
     ),
     Argument(
         'private_clock',
         '',
-        'true: remap /clock to NAMESPACE/clock for every node (needs a namespace), so that '
-        'machines launched in one domain under two namespaces keep their own clocks; empty: '
-        "the scenario's",
+        '`true`: every node of the launch has `/clock` remapped to `NAMESPACE/clock`, as '
+        '`run_scenario --private-clock` does, so that two simulated machines launched side '
+        'by side in one domain each step to their own plant; needs a `namespace`',
+        "the scenario's, else off",
     ),
 )
 # What runs the nodes a layout puts together (mill_bringup.container).

@@ -42,7 +42,7 @@ def documented_arguments() -> dict[str, str]:
     text = USER_GUIDE.read_text()
     section = text[text.index('## With a full ROS 2 install') :]
     table = section[section.index('| argument | default | meaning |') :].split('\n\n')[0]
-    rows = [line.split('|')[1:3] for line in table.splitlines()[2:]]
+    rows = [line.split('|')[1:3] for line in table.splitlines()[2:] if line.startswith('|')]
     return {name.strip().strip('`'): default.strip() for name, default in rows}
 
 
