@@ -96,6 +96,7 @@ def test_the_foxglove_layout_parses_and_names_only_graph_topics() -> None:
         topics.DIAGNOSTICS,
     }
     assert {topics.qualify(t) for t in wanted} <= named
+
     # every panel the layout places is configured, and every configured one placed
     def leaves(node: Any) -> Iterator[str]:
         if isinstance(node, dict):
