@@ -84,7 +84,7 @@ class TrajectoryNode(Node):
         v = self.params.values
         self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._planned = PlannedPath(self)
-        self._publish_planned()
+        self._planned.publish(job_path(self._schedule), self.progress.end_time)
         self._answer: tuple[int, bytes] | None = None  # lockstep overrides: the last answer
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         schedule = self._schedule
@@ -125,9 +125,9 @@ class TrajectoryNode(Node):
         self._publish_planned()
 
     def _publish_planned(self) -> None:
-        """The job's path on mill/planned_path, each time a job is loaded."""
+        """The job's path on mill/planned_path, once a parameter change has loaded it."""
         if self._planned is not None and self._schedule is not None:
-            self._planned.publish(job_path(self._schedule), self.progress.end_time)
+            self._planned.later(job_path(self._schedule), self.progress.end_time)
 
     def _override_scales(self) -> bool:
         s = self._schedule

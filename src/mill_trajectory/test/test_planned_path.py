@@ -63,9 +63,16 @@ def test_the_job_path_is_latched_on_planned_path_and_follows_a_new_path() -> Non
             t = end * middle / (PLANNED_POINTS - 1)
             assert _xyz(msg.poses[middle]) == path.sample(t).position
             # Another path loaded: published again, its end where the new path ends.
+            # `ros2 param load`: one parameter at a time, each loading the job anew; the
+            # path goes out once, after the last
             waypoints = [0.0, 0.0, 0.0, 0.004, 0.002, 0.0, 0.004, 0.002, -0.001]
+            for name in ('linear.feed_rate', 'settle_time', 'input_warn_time'):
+                assert set_one(node, name, node.get_parameter(name).value).successful
             assert set_one(node, 'linear.waypoints', waypoints).successful
             assert _spin_until(executor, lambda: len(got) == 2)
+            for _ in range(50):  # 0.5 s: no other
+                executor.spin_once(timeout_sec=0.01)
+            assert len(got) == 2
             new = job_path(node._schedule)
             assert new is not path
             assert _xyz(got[1].poses[-1]) == new.sample(new.end_time).position
