@@ -28,6 +28,13 @@ BASE_LINK = 'mill_base'
 TOOL_LINK = 'tool'
 # The direction each axis moves its carriage in BASE_LINK.
 AXIS_DIRECTIONS = {'x': '1 0 0', 'y': '0 1 0', 'z': '0 0 1'}
+# What a viewer draws of each moving link [m]: a slab per carriage, a cutter at the tool
+# (shapes to see the axes move by, not the machine's).
+SHAPES = {
+    'x_carriage': ('box', {'size': '0.06 0.02 0.005'}),
+    'y_carriage': ('box', {'size': '0.02 0.06 0.005'}),
+    TOOL_LINK: ('cylinder', {'radius': '0.003', 'length': '0.03'}),
+}
 
 
 @dataclass(frozen=True)
@@ -85,7 +92,13 @@ def machine_urdf(limits: dict[str, JointLimits], name: str = 'mill') -> str:
     parent = BASE_LINK
     for i, axis in enumerate(AXES):
         child = TOOL_LINK if i == len(AXES) - 1 else f'{axis}_carriage'
-        ElementTree.SubElement(robot, 'link', name=child)
+        link = ElementTree.SubElement(robot, 'link', name=child)
+        shape, size = SHAPES[child]
+        visual = ElementTree.SubElement(link, 'visual')
+        # the cutter's point at the link's origin, its shank above it
+        above = float(size.get('length', '0')) / 2
+        ElementTree.SubElement(visual, 'origin', xyz=f'0 0 {above!r}', rpy='0 0 0')
+        ElementTree.SubElement(ElementTree.SubElement(visual, 'geometry'), shape, size)
         joint = ElementTree.SubElement(robot, 'joint', name=axis, type='prismatic')
         ElementTree.SubElement(joint, 'parent', link=parent)
         ElementTree.SubElement(joint, 'child', link=child)
