@@ -94,7 +94,8 @@ class Event:
 @dataclass(frozen=True)
 class Status:
     """One /diagnostics status as it arrived: the stamp of its array [ns], its name
-    (`<node>: <part>`), level (0 OK, 1 WARN, 2 ERROR), message and values."""
+    (`[<namespace>/]<node>: <part>`, topics.status_name), level (0 OK, 1 WARN, 2 ERROR),
+    message and values."""
 
     stamp_ns: int
     name: str
@@ -104,7 +105,7 @@ class Status:
 
     @property
     def node(self) -> str:
-        return self.name.partition(': ')[0]
+        return topics.parse_status_name(self.name).node
 
     @property
     def part(self) -> str:

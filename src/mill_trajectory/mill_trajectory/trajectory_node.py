@@ -2,10 +2,10 @@
 
 Publishes /mill/reference (trajectory_msgs/JointTrajectory: point i holds positions,
 velocities and accelerations of x, y, z at stamp + time_from_start; a path that
-programs the spindle, G-code, adds the joint `spindle`, its position the speed [rev/min])
-and the job's status on /diagnostics ("running" with progress, then "done" with its
-end_time). Which points go
-out, and when, is decided by the ROS-free schedules of mill_trajectory.schedule, the ones
+programs the spindle, G-code, adds the joint `spindle`, its position the speed [rev/min]),
+the job's status on /diagnostics ("running" with progress, then "done" with its end_time)
+and the job's path, once loaded, on mill/planned_path (mill_trajectory.planned_path). Which
+points go out, and when, is decided by the ROS-free schedules of mill_trajectory.schedule, the ones
 the offline simulator uses too; this node takes what paces it, checks it and publishes:
 
 - lockstep, /clock: each tick is answered with `preview_time` of points ahead. With
@@ -63,6 +63,7 @@ from mill_trajectory.config import (
     parameter_specs,
 )
 from mill_trajectory.feed_override import FeedOverride
+from mill_trajectory.planned_path import PlannedPath, job_path
 from mill_trajectory.schedule import (
     ClockedReference,
     OverrideReference,
@@ -78,9 +79,12 @@ class TrajectoryNode(Node):
         self._name = self.get_name()  # the sender of every message; asked once
         self._schedule: Schedule | None = None
         self._override: FeedOverride  # set by _configure
+        self._planned: PlannedPath | None = None  # the path on mill/planned_path, once made
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
+        self._planned = PlannedPath(self)
+        self._planned.publish(job_path(self._schedule), self.progress.end_time)
         self._answer: tuple[int, bytes] | None = None  # lockstep overrides: the last answer
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         schedule = self._schedule
@@ -118,6 +122,12 @@ class TrajectoryNode(Node):
             return
         self._override = FeedOverride(feed.min, feed.max)
         self._schedule, self.progress = build_schedule(values, self._override)
+        self._publish_planned()
+
+    def _publish_planned(self) -> None:
+        """The job's path on mill/planned_path, once a parameter change has loaded it."""
+        if self._planned is not None and self._schedule is not None:
+            self._planned.later(job_path(self._schedule), self.progress.end_time)
 
     def _override_scales(self) -> bool:
         s = self._schedule

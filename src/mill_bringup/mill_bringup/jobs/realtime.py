@@ -268,9 +268,11 @@ class RealtimeAxisJob(Job[RunRecord]):
 
 
 def last_values(statuses: Sequence[Status], name: str) -> dict[str, str]:
-    """The values of the newest status of this name ({}: none heard)."""
+    """The values of the newest status with this name's node and part ({}: none heard;
+    the statuses are one machine's, so the namespace may be left out: topics.status_key)."""
+    key = topics.status_key(name)
     for s in reversed(statuses):
-        if s.name == name:
+        if topics.status_key(s.name) == key:
             return dict(s.values)
     return {}
 
