@@ -274,6 +274,33 @@ class PlannedPath(Trajectory):
         np.maximum.at(speed, src[keep], v[keep])
         return time, speed
 
+    def piece_starts(self, pieces: Sequence[Piece]) -> list[float]:
+        """For each of the planned input pieces, when it begins [s]: a move, where the sharp
+        path begins it; a rest, the instant the reference has come to rest for it (after
+        the dwells of the rests before it that it was merged with, which the reference
+        keeps exactly still through); a dropped (zero-length) move, where the next begins."""
+        n = len(pieces)
+        out = [self.end_time] * n
+        if self._profile is None:
+            return out
+        speed = self._profile.speed.tolist()
+        src = self.sources
+        for s, j in enumerate(src):
+            if j < 0 or (s > 0 and src[s - 1] == j):  # the path's own rests; a cut's rest
+                continue
+            if speed[s] > 0.0:
+                out[j] = self._starts[s]
+                continue
+            t = self._starts[s] + 0.5 * self._corners[s]
+            following = next((k for k in src[s + 1 :] if k >= 0), n)
+            for i in range(j, following):  # the rests merged into this one
+                out[i] = t
+                t += pieces[i].dwell if pieces[i].rest else 0.0
+        for i in range(n - 2, -1, -1):  # dropped moves: where the next piece begins
+            if not pieces[i].rest and math.dist(pieces[i].start, pieces[i].end) <= ZERO_LENGTH:
+                out[i] = out[i + 1]
+        return out
+
     @property
     def transitions(self) -> list[float]:
         """Duration of each junction's transition [s], the start's and the end's included."""
