@@ -84,9 +84,9 @@ class Holds:
         self.paused: ProgramEvent | None = None
         self.held = False  # a feed hold is asked for (until resume)
         self.hold_refusal = hold_refusal  # why this job cannot hold its feed (None: it can)
-        # Samples a pause lasts before it ends by itself (None: only resume ends it).
+        # Samples at the pause's point before it ends by itself (None: only resume ends it).
         self.resume_samples = (
-            max(1, math.ceil(resume_after / sample_period - 1e-9)) if resume_after > 0 else None
+            max(2, math.ceil(resume_after / sample_period - 1e-9)) if resume_after > 0 else None
         )
         self._rested = 0  # samples held in the current pause
         self.notices: list[Notice] = []  # drained by whoever reports them
@@ -97,11 +97,11 @@ class Holds:
         return 'paused' if self.paused is not None else 'held' if self.held else 'running'
 
     def feed_hold(self) -> Command:
-        if self.hold_refusal is not None:
-            return Command(False, self.hold_refusal)
         if self.paused is not None:
             p = self.paused
             return Command(False, f'paused at {p.where} ({p.text}): at rest already; resume it')
+        if self.hold_refusal is not None:
+            return Command(False, self.hold_refusal)
         if self.held:
             return Command(False, 'the feed is held already: call resume to go on')
         self.held = True
@@ -124,7 +124,8 @@ class Holds:
         """Before a sample at path time tau: the path time to hold (None: run on)."""
         if self.paused is not None:
             self._rested += 1
-            if self.resume_samples is not None and self._rested > self.resume_samples:
+            # This sample, the first after the pause, is still at the pause's point too.
+            if self.resume_samples is not None and self._rested >= self.resume_samples:
                 p, self.paused = self.paused, None
                 said = f'resumed by itself after {self.resume_samples} samples at {p.where}'
                 self.notices.append(Notice('resumed', p, said))
