@@ -160,6 +160,8 @@ class GcodeTrajectory(Trajectory):
         self.events = events
         self.pauses = tuple(e for e in events if e.kind == PAUSE)
         self.resume_after = resume_after  # gcode.resume_after [s]; 0: wait for ~/resume
+        self.moves: tuple[Move, ...] = ()  # the program read (from_parameters)
+        self.tolerance = DEFAULT_TOLERANCE  # the path tolerance it was planned with [m]
         self.end_time = planned.end_time
         # How fast a feed override may change on it (None: no override, or no limit binds).
         self.override_limit = override_limit
@@ -218,6 +220,7 @@ class GcodeTrajectory(Trajectory):
             raise ParameterError('file', v.file, str(exc)) from None
         events = program_events(moves, pieces, blocks, planned)
         out = cls(planned, override_limit, events, v.resume_after)
+        out.moves, out.tolerance = tuple(moves), limits.tolerance  # for a preview
         out.feed_summary = feed_summary(block_feeds(moves, pieces, blocks, planned))
         return out
 
