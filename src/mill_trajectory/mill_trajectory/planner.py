@@ -46,7 +46,9 @@ forwards and backwards, with a the share of the acceleration a curve leaves (u²
 acceleration and u³κ² of the jerk taken, and speeding up by a_t adding 3·u·a_t·κ to the
 jerk). A straight piece slowed by a corner at one of its ends is cut there, if the rest
 holds the ramps up to its cap: a short piece runs at the corner's speed and the rest at the
-feed, so that the corner slows only its neighbourhood. The start and end are junctions with
+feed, so that the corner slows only its neighbourhood; a piece slow at one end only (an
+arc's first chord after a sharp corner) is cut there too if the corner piece takes at most
+half of it, so that the rest ramps on into the pieces after it. The start and end are junctions with
 rest; an acceleration or jerk limit of inf is no limit (with both inf, the velocity steps at
 each corner, as the straight cuts of Beltrán 2013 eq. (19)-(22), and pieces are not cut).
 
@@ -94,6 +96,7 @@ MAX_PASSES = 400
 PATIENCE = 20  # slowings of a piece before its steps are at least STUBBORN
 STUBBORN = 0.97
 MAX_STRETCH = 8.0  # a transition lengthened at most this many times its shortest
+LONE_CUT = 0.5  # a piece slow at one end is cut there if its corner piece takes at most this
 PARALLEL = 1e-12  # |d_a − d_b| below this: the same direction
 ZERO_LENGTH = 1e-12  # [m]: a shorter move is no move
 
@@ -499,6 +502,10 @@ def _cut(c: _Chain, limits: Limits) -> _Chain:
     with np.errstate(invalid='ignore'):
         middle = np.nan_to_num(0.5 * c.cap * ramps, nan=np.inf)
     fits = (a + b + middle <= c.length) & (a + b > 0.0)
+    # A piece slow at one end only (an arc's first chord after a sharp corner, a short line
+    # into a curve): its corner piece alone, so that the rest ramps on into the pieces after
+    # it instead of crawling at the corner's speed from end to end.
+    fits |= (slow_in != slow_out) & (a + b > 0.0) & (a + b <= LONE_CUT * c.length)
     a, b = np.where(fits, a, 0.0), np.where(fits, b, 0.0)
     if not fits.any():
         return c
