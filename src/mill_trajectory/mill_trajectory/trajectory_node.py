@@ -86,6 +86,7 @@ class TrajectoryNode(Node):
         self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
         self._answer: tuple[int, bytes] | None = None  # lockstep overrides: the last answer
         self._job_time = 0.0  # the job time last reported
+        self._held_report_ns = 0  # lockstep: the next tick to report a pause or hold at
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         schedule = self._schedule
         self.guard = InputGuard(
@@ -215,6 +216,11 @@ class TrajectoryNode(Node):
         self._job_time = t
         self._tell(t)
         self.job_status(t)
+        holds = self.holds
+        if holds is not None and holds.state != 'running' and ns >= self._held_report_ns:
+            # The path time stands still while paused or held: say so once a second of clock.
+            self._held_report_ns = ns + 1_000_000_000
+            self.report(t, 'running', f'job {holds.state}')
 
     def _on_user_override(self, msg: Any) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan

@@ -118,6 +118,9 @@ def test_a_pause_holds_until_resume_and_messages_reach_the_operator(
     assert (kind, where) == ('paused', f'{part}:4:1')
     assert message.endswith("call the trajectory's ~/resume (std_srvs/Trigger) to go on")
     assert [t[0] for t in told[3:5]] == ['feed_hold', 'resume']
+    # While paused the path time stands still; the status says so on the clock's seconds.
+    held = [s for s in op.statuses if s.get('hold') == 'paused' and 'event' not in s]
+    assert held and held[0]['message'] == 'job paused'
     first_cut = next(s for s in op.statuses if s.get('event') == 'message')
     assert first_cut['event_channel'] == 'MSG' and 0.0 < float(first_cut['event_time_s']) < 0.1
 
