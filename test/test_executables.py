@@ -75,7 +75,9 @@ def test_node_help_lists_parameters(ros_env, module, executable, specs, required
         assert spec.description.strip(), f'{name} has no description'
 
 
-@pytest.mark.parametrize('module', ['mill_bringup.runner', 'mill_bringup.offline'])
+@pytest.mark.parametrize(
+    'module', ['mill_bringup.runner', 'mill_bringup.offline', 'mill_trajectory.preview']
+)
 def test_tool_help(ros_env, module) -> None:
     done = _help(module, ros_env)
     assert done.returncode == 0, done.stderr

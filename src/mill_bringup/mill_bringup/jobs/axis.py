@@ -91,8 +91,29 @@ class AxisJob(Job[RunRecord]):
         )
         self._bound = self._samples
         self._found: int | None = None  # the samples of a run whose end was found
+        # A program that pauses (M0/M1) ends later than planned: a length the run finds too.
+        path = c.trajectory_job().trajectory
+        self.pauses: tuple[Any, ...] = getattr(path, 'pauses', ())
+        self.resume_after: float = getattr(path, 'resume_after', 0.0)
+        self.open_end = self.override or bool(self.pauses)
         if self.override:
             self._check_override(tv)
+        if self.pauses and self.resume_after > 0:
+            # The bound of the offline loop: each pause at rest for resume_after, and more.
+            each = math.ceil(self.resume_after / seconds(self.dt_ns)) + 2
+            self._bound = max(self._bound, self._samples) + len(self.pauses) * each
+
+    def unattended_pause(self) -> str | None:
+        """Why nobody would end this job's first pause (None: it has none, or they end by
+        themselves after gcode.resume_after)."""
+        if not self.pauses or self.resume_after > 0:
+            return None
+        first = self.pauses[0]
+        return (
+            f"{first.where}: {first.text} waits for the trajectory's ~/resume, which nobody "
+            'calls in this run: give --resume-after SECONDS (gcode.resume_after), or run the '
+            'launch file and resume by hand'
+        )
 
     def _check_override(self, tv: dict[str, Any]) -> None:
         name = self.scenario.name
@@ -229,7 +250,7 @@ class AxisJob(Job[RunRecord]):
             )
 
     def complete(self, source: MessageSource) -> bool:
-        if self.override and self._found is None:
+        if self.open_end and self._found is None:
             # The trajectory says where the job ends, once its path has ended.
             status = source.status(topics.status_name(self.trajectory, topics.JOB_STATUS))
             if status is None or status.get('state') != 'done':

@@ -201,6 +201,10 @@ def main(argv: list[str] | None = None) -> int:
             check_layout(args.layout)
         _apply_namespace(scen, runs, args.namespace, args.private_clock)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
+        for job in jobs.values():  # nobody resumes a pause in a run_scenario run
+            unattended = getattr(job, 'unattended_pause', lambda: None)()
+            if unattended is not None:
+                raise RunError(unattended)
         if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
             raise RunError('--compare-offline: a realtime run has no offline twin')
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
