@@ -7,8 +7,9 @@ independent of the motion), motion in both directions at many speeds, and an axi
 stays near its reference. The bits are of two lengths: most last one to four `bit_period`
 (10 ms), whose power lies below ~90 Hz and moves the axis far and fast enough for its
 friction to show; for `short_share` of the time (15 %) they last one to four samples,
-which carries the power to the Nyquist frequency at the job's rate (within 20 dB of the
-low-frequency level up to 0.9 × Nyquist at 1 kHz, where 10 ms bits alone end near 97 Hz),
+which carries the power towards the Nyquist frequency at the job's rate (within 20 dB of
+its low-frequency level to 0.78 × Nyquist, 390 Hz at 1 kHz, where 10 ms bits alone end near
+97 Hz; the response's fit ends at 0.8 × Nyquist),
 so that a resonance the loop can reach is measured (mill_models.frequency_response). A
 low-bandwidth PD (eq. (9) of Beltrán 2013 with ξ̂ = 0) keeps it
 there; being soft, it lets the binary torque move the axis. Above `max_speed` the binary
@@ -60,7 +61,7 @@ class ExcitationParams(PdGains):
     short_share: float = param(
         0.15,
         'share of the time the binary torque spends in short bits of one to four samples '
-        '(the rest in bits of bit_period): they carry its power up to the Nyquist frequency, '
+        '(the rest in bits of bit_period): they carry its power to 0.8 × the Nyquist frequency, '
         'where a resonance that the loop can reach shows (0: bit_period alone)',
         in_range(0.0, 0.9),
         unit='-',

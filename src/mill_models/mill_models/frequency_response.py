@@ -16,12 +16,17 @@ ROS-free. From positions x[k] and commands u[k] (held over a period) sampled eve
 - The two models fitted to N where the coherence is good (weighted by the coherence, on
   the logarithm of N, so gain and phase count alike):
     rigid:     N = b·e^(−sτ)·s/(s + α_e)
-    two-mass:  N = rigid × (s²/ωa² + 2ζa·s/ωa + 1) / (s²/ωr² + 2ζ·s/ωr + 1)
+    two-mass:  N = b·e^(−sτ)·s²·X1/F of a motor side m1 driven by the torque and a table
+               m2 on the screw's stiffness k and damping c, with the friction's damping
+               α_e on the motor side (`_two_mass`), measured on the motor (collocated)
   α_e is the friction seen as damping (large below a few Hz, where Coulomb friction takes
-  much of the torque). The two-mass axis is a motor side m1 driven by the torque and a table
-  m2 on the screw's stiffness k and damping c, measured on the motor (collocated):
-  ωa² = k/m2, ωr² = k/μ (μ = m1·m2/M), so ωr/ωa = √(1 + m2/m1) and ζa = ζ·ωa/ωr, and b is
-  the whole axis's gain 1/(a·M).
+  much of the torque; larger the smaller the motion). In the two-mass model it acts on the
+  motor side, where the screw's bearings and nut are: put on the whole axis (the rigid line
+  times the undamped two-mass ratio, as first written) it biased b by -2 to -4 % on issue
+  32's M2 y. ωa² = k/m2, ωr² = k/μ (μ = m1·m2/M), so ωr/ωa = √(1 + m2/m1), and b is the
+  whole axis's gain 1/(a·M).
+- The band measured: `measured_to`, the highest frequency whose octave below is mostly
+  coherent; `tune` keeps its loop gain's reach within it (mill_bringup.tuning.design).
 - The two-mass model is chosen when it describes the data much better than the rigid one
   and its resonance is a real one: a peak above the rigid line, narrow, inside the band the
   data cover.
@@ -191,7 +196,9 @@ class TwoMassModel:
     def peak(self) -> float:
         """The response at the resonance over the rigid line's [×]."""
         w = np.array([self.omega_r.value])
-        return float(abs(self.acceleration(w / (2.0 * math.pi))[0] / _rigid(self._params()[:3], w)[0]))
+        return float(
+            abs(self.acceleration(w / (2.0 * math.pi))[0] / _rigid(self._params()[:3], w)[0])
+        )
 
     def _params(self) -> np.ndarray:
         return np.concatenate(
