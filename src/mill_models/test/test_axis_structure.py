@@ -176,19 +176,12 @@ def test_the_short_bits_carry_the_excitation_past_a_resonance_the_long_ones_miss
     assert 80.0 < slow.response.excitation_band[1] < 100.0
     slow_to = measured_to(slow.response.response)
     assert slow_to is not None and slow_to < 140.0
-    # a quarter of the time in bits of 1-4 samples: within 20 dB to beyond 0.9 × Nyquist,
-    # measured coherently past the resonance, which is pinned
-    fast = structure('150Hz', 1)
-    assert fast.response is not None and fast.response.excitation_band[1] > 450.0
-    fast_to = measured_to(fast.response.response)
-    assert fast_to is not None and fast_to > 180.0
-    assert fast.model == TWO_MASS, fast.reason
-    assert fast.two_mass is not None
-    assert fast.two_mass.resonance_hz == pytest.approx(150.0, rel=0.03)
-    assert abs(fast.two_mass.zeta.value - 0.03) < 0.015
-    # the rigid machine: measured as far, and still rigid
+    # 15 % of the time in bits of 1-4 samples: the record's binary torque within 20 dB to
+    # past 250 Hz, the rigid machine measured coherently to past 180 Hz, and still rigid
+    # (the 150 Hz axis, so identified, is test_tune_margins.py's M150)
     rigid = structure('rigid', 1)
     assert rigid.response is not None and not rigid.response.resonant
+    assert rigid.response.excitation_band[1] > 250.0
     rigid_to = measured_to(rigid.response.response)
     assert rigid_to is not None and rigid_to > 180.0
     # the stick-slip machine's response is not linear: measured coherently nowhere
