@@ -55,7 +55,7 @@ class FrfSettings:
     max_zeta: float = 0.25  # a resonance is narrow
     max_freq_error: float = 0.05  # the 95 % interval of its frequency within ± this
     band_drop: float = 20.0  # the excitation covers where its PSD is within this [dB]
-    measured_share: float = 0.75  # of the bins in the octave below f coherent: measured to f
+    measured_share: float = 0.65  # of the bins in the octave below f coherent: measured to f
 
 
 @dataclass(frozen=True)

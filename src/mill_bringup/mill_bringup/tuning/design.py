@@ -207,7 +207,8 @@ def _band_note(
         f'the response was measured up to {measured_to:.0f} Hz; a design crossing at '
         f'{short[0]:.0f} Hz needs it to ~{short[1]:.0f} Hz (its loop gain down to {floor}): '
         f'bandwidths lowered to ω_c {omega_c:.1f} rad/s (crossing at {crossover:.0f} Hz, '
-        f'{floor} by {reach:.0f} Hz); identify with excitation.short_share > 0 to measure more'
+        f'{floor} by {reach:.0f} Hz); a longer identify run or a larger '
+        'excitation.short_share measures more'
     )
 
 
