@@ -48,7 +48,7 @@ MIN_MEASURED_PHASE = 30.0  # [deg] on the measured response
 MARGIN_STEP = 0.9  # ω_o and ω_c are lowered by this factor until the measured margins hold
 # The loop must have been measured up to where its gain falls to this (on the response the
 # margins are taken on): above, an unseen resonance peaking up to 20 dB over the model
-# cannot make it cross 1 again (issue 32's M2: 12 dB over the rigid line)
+# cannot make it cross 1 again (issue 32's M2 y peaks 14 dB over the rigid line)
 LOOP_FLOOR_DB = -20.0
 
 
