@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import re
 import sys
 from dataclasses import replace
 from functools import cache, partial
@@ -24,9 +25,10 @@ import pytest
 import yaml
 from mill_analysis.identify import machine_file
 from mill_bringup.tuning import predict as prediction
-from mill_bringup.tuning.cli import _margins_at, tuning_config
+from mill_bringup.tuning.cli import _margins_at, measured_band, tuning_config
 from mill_bringup.tuning.cli import main as tune
 from mill_bringup.tuning.design import (
+    LOOP_FLOOR_DB,
     MARGIN_STEP,
     MIN_GAIN_MARGIN,
     MIN_MEASURED_PHASE,
@@ -44,7 +46,8 @@ from mill_bringup.tuning.plant_response import (
 )
 from mill_common.signals import AxisReference
 from mill_controllers.config import build_loop
-from mill_models.axis_model import AxisModel, identify_structure
+from mill_models.axis_model import TWO_MASS, AxisModel, identify_structure
+from mill_models.frequency_response import measured_to
 from mill_models.loop_tuning import loop_tuning
 from mill_observers.config import build_observer_loop
 
@@ -67,6 +70,9 @@ MACHINES = {
     'M2_Y': (im.M2_Y, 0.001),
     'M1': (M1_250, 0.004),
     'M3': (im.M3_X, 0.001),
+    # a stiffer screw: M2's axis with its resonance at 150 Hz (ζ 0.03), above where the job's
+    # 10 ms bits alone put power (below ~100 Hz)
+    'M150': (im.two_mass(150.0), 0.001),
 }
 
 
@@ -159,6 +165,7 @@ def test_the_adrc_loops_rigid_margins_are_python_controls(T: float, delay: int) 
     assert found.phase == pytest.approx(30.0, abs=1.5) and found.gain_db > 7.0
 
 
+@cache
 def _design(name: str, axis: str = 'y'):
     machine, T = MACHINES[name]
     structure = identified(name)
@@ -175,6 +182,7 @@ def _design(name: str, axis: str = 'y'):
         5.0,
         partial(_margins_at, config, axis, T, fit.delay, fit, 'eso', response, light, {}),
         two_mass=structure.model == 'two_mass',
+        measured_to=measured_band(structure),
     )
     true = partial(
         _margins_at, config, axis, T, fit.delay, fit, 'eso', true_response(machine, T), None, {}
@@ -182,7 +190,7 @@ def _design(name: str, axis: str = 'y'):
     return tuned, true, loop_tuning(T, fit.delay)
 
 
-@pytest.mark.parametrize('name', ['rigid', 'M2_Y', 'M1'])
+@pytest.mark.parametrize('name', ['rigid', 'M2_Y', 'M1', 'M150'])
 def test_the_design_keeps_its_margins_on_the_machines_true_response(name: str) -> None:
     tuned, true, rule = _design(name)
     on_true = true(tuned.omega_o, tuned.omega_c).measured
@@ -200,6 +208,64 @@ def test_the_design_keeps_its_margins_on_the_machines_true_response(name: str) -
     else:
         # the rule's own loop has 29-31° (two samples of delay: 29°): a few steps down at most
         assert tuned.omega_c >= MARGIN_STEP**3 * rule.omega_c * 0.999, tuned.limited_by
+
+
+def test_a_resonance_above_the_long_bits_band_is_identified_and_designed_for() -> None:
+    # issue 32: a resonance above ~100 Hz was never seen. The job's short bits measure the
+    # response past it: identify finds it, and the design holds on the true response
+    # (test_the_design_keeps_its_margins_on_the_machines_true_response['M150'])
+    structure = identified('M150')
+    assert structure.model == TWO_MASS, structure.reason
+    assert structure.two_mass is not None
+    assert structure.two_mass.resonance_hz == pytest.approx(150.0, rel=0.03)
+    assert structure.response is not None
+    band = measured_to(structure.response.response)
+    assert band is not None and band > 180.0
+    tuned, _, _ = _design('M150')
+    # within the band measured: its loop gain is down to -20 dB below it
+    loop = tuned.margins.measured
+    assert loop is not None and loop.reach(LOOP_FLOOR_DB) / (2 * math.pi) <= band
+    assert tuned.limited_by != 'measured band'
+    assert tuned.band_note.startswith(f'the response was measured up to {band:.0f} Hz;')
+
+
+def test_a_design_whose_loop_reaches_past_the_band_measured_comes_down_into_it() -> None:
+    # an axis whose response was measured only to 100 Hz (as 10 ms bits alone measured M2 y
+    # with seed 2),
+    # tuned at 1 kHz: the rule's loop crosses at ~27 Hz and its gain is above -20 dB to
+    # ~140 Hz; above 100 Hz the rigid model alone would say what the axis does, and a
+    # resonance there would not show. The bandwidths come down until the loop's gain has
+    # fallen to -20 dB inside the band, and the note says so in one line
+    fit = identified('rigid').fit
+    assert fit is not None
+    band, T, delay = 100.0, 0.001, 1
+    config = tuning_config('slotting', T, delay)
+    at = partial(_margins_at, config, 'y', T, delay, fit, 'eso', None, None, {})
+    rule = loop_tuning(T, delay)
+    free = at(rule.omega_o, rule.omega_c)
+    assert free.reach(LOOP_FLOOR_DB) / (2 * math.pi) > 1.3 * band  # the rule's loop: too far
+    tuned = design_axis('y', fit, T, delay, 5.0, at, measured_to=band)
+    assert tuned.limited_by == 'measured band'
+    assert tuned.margins.reach(LOOP_FLOOR_DB) / (2 * math.pi) <= band
+    # the largest such bandwidth: one step up reaches past the band
+    up = at(tuned.omega_o / MARGIN_STEP, tuned.omega_c / MARGIN_STEP)
+    assert up.reach(LOOP_FLOOR_DB) / (2 * math.pi) > band
+    said = re.fullmatch(
+        r'the response was measured up to 100 Hz; a design crossing at (\d+) Hz needs it '
+        r'to ~(\d+) Hz \(its loop gain down to -20 dB\): bandwidths lowered to ω_c '
+        r'([\d.]+) rad/s \(crossing at (\d+) Hz, -20 dB by (\d+) Hz\); .*',
+        tuned.band_note,
+    )
+    assert said, tuned.band_note
+    assert int(said.group(1)) == round(free.crossover / (2 * math.pi))
+    assert int(said.group(2)) == round(free.reach(LOOP_FLOOR_DB) / (2 * math.pi))
+    assert float(said.group(3)) == pytest.approx(tuned.omega_c, abs=0.05)
+    assert int(said.group(5)) <= 100
+    # with nothing measured coherently the design is the rule's, and the note says the
+    # margins are the model's alone
+    blind = design_axis('y', fit, T, delay, 5.0, at, measured_to=None)
+    assert blind.omega_o == pytest.approx(rule.omega_o)
+    assert blind.band_note.startswith('no frequency response was measured coherently')
 
 
 AIR = ['-p', 'plant.cutting_model=none']

@@ -16,12 +16,17 @@ ROS-free. From positions x[k] and commands u[k] (held over a period) sampled eve
 - The two models fitted to N where the coherence is good (weighted by the coherence, on
   the logarithm of N, so gain and phase count alike):
     rigid:     N = b·e^(−sτ)·s/(s + α_e)
-    two-mass:  N = rigid × (s²/ωa² + 2ζa·s/ωa + 1) / (s²/ωr² + 2ζ·s/ωr + 1)
+    two-mass:  N = b·e^(−sτ)·s²·X1/F of a motor side m1 driven by the torque and a table
+               m2 on the screw's stiffness k and damping c, with the friction's damping
+               α_e on the motor side (`_two_mass`), measured on the motor (collocated)
   α_e is the friction seen as damping (large below a few Hz, where Coulomb friction takes
-  much of the torque). The two-mass axis is a motor side m1 driven by the torque and a table
-  m2 on the screw's stiffness k and damping c, measured on the motor (collocated):
-  ωa² = k/m2, ωr² = k/μ (μ = m1·m2/M), so ωr/ωa = √(1 + m2/m1) and ζa = ζ·ωa/ωr, and b is
-  the whole axis's gain 1/(a·M).
+  much of the torque; larger the smaller the motion). In the two-mass model it acts on the
+  motor side, where the screw's bearings and nut are: put on the whole axis (the rigid line
+  times the undamped two-mass ratio, as first written) it biased b by -2 to -4 % on issue
+  32's M2 y. ωa² = k/m2, ωr² = k/μ (μ = m1·m2/M), so ωr/ωa = √(1 + m2/m1), and b is the
+  whole axis's gain 1/(a·M).
+- The band measured: `measured_to`, the highest frequency whose octave below is mostly
+  coherent; `tune` keeps its loop gain's reach within it (mill_bringup.tuning.design).
 - The two-mass model is chosen when it describes the data much better than the rigid one
   and its resonance is a real one: a peak above the rigid line, narrow, inside the band the
   data cover.
@@ -50,6 +55,7 @@ class FrfSettings:
     max_zeta: float = 0.25  # a resonance is narrow
     max_freq_error: float = 0.05  # the 95 % interval of its frequency within ± this
     band_drop: float = 20.0  # the excitation covers where its PSD is within this [dB]
+    measured_share: float = 0.65  # of the bins in the octave below f coherent: measured to f
 
 
 @dataclass(frozen=True)
@@ -83,6 +89,28 @@ class FrequencyResponse:
         return float(f[0]), float(f[below[0] - 1] if below.size and below[0] > 0 else f[-1])
 
 
+def measured_to(resp: FrequencyResponse, settings: FrfSettings | None = None) -> float | None:
+    """The frequency up to which the response was measured coherently [Hz]: the highest f
+    whose octave below, [f/2, f], has at least `measured_share` of its bins at
+    `min_coherence` or more (a dip at an anti-resonance, where a motor-side axis barely
+    moves, does not end the band; the end of the excitation's power or the encoder's
+    noise does). None when no octave above `low` is measured so."""
+    s = settings or FrfSettings()
+    f, good = resp.f, resp.coherence >= s.min_coherence
+    if f.size < 4:
+        return None
+    counts = np.concatenate([[0], np.cumsum(good)])
+    top = None
+    for i in np.flatnonzero(f >= 2.0 * s.low):
+        j = int(np.searchsorted(f, 0.5 * f[i]))
+        if (counts[i + 1] - counts[j]) >= s.measured_share * (i + 1 - j):
+            top = float(f[i])
+    return top
+
+
+ISOLATED = 10  # [samples] between two flips for the later one to give the torque's size
+
+
 def excitation_from_command(u: np.ndarray) -> np.ndarray | None:
     """The binary torque of the identify job read off the command: its flips are jumps of
     ±2·amplitude between two samples, far larger than what the soft hold changes in one
@@ -95,7 +123,11 @@ def excitation_from_command(u: np.ndarray) -> np.ndarray | None:
     jumps = size > 0.5 * big
     if not big > 0.0 or not 0.002 < jumps.mean() < 0.3:
         return None
-    two_a = float(np.median(size[jumps]))
+    # a flip soon after another carries the hold's answer to that one (the short bits): the
+    # size from flips well apart from the one before, when there are enough of them
+    at = np.flatnonzero(jumps)
+    apart = at[1:][np.diff(at) >= ISOLATED]
+    two_a = float(np.median(size[apart] if apart.size >= 20 else size[jumps]))
     # a binary torque: every jump the same size, and nothing else near that size
     if np.any(np.abs(size[jumps] - two_a) > 0.5 * two_a) or np.any(size[~jumps] > 0.35 * two_a):
         return None
@@ -163,18 +195,22 @@ class TwoMassModel:
     @property
     def peak(self) -> float:
         """The response at the resonance over the rigid line's [×]."""
-        return float(abs(_flex(self._params(), np.array([self.omega_r.value]))[0]))
+        w = np.array([self.omega_r.value])
+        return float(
+            abs(self.acceleration(w / (2.0 * math.pi))[0] / _rigid(self._params()[:3], w)[0])
+        )
 
     def _params(self) -> np.ndarray:
-        return np.log([self.mass_ratio.value, self.omega_r.value, self.zeta.value])
+        return np.concatenate(
+            [
+                [math.log(self.b.value), self.delay, math.log(self.friction_damping)],
+                np.log([self.mass_ratio.value, self.omega_r.value, self.zeta.value]),
+            ]
+        )
 
     def acceleration(self, f: np.ndarray) -> np.ndarray:
         """N(f) of the model (as FrequencyResponse.acceleration) [m/s² per N·m]."""
-        w = 2.0 * math.pi * np.asarray(f, float)
-        rigid = _rigid(
-            np.array([math.log(self.b.value), self.delay, math.log(self.friction_damping)]), w
-        )
-        return rigid * _flex(self._params(), w)
+        return _two_mass(self._params(), 2.0 * math.pi * np.asarray(f, float))
 
     def masses(self, lead: float) -> tuple[float, float, float]:
         """(m1, m2 [kg], k [N/m]) for a screw of lead a [m/rad]."""
@@ -224,13 +260,23 @@ def _rigid(p: np.ndarray, w: np.ndarray) -> np.ndarray:
     return np.exp(p[0]) * np.exp(-s * p[1]) * s / (s + np.exp(p[2]))
 
 
-def _flex(p: np.ndarray, w: np.ndarray) -> np.ndarray:
+def _two_mass(p: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """N of the motor-side two-mass axis (module doc) in shares of its whole mass M = 1:
+    motor side m1 = 1/(1 + r), table m2 = r/(1 + r), the screw's k = ωr²·μ and c = 2ζωr·μ
+    (μ = m1·m2) between them, and the friction's damping α_e on the motor side, where the
+    screw's bearings and nut are (as mill_bringup.tuning.plant_response models it). Far below
+    the resonance it is the rigid line b·e^(−sτ)·s/(s + α_e)."""
     s = 1j * w
-    ratio, wr, zeta = np.exp(p[0]), np.exp(p[1]), np.exp(p[2])
-    # motor-side two-mass: ωa = ωr/√(1 + m2/m1), ζa = ζ·ωa/ωr (one damper c between the masses)
-    wa = wr / np.sqrt(1.0 + ratio)
-    za = zeta * wa / wr
-    return (s * s / wa**2 + 2.0 * za * s / wa + 1.0) / (s * s / wr**2 + 2.0 * zeta * s / wr + 1.0)
+    b, tau, alpha = np.exp(p[0]), p[1], np.exp(p[2])
+    ratio, wr, zeta = np.exp(p[3]), np.exp(p[4]), np.exp(p[5])
+    m1, m2 = 1.0 / (1.0 + ratio), ratio / (1.0 + ratio)
+    mu = m1 * m2
+    k, c = wr * wr * mu, 2.0 * zeta * wr * mu
+    table = m2 * s * s + c * s + k
+    # (m1·s² + (c + α)s + k)·X1 − (cs + k)·X2 = F, (cs + k)·X1 = table·X2; the constant
+    # terms cancel: the denominator over s
+    den = m1 * m2 * s**3 + (m1 * c + m2 * (c + alpha)) * s * s + (k + alpha * c) * s + alpha * k
+    return b * np.exp(-s * tau) * s * table / den
 
 
 def _residual(n: np.ndarray, model: np.ndarray, weight: np.ndarray) -> np.ndarray:
@@ -275,7 +321,7 @@ def analyse(resp: FrequencyResponse, settings: FrfSettings | None = None) -> Frf
     chi_r = 2.0 * rigid.cost / dof_r
 
     def res_flex(p: np.ndarray) -> np.ndarray:
-        return _residual(n, _rigid(p[:3], w) * _flex(p[3:], w), weight)
+        return _residual(n, _two_mass(p, w), weight)
 
     # start from the bins that stand out of the rigid line and from bins across the band, a
     # few mass ratios and dampings; refine the best few (the fit has local minima)

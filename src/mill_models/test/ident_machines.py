@@ -11,7 +11,8 @@ The axis is moved as the identify job moves it (mill_controllers/excitation.py, 
 here since a mill_models test cannot import a role package): a soft PD hold on a slow sine,
 with an extended-state observer (velocity and lumped disturbance, so that friction and load
 are carried), plus a random binary torque of ±acceleration/b_nominal whose bits last 1 to 4
-bit periods, turned against the motion above max_speed. The command is held over a period
+bit periods (1 to 4 samples for short_share of the time), turned against the motion above
+max_speed. The command is held over a period
 and acts `delay` samples late.
 """
 
@@ -77,6 +78,7 @@ def stiffness_for(motor_mass: float, table_mass: float, hz: float) -> float:
 class Excitation:
     acceleration: float = 1.0  # binary torque amplitude as acceleration with nominal b [m/s²]
     bit_period: float = 0.01  # [s]
+    short_share: float = 0.15  # of the time in bits of 1-4 samples (0: bit_period alone)
     max_speed: float = 0.05  # [m/s]
     omega_c: float = 30.0  # hold bandwidth [rad/s]
     omega_o: float = 150.0  # observer bandwidth [rad/s]
@@ -106,6 +108,7 @@ def run(
     """Record the machine under the identify job's law for `seconds`."""
     e = exc or Excitation()
     rng = np.random.default_rng(seed)
+    kinds = np.random.default_rng([seed, 1])  # short or long bits: a stream of their own
     b0 = nominal_gain or m.input_gain
     amplitude = e.acceleration / b0  # [N·m]
     n = round(seconds / T)
@@ -129,6 +132,7 @@ def run(
     xs, us = np.empty(n), np.empty(n)
     tables, motors, bits = np.empty(n), np.empty(n), np.empty(n)
     bit_len = max(1, round(e.bit_period / T))
+    short = e.short_share * bit_len / (e.short_share * bit_len + (1.0 - e.short_share))
     sign, left = 1.0, 0
     u_prev = 0.0
     for k in range(n):
@@ -145,7 +149,9 @@ def run(
         ref, dref = e.sine * math.sin(w * t), e.sine * w * math.cos(w * t)
         hold = (wc * wc * (ref - xh) + 2.0 * wc * (dref - vh) - dh) / b0
         if left == 0:
-            sign, left = (1.0 if rng.random() < 0.5 else -1.0), bit_len * int(rng.integers(1, 5))
+            sign = 1.0 if rng.random() < 0.5 else -1.0
+            length = int(rng.integers(1, 5))
+            left = length * (1 if kinds.random() < short else bit_len)
         left -= 1
         s = -math.copysign(1.0, vh) if abs(vh) > e.max_speed else sign
         u = hold + s * amplitude

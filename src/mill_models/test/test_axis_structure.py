@@ -21,6 +21,7 @@ from mill_models.frequency_response import (
     analyse,
     excitation_from_command,
     frequency_response,
+    measured_to,
 )
 from mill_models.identification import (
     FitSettings,
@@ -36,7 +37,7 @@ SKIP = 1000  # the first second: the hold settles (the CLI's --skip 1)
 
 
 @cache
-def record(name: str, seed: int, bit_period: float = 0.01) -> im.Record:
+def record(name: str, seed: int, short_share: float = 0.25) -> im.Record:
     machines = {
         'rigid': im.BELTRAN_X,
         'M1': im.M1,
@@ -45,12 +46,13 @@ def record(name: str, seed: int, bit_period: float = 0.01) -> im.Record:
         'M3': im.M3_X,
         '150Hz': im.two_mass(150.0),
     }
-    return im.run(machines[name], seconds=20.0, seed=seed, exc=im.Excitation(bit_period=bit_period))
+    exc = im.Excitation(short_share=short_share)
+    return im.run(machines[name], seconds=20.0, seed=seed, exc=exc)
 
 
 @cache
-def structure(name: str, seed: int, bit_period: float = 0.01) -> AxisModel:
-    r = record(name, seed, bit_period)
+def structure(name: str, seed: int, short_share: float = 0.25) -> AxisModel:
+    r = record(name, seed, short_share)
     return identify_structure(r.x[SKIP:], r.u[SKIP:], r.T)
 
 
@@ -166,25 +168,25 @@ def test_backlash_with_a_second_encoder_is_the_lost_motion() -> None:
     assert none.backlash.width.value == pytest.approx(0.0, abs=1e-6)
 
 
-def test_the_excitation_band_and_what_a_richer_one_shows() -> None:
-    # the job's bits of 1-4 × 10 ms: a null at 100 Hz, the band ends below it
-    slow = structure('150Hz', 1, 0.01)
+def test_the_short_bits_carry_the_excitation_past_a_resonance_the_long_ones_miss() -> None:
+    # the job's bits of 1-4 × 10 ms alone (short_share 0): a null at 100 Hz, the band ends
+    # below it, and the response is measured coherently only to below the 150 Hz resonance
+    slow = structure('150Hz', 1, 0.0)
     assert slow.response is not None
     assert 80.0 < slow.response.excitation_band[1] < 100.0
-    # bits of one sample: flat to beyond 200 Hz, the 150 Hz resonance pinned
-    fast = structure('150Hz', 1, 0.001)
-    assert fast.response is not None and fast.response.excitation_band[1] > 200.0
-    assert fast.model == TWO_MASS, fast.reason
-    assert fast.two_mass is not None
-    assert fast.two_mass.resonance_hz == pytest.approx(150.0, rel=0.05)
-    rigid_fast = identify_structure(
-        *_xu(im.run(im.BELTRAN_X, 20.0, 1, exc=im.Excitation(bit_period=0.001)))
-    )
-    assert rigid_fast.response is not None and not rigid_fast.response.resonant
-
-
-def _xu(r: im.Record) -> tuple[np.ndarray, np.ndarray, float]:
-    return r.x[SKIP:], r.u[SKIP:], r.T
+    slow_to = measured_to(slow.response.response)
+    assert slow_to is not None and slow_to < 140.0
+    # 15 % of the time in bits of 1-4 samples: the record's binary torque within 20 dB to
+    # past 250 Hz, the rigid machine measured coherently to past 180 Hz, and still rigid
+    # (the 150 Hz axis, so identified, is test_tune_margins.py's M150)
+    rigid = structure('rigid', 1)
+    assert rigid.response is not None and not rigid.response.resonant
+    assert rigid.response.excitation_band[1] > 250.0
+    rigid_to = measured_to(rigid.response.response)
+    assert rigid_to is not None and rigid_to > 180.0
+    # the stick-slip machine's response is not linear: measured coherently nowhere
+    m1 = structure('M1', 1)
+    assert m1.response is not None and measured_to(m1.response.response) is None
 
 
 def test_the_binary_torque_is_read_off_the_command() -> None:

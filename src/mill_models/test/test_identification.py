@@ -21,6 +21,7 @@ from mill_models.identification import (
 )
 
 T = 0.001
+SHORT = 0.15 * 10 / (0.15 * 10 + 0.85)  # a new bit's chance to be short (excitation.py)
 
 
 def record(
@@ -39,6 +40,7 @@ def record(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Positions and commands of an axis moved by a PD hold and a binary torque."""
     rng = np.random.default_rng(seed)
+    kinds = np.random.default_rng([seed, 1])  # short or long: a stream of its own
     n = round(seconds / T)
     sub = 20
     h = T / sub
@@ -51,7 +53,10 @@ def record(
     for k in range(n):
         y = round(x / resolution) * resolution if resolution else x
         if left == 0:
-            bit, left = (1.0 if rng.random() < 0.5 else -1.0), 10 * int(rng.integers(1, 5))
+            # bits of 1-4 × 10 samples, and 15 % of the time 1-4 samples (the job's law)
+            bit = 1.0 if rng.random() < 0.5 else -1.0
+            length = int(rng.integers(1, 5))
+            left = length * (1 if kinds.random() < SHORT else 10)
         left -= 1
         ref = sine * math.sin(2 * math.pi * 0.5 * k * T)
         # a PD hold (with the load it is told) plus the binary torque

@@ -21,6 +21,7 @@ from mill_analysis.identify.machine_file import MachineFileError, MachineModel, 
 from mill_common.one_line_parser import OneLineParser, positive
 from mill_controllers.config import build_loop
 from mill_models.axis_model import TWO_MASS, AxisModel
+from mill_models.frequency_response import measured_to
 from mill_models.identification import AxisIdentification
 from mill_observers.config import build_observer_loop
 
@@ -174,6 +175,13 @@ def _margins_at(
     )
 
 
+def measured_band(structure: AxisModel | None) -> float | None:
+    """Up to where identify measured the axis's response coherently [Hz] (None: nowhere,
+    or no response was recorded)."""
+    frf = structure.response if structure is not None else None
+    return measured_to(frf.response) if frf is not None and frf.response.f.size else None
+
+
 def _delay(model: MachineModel, T: float, asked: int | None) -> int:
     if asked is not None:
         if asked < 0:
@@ -204,6 +212,8 @@ def _header(
             f'(limited by the {t.limited_by}); {t.margins.text()}'
         )
         lines.extend(f'{a}: {line}' for line in (*_why(t), *t.notes))
+        if t.band_note:
+            lines.append(f'{a}: {t.band_note}')
     return '\n'.join(lines)
 
 
@@ -262,6 +272,7 @@ def _design(
     """The axis's design: for a two-mass axis the better of a notch at its resonance and a
     lowered bandwidth; a Stribeck friction's feed-forward in either (it feeds the reference's
     speed forward: the loop's margins do not depend on it)."""
+    band = measured_band(structure)
 
     def design(shaping: dict[str, object]) -> AxisTuning:
         at = partial(_margins_at, config, a, T, delay, m, args.observer, response, light, shaping)
@@ -275,6 +286,7 @@ def _design(
             args.observer,
             args.min_phase_margin,
             two_mass=structure is not None and structure.model == TWO_MASS,
+            measured_to=band,
         )
         friction = friction_values(structure, m, found.omega_o)
         notes = found.notes
@@ -412,6 +424,9 @@ def main(argv: list[str] | None = None) -> int:
     picture = bode_path(out)
     plot_bode(picture, tuned, T)
     print(_report(tuned, pred))
+    for a, t in tuned.items():
+        if t.band_note:
+            print(f'{a}: {t.band_note}')
     print(
         f'parameter file: {out}\nprediction: {prediction_path(out)}\nBode plot: {picture}\n'
         f'next: run_scenario {args.scenario} --params-file {out}'

@@ -13,7 +13,14 @@ for the sample period and the identified delay (mill_models.loop_tuning: ω_o·(
   where the measurement is poor: mill_bringup.tuning.margins), must keep a gain margin of
   MIN_GAIN_MARGIN and a phase margin of MIN_MEASURED_PHASE and settle on the fitted model,
   else both bandwidths come down in steps of MARGIN_STEP until it does (`limited by:
-  resonance` on a two-mass axis, `measured response` on another).
+  resonance` on a two-mass axis, `measured response` on another);
+- the band measured: above the frequency up to which identify measured the response
+  coherently (mill_models.frequency_response.measured_to) the margins rest on the fitted
+  model alone, which cannot show a resonance there. The loop gain must have fallen to
+  LOOP_FLOOR_DB within that band, else both bandwidths come down in the same steps until it
+  has (`limited by: measured band`), and a note names the band, the crossover and the
+  frequency it would need. With no coherent measurement at all a note says the margins are
+  the model's alone.
 
 The observer starts from the identified load (hold_torque = γ/b), so a vertical axis does not
 sag when it is released, and both roles are told the identified input gain and delay.
@@ -39,6 +46,10 @@ MIN_PHASE_MARGIN = 20.0  # [deg] below it the design is refused (--min-phase-mar
 MIN_GAIN_MARGIN = 6.0  # [dB] on the measured response
 MIN_MEASURED_PHASE = 30.0  # [deg] on the measured response
 MARGIN_STEP = 0.9  # ω_o and ω_c are lowered by this factor until the measured margins hold
+# The loop must have been measured up to where its gain falls to this (on the response the
+# margins are taken on): above, an unseen resonance peaking up to 20 dB over the model
+# cannot make it cross 1 again (issue 32's M2 y peaks 14 dB over the rigid line)
+LOOP_FLOOR_DB = -20.0
 
 
 def observer_values(kind: str, omega_o: float) -> dict[str, object]:
@@ -74,6 +85,7 @@ class AxisTuning:
     shaping: dict[str, object] = field(default_factory=dict)  # the controller's command
     # shaping (command_filter.*, friction_compensation.*, backlash.*)
     notes: tuple[str, ...] = ()  # what was chosen for the axis's structure, and why
+    band_note: str = ''  # how the band identify measured bounds the design (printed)
 
     def controller(
         self, m: AxisIdentification, delay: int, torque_limit: float, following_error_limit: float
@@ -117,15 +129,19 @@ def design_axis(
     observer_kind: str = 'eso',
     min_phase_margin: float = MIN_PHASE_MARGIN,
     two_mass: bool = False,
+    measured_to: float | None = None,
 ) -> AxisTuning:
     """margins_at(ω_o, ω_c): the margins of the loop built with those bandwidths (with
     `.measured`, those on the axis's response, when it has one). `two_mass`: the axis has
-    a resonance (names what limits the bandwidth)."""
+    a resonance (names what limits the bandwidth). measured_to: the frequency up to which
+    the response was measured coherently [Hz] (None: nowhere)."""
     check_torque(axis, m, torque_limit)
     rule = loop_tuning(T, delay)
     omega_o, limited_by = rule.omega_o, 'rate and delay'
     quantization = m.resolution / math.sqrt(12.0)
     first: Margins | None = None
+    short: tuple[float, float] | None = None  # (crossover, reach) [Hz] of the first design
+    # whose loop gain had not fallen to LOOP_FLOOR_DB within the measured band
     for _ in range(60):
         found = margins_at(omega_o, omega_o * rule.omega_c / rule.omega_o)
         noise = found.noise_gain * quantization
@@ -144,8 +160,17 @@ def design_axis(
             omega_o = omega_o * MARGIN_STEP
             limited_by = 'resonance' if two_mass else 'measured response'
             continue
+        loop = on_axis or found
+        reach = loop.reach(LOOP_FLOOR_DB) / (2.0 * math.pi)
+        if measured_to is not None and reach > measured_to:
+            short = short or (loop.crossover / (2.0 * math.pi), reach)
+            omega_o, limited_by = omega_o * MARGIN_STEP, 'measured band'
+            continue
         omega_c = omega_o * rule.omega_c / rule.omega_o
-        return AxisTuning(axis, omega_o, omega_c, found, noise, limited_by, observer_kind, first)
+        note = _band_note(measured_to, short, omega_c, loop.crossover / (2.0 * math.pi), reach)
+        return AxisTuning(
+            axis, omega_o, omega_c, found, noise, limited_by, observer_kind, first, band_note=note
+        )
     if first is not None:
         raise TuneError(
             f'{axis}: no bandwidth keeps a gain margin of {MIN_GAIN_MARGIN:g} dB and a phase '
@@ -155,6 +180,35 @@ def design_axis(
     raise TuneError(
         f'{axis}: the encoder ({1e6 * m.resolution:.3g} µm) moves the command by more than '
         f'{100 * NOISE_SHARE:g} % of the torque limit at any usable bandwidth'
+    )
+
+
+def _band_note(
+    measured_to: float | None,
+    short: tuple[float, float] | None,
+    omega_c: float,
+    crossover: float,
+    reach: float,
+) -> str:
+    """One line: how the band identify measured bounds the design (module doc)."""
+    floor = f'{LOOP_FLOOR_DB:g} dB'
+    if measured_to is None:
+        return (
+            'no frequency response was measured coherently: the margins are the fitted '
+            f"model's alone at every frequency (the loop gain falls to {floor} by "
+            f'{reach:.0f} Hz); a resonance there would not show'
+        )
+    if short is None:
+        return (
+            f'the response was measured up to {measured_to:.0f} Hz; the loop gain falls to '
+            f'{floor} by {reach:.0f} Hz, within it'
+        )
+    return (
+        f'the response was measured up to {measured_to:.0f} Hz; a design crossing at '
+        f'{short[0]:.0f} Hz needs it to ~{short[1]:.0f} Hz (its loop gain down to {floor}): '
+        f'bandwidths lowered to ω_c {omega_c:.1f} rad/s (crossing at {crossover:.0f} Hz, '
+        f'{floor} by {reach:.0f} Hz); a longer identify run or a larger '
+        'excitation.short_share measures more'
     )
 
 

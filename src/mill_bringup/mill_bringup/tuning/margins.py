@@ -68,6 +68,15 @@ class Margins:
             f'gain margin {gm}, delay margin {self.delay:.2f} samples'
         )
 
+    def reach(self, floor_db: float) -> float:
+        """The highest ω where the loop gain is still floor_db or more [rad/s] (nan: no
+        curve)."""
+        if self.curve is None:
+            return math.nan
+        w, L = self.curve
+        above = np.flatnonzero(np.abs(L) >= 10.0 ** (floor_db / 20.0))
+        return float(w[above[-1]]) if above.size else 0.0
+
     def holds(self, min_phase: float, min_gain_db: float) -> bool:
         return self.stable and self.phase >= min_phase and self.gain_db >= min_gain_db
 

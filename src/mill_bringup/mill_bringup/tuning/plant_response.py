@@ -26,8 +26,10 @@ from scipy.linalg import expm
 
 MIN_COHERENCE = 0.8  # a measured bin is used from this coherence up
 # The identify job's small, dithered motion lets friction damp the resonance: issue 32's M2
-# (screw ζ 0.03) measured ζ 0.039 and a peak 3 dB below the true one. The margins are also
-# required on the fitted model with its damping times this (`lightly_damped`).
+# (screw ζ 0.03) measured ζ 0.039 and a peak 3 dB below the true one while the fit put the
+# friction's damping on the whole axis (0.029 now that it is on the motor side). The
+# margins are also required on the fitted model with its damping times this
+# (`lightly_damped`).
 DAMPING_SHARE = 0.5
 
 Space = tuple[np.ndarray, np.ndarray, np.ndarray]  # (A, B, c) of x' = Ax + Bu, y = c·x
