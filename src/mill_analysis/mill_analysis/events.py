@@ -14,7 +14,8 @@ in, never from the status's prose:
 
 The runner adds what it found itself: a drive that went silent (`drive_silent`), a run
 that stalled (`stall`), a node that died (`node_died`), a run it could not complete
-(`run_error`). The offline simulator makes its trips as the controllers report them.
+(`run_error`), a job it refused to start (`refused`: an axis the drive holds stopped), a run
+interrupted (`interrupted`). The offline simulator makes its trips as the controllers report them.
 
 An event's time is the job's [s]: the trip's own time, else the stamp of the status that
 first told it, less the job's start (the realtime job's start stamp; 0 in lockstep).
@@ -27,6 +28,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from mill_analysis import drive_status as keys
 from mill_common import topics
 
 TRIP = 'trip'  # the controller's following-error trip latched: it sends brake requests
@@ -34,11 +36,25 @@ STOPPED = 'stopped'  # the drive stopped the axis (no fresh command, a motion it
 BRAKED = 'braked'  # the drive braked the axis on a brake request (an invalid command)
 FAULT = 'fault'  # the machine reports the axis at fault
 DRIVE_SILENT = 'drive_silent'  # the runner heard no state of the drive for too long
+REFUSED = 'refused'  # the runner refused to start the job (a latched axis): nothing moved
+INTERRUPTED = 'interrupted'  # the run was interrupted (Ctrl-C, SIGTERM)
 STALL = 'stall'  # the run made no progress for --stall-timeout
 NODE_DIED = 'node_died'  # a node's process ended while the job ran
 RUN_ERROR = 'run_error'  # the run could not go on (the graph refused it)
 FOREIGN = 'foreign_publisher'  # the drive saw another publisher on its topics (ignored)
-KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN, DRIVE_SILENT, STALL, NODE_DIED, RUN_ERROR)
+KINDS = (
+    TRIP,
+    STOPPED,
+    BRAKED,
+    FAULT,
+    FOREIGN,
+    DRIVE_SILENT,
+    STALL,
+    NODE_DIED,
+    RUN_ERROR,
+    REFUSED,
+    INTERRUPTED,
+)
 # The events of a status on the machine (the others are the runner's own findings).
 MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN)
 
@@ -184,12 +200,12 @@ def events_of(
             continue
         for key, value in values.items():
             axis, _, field = key.partition('.')
-            if field == 'stops':
+            if field == keys.STOPS:
                 n, was = _count(value), counted.get((s.node, key), 0)
-                why = values.get(f'{axis}.stopped') or 'released since'
+                why = values.get(keys.axis_key(axis, keys.STOPPED)) or 'released since'
                 out += [Event(axis, STOPPED, at, why, s.node) for _ in range(n - was)]
                 counted[(s.node, key)] = max(n, was)
-            elif field == 'invalid_commands':
+            elif field == keys.INVALID_COMMANDS:
                 # The first brake request of the axis: a tripped controller sends one every
                 # period, and a status (once a second, and at each stop) cannot tell one
                 # series of them from the next.
@@ -197,7 +213,7 @@ def events_of(
                 if n > 0 and (s.node, key) not in counted:
                     counted[(s.node, key)] = n
                     out.append(Event(axis, BRAKED, at, 'brake request (invalid command)', s.node))
-            elif field == 'fault' and value and faults.get((s.node, axis)) != value:
+            elif field == keys.FAULT and value and faults.get((s.node, axis)) != value:
                 faults[(s.node, axis)] = value
                 out.append(Event(axis, FAULT, at, value, s.node))
     return out

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import json
 import signal
 import sys
 from pathlib import Path
@@ -21,17 +20,23 @@ from mill_bringup.jobs.registry import job_for
 from mill_bringup.runner.options import RunError, RunOptions
 from mill_bringup.runner.result import (
     GOOD,
+    INTERRUPTED_CODE,
     JOB_FAILED,
     RECORD_INCOMPLETE,
+    START_REFUSED,
+    Outcome,
+    ended,
     format_result,
+    write_summary,
 )
 from mill_bringup.runner.run import run
 from mill_bringup.scenario import Scenario, ScenarioError, check_layout
 from mill_common import topics
 
 # run_scenario's exit codes, from the least to the most severe: 0 good and complete, 3 a good
-# job with an incomplete record, 1 the job failed (2: usage, argparse; 130: interrupted)
-SEVERITY = (GOOD, RECORD_INCOMPLETE, JOB_FAILED)
+# job with an incomplete record, 2 a start refused (and usage, argparse), 1 the job failed,
+# 130 interrupted
+SEVERITY = (GOOD, RECORD_INCOMPLETE, START_REFUSED, JOB_FAILED, INTERRUPTED_CODE)
 
 
 def _apply_namespace(
@@ -54,9 +59,11 @@ def parser() -> argparse.ArgumentParser:
         'lockstep and print its results.',
         epilog='exit codes: 0 the job went well and its record is complete; 1 the job failed '
         '(an axis tripped, stopped or braked on a machine, the drive went silent, a node died, '
-        'the run could not go on) or could not start; 2 usage; 3 the job went well but the '
-        "runner's record of it is incomplete (samples missing, foreign messages); 130 "
-        'interrupted. Each run writes summary.json, however it ends.',
+        'the run could not go on) or could not start; 2 usage, or the job refused to start '
+        '(an axis the drive holds stopped from an earlier job: --rearm); 3 the job went well '
+        "but the runner's record of it is incomplete (samples missing, foreign messages); 130 "
+        'interrupted. Each run writes summary.json (its outcome and exit_code), however it '
+        'ends.',
     )
     add_scenario_arguments(parser)
     parser.add_argument('--output', type=Path, help='run directory (default runs/NAME-TIME)')
@@ -124,6 +131,13 @@ def parser() -> argparse.ArgumentParser:
         'the system refuses, each says so in one line and goes on',
     )
     parser.add_argument(
+        '--rearm',
+        action='store_true',
+        help='an axis an --external drive holds stopped from an earlier job (its status says '
+        "<axis>.stopped) is released through the drive's ~/release before any node of the job "
+        'starts; without it the job refuses to start on such an axis (exit code 2)',
+    )
+    parser.add_argument(
         '--layout',
         metavar='LAYOUT',
         help='which nodes share a process: processes (each its own), per_axis (observer and '
@@ -161,6 +175,7 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         respawn=args.respawn,
         external=frozenset(args.external),
         layout=args.layout,
+        rearm=args.rearm,
     )
 
 
@@ -186,6 +201,9 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signum, interrupt_once)
     records: dict[str, Any] = {}
     code = GOOD
+    # the run directory of the variant under way, until its summary is written: an ending
+    # without a result (an error or an interrupt before the run had one) writes it there
+    pending: tuple[Path, str] | None = None
     try:
         release_stop_signals()  # held since the first line (mill_common.executable)
         scen, runs = load_scenario(args)
@@ -206,25 +224,34 @@ def main(argv: list[str] | None = None) -> int:
         for name, job in jobs.items():
             variant_dir = run_dir / name if name else run_dir
             variant_dir.mkdir(parents=True, exist_ok=True)
+            pending = (variant_dir, scen.name)
             if name:
                 print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
             result = run(job, variant_dir, run_options(args, bags[name]))
             records[name] = result.record
             code = max(code, result.exit_code, key=SEVERITY.index)
-            # every ending writes its summary, a run stopped by a dead drive included
-            (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
+            write_summary(variant_dir, result)  # every ending: a dead drive, a refusal, Ctrl-C
+            pending = None
             if name:
                 print(f'variant {name}:')
             print(format_result(result))
+            if result.outcome is Outcome.INTERRUPTED:
+                print('run_scenario: interrupted', file=sys.stderr)
+                return INTERRUPTED_CODE
             if result.error is not None:  # the run stopped: the next variants do not run
                 print(f'run_scenario: error: {result.error}', file=sys.stderr)
-                return JOB_FAILED
+                return result.exit_code
     except (ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
+        if pending is not None:
+            write_summary(pending[0], ended(pending[1], Outcome.FAILED, str(exc)))
         return 1
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
-        return 130
+        if pending is not None:
+            said = 'interrupted (Ctrl-C or SIGTERM) before the run had a result'
+            write_summary(pending[0], ended(pending[1], Outcome.INTERRUPTED, said))
+        return INTERRUPTED_CODE
     configs = {name: job.config for name, job in jobs.items()}
     text = paper_text(scen.paper, jobs, records, run_parameters(configs))
     if text:
@@ -234,6 +261,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             'run_scenario: error: the job failed on the machine (see FAILED above)', file=sys.stderr
         )
+    elif code == START_REFUSED:
+        print('run_scenario: error: the job refused to start (see REFUSED above)', file=sys.stderr)
     elif code == RECORD_INCOMPLETE:
         print(
             "run_scenario: the job went well, but the runner's record of it is incomplete or "

@@ -54,6 +54,8 @@ class Session:
         self._next_check = 0.0
         self._previous: dict[int, Any] = {}
         self._stop: list[int] = []  # signals received (install_stop_handlers)
+        # axes the start handshake released (--rearm), with the stop each was latched by
+        self.rearmed: dict[str, str] = {}
         self._never: Any = None
         self._monitor: Monitor | None = None
         self._graph: Graph | None = None
