@@ -286,7 +286,8 @@ class RealtimeAxisJob(Job[RunRecord]):
             self.FAILING,
             ending,
             approach=float(job.get('approach_s', 0.0)),
-            drive=drive_figures(self.axes, drive, received),
+            # a job that never started has no figures of the drive (they are an earlier job's)
+            drive=drive_figures(self.axes, drive, received) if self.start_ns is not None else None,
             start_stamp_ns=self.start_ns,
         )
 
