@@ -163,13 +163,16 @@ def _count(text: str | None) -> int:
 
 
 def events_of(
-    statuses: Sequence[Status], start_ns: int = 0, axis_of: Mapping[str, str] | None = None
+    statuses: Sequence[Status],
+    start_ns: int = 0,
+    axis_of: Mapping[str, str] | None = None,
+    counted_from: int | None = None,
 ) -> list[Event]:
     """The machine's events (MACHINE_KINDS) told by these statuses, once each, in the order
-    they were told; a drive's counts (stops, brake requests) from the first status heard of
-    it on, not those it had told before. start_ns: the job's start on the statuses' clock
+    they were told. start_ns: the job's start on the statuses' clock
     (time 0 of the events); axis_of: the axis of each controller node, for one whose status
-    does not name it."""
+    does not name it; counted_from: a drive's counts (stops, brake requests) in statuses
+    stamped before it are what it had told before the job (None: none)."""
     axis_of = axis_of or {}
     start = start_ns * 1e-9
     out: list[Event] = []
@@ -177,7 +180,6 @@ def events_of(
     counted: dict[tuple[str, str], int] = {}  # (node, key) -> the count told so far
     faults: dict[tuple[str, str], str] = {}
     foreign: set[str] = set()  # drives that told of a foreign publisher
-    drives: set[str] = set()  # drives heard
     braked: set[tuple[str, str]] = set()  # (node, key) whose first brake request was told
     for s in statuses:
         at = (s.stamp_ns - start_ns) * 1e-9
@@ -202,10 +204,9 @@ def events_of(
             continue
         if s.part not in topics.DRIVE_STATUSES:
             continue
-        # A drive's counts run over its life: those of the first status heard of it were
-        # told before this run (a drive that stays up across jobs; a fresh one says 0).
-        first = s.node not in drives
-        drives.add(s.node)
+        # A drive's counts run over its life: those it told before the job started are an
+        # earlier job's (a drive that stays up across jobs), not events of this one.
+        first = counted_from is not None and s.stamp_ns < counted_from
         for key, value in values.items():
             axis, _, field = key.partition('.')
             if field == keys.STOPS:
@@ -221,8 +222,11 @@ def events_of(
                 # The first brake request of the axis: a tripped controller sends one every
                 # period, and a status (once a second, and at each stop) cannot tell one
                 # series of them from the next.
-                n, before = _count(value), counted.setdefault((s.node, key), _count(value))
-                if n > before and (s.node, key) not in braked:
+                n = _count(value)
+                if first:
+                    counted[(s.node, key)] = n
+                    continue
+                if n > counted.get((s.node, key), 0) and (s.node, key) not in braked:
                     braked.add((s.node, key))
                     out.append(Event(axis, BRAKED, at, 'brake request (invalid command)', s.node))
             elif field == keys.FAULT and value and faults.get((s.node, axis)) != value:

@@ -227,8 +227,12 @@ class RealtimeAxisJob(Job[RunRecord]):
         return self.nodes.owners()
 
     def events(self, statuses: Sequence[Status]) -> list[Event]:
-        # the controllers' trips on the system clock, the drive's statuses stamped on it
-        return self.nodes.events(statuses, self.start_ns or 0)
+        # the controllers' trips on the system clock, the drive's statuses stamped on it; what
+        # the drive counted before the job started (a drive kept from an earlier job) is not
+        # this job's, and a job that never started has no stop nor brake of its own
+        start = self.start_ns
+        counted_from = start if start is not None else 2**63
+        return self.nodes.events(statuses, start or 0, counted_from)
 
     def foreign(self, rec: RunRecord) -> dict[str, int]:
         return dict(rec.foreign)
