@@ -131,6 +131,15 @@ def parser() -> argparse.ArgumentParser:
         'the system refuses, each says so in one line and goes on',
     )
     parser.add_argument(
+        '--runner-priority',
+        type=int,
+        metavar='N',
+        help="SCHED_FIFO priority of the runner's own threads (the monitor that takes every "
+        "message of the run's record), 0 the normal scheduler; default: with "
+        '--realtime-priority P, P - 1 (below the graph, above other load, so that the record '
+        'keeps up), else 0',
+    )
+    parser.add_argument(
         '--rearm',
         action='store_true',
         help='an axis an --external drive holds stopped from an earlier job (its status says '
@@ -176,7 +185,17 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         external=frozenset(args.external),
         layout=args.layout,
         rearm=args.rearm,
+        runner_priority=runner_priority(args),
     )
+
+
+def runner_priority(args: argparse.Namespace) -> int:
+    """--runner-priority, else one below --realtime-priority (at least 1), else 0."""
+    if args.runner_priority is not None:
+        return max(0, args.runner_priority)
+    if args.realtime_priority:
+        return max(1, args.realtime_priority - 1)
+    return 0
 
 
 def paper_text(

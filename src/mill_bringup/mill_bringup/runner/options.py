@@ -43,6 +43,8 @@ class RunOptions:
     runner to activate it where it would have been launched. Another clock node keeps a
     process of its own, started last, so that it cannot start before the monitor hears the
     nodes upstream. Respawn starts a process again whose nodes are none of the clocks.
+    runner_priority: SCHED_FIFO priority of the runner's own threads (its monitor, which
+    takes every message of the record, and the middleware's), 0: the normal scheduler.
     rearm: an axis an external drive holds stopped (latched by an earlier job) is released
     through the drive's ~/release before the job starts, instead of refusing the start.
     """
@@ -58,3 +60,4 @@ class RunOptions:
     external: frozenset[str] = frozenset()
     layout: str | None = None
     rearm: bool = False
+    runner_priority: int = 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 from types import TracebackType
@@ -118,6 +119,8 @@ class Session:
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)
+            if options.runner_priority > 0:
+                self._realtime(options.runner_priority)
             respawn = self.restartable if options.respawn else ()
             self._graph = Graph(job.scenario, self.run_dir, self.env, respawn=respawn)
             self._never = Future()
@@ -125,6 +128,19 @@ class Session:
             self.close()
             raise
         return self
+
+    def _realtime(self, priority: int) -> None:
+        """Every thread of the runner (the executor's, the middleware's that take the
+        messages) at SCHED_FIFO `priority`, below the graph's: beside other load its record
+        then keeps up with the graph (mill_common.realtime_setup; a refusal is said in one
+        line and the runner goes on)."""
+        from mill_common.realtime_setup import apply
+
+        done, refused = apply(priority, ())
+        for line in refused:  # said even with --quiet, as the nodes say theirs
+            print(f'runner: {line}', file=sys.stderr)
+        if done:
+            self.progress.note(f'runner: {", ".join(done)}')
 
     def __exit__(
         self,
