@@ -235,3 +235,14 @@ def test_the_rearmed_axes_and_the_runners_warnings_are_said_and_kept() -> None:
     data = json.loads(json.dumps(r.to_json()))
     assert data['rearmed'] == {'y': 'speed 900 mm/s above the limit'}
     assert data['warnings'] == ['misnamed'] and data['outcome'] == 'good'
+
+
+def test_the_runner_runs_below_the_graph_when_the_graph_runs_realtime() -> None:
+    def priority(*argv: str) -> int:
+        return cli.runner_priority(cli.parser().parse_args(['slotting', *argv]))
+
+    assert priority() == 0  # the normal scheduler, as the graph
+    assert priority('--realtime-priority', '80') == 79  # below the graph, above other load
+    assert priority('--realtime-priority', '1') == 1
+    assert priority('--realtime-priority', '80', '--runner-priority', '0') == 0
+    assert priority('--runner-priority', '50') == 50
