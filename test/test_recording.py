@@ -285,6 +285,10 @@ def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == 'run_scenario: interrupted'
     assert wait_until(lambda: not processes_mentioning(str(run_dir)), 10), 'nodes left running'
+    # the interrupted run's summary: its outcome and the figures of what arrived
+    summary = json.loads((run_dir / 'summary.json').read_text())
+    assert (summary['outcome'], summary['exit_code']) == ('interrupted', 130)
+    assert [f['kind'] for f in summary['failures']] == ['interrupted']
     by_rosbags, by_mcap, ks = both_readers(bag)  # complete: summary and footer written
     assert by_rosbags == by_mcap == metadata_counts(bag)
     states = sorted(set(ks[Q(topics.state('x'))]))

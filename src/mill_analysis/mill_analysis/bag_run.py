@@ -244,7 +244,7 @@ def read_run(
         owners = bag_meta.owners(bag.custom_data, ns)
         run = _realtime_run(bag, axes, raw, walls, statuses, start_ns, stamps, total, owners)
         # What the machine told (trips, stops, brakes), as the runner takes it
-        run.record.events = events_of(statuses_of(statuses), start_ns)
+        run.record.events = events_of(statuses_of(statuses), start_ns, counted_from=start_ns)
         run.approach = job_approach(statuses)
         return run
     diffs = np.diff(stamps)

@@ -19,7 +19,8 @@ in, never from the status's prose:
 
 The runner adds what it found itself: a drive that went silent (`drive_silent`), a run
 that stalled (`stall`), a node that died (`node_died`), a run it could not complete
-(`run_error`). The offline simulator makes its trips as the controllers report them.
+(`run_error`), a job it refused to start (`refused`: an axis the drive holds stopped), a run
+interrupted (`interrupted`). The offline simulator makes its trips as the controllers report them.
 
 An event's time is the job's [s]: the trip's own time, else the stamp of the status that
 first told it, less the job's start (the realtime job's start stamp; 0 in lockstep).
@@ -32,6 +33,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from mill_analysis import drive_status as keys
 from mill_common import topics
 
 TRIP = 'trip'  # the controller's following-error trip latched: it sends brake requests
@@ -39,6 +41,8 @@ STOPPED = 'stopped'  # the drive stopped the axis (no fresh command, a motion it
 BRAKED = 'braked'  # the drive braked the axis on a brake request (an invalid command)
 FAULT = 'fault'  # the machine reports the axis at fault
 DRIVE_SILENT = 'drive_silent'  # the runner heard no state of the drive for too long
+REFUSED = 'refused'  # the runner refused to start the job (a latched axis): nothing moved
+INTERRUPTED = 'interrupted'  # the run was interrupted (Ctrl-C, SIGTERM)
 STALL = 'stall'  # the run made no progress for --stall-timeout
 NODE_DIED = 'node_died'  # a node's process ended while the job ran
 RUN_ERROR = 'run_error'  # the run could not go on (the graph refused it)
@@ -55,6 +59,8 @@ KINDS = (
     STALL,
     NODE_DIED,
     RUN_ERROR,
+    REFUSED,
+    INTERRUPTED,
     PROGRAM_MESSAGE,
     PAUSE,
 )
@@ -178,11 +184,16 @@ def _count(text: str | None) -> int:
 
 
 def events_of(
-    statuses: Sequence[Status], start_ns: int = 0, axis_of: Mapping[str, str] | None = None
+    statuses: Sequence[Status],
+    start_ns: int = 0,
+    axis_of: Mapping[str, str] | None = None,
+    counted_from: int | None = None,
 ) -> list[Event]:
     """The machine's events (MACHINE_KINDS) told by these statuses, once each, in the order
-    they were told. start_ns: the job's start on the statuses' clock (time 0 of the events);
-    axis_of: the axis of each controller node, for one whose status does not name it."""
+    they were told. start_ns: the job's start on the statuses' clock
+    (time 0 of the events); axis_of: the axis of each controller node, for one whose status
+    does not name it; counted_from: a drive's counts (stops, brake requests) in statuses
+    stamped before it are what it had told before the job (None: none)."""
     axis_of = axis_of or {}
     start = start_ns * 1e-9
     out: list[Event] = []
@@ -190,6 +201,7 @@ def events_of(
     counted: dict[tuple[str, str], int] = {}  # (node, key) -> the count told so far
     faults: dict[tuple[str, str], str] = {}
     foreign: set[str] = set()  # drives that told of a foreign publisher
+    braked: set[tuple[str, str]] = set()  # (node, key) whose first brake request was told
     for s in statuses:
         at = (s.stamp_ns - start_ns) * 1e-9
         values = s.values
@@ -213,22 +225,32 @@ def events_of(
             continue
         if s.part not in topics.DRIVE_STATUSES:
             continue
+        # A drive's counts run over its life: those it told before the job started are an
+        # earlier job's (a drive that stays up across jobs), not events of this one.
+        first = counted_from is not None and s.stamp_ns < counted_from
         for key, value in values.items():
             axis, _, field = key.partition('.')
-            if field == 'stops':
-                n, was = _count(value), counted.get((s.node, key), 0)
-                why = values.get(f'{axis}.stopped') or 'released since'
+            if field == keys.STOPS:
+                n = _count(value)
+                if first:
+                    counted[(s.node, key)] = n
+                    continue
+                was = counted.get((s.node, key), 0)
+                why = values.get(keys.axis_key(axis, keys.STOPPED)) or 'released since'
                 out += [Event(axis, STOPPED, at, why, s.node) for _ in range(n - was)]
                 counted[(s.node, key)] = max(n, was)
-            elif field == 'invalid_commands':
+            elif field == keys.INVALID_COMMANDS:
                 # The first brake request of the axis: a tripped controller sends one every
                 # period, and a status (once a second, and at each stop) cannot tell one
                 # series of them from the next.
                 n = _count(value)
-                if n > 0 and (s.node, key) not in counted:
+                if first:
                     counted[(s.node, key)] = n
+                    continue
+                if n > counted.get((s.node, key), 0) and (s.node, key) not in braked:
+                    braked.add((s.node, key))
                     out.append(Event(axis, BRAKED, at, 'brake request (invalid command)', s.node))
-            elif field == 'fault' and value and faults.get((s.node, axis)) != value:
+            elif field == keys.FAULT and value and faults.get((s.node, axis)) != value:
                 faults[(s.node, axis)] = value
                 out.append(Event(axis, FAULT, at, value, s.node))
     return out

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from mill_common.signals import AXES
 
+from mill_analysis import drive_status as keys
 from mill_analysis.events import BRAKED, STOPPED, TRIP, Event
 from mill_analysis.metrics import ContourMetrics, Window, contour_error, peak, rms
 from mill_analysis.record import RunRecord
@@ -77,13 +78,7 @@ class PredictionComparison:
         return out
 
 
-DRIVE_FIGURES = (
-    'late_fraction',
-    'longest_late_run',
-    'latency_median_ms',
-    'latency_p99_ms',
-    'latency_max_ms',
-)
+DRIVE_FIGURES = keys.FIGURES  # per axis, as the drive's status names them
 
 
 @dataclass(frozen=True)

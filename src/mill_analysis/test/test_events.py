@@ -81,6 +81,29 @@ def test_the_drive_counts_give_one_event_per_new_stop_brake_and_fault() -> None:
     assert first_stop(events_of(statuses, START), 'y') is None
 
 
+def test_what_a_drive_that_stays_up_told_before_the_job_is_no_event_of_it() -> None:
+    """A drive kept across jobs counts over its life: its counts in the statuses before the
+    job's start are the jobs' before (a stop latched then, the brake requests of a tripped
+    controller); only what it counts from then on is this job's."""
+    statuses = [
+        drive(-2.0, x__stops=1, x__stopped='no fresh command', x__invalid_commands=40),
+        drive(-1.0, x__stops=1, x__stopped='', x__invalid_commands=40),  # released
+        drive(1.0, x__stops=1, x__stopped='', x__invalid_commands=40),
+        drive(2.0, x__stops=2, x__stopped='speed limit', x__invalid_commands=41),
+    ]
+    got = [
+        (e.axis, e.kind, round(e.time, 6), e.detail)
+        for e in events_of(statuses, START, counted_from=START)
+    ]
+    assert got == [
+        ('x', STOPPED, 2.0, 'speed limit'),
+        ('x', BRAKED, 2.0, 'brake request (invalid command)'),
+    ]
+    assert events_of(statuses[:3], START, counted_from=START) == []
+    # without it every count is the run's (a drive the run started: it counts from 0)
+    assert [e.kind for e in events_of(statuses, START)] == [STOPPED, BRAKED, STOPPED]
+
+
 def test_statuses_of_diagnostic_arrays_keep_their_machine_only() -> None:
     def status(name: str, hw: str, level: bytes) -> SimpleNamespace:
         kv = SimpleNamespace(key='x.stops', value='1')

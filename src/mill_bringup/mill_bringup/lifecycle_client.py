@@ -1,5 +1,6 @@
 """The runner as a lifecycle client: bring a drive that runs elsewhere (another host, a
-container) to active where the runner would have started it, and brake it at the end."""
+container) to active where the runner would have started it, brake it at the end, and
+release its latched axes when the operator asked to re-arm them (`release`)."""
 
 from __future__ import annotations
 
@@ -94,5 +95,23 @@ def deactivate(node: Any, executor: Any, target: str, progress: Progress) -> Non
         progress.note(
             f'{target}: deactivated (axes braked)' if ok else f'{target}: deactivate failed'
         )
+    finally:
+        node.destroy_client(client)
+
+
+def release(node: Any, executor: Any, target: str, wait: float) -> str | None:
+    """Call the drive's `~/release` (std_srvs/Trigger): its answer (what it released), or
+    None when it offers no such service within `wait` s."""
+    from std_srvs.srv import Trigger
+
+    client = node.create_client(Trigger, f'{target}/release')
+    try:
+        deadline = time.monotonic() + wait
+        while not client.service_is_ready():
+            if time.monotonic() > deadline:
+                return None
+            executor.spin_once(timeout_sec=0.05)
+        response = _call(executor, client, Trigger.Request())
+        return None if response is None else str(response.message)
     finally:
         node.destroy_client(client)

@@ -21,6 +21,7 @@ from mill_bringup.runner.result import (
     RunResult,
     format_result,
 )
+from mill_common.realtime_setup import LISTENER_BELOW
 
 
 def result(events: list[Event] = (), failing: tuple[str, ...] = (), **kw: Any) -> RunResult:
@@ -151,3 +152,99 @@ def test_what_stopped_a_run_is_its_typed_failure() -> None:
     silent = Event('y', DRIVE_SILENT, 4.0, 'the drive went silent')
     assert failure_of(DriveSilent(silent), Job(), session) is silent
     assert str(DriveSilent(silent)) == 'the drive went silent'  # the line the runner prints
+
+
+def _ending(kind: str, detail: str) -> RunResult:
+    """A run the runner stopped itself (the failure of its Ending), before the job started."""
+    event = Event('', kind, math.nan, detail)
+    rec = RunRecord.empty(0, 0.1)
+    return result(summary=replace(axis_summary(rec, 1.0), failures=(event,)), error=detail)
+
+
+@pytest.mark.parametrize(
+    ('kind', 'outcome', 'code', 'word'),
+    [
+        ('refused', 'refused', 2, 'REFUSED'),
+        ('interrupted', 'interrupted', 130, 'FAILED'),
+        ('node_died', 'failed', 1, 'FAILED'),
+        ('drive_silent', 'failed', 1, 'FAILED'),
+    ],
+)
+def test_every_ending_writes_its_outcome_and_exit_code(
+    monkeypatch, tmp_path: Path, capsys, kind: str, outcome: str, code: int, word: str
+) -> None:
+    said = f'what ended it ({kind})'
+    assert _main(monkeypatch, tmp_path, _ending(kind, said)) == code
+    data = json.loads((tmp_path / 'summary.json').read_text())
+    assert (data['outcome'], data['exit_code'], data['error']) == (outcome, code, said)
+    assert data['failures'][0]['kind'] == kind
+    out, err = capsys.readouterr()
+    assert out.startswith(f'{word}: {kind.replace("_", " ")}: {said}')
+    last = 'run_scenario: interrupted' if code == 130 else f'run_scenario: error: {said}'
+    assert err.splitlines()[-1] == last
+
+
+@pytest.mark.parametrize(
+    ('made', 'outcome'),
+    [
+        (result(), 'good'),
+        (result(missing_samples={'mill/x/state': 2}), 'record_incomplete'),
+        (result([TRIPPED], failing=(TRIP,)), 'failed'),
+    ],
+    ids=['good', 'incomplete', 'tripped'],
+)
+def test_a_completed_run_says_its_outcome_too(
+    monkeypatch, tmp_path: Path, made: RunResult, outcome: str
+) -> None:
+    _main(monkeypatch, tmp_path, made)
+    assert json.loads((tmp_path / 'summary.json').read_text())['outcome'] == outcome
+
+
+@pytest.mark.parametrize(
+    ('raised', 'outcome', 'code'),
+    [
+        (KeyboardInterrupt(), 'interrupted', 130),
+        (cli.RunError('no publisher appeared on mill/x/state'), 'failed', 1),
+    ],
+    ids=['ctrl-c', 'graph'],
+)
+def test_a_run_that_ended_before_it_had_a_result_writes_its_summary(
+    monkeypatch, tmp_path: Path, raised: BaseException, outcome: str, code: int
+) -> None:
+    """Ctrl-C or an error while the graph was planned or started: no record, but the
+    summary says how the run ended."""
+
+    def run(job: object, run_dir: Path, options: object) -> RunResult:
+        raise raised
+
+    monkeypatch.setattr(cli, 'run', run)
+    argv = ['slotting', '--timing', 'realtime', '--output', str(tmp_path), '-q']
+    assert cli.main(argv) == code
+    data = json.loads((tmp_path / 'summary.json').read_text())
+    assert (data['outcome'], data['exit_code'], data['scenario']) == (outcome, code, 'slotting')
+    assert data['metrics'] == [] and data['error']
+
+
+def test_the_rearmed_axes_and_the_runners_warnings_are_said_and_kept() -> None:
+    r = result(rearmed={'y': 'speed 900 mm/s above the limit'}, warnings=['misnamed'])
+    text = format_result(r)
+    assert 'WARNING: misnamed' in text.splitlines()
+    assert (
+        "re-armed before the start (--rearm, the drive's ~/release): y (stopped: speed 900 "
+        'mm/s above the limit)'
+    ) in text.splitlines()
+    data = json.loads(json.dumps(r.to_json()))
+    assert data['rearmed'] == {'y': 'speed 900 mm/s above the limit'}
+    assert data['warnings'] == ['misnamed'] and data['outcome'] == 'good'
+
+
+def test_the_runner_runs_below_the_graph_when_the_graph_runs_realtime() -> None:
+    def priority(*argv: str) -> int:
+        return cli.runner_priority(cli.parser().parse_args(['slotting', *argv]))
+
+    assert priority() == 0  # the normal scheduler, as the graph
+    # below the graph, above other load
+    assert priority('--realtime-priority', '80') == 80 - LISTENER_BELOW
+    assert priority('--realtime-priority', '1') == 1
+    assert priority('--realtime-priority', '80', '--runner-priority', '0') == 0
+    assert priority('--runner-priority', '50') == 50

@@ -23,8 +23,12 @@ A stopped axis stays braked when commands return: the first command that arrives
 outage comes from a controller that knows nothing of it. It is released only by an explicit
 handshake, as a servo amplifier's fault is: the owner acknowledges with a brake request (a
 NaN command, what a tripped controller sends) and then re-arms with a valid command, or the
-operator releases it (`release`, the drive's ~/release service); it then holds braked until
-its next fresh command.
+operator releases it (`release`, the drive's ~/release service). A released axis goes back to
+where it stood before its first command: braked, and not watched — no tick counts late and no
+silence stops it again — until its next fresh command, which a new job's controller sends once
+it runs (a release between jobs, with no job running, is not undone by the window). A
+deactivated drive (`brake_all`) does the same for every axis, but a latched stop stays latched
+through it: the next job's start handshake releases it explicitly (docs/hardware-driver.md).
 
 It also keeps, per axis, the state → command latency of every fresh command: the time the
 command arrived minus the stamp of the state it answers (both on the drive's clock), in a
@@ -45,7 +49,8 @@ from mill_plant.latency_histogram import LatencyHistogram
 @dataclass
 class AxisCommands:
     value: float = math.nan  # the newest accepted command
-    stamp: int = -1  # stamp of the state it answers [ns]
+    stamp: int = -1  # stamp of the state it answers [ns]; -1: none since the start or release
+    floor: int = -1  # a command must be newer than this (the one held before a release)
     fresh: bool = False  # arrived since the last tick
     late_in_row: int = 0
     longest_late_run: int = 0  # most late ticks in a row
@@ -79,7 +84,7 @@ class CommandTable:
     def offer(self, axis: str, stamp: int, value: float, arrived_ns: int | None = None) -> bool:
         """An accepted command; False if it is not newer than the one held (dropped)."""
         c = self.by_axis[axis]
-        if stamp <= c.stamp:
+        if stamp <= max(c.stamp, c.floor):
             return False
         c.value, c.stamp, c.fresh = value, stamp, True
         if c.stopped and math.isnan(value):
@@ -112,7 +117,8 @@ class CommandTable:
         returned: list[str] = []
         for axis, c in self.by_axis.items():
             if c.stamp < 0:
-                efforts.append(math.nan)  # no command yet: the job has not started for it
+                # no command yet (or since a release): no job runs on it, it holds braked
+                efforts.append(math.nan)
                 continue
             c.ticks += 1
             if c.fresh:
@@ -156,21 +162,30 @@ class CommandTable:
 
     def release(self, axis: str) -> bool:
         """The operator's release of a stopped axis (False if it was not stopped): it holds
-        braked until its next fresh command."""
+        braked, unwatched, until its next fresh command (as before its first)."""
         c = self.by_axis[axis]
         if not c.stopped:
             return False
         self._release(c)
-        c.braked, c.late_in_row, c.waited_ns = True, 0, 0
+        self._idle(c)
         return True
+
+    @staticmethod
+    def _idle(c: AxisCommands) -> None:
+        """Back to the state before the axis's first command: braked, no tick counted late
+        until the next fresh command (newer than the one held)."""
+        c.floor = max(c.floor, c.stamp)
+        c.stamp, c.fresh, c.braked, c.late_in_row, c.waited_ns = -1, False, True, 0, 0
 
     @staticmethod
     def _release(c: AxisCommands) -> None:
         c.stopped, c.acknowledged, c.returned = '', False, False
 
     def brake_all(self) -> None:
+        """Every axis braked and idle until its next fresh command (a deactivated drive:
+        the next job starts afresh); a latched stop stays latched."""
         for c in self.by_axis.values():
-            c.braked = True
+            self._idle(c)
 
     def stop_reasons(self) -> dict[str, str]:
         """Why each stopped axis is stopped."""

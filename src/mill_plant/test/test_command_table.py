@@ -105,6 +105,44 @@ def test_the_operator_releases_a_stopped_axis_which_waits_for_a_fresh_command() 
     assert tick.efforts == [2.0] and tick.resumed == ['x']
 
 
+def test_a_release_with_no_job_running_holds_braked_and_is_not_undone_by_the_window() -> None:
+    """Between jobs nothing commands the axis: released, it waits braked as before its first
+    command (no late tick, no new stop), however long; a command older than the one it held
+    before the release is no fresh one."""
+    table = table_of(['x'])
+    take = late_ticks_stop(table)
+    late = table.by_axis['x'].late
+    assert table.release('x')
+    for _ in range(100):  # 1 s: the window of 35 ms many times over
+        tick = take()
+        assert math.isnan(tick.efforts[0]) and tick.stopped == []
+    assert table.stop_reasons() == {} and table.by_axis['x'].late == late
+    assert not table.offer('x', 0, 3.0)  # answers a state from before the release
+    assert math.isnan(take().efforts[0])
+    table.offer('x', 200 * T, 2.0)  # the next job's first command arms it
+    tick = take()
+    assert tick.efforts == [2.0] and tick.resumed == ['x']
+    assert [take().stopped for _ in range(3)][-1] == ['x']  # and the window watches again
+
+
+def test_a_deactivated_drive_waits_for_fresh_commands_but_keeps_a_latched_stop() -> None:
+    table = table_of(['x', 'y'])
+    take = Ticks(table)
+    table.offer('x', 0, 1.0)
+    table.offer('y', 0, 2.0)
+    take()
+    table.stop('y', 'speed 900 mm/s above the limit')
+    table.brake_all()  # deactivated at the end of a job
+    for _ in range(10):  # no job: nothing counted, nothing stopped anew
+        tick = take()
+        assert all(math.isnan(e) for e in tick.efforts) and tick.stopped == []
+    assert table.stop_reasons() == {'y': 'speed 900 mm/s above the limit'}
+    table.offer('x', 20 * T, 1.5)
+    table.offer('y', 20 * T, 2.5)
+    tick = take()  # the next job: x resumes, y stays stopped until released
+    assert tick.efforts[0] == 1.5 and math.isnan(tick.efforts[1]) and tick.returned == ['y']
+
+
 def test_a_stop_from_outside_latches_with_its_reason_even_with_fresh_commands() -> None:
     table = table_of(['x', 'y'], HoldWindow())
     take = Ticks(table)

@@ -121,9 +121,11 @@ class AxisNodes:
             if n.kind.per_axis and n.kind.role == CONTROLLER
         }
 
-    def events(self, statuses: Sequence[Status], start_ns: int = 0) -> list[Event]:
+    def events(
+        self, statuses: Sequence[Status], start_ns: int = 0, counted_from: int | None = None
+    ) -> list[Event]:
         """The machine's events (trips, stops, brakes) of the job's axes."""
-        found = events_of(statuses, start_ns, self.axis_of())
+        found = events_of(statuses, start_ns, self.axis_of(), counted_from)
         # a foreign publisher is no event of the motion: it makes the record not intact
         return [e for e in found if e.kind != FOREIGN and (not e.axis or e.axis in self.axes)]
 

@@ -192,6 +192,18 @@ class Job(ABC, Generic[R]):
         """While the run goes on: ScenarioError when the graph cannot make the job (a
         driver on another clock, a drive gone silent)."""
 
+    def latched(self, source: MessageSource) -> dict[str, str] | None:
+        """The axes the clock node (a drive that stays up across jobs) says it holds stopped,
+        latched from an earlier job, with the reason of each; None: it has not said yet. The
+        runner refuses to start the job on one unless told to re-arm (mill_bringup.runner.
+        start.handshake). A job whose clock node latches nothing: {}."""
+        return {}
+
+    def warnings(self, statuses: Sequence[Status]) -> list[str]:
+        """What the runner says once at the end about the statuses it heard (a drive's
+        status named otherwise than the job reads it)."""
+        return []
+
     def events(self, statuses: Sequence[Status]) -> list[Event]:
         """What the machine told of itself in these statuses (trips, stops, brakes)."""
         return []

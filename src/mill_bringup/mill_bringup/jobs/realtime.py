@@ -25,6 +25,7 @@ from mill_analysis.summary import DRIVE_FIGURES, AxisSummary, DriveFigures
 from mill_common.signals import AXES
 from mill_common.timebase import job_steps, seconds
 
+from mill_analysis import drive_status as keys
 from mill_bringup.bag_handshake import RecordedSteps
 from mill_bringup.catalogue import PLANT
 from mill_bringup.job_config import JobConfig
@@ -226,18 +227,33 @@ class RealtimeAxisJob(Job[RunRecord]):
         return self.nodes.owners()
 
     def events(self, statuses: Sequence[Status]) -> list[Event]:
-        # the controllers' trips on the system clock, the drive's statuses stamped on it
-        return self.nodes.events(statuses, self.start_ns or 0)
+        # the controllers' trips on the system clock, the drive's statuses stamped on it; what
+        # the drive counted before the job started (a drive kept from an earlier job) is not
+        # this job's, and a job that never started has no stop nor brake of its own
+        start = self.start_ns
+        counted_from = start if start is not None else 2**63
+        return self.nodes.events(statuses, start or 0, counted_from)
 
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> Any:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
+    def latched(self, source: MessageSource) -> dict[str, str] | None:
+        """The axes the drive says it holds stopped (latched), with the reason of each, from
+        its newest status `<drive>: realtime` (None: none heard yet)."""
+        status = source.status(self.drive_status)
+        return None if status is None else keys.stopped(status, self.axes)
+
+    def warnings(self, statuses: Sequence[Status]) -> list[str]:
+        """A drive whose statuses are named otherwise than `<drive>: realtime`: said once."""
+        text = keys.misnamed((s.name for s in statuses), self.state_owner)
+        return [text] if text else []
+
     # -- results ---------------------------------------------------------------------------
     @property
     def drive_status(self) -> str:
         """The name of the drive's status with its figures (`plant: realtime`)."""
-        return topics.status_name(self.state_owner, topics.DRIVE_STATUSES[1])
+        return topics.status_name(self.state_owner, keys.PART)
 
     def summary(self, rec: RunRecord, skip: float, ending: Ending | None = None) -> AxisSummary:
         """Figures from `skip` s after the approach (the trajectory says how long it took),
@@ -262,7 +278,8 @@ class RealtimeAxisJob(Job[RunRecord]):
             self.FAILING,
             ending,
             approach=float(job.get('approach_s', 0.0)),
-            drive=drive_figures(self.axes, drive, received),
+            # a job that never started has no figures of the drive (they are an earlier job's)
+            drive=drive_figures(self.axes, drive, received) if self.start_ns is not None else None,
             start_stamp_ns=self.start_ns,
         )
 
@@ -287,12 +304,13 @@ def drive_figures(
     report them: as the runner received the commands (`received`)."""
     received = received or {}
     out = {}
+    said = {a: keys.axis_key(a, keys.LATE_FRACTION) in drive for a in axes}
     for axis in axes:
-        if f'{axis}.late_fraction' in drive or axis not in received:
-            out[axis] = {f: float(drive.get(f'{axis}.{f}', 'nan')) for f in DRIVE_FIGURES}
+        if said[axis] or axis not in received:
+            out[axis] = {f: float(drive.get(keys.axis_key(axis, f), 'nan')) for f in DRIVE_FIGURES}
         else:
             out[axis] = dict(received[axis])
-    if any(f'{a}.late_fraction' in drive for a in axes) or not received:
+    if any(said.values()) or not received:
         source = 'the drive'
     else:
         source = 'the commands as the runner received them'
@@ -306,7 +324,7 @@ def drive_figures(
         stalls=stalls,
         longest_stall_ms=longest_ms,
         longest_stall=longest,
-        stall_report_ms=drive.get('stall_report_ms', '?'),
+        stall_report_ms=drive.get(keys.STALL_REPORT_MS, '?'),
     )
 
 
@@ -314,7 +332,8 @@ def drive_ticks(drive: Mapping[str, str]) -> tuple[int, int]:
     """The drive's ticks more than half a period late, and its ticks while active (the
     approach and the hold included; 0 from a driver that does not report them), both from
     its last status."""
-    return int(float(drive.get('overruns', '0'))), int(float(drive.get('active_ticks', '0')))
+    overruns, ticks = drive.get(keys.OVERRUNS, '0'), drive.get(keys.ACTIVE_TICKS, '0')
+    return int(float(overruns)), int(float(ticks))
 
 
 def drive_stalls(drive: Mapping[str, str]) -> tuple[int, float, str]:
@@ -322,7 +341,7 @@ def drive_stalls(drive: Mapping[str, str]) -> tuple[int, float, str]:
     monotonic clock): how many, the longest [ms] and its line (which process, when), from its
     last status (0 from a driver that does not report them)."""
     return (
-        int(float(drive.get('stalls', '0'))),
-        float(drive.get('longest_stall_ms', '0')),
-        drive.get('longest_stall', ''),
+        int(float(drive.get(keys.STALLS, '0'))),
+        float(drive.get(keys.LONGEST_STALL_MS, '0')),
+        drive.get(keys.LONGEST_STALL, ''),
     )

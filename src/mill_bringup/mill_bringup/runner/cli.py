@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
-import json
 import signal
 import sys
 from pathlib import Path
@@ -22,17 +21,23 @@ from mill_bringup.jobs.registry import job_for
 from mill_bringup.runner.options import RunError, RunOptions
 from mill_bringup.runner.result import (
     GOOD,
+    INTERRUPTED_CODE,
     JOB_FAILED,
     RECORD_INCOMPLETE,
+    START_REFUSED,
+    Outcome,
+    ended,
     format_result,
+    write_summary,
 )
 from mill_bringup.runner.run import run
 from mill_bringup.scenario import Scenario, ScenarioError, check_layout
 from mill_common import topics
 
 # run_scenario's exit codes, from the least to the most severe: 0 good and complete, 3 a good
-# job with an incomplete record, 1 the job failed (2: usage, argparse; 130: interrupted)
-SEVERITY = (GOOD, RECORD_INCOMPLETE, JOB_FAILED)
+# job with an incomplete record, 2 a start refused (and usage, argparse), 1 the job failed,
+# 130 interrupted
+SEVERITY = (GOOD, RECORD_INCOMPLETE, START_REFUSED, JOB_FAILED, INTERRUPTED_CODE)
 
 
 def _apply_namespace(
@@ -55,9 +60,11 @@ def parser() -> argparse.ArgumentParser:
         'lockstep and print its results.',
         epilog='exit codes: 0 the job went well and its record is complete; 1 the job failed '
         '(an axis tripped, stopped or braked on a machine, the drive went silent, a node died, '
-        'the run could not go on) or could not start; 2 usage; 3 the job went well but the '
-        "runner's record of it is incomplete (samples missing, foreign messages); 130 "
-        'interrupted. Each run writes summary.json, however it ends.',
+        'the run could not go on) or could not start; 2 usage, or the job refused to start '
+        '(an axis the drive holds stopped from an earlier job: --rearm); 3 the job went well '
+        "but the runner's record of it is incomplete (samples missing, foreign messages); 130 "
+        'interrupted. Each run writes summary.json (its outcome and exit_code), however it '
+        'ends.',
     )
     add_scenario_arguments(parser)
     parser.add_argument('--output', type=Path, help='run directory (default runs/NAME-TIME)')
@@ -122,8 +129,25 @@ def parser() -> argparse.ArgumentParser:
         metavar='N',
         help='SCHED_FIFO priority 1-98 of the drive and of the processes of the axis nodes '
         '(their realtime_priority parameter: memory locked, garbage collector frozen), and of '
-        f"the runner's listener {LISTENER_BELOW} below it (at least 1); where the system "
+        f'the runner {LISTENER_BELOW} below it (--runner-priority); where the system '
         'refuses, each says so in one line and goes on',
+    )
+    parser.add_argument(
+        '--runner-priority',
+        type=int,
+        metavar='N',
+        help="SCHED_FIFO priority of the runner's own threads (the monitor that takes every "
+        "message of the run's record), 0 the normal scheduler; default: with "
+        f'--realtime-priority P, P - {LISTENER_BELOW} (at least 1: below the graph, above '
+        'other load, so that the record keeps up), else 0; the processes it starts do not '
+        'inherit it',
+    )
+    parser.add_argument(
+        '--rearm',
+        action='store_true',
+        help='an axis an --external drive holds stopped from an earlier job (its status says '
+        "<axis>.stopped) is released through the drive's ~/release before any node of the job "
+        'starts; without it the job refuses to start on such an axis (exit code 2)',
     )
     parser.add_argument(
         '--layout',
@@ -163,10 +187,18 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         respawn=args.respawn,
         external=frozenset(args.external),
         layout=args.layout,
-        listener_priority=(
-            None if args.realtime_priority is None else listener_priority(args.realtime_priority)
-        ),
+        rearm=args.rearm,
+        runner_priority=runner_priority(args),
     )
+
+
+def runner_priority(args: argparse.Namespace) -> int:
+    """--runner-priority, else one below --realtime-priority (at least 1), else 0."""
+    if args.runner_priority is not None:
+        return max(0, args.runner_priority)
+    if args.realtime_priority:
+        return listener_priority(args.realtime_priority)
+    return 0
 
 
 def paper_text(
@@ -191,6 +223,9 @@ def main(argv: list[str] | None = None) -> int:
         signal.signal(signum, interrupt_once)
     records: dict[str, Any] = {}
     code = GOOD
+    # the run directory of the variant under way, until its summary is written: an ending
+    # without a result (an error or an interrupt before the run had one) writes it there
+    pending: tuple[Path, str] | None = None
     try:
         release_stop_signals()  # held since the first line (mill_common.executable)
         scen, runs = load_scenario(args)
@@ -215,25 +250,34 @@ def main(argv: list[str] | None = None) -> int:
         for name, job in jobs.items():
             variant_dir = run_dir / name if name else run_dir
             variant_dir.mkdir(parents=True, exist_ok=True)
+            pending = (variant_dir, scen.name)
             if name:
                 print(f'variant {name}: {" ".join(scen.variants[name])}', file=sys.stderr)
             result = run(job, variant_dir, run_options(args, bags[name]))
             records[name] = result.record
             code = max(code, result.exit_code, key=SEVERITY.index)
-            # every ending writes its summary, a run stopped by a dead drive included
-            (variant_dir / 'summary.json').write_text(json.dumps(result.to_json(), indent=2))
+            write_summary(variant_dir, result)  # every ending: a dead drive, a refusal, Ctrl-C
+            pending = None
             if name:
                 print(f'variant {name}:')
             print(format_result(result))
+            if result.outcome is Outcome.INTERRUPTED:
+                print('run_scenario: interrupted', file=sys.stderr)
+                return INTERRUPTED_CODE
             if result.error is not None:  # the run stopped: the next variants do not run
                 print(f'run_scenario: error: {result.error}', file=sys.stderr)
-                return JOB_FAILED
+                return result.exit_code
     except (ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
+        if pending is not None:
+            write_summary(pending[0], ended(pending[1], Outcome.FAILED, str(exc)))
         return 1
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
-        return 130
+        if pending is not None:
+            said = 'interrupted (Ctrl-C or SIGTERM) before the run had a result'
+            write_summary(pending[0], ended(pending[1], Outcome.INTERRUPTED, said))
+        return INTERRUPTED_CODE
     configs = {name: job.config for name, job in jobs.items()}
     text = paper_text(scen.paper, jobs, records, run_parameters(configs))
     if text:
@@ -243,6 +287,8 @@ def main(argv: list[str] | None = None) -> int:
         print(
             'run_scenario: error: the job failed on the machine (see FAILED above)', file=sys.stderr
         )
+    elif code == START_REFUSED:
+        print('run_scenario: error: the job refused to start (see REFUSED above)', file=sys.stderr)
     elif code == RECORD_INCOMPLETE:
         print(
             "run_scenario: the job went well, but the runner's record of it is incomplete or "

@@ -40,6 +40,8 @@ class Collected:
     peak_rss_mb: dict[str, float]  # per process of the graph
     peak_pss_mb: float  # graph + runner
     foreign_publishers: list[str]  # what the drives said of foreign publishers they ignored
+    warnings: list[str]  # what the job says once of the statuses heard (Job.warnings)
+    rearmed: dict[str, str]  # axes the start handshake released (--rearm), and why stopped
 
 
 def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending) -> Collected:
@@ -81,9 +83,21 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
     short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
     # A foreign publisher on the drive's topics, told at any time: the record is not intact.
-    foreign = [e.text() for e in events_of(monitor.statuses()) if e.kind == FOREIGN]
+    heard = monitor.statuses()
+    foreign = [e.text() for e in events_of(heard) if e.kind == FOREIGN]
     return Collected(
-        record, missing, ranges, lost, problems, bag, short, peak, session.peak_pss_mb, foreign
+        record,
+        missing,
+        ranges,
+        lost,
+        problems,
+        bag,
+        short,
+        peak,
+        session.peak_pss_mb,
+        foreign,
+        job.warnings(heard),
+        dict(session.rearmed),
     )
 
 
@@ -169,6 +183,8 @@ def result(
         dropped=job.RECORD.dropped(record),
         lost_with_restarts=collected.lost,
         foreign_publishers=collected.foreign_publishers,
+        warnings=collected.warnings,
+        rearmed=collected.rearmed,
         error=None if ending.failure is None else ending.failure.detail,
         bag=collected.bag,
         record=record,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 class RunError(RuntimeError):
@@ -17,6 +18,15 @@ class RunFailed(RunError):
     def __init__(self, kind: str, message: str) -> None:
         super().__init__(message)
         self.kind = kind
+
+
+class StartRefused(RunError):
+    """The runner refused to start the job (an axis the drive holds stopped): nothing moved.
+    `event` is the refusal (mill_analysis.events.REFUSED); str() the one line said."""
+
+    def __init__(self, event: Any) -> None:
+        super().__init__(event.detail)
+        self.event = event
 
 
 @dataclass(frozen=True)
@@ -33,6 +43,10 @@ class RunOptions:
     runner to activate it where it would have been launched. Another clock node keeps a
     process of its own, started last, so that it cannot start before the monitor hears the
     nodes upstream. Respawn starts a process again whose nodes are none of the clocks.
+    runner_priority: SCHED_FIFO priority of the runner's own threads (its monitor, which
+    takes every message of the record, and the middleware's), 0: the normal scheduler.
+    rearm: an axis an external drive holds stopped (latched by an earlier job) is released
+    through the drive's ~/release before the job starts, instead of refusing the start.
     """
 
     skip: float = 1.0  # the summary's metrics over t >= skip [s]
@@ -45,6 +59,5 @@ class RunOptions:
     respawn: bool = False
     external: frozenset[str] = frozenset()
     layout: str | None = None
-    # SCHED_FIFO priority of the runner's listener (mill_common.realtime_setup.listen_at),
-    # None: the normal scheduler
-    listener_priority: int | None = None
+    rearm: bool = False
+    runner_priority: int = 0

@@ -1,9 +1,10 @@
 """One run of a job across processes: plan, start, follow, collect (one module each).
 
-However the run ends once its graph started, it ends with a RunResult: the job complete, or
-the run stopped by what the runner found (a drive gone silent, a node that died, a stall, a
-graph that cannot make the job), which is the result's failure (mill_analysis.events), with
-the record of what arrived until then. The runner takes the run's `Ending` once, there: the
+However the run ends once its graph was planned, it ends with a RunResult: the job complete,
+or the run stopped by what the runner found (a drive gone silent, a node that died, a stall, a
+graph that cannot make the job, a start refused on a latched axis, an interrupt: Ctrl-C or
+SIGTERM), which is the result's failure (mill_analysis.events), with the record of what
+arrived until then. The runner takes the run's `Ending` once, there: the
 statuses the machine sent until then, and what ended it.
 """
 
@@ -14,7 +15,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mill_analysis.events import NODE_DIED, RUN_ERROR, Event
+from mill_analysis.events import INTERRUPTED, NODE_DIED, RUN_ERROR, Event
 
 from mill_bringup.graph import GraphError
 from mill_bringup.jobs.base import Ending, Job
@@ -43,6 +44,9 @@ def run(job: Job[Any], run_dir: Path, options: RunOptions | None = None) -> RunR
             except (RunError, ScenarioError, GraphError) as exc:
                 failure = failure_of(exc, job, session)
                 timing = stopped(began)
+            except KeyboardInterrupt:
+                failure = interrupted(job, session)
+                timing = stopped(began)
             monitor = session.monitor
             ending = Ending(tuple(monitor.statuses()), failure, monitor)
             collected = collect(session, job, options, ending)
@@ -70,3 +74,13 @@ def failure_of(exc: Exception, job: Job[Any], session: Session) -> Event:
     except ScenarioError:
         reached = -math.inf
     return Event('', kind, reached if reached > -math.inf else math.nan, str(exc))
+
+
+def interrupted(job: Job[Any], session: Session) -> Event:
+    """The run interrupted (Ctrl-C, SIGTERM), as its failure event: when, in the job."""
+    try:
+        reached = job.progress(session.monitor)
+    except ScenarioError:
+        reached = -math.inf
+    at = reached if reached > -math.inf else math.nan
+    return Event('', INTERRUPTED, at, 'interrupted (Ctrl-C or SIGTERM): the graph was stopped')

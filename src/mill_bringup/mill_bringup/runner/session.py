@@ -55,6 +55,8 @@ class Session:
         self._next_check = 0.0
         self._previous: dict[int, Any] = {}
         self._stop: list[int] = []  # signals received (install_stop_handlers)
+        # axes the start handshake released (--rearm), with the stop each was latched by
+        self.rearmed: dict[str, str] = {}
         self._never: Any = None
         self._monitor: Monitor | None = None
         self._graph: Graph | None = None
@@ -130,8 +132,8 @@ class Session:
     def listen(self) -> None:
         """The listener's threads at its SCHED_FIFO priority, if the run has one; called
         again once the graph runs (the middleware starts threads as it discovers peers)."""
-        priority = self.options.listener_priority
-        if priority is None:
+        priority = self.options.runner_priority
+        if priority <= 0:
             return
         from mill_common.realtime_setup import listen_at
 

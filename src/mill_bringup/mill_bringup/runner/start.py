@@ -1,6 +1,16 @@
 """Starting a run: which processes start first and which clock nodes wait (`plan`), then the
 nodes, and, once the monitor hears them, the node that clocks the job (`start`).
 
+Before any node starts, the start handshake with a drive that stays up across jobs (an
+external clock node, `handshake`): the runner waits up to DRIVE_STATUS_WAIT for the drive's
+status and reads the axes it holds stopped (`<axis>.stopped`, latched by an earlier job). On
+such an axis the job does not start (StartRefused, one line naming the axis and the stop's
+reason; run_scenario exits 2) unless the operator asked to re-arm (--rearm): the runner then
+calls the drive's `~/release`, which logs it, and checks the drive's next status. No
+controller of this job runs yet, so the first command a released axis takes comes from a
+controller started at rest where the axis stands (the trajectory holds every axis there
+until all of them command).
+
 The clock node starts last, once the monitor has matched the others' publishers: it cannot
 see whether their messages reach the monitor. A clock node in a container (a lifecycle
 drive that shares a process) waits for `activate`, sent once the upstream is heard; so
@@ -11,17 +21,25 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from mill_analysis.events import REFUSED, Event
+
 from mill_bringup.jobs.base import GraphPlan, Job
 from mill_bringup.layout import Process, processes
-from mill_bringup.lifecycle_client import activate
-from mill_bringup.runner.options import RunError, RunOptions
+from mill_bringup.lifecycle_client import activate, release
+from mill_bringup.runner.options import RunError, RunOptions, StartRefused
 from mill_bringup.scenario import NodeLaunch, check_layout
+from mill_common import topics
 
 if TYPE_CHECKING:
     from mill_bringup.runner.session import Session
+
+# How long the start handshake waits for an external drive's status (it sends one a second;
+# discovery may take as long again) and, after a release, for the next one [s].
+DRIVE_STATUS_WAIT = 3.0
 
 
 @dataclass
@@ -81,8 +99,10 @@ def plan(job: Job[Any], options: RunOptions) -> Launch:
 
 
 def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) -> None:
-    """Every node, the clock node last; held and external clock nodes activated."""
+    """The start handshake, then every node, the clock node last; held and external clock
+    nodes activated."""
     monitor, graph = session.monitor, session.graph
+    handshake(session, job, options)
     graph.launch(launch.first)
     upstream = launch.graph.upstream
     deadline = time.monotonic() + options.startup_timeout
@@ -108,3 +128,67 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
         'waiting for discovery'
     )
     session.listen()
+
+
+def handshake(session: Session, job: Job[Any], options: RunOptions) -> None:
+    """Before any node starts: StartRefused on an axis an external drive holds stopped,
+    unless options.rearm (the drive's ~/release, then its next status says it is free)."""
+    drives = [n.name for n in job.clock_nodes if n.name in options.external]
+    if not drives:
+        return  # a drive the runner starts itself holds nothing from an earlier job
+    drive = drives[0]
+    latched = _wait_latched(session, job, time.monotonic() + DRIVE_STATUS_WAIT)
+    if latched is None:
+        session.progress.note(
+            f'{drive}: no drive status within {DRIVE_STATUS_WAIT:g} s: whether it holds an '
+            'axis stopped from an earlier job is not known before the start'
+        )
+        return
+    if not latched:
+        return
+    if not options.rearm:
+        raise StartRefused(refusal(drive, latched))
+    monitor = session.monitor
+    heard = len(monitor.statuses())
+    answer = release(monitor, session.executor, drive, DRIVE_STATUS_WAIT)
+    if answer is None:
+        raise StartRefused(refusal(drive, latched, f'{drive} offers no ~/release'))
+    session.progress.note(f'--rearm: {drive}/~release: {answer}')
+    deadline = time.monotonic() + DRIVE_STATUS_WAIT
+    while time.monotonic() < deadline and not _said_since(session, drive, heard):
+        session.spin('while the drive released its axes')
+    still = job.latched(monitor) if _said_since(session, drive, heard) else None
+    if still:
+        raise StartRefused(refusal(drive, still, 'still stopped after its ~/release'))
+    session.rearmed = dict(latched)
+
+
+def _wait_latched(session: Session, job: Job[Any], deadline: float) -> dict[str, str] | None:
+    latched = job.latched(session.monitor)
+    while latched is None and time.monotonic() < deadline:
+        session.spin('before the job started')
+        latched = job.latched(session.monitor)
+    return latched
+
+
+def _said_since(session: Session, drive: str, heard: int) -> bool:
+    """Whether the drive's status (with its axes' stops) came after the first `heard`."""
+    return any(
+        s.node == drive and s.part in topics.DRIVE_STATUSES
+        for s in session.monitor.statuses()[heard:]
+    )
+
+
+def refusal(drive: str, latched: Mapping[str, str], why: str = '') -> Event:
+    """The one line of a start refused on axes the drive holds stopped (axis: reason)."""
+    axes = sorted(latched)
+    named = f'axis {axes[0]}' if len(axes) == 1 else f'axes {", ".join(axes)}'
+    reasons = '; '.join(f'{a}: {latched[a]}' for a in axes) if len(axes) > 1 else latched[axes[0]]
+    then = (
+        f'{why}: release it on the drive'
+        if why
+        else 'once the machine is safe to move, run again with --rearm (the runner then '
+        "calls the drive's ~/release before any node of the job starts)"
+    )
+    detail = f'{named} held stopped by the drive {drive} ({reasons}): job not started; {then}'
+    return Event(axes[0] if len(axes) == 1 else '', REFUSED, math.nan, detail, drive)
