@@ -67,6 +67,11 @@ command_line: list[str] | None = None
 process_nodes: tuple[str, ...] = ()
 
 
+class CoresNotBuilt(ValueError):
+    """At start-up: the node's cores cannot be built from the values it was given; str() is
+    one line naming those values and the failure (mill_common.build_check)."""
+
+
 class UndeclaredParameter(ParameterNotDeclaredException):
     """A change of a name the node does not declare; str() names it, with the closest name.
 
@@ -159,8 +164,9 @@ class NodeParameters:
             apply(values)
         except ParameterError:
             raise
-        except BUILD_ERRORS as exc:
-            raise ParameterError('configuration', '', build_failure(exc)) from exc
+        except BUILD_ERRORS as exc:  # the values given, as a run-time change names them
+            asked = ', '.join(f'{name}={values[name]!r}' for name in given if name in values)
+            raise CoresNotBuilt(f'{asked or "the defaults"}: {build_failure(exc)}') from exc
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
