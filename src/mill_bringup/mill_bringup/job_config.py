@@ -34,13 +34,15 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from mill_common.build_check import BUILD_ERRORS, build_failure
 from mill_common.parameters import algorithm_values
 from mill_common.signals import AXES
 from mill_controllers.base import AxisController
-from mill_controllers.config import build_controller
+from mill_controllers.config import build_controller, build_loop, check_other_laws
 from mill_controllers.registry import CONTROLLERS
 from mill_models.force_process import ForceProcessModel
 from mill_observers.base import Observer
+from mill_observers.config import build_observer_loop, check_other_observers
 from mill_observers.registry import OBSERVERS
 from mill_plant.models.base import AxisModel
 from mill_plant.registry import AXIS_MODELS
@@ -185,7 +187,12 @@ class JobConfig:
             name = self.trajectory
             if name is None:
                 raise ScenarioError(f'scenario {self.scenario}: an axis job has one trajectory')
-            self._built['trajectory'] = build_job(self.values(name))
+            try:
+                self._built['trajectory'] = build_job(self.values(name))
+            except ScenarioError:
+                raise
+            except ValueError as exc:  # the path leaves the travel, the job is too long
+                raise ScenarioError(f'{name}: {exc}') from None
         job: JobPath = self._built['trajectory']
         return job
 
@@ -318,6 +325,37 @@ def disturbance_unit(c: JobConfig) -> list[Failure]:
                 f'in {wanted}: use an observer whose estimate the law can use',
             )
         )
+    return out
+
+
+def cores_build(c: JobConfig) -> list[Failure]:
+    """Every axis controller and observer can build its cores from its values, as the node
+    does at start-up: the running law or observer, and each other one given gains other
+    than its defaults (a switch to it later must not fail). Its design period is the rule
+    design_period's, so it is left out here."""
+    builds: dict[str, tuple[str, Callable[[dict[str, Any]], Any]]] = {
+        CONTROLLER: ('controller', lambda v: (build_loop(v), check_other_laws(v))),
+        OBSERVER: ('observer', lambda v: (build_observer_loop(v), check_other_observers(v))),
+    }
+    out = []
+    for n in c.nodes:
+        if n.role not in builds:
+            continue
+        choice, build = builds[n.role]
+        values = {**n.values, 'design_period': 0.0}
+        try:
+            build(values)
+        except BUILD_ERRORS as exc:
+            defaults = {k: spec.default for k, spec in n.kind.parameter_specs()}
+            given = {k: v for k, v in n.values.items() if v != defaults.get(k)}
+            out.append(
+                Failure(
+                    'cores_build',
+                    (Side(n.name, choice, values[choice]), Side(n.name, 'values', given)),
+                    f'{n.name}: {choice} {values[choice]} cannot run with its values: '
+                    f'{build_failure(exc)}',
+                )
+            )
     return out
 
 
@@ -499,6 +537,7 @@ def override_period(c: JobConfig) -> list[Failure]:
 
 # In the order a failure is reported: the first is the most basic.
 RULES: tuple[Rule, ...] = (
+    cores_build,
     one_sample_period,
     gains_for_the_rate,
     one_command_delay,
@@ -514,8 +553,15 @@ RULES: tuple[Rule, ...] = (
 
 
 def check(c: JobConfig, rules: tuple[Rule, ...] = RULES) -> list[Failure]:
-    """Every failure of every rule, in the rules' order."""
-    return [f for rule in rules for f in rule(c)]
+    """Every failure of every rule, in the rules' order; none after cores_build's (the
+    other rules build the cores too)."""
+    out = []
+    for rule in rules:
+        found = rule(c)
+        out += found
+        if found and rule is cores_build:
+            break
+    return out
 
 
 # -- the builder ----------------------------------------------------------------------------

@@ -204,6 +204,26 @@ positive_int = WholeAtLeast(1)
 non_negative_int = WholeAtLeast(0)
 
 
+class WholeIn(Constraint):
+    """A whole number (not a bool) in [lo, hi]: a count whose size drives memory or CPU time
+    (substeps, taps, grid intervals, samples of delay) is bounded, so that no value can
+    make a node run out of either."""
+
+    def __init__(self, lo: int, hi: int) -> None:
+        self.lo, self.hi = lo, hi
+        self.bounds = (lo, hi)
+        self.text = f'a whole number in [{lo}, {hi}]'
+
+    def __call__(self, value: Any) -> str | None:
+        if not isinstance(value, int) or isinstance(value, bool) or not self.lo <= value <= self.hi:
+            return f'must be {self.text}'
+        return None
+
+
+def whole_in(lo: int, hi: int) -> WholeIn:
+    return WholeIn(lo, hi)
+
+
 class OneOf(Constraint):
     def __init__(self, choices: Sequence[str]) -> None:
         self.choices = tuple(choices)

@@ -1,0 +1,97 @@
+"""Property tests (hypothesis): no parameter set and no law switch kills a controller node.
+
+Every declared parameter of every law of the registry (and `controller` itself, the
+switch) is set in sequences to values drawn from its spec (mill_common.param_examples:
+accepted ones, edges, refused ones) on one in-process node, as `ros2 param set` would. After
+each change: the node is alive and answers; a refused change left the values, the ROS
+parameter and the running law as they were, with a one-line reason; an accepted one runs
+a law that commands finite values on an axis 1 mm from its reference (issue 37, point 4).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
+from mill_common.in_process import node_factory, set_one
+from mill_common.param_examples import values
+from mill_common.signals import AxisReference, ControlInputs, Estimate
+from mill_controllers.config import parameter_specs
+from mill_controllers.registry import CONTROLLERS
+
+SPECS = dict(parameter_specs())
+# Every law's parameters, from the registry, and the switch between the laws.
+NAMES = ['controller', *(name for name, _spec in CONTROLLERS.parameter_specs())]
+SAMPLES = 40
+
+
+@pytest.fixture
+def controller(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., Any]]:
+    from mill_controllers.axis_controller_node import AxisControllerNode
+
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(150 + os.getpid() % 10))
+    with node_factory(AxisControllerNode, 'x_controller') as make:
+        yield make
+
+
+def test_the_names_come_from_the_registry() -> None:
+    assert len(NAMES) > 40 and {'gpi.omega_n', 'sliding_gpi.omega_n', 'pd.omega_c'} <= set(NAMES)
+    assert all(name in SPECS for name in NAMES)
+
+
+def commands(law: Any, sample_period: float) -> list[float]:
+    """What a copy of the law commands over SAMPLES samples, the axis at rest 1 mm from a
+    reference at rest (the integrators wind up: the gains act on a growing sum)."""
+    trial = copy.deepcopy(law)
+    rest = Estimate(0.0, 0.0, 0.0)
+    return [
+        trial.compute(ControlInputs(k * sample_period, 0.0, AxisReference(1e-3, 0.0, 0.0), rest))
+        for k in range(SAMPLES)
+    ]
+
+
+def changes() -> Any:
+    """Sequences of (name, value), a law switch among them as often as a gain."""
+    name = st.one_of(st.just('controller'), st.sampled_from(NAMES))
+    change = name.flatmap(lambda n: st.tuples(st.just(n), values(SPECS[n])))
+    return st.lists(change, min_size=1, max_size=6)
+
+
+def test_no_sequence_of_changes_kills_the_node_or_its_law(controller) -> None:
+    node = controller()
+    refusals = []
+
+    @settings(
+        max_examples=40,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
+    @given(changes())
+    @example([('gpi.omega_n', 1e300), ('controller', 'gpi')])  # issue 37's two sets
+    @example([('sliding_gpi.omega_n', 1e300), ('controller', 'sliding_gpi')])
+    def run(sequence: list[tuple[str, Any]]) -> None:
+        for name, value in sequence:
+            law, before = node.loop.law, dict(node.params.values)
+            result = set_one(node, name, value)
+            if not result.successful:
+                refusals.append(result.reason)
+                assert result.reason and '\n' not in result.reason, result.reason
+                assert node.loop.law is law and node.params.values == before
+                assert node.get_parameter(name).value == before[name]
+                continue
+            v = node.params.values
+            if v['controller'] == 'adaptive_pi' and v['adaptive_pi.model_source'] == 'observer':
+                continue  # it needs the rls observer's model each sample: not here
+            u = commands(node.loop.law, v['sample_period'])
+            assert all(math.isfinite(x) for x in u), (name, value, u)
+
+    run()
+    assert refusals  # the strategies draw refused values too
+    assert set_one(node, 'controller', 'pd').successful  # and the node takes changes still
