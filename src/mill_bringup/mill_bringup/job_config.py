@@ -333,18 +333,19 @@ def cores_build(c: JobConfig) -> list[Failure]:
     does at start-up: the running law or observer, and each other one given gains other
     than its defaults (a switch to it later must not fail). Its design period is the rule
     design_period's, so it is left out here."""
-    builds: dict[str, tuple[str, Callable[[dict[str, Any]], Any]]] = {
-        CONTROLLER: ('controller', lambda v: (build_loop(v), check_other_laws(v))),
-        OBSERVER: ('observer', lambda v: (build_observer_loop(v), check_other_observers(v))),
+    builds: dict[str, tuple[str, Callable[[dict[str, Any]], Any], Callable[..., None]]] = {
+        CONTROLLER: ('controller', build_loop, check_other_laws),
+        OBSERVER: ('observer', build_observer_loop, check_other_observers),
     }
     out = []
     for n in c.nodes:
         if n.role not in builds:
             continue
-        choice, build = builds[n.role]
+        choice, build, check_others = builds[n.role]
         values = {**n.values, 'design_period': 0.0}
         try:
             build(values)
+            check_others(values)
         except BUILD_ERRORS as exc:
             defaults = {k: spec.default for k, spec in n.kind.parameter_specs()}
             given = {k: v for k, v in n.values.items() if v != defaults.get(k)}

@@ -51,7 +51,7 @@ class _Composer(yaml.SafeLoader):
         try:
             if self._depth > MAX_YAML_DEPTH:
                 raise YamlRefused(f'nested more than {MAX_YAML_DEPTH} levels deep{where}')
-            return super().compose_node(parent, index)  # type: ignore[no-any-return]
+            return super().compose_node(parent, index)
         finally:
             self._depth -= 1
 
