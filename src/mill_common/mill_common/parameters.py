@@ -71,11 +71,24 @@ class Plugin(Protocol):
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
 
 
+# The most of a value a one-line message shows (a parameter file may hold a list of a
+# million numbers: its refusal stays one short line).
+SHOWN_CHARS = 200
+
+
+def shown(value: Any) -> str:
+    """repr(value), cut to SHOWN_CHARS with what was left out said."""
+    text = repr(value)
+    if len(text) <= SHOWN_CHARS:
+        return text
+    return f'{text[:SHOWN_CHARS]}... ({len(text) - SHOWN_CHARS} more characters)'
+
+
 class ParameterError(ValueError):
     """A parameter value was refused; str() is a one-line message naming it."""
 
     def __init__(self, name: str, value: Any, reason: str) -> None:
-        super().__init__(f'invalid parameter {name}={value!r}: {reason}')
+        super().__init__(f'invalid parameter {name}={shown(value)}: {reason}')
         self.name = name
         self.value = value
         self.reason = reason
@@ -102,7 +115,7 @@ def unknown_parameters_message(
     for name in sorted(given):
         close = difflib.get_close_matches(name, known, n=1)
         hint = f' (did you mean {close[0]}?)' if close else ''
-        parts.append(f'{name}={given[name]!r}{hint}')
+        parts.append(f'{name}={shown(given[name])}{hint}')
     s = 's' if len(parts) > 1 else ''
     reason = reason or f'{owner} has no such parameter{s}'
     return f'unknown parameter{s} {", ".join(parts)}: {reason}'

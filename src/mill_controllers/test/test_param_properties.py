@@ -5,7 +5,8 @@ switch) is set in sequences to values drawn from its spec (mill_common.param_exa
 accepted ones, edges, refused ones) on one in-process node, as `ros2 param set` would. After
 each change: the node is alive and answers; a refused change left the values, the ROS
 parameter and the running law as they were, with a one-line reason; an accepted one runs
-a law that commands finite values on an axis 1 mm from its reference (issue 37, point 4).
+a control loop that commands finite values on an axis 1 mm from its reference, until a
+trip (issue 37, point 4). The node's other run-time parameters are drawn too.
 """
 
 from __future__ import annotations
@@ -21,13 +22,15 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from mill_common.in_process import node_factory, set_one
 from mill_common.param_examples import values
-from mill_common.signals import AxisReference, ControlInputs, Estimate
+from mill_common.signals import AxisReference, Estimate
 from mill_controllers.config import parameter_specs
 from mill_controllers.registry import CONTROLLERS
 
 SPECS = dict(parameter_specs())
-# Every law's parameters, from the registry, and the switch between the laws.
-NAMES = ['controller', *(name for name, _spec in CONTROLLERS.parameter_specs())]
+# Every law's parameters, from the registry, the switch between the laws, and the node's
+# other parameters that may change at run time (command shaping, blend, trip limit).
+LAWS = ['controller', *(name for name, _spec in CONTROLLERS.parameter_specs())]
+NAMES = LAWS + [n for n, s in SPECS.items() if n not in LAWS and not s.read_only]
 SAMPLES = 40
 
 
@@ -42,19 +45,32 @@ def controller(monkeypatch: pytest.MonkeyPatch) -> Iterator[Callable[..., Any]]:
 
 
 def test_the_names_come_from_the_registry() -> None:
-    assert len(NAMES) > 40 and {'gpi.omega_n', 'sliding_gpi.omega_n', 'pd.omega_c'} <= set(NAMES)
+    assert len(LAWS) > 40 and {'gpi.omega_n', 'sliding_gpi.omega_n', 'pd.omega_c'} <= set(LAWS)
+    assert {'blend_time', 'following_error_limit'} <= set(NAMES)
     assert all(name in SPECS for name in NAMES)
 
 
-def commands(law: Any, sample_period: float) -> list[float]:
-    """What a copy of the law commands over SAMPLES samples, the axis at rest 1 mm from a
-    reference at rest (the integrators wind up: the gains act on a growing sum)."""
-    trial = copy.deepcopy(law)
-    rest = Estimate(0.0, 0.0, 0.0)
-    return [
-        trial.compute(ControlInputs(k * sample_period, 0.0, AxisReference(1e-3, 0.0, 0.0), rest))
-        for k in range(SAMPLES)
-    ]
+class Reference:
+    """A reference 1 mm from the axis, moving 0.1 mm/s."""
+
+    def at(self, ns: int) -> AxisReference:
+        return AxisReference(1e-3 + 1e-4 * ns * 1e-9, 1e-4, 0.0)
+
+
+def commands(loop: Any, sample_period: float) -> list[float]:
+    """What a copy of the node's control loop (law, command shaping, trip) commands over
+    SAMPLES samples, the axis at rest (the integrators wind up: the gains act on a growing
+    sum), up to a trip (a limit set below 1 mm trips at once: NaN, the brake request)."""
+    trial = copy.deepcopy(loop)
+    out = []
+    for k in range(SAMPLES):
+        command = trial.step(
+            round(k * sample_period * 1e9), 0.0, Estimate(0.0, 0.0, 0.0), Reference()
+        )
+        if trial.trip.tripped:
+            break
+        out.append(command.effort)
+    return out
 
 
 def changes() -> Any:
@@ -89,7 +105,7 @@ def test_no_sequence_of_changes_kills_the_node_or_its_law(controller) -> None:
             v = node.params.values
             if v['controller'] == 'adaptive_pi' and v['adaptive_pi.model_source'] == 'observer':
                 continue  # it needs the rls observer's model each sample: not here
-            u = commands(node.loop.law, v['sample_period'])
+            u = commands(node.loop, v['sample_period'])
             assert all(math.isfinite(x) for x in u), (name, value, u)
 
     run()
