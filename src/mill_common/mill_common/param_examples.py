@@ -1,11 +1,10 @@
-"""Hypothesis strategies of parameter values, from a ParamSpec alone: for the property tests
-of every package, which iterate their registries' declared parameters instead of listing
-them by hand.
+"""Values to try a parameter with, from its ParamSpec alone: for the property tests of every
+package, which iterate their registries' declared parameters instead of listing them by
+hand (they draw from these with hypothesis). ROS-free.
 
-Each strategy mixes values the spec's check accepts, its edges (bounds, 0, ±1e-300,
-±1e300, the default scaled by powers of ten) and values it refuses (NaN, ±inf, negative,
-wrong types), so that a test sees both what a node must take and what it must refuse.
-Needs hypothesis (a test dependency): import this module from tests only.
+The values mix what the spec's check accepts, its edges (bounds, 0, ±1e-300, ±1e300, the
+default scaled by powers of ten) and what it refuses (NaN, ±inf, out of range, wrong
+types), so that a test sees both what a node must take and what it must refuse.
 """
 
 from __future__ import annotations
@@ -17,64 +16,49 @@ from mill_common.parameters import OneOf, ParamSpec, value_type
 
 EDGES = (0.0, 1e-300, -1e-300, 1e-9, 1.0, -1.0, 1e9, 1e300, -1e300, math.inf, -math.inf, math.nan)
 WRONG = ('x', True, None)
+POWERS = (-300, -100, -30, -12, -6, -3, -2, -1, 1, 2, 3, 6, 12, 30, 100, 300)
 
 
-def number_values(spec: ParamSpec) -> Any:
-    """Floats around the spec's default and bounds, and the edges."""
-    import hypothesis.strategies as st
-
+def numbers(spec: ParamSpec) -> tuple[float, ...]:
+    """The edges, the finite bounds of the check and the default, each also scaled by
+    powers of ten, of both signs."""
     default = spec.default if isinstance(spec.default, int | float) else 1.0
     bounds = getattr(spec.check, 'bounds', None) or ()
-    near = [b for b in bounds if math.isfinite(b)] + [float(default)]
-    scaled = st.builds(
-        lambda base, exp, sign: sign * (abs(base) or 1.0) * 10.0**exp,
-        st.sampled_from(near),
-        st.integers(-300, 300),
-        st.sampled_from((1.0, -1.0)),
-    )
-    return st.one_of(
-        st.sampled_from(EDGES + tuple(near)),
-        scaled,
-        st.floats(allow_nan=True, allow_infinity=True),
-    )
+    near = [float(b) for b in bounds if math.isfinite(b)] + [float(default)]
+    scaled = [s * (abs(b) or 1.0) * 10.0**p for b in near for p in POWERS for s in (1.0, -1.0)]
+    return tuple(dict.fromkeys([*EDGES, *near, *scaled]))
 
 
-def integer_values(spec: ParamSpec) -> Any:
-    import hypothesis.strategies as st
-
+def integers(spec: ParamSpec) -> tuple[int, ...]:
+    """The small counts from the check's lower bound, its upper bound and beyond."""
     bounds = getattr(spec.check, 'bounds', None) or (0, 10)
     lo = int(bounds[0]) if math.isfinite(bounds[0]) else -10
     hi = int(bounds[1]) if math.isfinite(bounds[1]) else lo + 10
-    return st.one_of(
-        st.integers(lo, min(hi, lo + 8)),  # small, accepted counts: the cores are built
-        st.sampled_from((lo - 1, hi, hi + 1, 10**9, 2**63 - 1, -(2**31))),
-    )
+    small = range(lo, min(hi, lo + 8) + 1)
+    return tuple(dict.fromkeys([*small, lo - 1, hi, hi + 1, 10**9, 2**63 - 1, -(2**31)]))
 
 
-def values(spec: ParamSpec) -> Any:
-    """A strategy of values to set `spec` to: accepted ones, edges and refused ones."""
-    import hypothesis.strategies as st
-
+def examples(spec: ParamSpec) -> tuple[Any, ...]:
+    """Values to set `spec` to: accepted ones, edges and refused ones."""
     kind = value_type(spec)
-    wrong = st.sampled_from(WRONG)
     if kind == 'bool':
-        return st.one_of(st.booleans(), st.sampled_from(('maybe', 1)))
+        return (True, False, 'maybe', 1)
     if kind == 'integer':
-        return st.one_of(integer_values(spec), wrong)
+        return integers(spec) + WRONG
     if kind == 'double':
-        return st.one_of(number_values(spec), wrong)
+        return numbers(spec) + WRONG
     if kind == 'string':
         choices = spec.check.choices if isinstance(spec.check, OneOf) else (spec.default,)
-        return st.one_of(st.sampled_from(choices), st.text(max_size=4))
+        return (*choices, '', 'bogus', 1.0)
     if kind == 'double_array':
         default = list(spec.default) or [1.0]
-        entry = number_values(ParamSpec(spec.name, default[0], ''))
-        one_changed = st.builds(
-            lambda i, v: [v if j == i % len(default) else x for j, x in enumerate(default)],
-            st.integers(0, len(default) - 1),
-            entry,
-        )
-        return st.one_of(one_changed, st.lists(entry, max_size=len(default) + 2))
+        entries = numbers(ParamSpec(spec.name, default[0], ''))
+        changed = [
+            [v if j == i else x for j, x in enumerate(default)]
+            for i in range(len(default))
+            for v in entries[:: max(1, len(entries) // 16)]
+        ]
+        return (*changed, [], default[:-1], [*default, default[-1]], [1.0] * 100, ['x'])
     if kind == 'integer_array':
-        return st.lists(st.integers(-2, 8), max_size=4)
-    return st.lists(st.text(max_size=4), max_size=3)
+        return ([], [0], [0, 0], [-1], [10**6])
+    return ([], ['x'], [''], [1.0])

@@ -2,11 +2,12 @@
 
 Every declared parameter of every law of the registry (and `controller` itself, the
 switch) is set in sequences to values drawn from its spec (mill_common.param_examples:
-accepted ones, edges, refused ones) on one in-process node, as `ros2 param set` would. After
-each change: the node is alive and answers; a refused change left the values, the ROS
-parameter and the running law as they were, with a one-line reason; an accepted one runs
-a control loop that commands finite values on an axis 1 mm from its reference, until a
-trip (issue 37, point 4). The node's other run-time parameters are drawn too.
+accepted ones, edges, refused ones, and any float for a double) on one in-process node, as
+`ros2 param set` would. After each change: the node is alive and answers; a refused change
+left the values, the ROS parameter and the running law as they were, with a one-line
+reason; an accepted one runs a control loop that commands finite values on an axis 1 mm
+from its reference, until a trip (issue 37, point 4). The node's other run-time parameters
+are drawn too.
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from mill_common.in_process import node_factory, set_one
-from mill_common.param_examples import values
+from mill_common.param_examples import examples
+from mill_common.parameters import ParamSpec, value_type
 from mill_common.signals import AxisReference, Estimate
 from mill_controllers.config import parameter_specs
 from mill_controllers.registry import CONTROLLERS
@@ -71,6 +73,14 @@ def commands(loop: Any, sample_period: float) -> list[float]:
             break
         out.append(command.effort)
     return out
+
+
+def values(spec: ParamSpec) -> Any:
+    """The spec's examples (accepted, edges, refused), and any float for a double."""
+    drawn = st.sampled_from(examples(spec))
+    if value_type(spec) == 'double':
+        return st.one_of(drawn, st.floats(allow_nan=True, allow_infinity=True))
+    return drawn
 
 
 def changes() -> Any:

@@ -20,7 +20,8 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from mill_common.in_process import node_factory, set_one
-from mill_common.param_examples import values
+from mill_common.param_examples import examples
+from mill_common.parameters import ParamSpec, value_type
 from mill_observers.config import parameter_specs
 from mill_observers.registry import OBSERVERS
 
@@ -58,6 +59,14 @@ def estimates(loop: Any) -> list[float]:
     return out
 
 
+def values(spec: ParamSpec) -> Any:
+    """The spec's examples (accepted, edges, refused), and any float for a double."""
+    drawn = st.sampled_from(examples(spec))
+    if value_type(spec) == 'double':
+        return st.one_of(drawn, st.floats(allow_nan=True, allow_infinity=True))
+    return drawn
+
+
 def changes() -> Any:
     name = st.one_of(st.just('observer'), st.sampled_from(NAMES))
     change = name.flatmap(lambda n: st.tuples(st.just(n), values(SPECS[n])))
@@ -69,7 +78,7 @@ def test_no_sequence_of_changes_kills_the_node_or_its_observer(observer) -> None
     refusals = []
 
     @settings(
-        max_examples=30,
+        max_examples=25,
         deadline=None,
         suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
     )
