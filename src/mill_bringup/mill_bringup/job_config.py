@@ -7,6 +7,9 @@ launch plan and `tune` read. Each rule is a small function of the configuration 
 typed `Failure`s (the rule, the two sides, the one-line message), so a caller or a test
 reads which two values disagree without parsing a message:
 
+- `cores_build`: every axis controller and observer builds its cores from its values, the
+  running law or observer and each other one given gains other than its defaults (issue
+  37: a gain that overflows is refused before any process starts, in one line);
 - `sample_period`: every node that has a sample period runs at the job's one (the plant's,
   or the force process's spindle revolution);
 - `design_period`: gains designed for one rate (a node's design_period) run at that rate;
