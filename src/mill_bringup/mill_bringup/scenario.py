@@ -24,6 +24,7 @@ from mill_common.parameters import (
     ParameterError,
     ParamSpec,
     is_ros_parameter,
+    ros_parameter_problem,
     unknown_parameters_message,
     validate,
 )
@@ -176,6 +177,10 @@ class Scenario:
             message = unknown_parameters_message(unknown, known, name)
             raise ScenarioError(f'{self.path}: entry {name}: {message}')
         raw = self.raw_parameters(name)
+        for n, v in raw.items():  # rclpy's own (use_sim_time): the node would end on them
+            problem = ros_parameter_problem(n, v)
+            if problem:
+                raise ScenarioError(f'{name}: {problem}')
         values = {}
         for full, spec in specs:
             try:

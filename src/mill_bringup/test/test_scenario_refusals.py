@@ -51,8 +51,12 @@ PEAK = (
             ['-p', 'plant.substeps=1000000000'],
             'plant: invalid parameter substeps=1000000000: must be a whole number in [1, 1000]',
         ),
+        (
+            ['-p', 'x_observer.use_sim_time=maybe'],
+            "x_observer: invalid parameter use_sim_time='maybe': must be true or false",
+        ),
     ],
-    ids=['duration', 'duration-inf', 'path-too-long', 'gain', 'gain-running', 'substeps'],
+    ids=['duration', 'duration-inf', 'path-too-long', 'gain', 'gain-running', 'substeps', 'sim'],
 )
 def test_a_value_nothing_can_run_with_ends_run_scenario_in_one_line(
     capsys, tmp_path: Path, args: list[str], line: str

@@ -131,6 +131,14 @@ def is_ros_parameter(name: str) -> bool:
     return name in ROS_PARAMETERS or name.startswith(ROS_PARAMETER_PREFIXES)
 
 
+def ros_parameter_problem(name: str, value: Any) -> str | None:
+    """Why rclpy would refuse `value` for a parameter it declares itself (both of
+    ROS_PARAMETERS are booleans), in one line; None if it would not (or it is not one)."""
+    if name in ROS_PARAMETERS and not isinstance(value, bool):
+        return f'invalid parameter {name}={shown(value)}: must be true or false'
+    return None
+
+
 def _is_number(value: Any) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
