@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 import yaml
-from mill_common.yaml_files import read_yaml
+from mill_common.yaml_files import YamlRefused, read_yaml
 
 from mill_bringup.catalogue import KINDS, UnknownNodeKind, kind_of
 from mill_bringup.scenario import SCENARIO_KEY
@@ -58,6 +58,8 @@ def scenario_launch(files: Sequence[str]) -> dict[str, tuple[str, str]]:
     for path in files:
         try:
             raw = read_yaml(path)
+        except YamlRefused as exc:  # read by none of the container's nodes either
+            raise ContainerError(f'--params-file {path}: {exc}') from None
         except (OSError, UnicodeDecodeError, yaml.YAMLError):
             continue  # rcl says what is wrong with the file
         entry = raw.get(SCENARIO_KEY) if isinstance(raw, dict) else None
