@@ -42,6 +42,7 @@ from mill_common.parameters import algorithm_values
 from mill_common.signals import AXES
 from mill_controllers.base import AxisController
 from mill_controllers.config import build_controller, build_loop, check_other_laws
+from mill_controllers.force_control import ForceFeedLoop
 from mill_controllers.registry import CONTROLLERS
 from mill_models.force_process import ForceProcessModel
 from mill_observers.base import Observer
@@ -331,14 +332,19 @@ def disturbance_unit(c: JobConfig) -> list[Failure]:
     return out
 
 
+def _nothing(_values: dict[str, Any]) -> None:
+    """(A force controller builds its one law at start-up, and switches to no other.)"""
+
+
 def cores_build(c: JobConfig) -> list[Failure]:
-    """Every axis controller and observer can build its cores from its values, as the node
-    does at start-up: the running law or observer, and each other one given gains other
-    than its defaults (a switch to it later must not fail). Its design period is the rule
-    design_period's, so it is left out here."""
+    """Every axis controller, observer and force controller can build its cores from its
+    values, as the node does at start-up: the running law or observer, and each other one
+    given gains other than its defaults (a switch to it later must not fail). Its design
+    period is the rule design_period's, so it is left out here."""
     builds: dict[str, tuple[str, Callable[[dict[str, Any]], Any], Callable[..., None]]] = {
         CONTROLLER: ('controller', build_loop, check_other_laws),
         OBSERVER: ('observer', build_observer_loop, check_other_observers),
+        FORCE_CONTROLLER: ('force_controller', ForceFeedLoop.from_parameters, _nothing),
     }
     out = []
     for n in c.nodes:
@@ -627,7 +633,10 @@ def build(scen: Scenario, all_failures: bool = False, rules: tuple[Rule, ...] = 
         NodeConfig(n.name, n.kind, MappingProxyType(scen.parameters(n.name))) for n in scen.nodes
     )
     plants = [n for n in nodes if n.role == PLANT]
-    source = _period_source(scen, nodes)
+    try:
+        source = _period_source(scen, nodes)
+    except BUILD_ERRORS as exc:  # a force process model that cannot be built
+        raise ScenarioError(f'scenario {scen.name}: {build_failure(exc)}') from None
     config = JobConfig(
         scenario=scen.name,
         nodes=nodes,

@@ -55,13 +55,27 @@ PEAK = (
             ['-p', 'x_observer.use_sim_time=maybe'],
             "x_observer: invalid parameter use_sim_time='maybe': must be true or false",
         ),
+        (
+            ['rubio', '-p', 'force_controller.force_control.natural_frequency=1e300'],
+            f'force_controller: force_controller fixed cannot run with its values: {OVERFLOW}',
+        ),
     ],
-    ids=['duration', 'duration-inf', 'path-too-long', 'gain', 'gain-running', 'substeps', 'sim'],
+    ids=[
+        'duration',
+        'duration-inf',
+        'path-too-long',
+        'gain',
+        'gain-running',
+        'substeps',
+        'sim',
+        'force-gain',
+    ],
 )
 def test_a_value_nothing_can_run_with_ends_run_scenario_in_one_line(
     capsys, tmp_path: Path, args: list[str], line: str
 ) -> None:
-    assert run_scenario_main(['slotting', *args, '--output', str(tmp_path / 'run')]) == 1
+    scenario = [] if args[0] == 'rubio' else ['slotting']
+    assert run_scenario_main([*scenario, *args, '--output', str(tmp_path / 'run')]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f'run_scenario: error: {line}']
     assert not (tmp_path / 'run').exists()  # nothing was started
