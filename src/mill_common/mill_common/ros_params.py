@@ -42,6 +42,7 @@ from mill_common.parameters import (
     UnknownParameterError,
     coerce,
     is_ros_parameter,
+    shown,
     unknown_parameters_message,
     validate,
     value_type,
@@ -165,7 +166,7 @@ class NodeParameters:
         except ParameterError:
             raise
         except BUILD_ERRORS as exc:  # the values given, as a run-time change names them
-            asked = ', '.join(f'{name}={values[name]!r}' for name in given if name in values)
+            asked = ', '.join(f'{name}={shown(values[name])}' for name in given if name in values)
             raise CoresNotBuilt(f'{asked or "the defaults"}: {build_failure(exc)}') from exc
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
@@ -251,7 +252,7 @@ class NodeParameters:
         except ParameterError as exc:
             return self._refuse(str(exc))
         except BUILD_ERRORS as exc:  # the cores cannot be built: the old ones run on
-            asked = ', '.join(f'{name}={candidate[name]!r}' for name in changed)
+            asked = ', '.join(f'{name}={shown(candidate[name])}' for name in changed)
             return self._refuse(f'{asked}: {build_failure(exc)}')
         self.values = candidate
         for name in changed:
