@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
+from mill_common.yaml_files import read_yaml
 
 from mill_bag.errors import BagError
 from mill_bag.mcap_read import Damage, McapFile, Row
@@ -149,11 +150,11 @@ def open_bag(path: str | Path) -> Bag:
     meta_path = path / 'metadata.yaml'
     if meta_path.is_file():
         try:
-            meta = yaml.safe_load(meta_path.read_text())
+            meta = read_yaml(meta_path)
             info = meta['rosbag2_bagfile_information']
             storage = info.get('storage_identifier', 'mcap')
             names = list(info.get('relative_file_paths') or [])
-        except (yaml.YAMLError, KeyError, TypeError, AttributeError):
+        except (yaml.YAMLError, UnicodeDecodeError, KeyError, TypeError, AttributeError):
             raise BagError(f'{meta_path}: not a rosbag2 metadata file') from None
         if storage not in ('mcap', 'sqlite3'):
             raise BagError(f'{path}: storage {storage!r} is not supported (mcap, sqlite3)')

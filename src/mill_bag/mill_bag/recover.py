@@ -18,8 +18,10 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import yaml
+from mill_common.yaml_files import parse_yaml
 
 from mill_bag.errors import BagError
 from mill_bag.mcap_read import Damage
@@ -127,7 +129,7 @@ def _rewrite(src: Path, bag: Bag, written: list[Path]) -> _Rewritten:
                 if msgtype not in schemas:
                     schemas[msgtype] = writer.register_schema(msgtype, 'ros2msg', msgdef.encode())
                 qos_text = sub.qos.get(topic, '')
-                qos = yaml.safe_load(qos_text) if qos_text else []
+                qos = _qos(qos_text)
                 channel = writer.register_channel(
                     topic,
                     'cdr',
@@ -143,3 +145,14 @@ def _rewrite(src: Path, bag: Bag, written: list[Path]) -> _Rewritten:
         out.flush()
         os.fsync(out.fileno())
     return _Rewritten(src, tmp, list(infos.values()), start, end)
+
+
+def _qos(text: str) -> Any:
+    """The QoS profiles a channel offered (its metadata's YAML); [] if it has none or they
+    cannot be read safely (mill_common.yaml_files): the messages are kept all the same."""
+    if not text:
+        return []
+    try:
+        return parse_yaml(text)
+    except yaml.YAMLError:
+        return []

@@ -329,7 +329,15 @@ def mcap_library() -> str:
     return LIBRARY_IDENTIFIER
 
 
-_DUMPER = getattr(yaml, 'CSafeDumper', yaml.SafeDumper)  # libyaml when there: 10x faster
+class _Dumper(getattr(yaml, 'CSafeDumper', yaml.SafeDumper)):  # type: ignore[misc]
+    """libyaml when there (10x faster); no anchors and aliases, which readers refuse
+    (mill_common.yaml_files), even where one object appears twice."""
+
+    def ignore_aliases(self, data: Any) -> bool:
+        return True
+
+
+_DUMPER = _Dumper
 
 
 def dump_yaml(value: Any) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -208,8 +209,8 @@ def set_resume_after(scen: Scenario, seconds: float) -> None:
 
 def set_duration(scen: Scenario, duration: float) -> None:
     """--duration: the machine time the trajectory runs."""
-    if not duration > 0:
-        raise ScenarioError(f'--duration must be > 0, got {duration}')
+    if not (duration > 0 and math.isfinite(duration)):
+        raise ScenarioError(f'--duration must be a finite number > 0, got {duration}')
     for node in scen.nodes_of(TRAJECTORY):
         scen.add_override(f'{node.name}.duration={duration!r}')
 

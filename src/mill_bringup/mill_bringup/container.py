@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import yaml
+from mill_common.yaml_files import YamlRefused, read_yaml
 
 from mill_bringup.catalogue import KINDS, UnknownNodeKind, kind_of
 from mill_bringup.scenario import SCENARIO_KEY
@@ -57,8 +57,10 @@ def scenario_launch(files: Sequence[str]) -> dict[str, tuple[str, str]]:
     """NAME -> (package, executable) from the `mill_scenario: launch:` entry of the files."""
     for path in files:
         try:
-            raw = yaml.safe_load(Path(path).read_text())
-        except (OSError, yaml.YAMLError):
+            raw = read_yaml(path)
+        except YamlRefused as exc:  # read by none of the container's nodes either
+            raise ContainerError(f'--params-file {path}: {exc}') from None
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
             continue  # rcl says what is wrong with the file
         entry = raw.get(SCENARIO_KEY) if isinstance(raw, dict) else None
         params = entry.get('ros__parameters') if isinstance(entry, dict) else None

@@ -38,7 +38,7 @@ from mill_analysis.force_record import ForceRecord
 from mill_analysis.papers import rubio_claims
 from mill_common.declared import ParamSet, param
 from mill_common.one_line_parser import OneLineParser
-from mill_common.parameters import number, positive, positive_int
+from mill_common.parameters import number, positive, whole_in
 from mill_controllers.force_control import ForceFeedLoop, ForceLaw, build_law
 from mill_models.force_process import ForceProcessModel, ForceProcessParams, ForceProcessPlant
 from mill_models.quadrature import simpson
@@ -71,7 +71,7 @@ class ForceLoopParams(ParamSet):
     )
     override_max: float = param(2.0, 'highest feed override (200 %)', _number_or_inf, unit='-')
     intersample_intervals: int = param(
-        32, 'grid intervals per sample for J_c', positive_int, unit='-'
+        32, 'grid intervals per sample for J_c', whole_in(1, 1000), unit='-'
     )
 
 

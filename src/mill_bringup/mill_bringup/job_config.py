@@ -7,6 +7,9 @@ launch plan and `tune` read. Each rule is a small function of the configuration 
 typed `Failure`s (the rule, the two sides, the one-line message), so a caller or a test
 reads which two values disagree without parsing a message:
 
+- `cores_build`: every axis controller and observer builds its cores from its values, the
+  running law or observer and each other one given gains other than its defaults (issue
+  37: a gain that overflows is refused before any process starts, in one line);
 - `sample_period`: every node that has a sample period runs at the job's one (the plant's,
   or the force process's spindle revolution);
 - `design_period`: gains designed for one rate (a node's design_period) run at that rate;
@@ -34,13 +37,16 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from mill_common.build_check import BUILD_ERRORS, build_failure
 from mill_common.parameters import algorithm_values
 from mill_common.signals import AXES
 from mill_controllers.base import AxisController
-from mill_controllers.config import build_controller
+from mill_controllers.config import build_controller, build_loop, check_other_laws
+from mill_controllers.force_control import ForceFeedLoop
 from mill_controllers.registry import CONTROLLERS
 from mill_models.force_process import ForceProcessModel
 from mill_observers.base import Observer
+from mill_observers.config import build_observer_loop, check_other_observers
 from mill_observers.registry import OBSERVERS
 from mill_plant.models.base import AxisModel
 from mill_plant.registry import AXIS_MODELS
@@ -185,7 +191,12 @@ class JobConfig:
             name = self.trajectory
             if name is None:
                 raise ScenarioError(f'scenario {self.scenario}: an axis job has one trajectory')
-            self._built['trajectory'] = build_job(self.values(name))
+            try:
+                self._built['trajectory'] = build_job(self.values(name))
+            except ScenarioError:
+                raise
+            except ValueError as exc:  # the path leaves the travel, the job is too long
+                raise ScenarioError(f'{name}: {exc}') from None
         job: JobPath = self._built['trajectory']
         return job
 
@@ -318,6 +329,43 @@ def disturbance_unit(c: JobConfig) -> list[Failure]:
                 f'in {wanted}: use an observer whose estimate the law can use',
             )
         )
+    return out
+
+
+def _nothing(_values: dict[str, Any]) -> None:
+    """(A force controller builds its one law at start-up, and switches to no other.)"""
+
+
+def cores_build(c: JobConfig) -> list[Failure]:
+    """Every axis controller, observer and force controller can build its cores from its
+    values, as the node does at start-up: the running law or observer, and each other one
+    given gains other than its defaults (a switch to it later must not fail). Its design
+    period is the rule design_period's, so it is left out here."""
+    builds: dict[str, tuple[str, Callable[[dict[str, Any]], Any], Callable[..., None]]] = {
+        CONTROLLER: ('controller', build_loop, check_other_laws),
+        OBSERVER: ('observer', build_observer_loop, check_other_observers),
+        FORCE_CONTROLLER: ('force_controller', ForceFeedLoop.from_parameters, _nothing),
+    }
+    out = []
+    for n in c.nodes:
+        if n.role not in builds:
+            continue
+        choice, build, check_others = builds[n.role]
+        values = {**n.values, 'design_period': 0.0}
+        try:
+            build(values)
+            check_others(values)
+        except BUILD_ERRORS as exc:
+            defaults = {k: spec.default for k, spec in n.kind.parameter_specs()}
+            given = {k: v for k, v in n.values.items() if v != defaults.get(k)}
+            out.append(
+                Failure(
+                    'cores_build',
+                    (Side(n.name, choice, values[choice]), Side(n.name, 'values', given)),
+                    f'{n.name}: {choice} {values[choice]} cannot run with its values: '
+                    f'{build_failure(exc)}',
+                )
+            )
     return out
 
 
@@ -499,6 +547,7 @@ def override_period(c: JobConfig) -> list[Failure]:
 
 # In the order a failure is reported: the first is the most basic.
 RULES: tuple[Rule, ...] = (
+    cores_build,
     one_sample_period,
     gains_for_the_rate,
     one_command_delay,
@@ -514,8 +563,15 @@ RULES: tuple[Rule, ...] = (
 
 
 def check(c: JobConfig, rules: tuple[Rule, ...] = RULES) -> list[Failure]:
-    """Every failure of every rule, in the rules' order."""
-    return [f for rule in rules for f in rule(c)]
+    """Every failure of every rule, in the rules' order; none after cores_build's (the
+    other rules build the cores too)."""
+    out = []
+    for rule in rules:
+        found = rule(c)
+        out += found
+        if found and rule is cores_build:
+            break
+    return out
 
 
 # -- the builder ----------------------------------------------------------------------------
@@ -577,7 +633,10 @@ def build(scen: Scenario, all_failures: bool = False, rules: tuple[Rule, ...] = 
         NodeConfig(n.name, n.kind, MappingProxyType(scen.parameters(n.name))) for n in scen.nodes
     )
     plants = [n for n in nodes if n.role == PLANT]
-    source = _period_source(scen, nodes)
+    try:
+        source = _period_source(scen, nodes)
+    except BUILD_ERRORS as exc:  # a force process model that cannot be built
+        raise ScenarioError(f'scenario {scen.name}: {build_failure(exc)}') from None
     config = JobConfig(
         scenario=scen.name,
         nodes=nodes,

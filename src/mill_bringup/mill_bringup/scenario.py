@@ -14,7 +14,6 @@ the runner and the launch file apply them in any namespace.
 from __future__ import annotations
 
 import fnmatch
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,12 +24,13 @@ from mill_common.parameters import (
     ParameterError,
     ParamSpec,
     is_ros_parameter,
+    ros_parameter_problem,
     unknown_parameters_message,
     validate,
 )
 
 from mill_bringup.catalogue import NodeKind, UnknownNodeKind, kind_of
-from mill_common import topics
+from mill_common import topics, yaml_files
 
 SCENARIO_KEY = 'mill_scenario'
 SHARED_KEY = '/**'  # what a parameter file gives every node
@@ -45,19 +45,10 @@ def check_layout(value: object) -> str:
     return str(value)
 
 
-class _Loader(yaml.SafeLoader):
-    """YAML as ROS reads parameter files: `1.37e9` is a float (PyYAML's YAML 1.1 says string)."""
-
-
-_Loader.add_implicit_resolver(
-    'tag:yaml.org,2002:float',
-    re.compile(r'^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$'),
-    list('-+0123456789'),
-)
-
-
-def parse_yaml(text: str):
-    return yaml.load(text, Loader=_Loader)
+def parse_yaml(text: str) -> Any:
+    """YAML as ROS reads parameter files (`1.37e9` is a float), read safely
+    (mill_common.yaml_files: no aliases, at most 1 MiB)."""
+    return yaml_files.parse_yaml(text, ros_floats=True)
 
 
 class _Dumper(yaml.SafeDumper):
@@ -186,6 +177,10 @@ class Scenario:
             message = unknown_parameters_message(unknown, known, name)
             raise ScenarioError(f'{self.path}: entry {name}: {message}')
         raw = self.raw_parameters(name)
+        for n, v in raw.items():  # rclpy's own (use_sim_time): the node would end on them
+            problem = ros_parameter_problem(n, v)
+            if problem:
+                raise ScenarioError(f'{name}: {problem}')
         values = {}
         for full, spec in specs:
             try:
@@ -251,6 +246,8 @@ class Scenario:
             raise ScenarioError(f'override {text!r} is not NODE.NAME=VALUE')
         try:
             value = parse_yaml(value_text)
+        except yaml_files.YamlRefused as exc:
+            raise ScenarioError(f'override {text!r}: {exc}') from None
         except yaml.YAMLError:
             raise ScenarioError(f'override {text!r}: value is not valid YAML') from None
         matched = [n.name for n in self.nodes if fnmatch.fnmatchcase(n.name, node_glob)]
@@ -299,9 +296,9 @@ def resolve(name_or_path: str) -> Path:
 def load(name_or_path: str) -> Scenario:
     path = resolve(name_or_path)
     try:
-        raw = parse_yaml(path.read_text())
+        raw = yaml_files.read_yaml(path, ros_floats=True)
     except yaml.YAMLError as exc:
-        raise ScenarioError(f'{path}: not valid YAML ({exc})') from None
+        raise ScenarioError(f'{path}: {yaml_files.yaml_problem(exc)}') from None
     except OSError as exc:
         raise ScenarioError(f'{path}: {exc.strerror or exc}') from None
     except UnicodeDecodeError:
@@ -354,11 +351,13 @@ def apply_params_file(scen: Scenario, path: str) -> None:
     is a typo, refused. A node's own entry may hold only names that node declares.
     """
     try:
-        raw = parse_yaml(Path(path).read_text())
+        raw = yaml_files.read_yaml(path, ros_floats=True)
     except OSError as exc:
         raise ScenarioError(f'params_file {path}: {exc.strerror or exc}') from None
-    except Exception as exc:  # yaml errors
-        raise ScenarioError(f'params_file {path}: not valid YAML ({exc})') from None
+    except UnicodeDecodeError:
+        raise ScenarioError(f'params_file {path}: not a text file') from None
+    except yaml.YAMLError as exc:
+        raise ScenarioError(f'params_file {path}: {yaml_files.yaml_problem(exc)}') from None
     if raw is None:
         raise ScenarioError(f'params_file {path}: empty: it sets no parameter')
     if not isinstance(raw, dict):

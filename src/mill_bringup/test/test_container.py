@@ -87,3 +87,16 @@ def test_main_help_and_bad_node(capsys: pytest.CaptureFixture[str]) -> None:
     err = capsys.readouterr().err
     assert err.startswith("mill_container: error: the scenario has no node 'spindle'")
     assert err.count('\n') == 1
+
+
+def test_a_params_file_with_aliases_is_refused_in_one_line(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    path = tmp_path / 'bomb.yaml'
+    path.write_text('a: &a [1, 2]\nb: [*a, *a]\n')
+    assert main(['mill_container', 'plant', '--ros-args', '--params-file', str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        f'mill_container: error: --params-file {path}: an anchor (&a) at line 1, column 4: '
+        'anchors are refused\n'
+    )

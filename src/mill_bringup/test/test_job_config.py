@@ -16,6 +16,7 @@ from mill_bringup.job_config import (
     build,
     check,
     command_unit,
+    cores_build,
     disturbance_unit,
     feed_limits,
     following_band,
@@ -243,6 +244,7 @@ def build_unchecked(scen: scenario.Scenario) -> JobConfig:
 
 def test_every_rule_is_in_the_table() -> None:
     assert (
+        cores_build,
         one_sample_period,
         gains_for_the_rate,
         one_command_delay,
@@ -318,3 +320,22 @@ def test_a_lockstep_override_comes_once_per_spindle_revolution() -> None:
         Side('force_controller', 'spindle revolution 60/S_s', 60.0 / 1800.0),
     )
     assert failures_of(scen) == [failure]
+
+
+def test_a_gain_no_law_builds_with_is_a_typed_failure_and_stops_the_checks() -> None:
+    # Issue 37: gpi.omega_n = 1e300 overflows in gpi's design, running or not; the rules
+    # after cores_build build the cores too, so it is the one failure.
+    scen = scenario.load('slotting')
+    scen.add_override('x_controller.gpi.omega_n=1e300')
+    scen.add_override('y_observer.dfo.omega_o=1e300')
+    failures = check(build_unchecked(scen))
+    assert [f.rule for f in failures] == ['cores_build', 'cores_build']
+    by_node = {f.sides[0].node: f for f in failures}
+    law, given = by_node['x_controller'].sides
+    assert (law.name, law.value) == ('controller', 'adrc')
+    assert given.name == 'values' and given.value['gpi.omega_n'] == 1e300
+    assert by_node['x_controller'].message == (
+        'x_controller: controller adrc cannot run with its values: gpi (not the running law): '
+        "OverflowError: (34, 'Numerical result out of range')"
+    )
+    assert 'dfo (not the running observer): OverflowError' in by_node['y_observer'].message

@@ -245,6 +245,7 @@ def run_nodes(
         os.environ.setdefault(key, ros_environment({})[key])
 
     import rclpy
+    from rclpy.exceptions import ParameterException
     from rclpy.executors import ExternalShutdownException
     from rclpy.signals import SignalHandlerOptions
     from rclpy.task import Future
@@ -320,8 +321,10 @@ def run_nodes(
         if request is not None:
             label, exit_ = request
             raise exit_
-    except (ParameterError, ValueError) as exc:
-        print(f'{executable}: {_of(label)}error: {exc}', file=sys.stderr)
+    except (ParameterError, ValueError, ParameterException) as exc:
+        # ParameterException: what rclpy refuses of a value it declares itself at start-up
+        # (`use_sim_time:=maybe`: "Trying to set parameter 'use_sim_time' to 'maybe' ...")
+        print(f'{executable}: {_of(label)}error: {" ".join(str(exc).split())}', file=sys.stderr)
         code = 2
     except NodeExit as exc:
         print(f'{executable}: {_of(label)}{"error: " if exc.code else ""}{exc}', file=sys.stderr)

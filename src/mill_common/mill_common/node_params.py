@@ -20,6 +20,7 @@ from mill_common.parameters import (
     number_list,
     one_of,
     text,
+    whole_in,
 )
 from mill_common.signals import AXES
 
@@ -136,7 +137,7 @@ class AxisNodeParams(InputWatch, RealtimeScheduling):
         'acts in (realtime: 1); the observer predicts with the commands that really act '
         'and estimates the state N samples ahead, the controller aims at the reference '
         'N samples ahead',
-        non_negative_int,
+        whole_in(0, 1000),
         read_only=True,
     )
 

@@ -28,6 +28,8 @@ from typing import Any
 
 import yaml
 
+from mill_common.yaml_files import read_yaml, yaml_problem
+
 PARAMETER_FLAGS = ('-p', '--param')
 PARAMS_FILE_FLAG = '--params-file'
 ROS_PARAMETERS_KEY = 'ros__parameters'
@@ -129,8 +131,8 @@ def parameter_sources(argv: Sequence[str], node_name: str, fqn: str) -> Paramete
     for path in _flag_values(args, (PARAMS_FILE_FLAG,)):
         sources.files.append(path)
         try:
-            document = yaml.safe_load(Path(path).read_text())
-        except (OSError, yaml.YAMLError):
+            document = read_yaml(path)
+        except (OSError, UnicodeDecodeError, yaml.YAMLError):
             continue
         for key, params in node_entries(document):
             if not key_matches(key, fqn):
@@ -169,18 +171,13 @@ def params_file_problem(path: str) -> str | None:
     if p.is_dir():
         return 'is a directory, not a parameter file'
     try:
-        text = p.read_text()
+        document = read_yaml(p)
     except OSError as exc:
         return exc.strerror or str(exc)
     except UnicodeDecodeError:
         return 'not a text file'
-    try:
-        document = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, 'problem_mark', None)
-        problem = getattr(exc, 'problem', None) or type(exc).__name__
-        where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark else ''
-        return f'not valid YAML ({problem}{where})'
+        return yaml_problem(exc)
     if any(values for _key, values in node_entries(document)):
         return None
     if document is None:
@@ -193,7 +190,7 @@ def params_file_miss(path: str, fqns: Sequence[str]) -> str | None:
     None if one of its entries with values applies to one of them, or if it cannot be read
     (params_file_problem and rcl say why)."""
     try:
-        document = yaml.safe_load(Path(path).read_text())
+        document = read_yaml(path)
     except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return None
     keys = list(dict.fromkeys(key for key, values in node_entries(document) if values))

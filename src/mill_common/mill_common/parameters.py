@@ -71,11 +71,24 @@ class Plugin(Protocol):
     PARAMETERS: ClassVar[tuple[ParamSpec, ...]]
 
 
+# The most of a value a one-line message shows (a parameter file may hold a list of a
+# million numbers: its refusal stays one short line).
+SHOWN_CHARS = 200
+
+
+def shown(value: Any) -> str:
+    """repr(value), cut to SHOWN_CHARS with what was left out said."""
+    text = repr(value)
+    if len(text) <= SHOWN_CHARS:
+        return text
+    return f'{text[:SHOWN_CHARS]}... ({len(text) - SHOWN_CHARS} more characters)'
+
+
 class ParameterError(ValueError):
     """A parameter value was refused; str() is a one-line message naming it."""
 
     def __init__(self, name: str, value: Any, reason: str) -> None:
-        super().__init__(f'invalid parameter {name}={value!r}: {reason}')
+        super().__init__(f'invalid parameter {name}={shown(value)}: {reason}')
         self.name = name
         self.value = value
         self.reason = reason
@@ -102,7 +115,7 @@ def unknown_parameters_message(
     for name in sorted(given):
         close = difflib.get_close_matches(name, known, n=1)
         hint = f' (did you mean {close[0]}?)' if close else ''
-        parts.append(f'{name}={given[name]!r}{hint}')
+        parts.append(f'{name}={shown(given[name])}{hint}')
     s = 's' if len(parts) > 1 else ''
     reason = reason or f'{owner} has no such parameter{s}'
     return f'unknown parameter{s} {", ".join(parts)}: {reason}'
@@ -116,6 +129,14 @@ ROS_PARAMETER_PREFIXES = ('qos_overrides.',)
 
 def is_ros_parameter(name: str) -> bool:
     return name in ROS_PARAMETERS or name.startswith(ROS_PARAMETER_PREFIXES)
+
+
+def ros_parameter_problem(name: str, value: Any) -> str | None:
+    """Why rclpy would refuse `value` for a parameter it declares itself (both of
+    ROS_PARAMETERS are booleans), in one line; None if it would not (or it is not one)."""
+    if name in ROS_PARAMETERS and not isinstance(value, bool):
+        return f'invalid parameter {name}={shown(value)}: must be true or false'
+    return None
 
 
 def _is_number(value: Any) -> bool:
@@ -202,6 +223,26 @@ class WholeAtLeast(Constraint):
 
 positive_int = WholeAtLeast(1)
 non_negative_int = WholeAtLeast(0)
+
+
+class WholeIn(Constraint):
+    """A whole number (not a bool) in [lo, hi]: a count whose size drives memory or CPU time
+    (substeps, taps, grid intervals, samples of delay) is bounded, so that no value can
+    make a node run out of either."""
+
+    def __init__(self, lo: int, hi: int) -> None:
+        self.lo, self.hi = lo, hi
+        self.bounds = (lo, hi)
+        self.text = f'a whole number in [{lo}, {hi}]'
+
+    def __call__(self, value: Any) -> str | None:
+        if not isinstance(value, int) or isinstance(value, bool) or not self.lo <= value <= self.hi:
+            return f'must be {self.text}'
+        return None
+
+
+def whole_in(lo: int, hi: int) -> WholeIn:
+    return WholeIn(lo, hi)
 
 
 class OneOf(Constraint):

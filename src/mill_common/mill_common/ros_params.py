@@ -42,6 +42,7 @@ from mill_common.parameters import (
     UnknownParameterError,
     coerce,
     is_ros_parameter,
+    shown,
     unknown_parameters_message,
     validate,
     value_type,
@@ -65,6 +66,11 @@ command_line: list[str] | None = None
 # The names of the nodes that share the node's process (run_nodes sets them: a container's
 # nodes): a parameter file given to a container must hold something for one of them.
 process_nodes: tuple[str, ...] = ()
+
+
+class CoresNotBuilt(ValueError):
+    """At start-up: the node's cores cannot be built from the values it was given; str() is
+    one line naming those values and the failure (mill_common.build_check)."""
 
 
 class UndeclaredParameter(ParameterNotDeclaredException):
@@ -159,8 +165,9 @@ class NodeParameters:
             apply(values)
         except ParameterError:
             raise
-        except BUILD_ERRORS as exc:
-            raise ParameterError('configuration', '', build_failure(exc)) from exc
+        except BUILD_ERRORS as exc:  # the values given, as a run-time change names them
+            asked = ', '.join(f'{name}={shown(values[name])}' for name in given if name in values)
+            raise CoresNotBuilt(f'{asked or "the defaults"}: {build_failure(exc)}') from exc
         self.values = values
         node.add_pre_set_parameters_callback(self._coerce)
         node.add_on_set_parameters_callback(self._on_set)
@@ -245,7 +252,7 @@ class NodeParameters:
         except ParameterError as exc:
             return self._refuse(str(exc))
         except BUILD_ERRORS as exc:  # the cores cannot be built: the old ones run on
-            asked = ', '.join(f'{name}={candidate[name]!r}' for name in changed)
+            asked = ', '.join(f'{name}={shown(candidate[name])}' for name in changed)
             return self._refuse(f'{asked}: {build_failure(exc)}')
         self.values = candidate
         for name in changed:

@@ -45,8 +45,16 @@ def step_ns(k: int, dt_ns: int) -> int:
     return k * dt_ns
 
 
+# The longest job (machine time) a trajectory is given: a day. Every sample of a run is
+# kept in memory (about 0.2 kB at 1 kHz: 20 GB a day), so a longer one is refused.
+MAX_JOB_TIME = 86_400.0  # s
+
+
 def job_steps(end_time: float, dt_ns: int) -> int:
-    """Samples of a job: k = 0 .. the first k with t_k >= end_time (when the job is done)."""
+    """Samples of a job: k = 0 .. the first k with t_k >= end_time (when the job is done);
+    ValueError for an end time that is not finite or beyond MAX_JOB_TIME."""
+    if not math.isfinite(end_time) or end_time > MAX_JOB_TIME:
+        raise ValueError(f'a job ending at t = {end_time:g} s: longer than {MAX_JOB_TIME:g} s')
     k = max(0, math.ceil(end_time * 1e9 / dt_ns) - 1)
     while seconds(k * dt_ns) < end_time:
         k += 1

@@ -154,3 +154,16 @@ def test_descriptors_carry_type_range_and_constraint() -> None:
 
     d = descriptor(ParamSpec('custom', 1.0, 'c', lambda v: None))
     assert d.type == ParameterType.PARAMETER_DOUBLE and d.additional_constraints == ''
+
+
+def test_a_refused_value_is_shown_short_however_long_it_is() -> None:
+    from mill_common.parameters import ParameterError, shown, unknown_parameters_message
+
+    assert shown([1.0, 2.0]) == '[1.0, 2.0]'
+    long = [0.5] * 1_000_000  # a list a parameter file of a few MB could give
+    text = str(ParameterError('harmonic.harmonics', long, 'must list at most 32 harmonics'))
+    assert len(text) < 320 and '\n' not in text
+    assert text.startswith('invalid parameter harmonic.harmonics=[0.5, 0.5, ')
+    assert text.endswith('... (4999800 more characters): must list at most 32 harmonics')
+    unknown = unknown_parameters_message({'pd.omega': 'x' * 10_000}, ['pd.omega_c'], '/x')
+    assert len(unknown) < 320 and 'did you mean pd.omega_c?' in unknown

@@ -152,6 +152,7 @@ class AxisControllerNode(Node):
         if self._loop is None:
             self._law_name = values['controller']
             self._loop = build_loop(values)
+            check_other_laws(values)  # those given other gains than their defaults build too
             return
         law = build_controller(values)  # raises, with the reason, before anything changes
         check_other_laws(values, self.params.values)  # a law to switch to later builds too

@@ -168,11 +168,17 @@ def _try_at_rest(law: AxisController, name: str, sample_period: float) -> None:
             )
 
 
-def check_other_laws(values: dict[str, Any], old: dict[str, Any]) -> None:
+def defaults() -> dict[str, Any]:
+    """Every parameter of the node at its declared default."""
+    return {name: spec.default for name, spec in parameter_specs()}
+
+
+def check_other_laws(values: dict[str, Any], old: dict[str, Any] | None = None) -> None:
     """A change of the gains of a law that does not run: a candidate of that law built with
     the would-be values (ValueError, ArithmeticError naming it if it cannot be built), so
-    that a later switch to it cannot fail on them."""
-    for name in changed_choices(CONTROLLERS, values, old):
+    that a later switch to it cannot fail on them. old None: at start-up, every law whose
+    gains differ from their defaults."""
+    for name in changed_choices(CONTROLLERS, values, defaults() if old is None else old):
         try:
             build_controller({**values, 'controller': name})
         except BUILD_ERRORS as exc:

@@ -58,6 +58,7 @@ from mill_common.parameters import (
     one_of,
     positive,
     positive_int,
+    whole_in,
 )
 from mill_models.force_process import ForceProcessModel, ForceProcessPlant
 from mill_models.holds import HeldPlant
@@ -108,7 +109,9 @@ class MultiModelParams(RstDesignParams):
     weight_jump: float = _weight(0.2, _JUMP)
     weight_control: float = _weight(0.0, _CONTROL)
     weight_identification: float = _weight(0.0, 'δ of eq. (13): measured force vs model output')
-    horizon: int = param(4, 'M of eq. (13): samples in the sums, k−M..k', positive_int, unit='-')
+    horizon: int = param(
+        4, 'M of eq. (13): samples in the sums, k−M..k', whole_in(1, 1000), unit='-'
+    )
     forgetting: float = param(0.8, 'λ of eq. (13) in (0, 1]', _forgetting, unit='-')
     residence_samples: int = param(
         2,
@@ -129,7 +132,7 @@ class MultiModelParams(RstDesignParams):
         one_of('continuous', 'sampled'),
     )
     intersample_intervals: int = param(
-        16, 'grid intervals per sample for the continuous error', positive_int, unit='-'
+        16, 'grid intervals per sample for the continuous error', whole_in(1, 1000), unit='-'
     )
 
     def __post_init__(self) -> None:

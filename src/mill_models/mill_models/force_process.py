@@ -49,7 +49,7 @@ from mill_common.parameters import (
     ParameterError,
     non_negative,
     positive,
-    positive_int,
+    whole_in,
 )
 
 # (start time [s], axial depth of cut [mm]); our reading of Rubio 2013 fig. 3.
@@ -159,7 +159,7 @@ class ForceProcessParams(ParamSet):
         'specific cutting pressure K_c [N/mm^2] (aluminium, Rubio 2013 §5)',
         positive,
     )
-    flutes: int = param(4, 'number of teeth N_t of the cutter', positive_int, unit='-')
+    flutes: int = param(4, 'number of teeth N_t of the cutter', whole_in(1, 100), unit='-')
     immersion: float = param(
         4.0, 'immersion function r(φ_st, φ_ex, N_t) [-] (r = 4, full immersion, §5)', positive
     )

@@ -54,7 +54,7 @@ from mill_common.parameters import (
     in_range,
     number,
     positive,
-    positive_int,
+    whole_in,
 )
 from mill_common.signals import FopdtEstimate
 
@@ -86,7 +86,7 @@ class RlsParams(ParamSet):
     input_taps: int = param(
         2,
         'RLS input taps m of y(k) = a y(k−1) + Σ_{i≤m} b_i u(k−i); dead time up to m−1 samples',
-        positive_int,
+        whole_in(1, 32),
         unit='-',
     )
     load_term: bool = param(

@@ -97,11 +97,17 @@ def _try_at_rest(loop: ObserverLoop, name: str) -> None:
             )
 
 
-def check_other_observers(values: dict[str, Any], old: dict[str, Any]) -> None:
+def defaults() -> dict[str, Any]:
+    """Every parameter of the node at its declared default."""
+    return {name: spec.default for name, spec in parameter_specs()}
+
+
+def check_other_observers(values: dict[str, Any], old: dict[str, Any] | None = None) -> None:
     """A change of the gains of an observer that does not run: a candidate of it built with
     the would-be values (ValueError naming it if it cannot be built), so that a later
-    switch to it cannot fail on them."""
-    for name in changed_choices(OBSERVERS, values, old):
+    switch to it cannot fail on them. old None: at start-up, every observer whose gains
+    differ from their defaults."""
+    for name in changed_choices(OBSERVERS, values, defaults() if old is None else old):
         try:
             build_observer_loop({**values, 'observer': name})
         except BUILD_ERRORS as exc:

@@ -45,7 +45,7 @@ from typing import ClassVar
 
 import numpy as np
 from mill_common.declared import param
-from mill_common.parameters import ParameterError, in_range, positive, positive_int
+from mill_common.parameters import ParameterError, in_range, positive, whole_in
 from mill_common.signals import Estimate
 from mill_models.harmonics import harmonic_multiples
 
@@ -68,7 +68,7 @@ class DfoParams(MaharofPlant):
         1,
         'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
         'flute count = tooth passing)',
-        positive_int,
+        whole_in(1, 100),
         unit='-',
     )
     harmonics: list[float] = param(

@@ -127,8 +127,8 @@ class ObserverNode(Node):
                     f'{old} in {units[0]}: the controller cannot use both'
                 )
         loop = build_observer_loop(values)  # raises, with the reason, before anything changes
-        if self._loop is not None:
-            check_other_observers(values, self.params.values)  # to switch to later
+        # to switch to later (at start-up: those given other gains than their defaults)
+        check_other_observers(values, None if self._loop is None else self.params.values)
         # A rebuilt observer starts from the next measurement, its estimate continuing.
         self._loop = loop if self._loop is None else self._loop.replace(loop)
         self._commands.clear()

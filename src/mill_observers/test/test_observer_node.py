@@ -52,17 +52,17 @@ def test_a_bandwidth_the_observer_cannot_be_built_with_is_refused_running_or_not
         assert set_one(node, 'blend_time', 0.01).successful
 
 
-def test_a_bad_bandwidth_given_at_start_up_is_refused_when_its_observer_is_selected(
-    observer,
-) -> None:
-    # (imbdo: a disturbance in V as dfo's, so that the switch is one the node may make)
-    node = observer('-p', 'observer:=imbdo', '-p', 'dfo.omega_o:=1e300')
-    loop = node._loop
-    result = set_one(node, 'observer', 'dfo')
-    assert not result.successful
-    assert result.reason == "observer='dfo': OverflowError: (34, 'Numerical result out of range')"
-    assert node._loop is loop and node.params.values['observer'] == 'imbdo'
-    assert set_one(node, 'dfo.omega_o', 200.0).successful
+def test_a_bad_bandwidth_given_at_start_up_ends_the_start_up_in_one_line(observer) -> None:
+    # Issue 37: every observer given other gains than its defaults is built at start-up.
+    from mill_common.ros_params import CoresNotBuilt
+
+    with pytest.raises(CoresNotBuilt) as info:
+        observer('-p', 'observer:=imbdo', '-p', 'dfo.omega_o:=1e300')
+    assert str(info.value) == (
+        "observer='imbdo', dfo.omega_o=1e+300: dfo (not the running observer): "
+        "OverflowError: (34, 'Numerical result out of range')"
+    )
+    node = observer('-p', 'observer:=imbdo', '-p', 'dfo.omega_o:=200.0')
     assert set_one(node, 'observer', 'dfo').successful
 
 

@@ -24,6 +24,7 @@ from mill_common.parameters import (
     positive,
     positive_int,
     positive_or_inf,
+    whole_in,
 )
 from mill_common.signals import AXES
 
@@ -143,7 +144,7 @@ class MachineParams(LockstepClock):
         in_range(1e-6, 10.0),
         read_only=True,
     )
-    substeps: int = param(4, 'RK4 substeps per sample', positive_int, read_only=True)
+    substeps: int = param(4, 'RK4 substeps per sample', whole_in(1, 1000), read_only=True)
     friction_reversal: str = param(
         'stop',
         "a carriage whose velocity crosses zero inside a substep: 'stop' there for the rest "
@@ -250,7 +251,7 @@ class ForceProcessParams(LockstepClock, RecorderWindow):
     trace_intervals: int = param(
         32,
         'grid intervals per sample of the force published on /mill/cutting_force/trace',
-        positive_int,
+        whole_in(1, 1000),
         read_only=True,
     )
     min_subscribers: int = param(

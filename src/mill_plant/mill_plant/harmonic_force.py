@@ -45,8 +45,8 @@ from mill_common.parameters import (
     number,
     number_list,
     positive,
-    positive_int,
     positive_or_inf,
+    whole_in,
 )
 from mill_models.harmonics import harmonic_multiples
 
@@ -83,7 +83,7 @@ class HarmonicParams(ParamSet):
         MAHAROF_TEETH,
         'events per spindle revolution in f_0 = n/60·teeth (1 = once per revolution, '
         'flute count = tooth passing)',
-        positive_int,
+        whole_in(1, 100),
         unit='-',
     )
     harmonics: list[float] = param(

@@ -80,7 +80,7 @@ from mill_common.parameters import (
     number_list,
     one_of,
     positive,
-    positive_int,
+    whole_in,
 )
 
 from mill_plant.cutting import CuttingForceModel, Force3
@@ -144,7 +144,7 @@ class KlineParams(ParamSet):
         1.37e9, 'u_s, energy per removed volume [J/m^3] (0.5 hp min/in^3)', positive
     )
     spindle_speed: float = param(1800.0, 'spindle speed N', positive, unit='rpm')
-    teeth: int = param(2, 'cutter teeth n_t', positive_int)
+    teeth: int = param(2, 'cutter teeth n_t', whole_in(1, 100))
     tool_diameter: float = param(0.010, 'cutter diameter D', positive, unit='m')
     radial_depth: float = param(0.010, 'radial depth of cut b [m] (b = D: slot)', positive)
     helix_angle: float = param(45.0, 'cutting-edge angle lambda', in_range(0, 89), unit='deg')

@@ -25,7 +25,7 @@ from mill_common.parameters import (
     positive,
 )
 from mill_common.signals import AXES
-from mill_common.timebase import period_ns, seconds
+from mill_common.timebase import MAX_JOB_TIME, period_ns, seconds
 
 from mill_trajectory.base import Trajectory
 from mill_trajectory.feed_override import (
@@ -61,7 +61,9 @@ class TrajectoryNodeParams(InputWatch):
 
     trajectory: str = param('linear', 'path type', TRAJECTORIES.check())
     duration: float = param(
-        0.0, 'end the job after this time [s]; 0 = when the path ends', non_negative
+        0.0,
+        'end the job after this time [s]; 0 = when the path ends',
+        in_range(0.0, MAX_JOB_TIME),
     )
     sample_period: float = param(
         0.001, 'sample period T', in_range(1e-6, 1.0), unit='s', read_only=True
@@ -71,7 +73,9 @@ class TrajectoryNodeParams(InputWatch):
         "span of reference points sent per /clock tick [s]; must cover the plant's clock_period",
         in_range(1e-6, 10.0),
     )
-    settle_time: float = param(0.0, 'time held at the end of the path', non_negative, unit='s')
+    settle_time: float = param(
+        0.0, 'time held at the end of the path', in_range(0.0, MAX_JOB_TIME), unit='s'
+    )
     timing: str = param(
         'lockstep',
         'lockstep: answer each /clock tick of the plant with the reference ahead of it; '
@@ -226,6 +230,11 @@ def build_job(values: Mapping[str, Any]) -> JobPath:
     end = path.end_time + node.settle_time
     if node.duration > 0:
         end = min(end, node.duration)
+    if not end <= MAX_JOB_TIME:  # a path that takes longer (a feed of nm/s): its samples
+        raise ValueError(
+            f'the job would end at t = {end:g} s, after {MAX_JOB_TIME:g} s (a day): '
+            'give a duration or a faster path'
+        )
     return JobPath(path, end)
 
 

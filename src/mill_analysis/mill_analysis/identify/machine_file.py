@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 import yaml
 from mill_common.signals import AXES
+from mill_common.yaml_files import read_yaml, yaml_problem
 from mill_models.axis_model import RIGID, TWO_MASS, AxisModel
 from mill_models.backlash_id import Backlash
 from mill_models.frequency_response import FrequencyResponse, FrfAnalysis, TwoMassModel
@@ -164,11 +165,13 @@ def _plain(value: Any) -> Any:
 def read(path: Path) -> MachineModel:
     where = f'machine model {path}'
     try:
-        raw = yaml.safe_load(Path(path).read_text())
+        raw = read_yaml(path)
     except OSError as exc:
         raise MachineFileError(f'{where}: {exc.strerror or exc}') from None
+    except UnicodeDecodeError:
+        raise MachineFileError(f'{where}: not a text file') from None
     except yaml.YAMLError as exc:
-        raise MachineFileError(f'{where}: not valid YAML ({str(exc).splitlines()[0]})') from None
+        raise MachineFileError(f'{where}: {yaml_problem(exc)}') from None
     if not isinstance(raw, dict) or raw.get('mill_machine_model') != VERSION:
         raise MachineFileError(f'{where}: not a machine model written by identify')
     T = _number(raw.get('sample_period'), f'{where}: sample_period')

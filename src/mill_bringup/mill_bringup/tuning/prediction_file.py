@@ -17,6 +17,7 @@ from typing import Any
 
 import yaml
 from mill_analysis.summary import PredictionComparison
+from mill_common.yaml_files import read_yaml
 
 from mill_bringup.scenario import Scenario
 
@@ -58,8 +59,8 @@ def write_prediction(path: Path, p: Prediction) -> None:
 def read_prediction(params_file: str | Path) -> dict[str, Any] | None:
     """The prediction next to a parameter file, None if there is none or it is unreadable."""
     try:
-        data = yaml.safe_load(prediction_path(params_file).read_text())
-    except (OSError, yaml.YAMLError):
+        data = read_yaml(prediction_path(params_file))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError):
         return None
     if not isinstance(data, dict) or not isinstance(data.get('rms_error'), dict):
         return None
