@@ -299,7 +299,7 @@ def test_run_scenario_refuses_an_unknown_override_before_anything_starts(ros_env
         timeout=120,
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
-    assert proc.returncode == 1 and lines == [
+    assert proc.returncode == 2 and lines == [
         "run_scenario: error: override 'x_controller.pd.omega=3.0': unknown parameter "
         'pd.omega=3.0 (did you mean pd.omega_c?): x_controller has no such parameter'
     ], proc.stderr

@@ -89,7 +89,7 @@ def test_an_axis_near_the_end_of_its_travel_is_refused(ros_env, tmp_path: Path) 
         '--output',
         str(tmp_path / 'run'),
     )
-    assert proc.returncode == 1  # refused before any node starts
+    assert proc.returncode == 2  # refused before any node starts
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and 'axis x may leave the machine travel' in lines[0], proc.stderr
     assert 'Traceback' not in proc.stderr

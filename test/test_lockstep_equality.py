@@ -113,7 +113,7 @@ def test_layouts_run_equals_offline_simulation(ros_env, tmp_path, layout, proces
 
 def test_bad_layout_is_refused_in_one_line(ros_env, tmp_path):
     proc = run_scenario(ros_env, 'slotting', '--layout', 'pairs', timeout=120)
-    assert proc.returncode == 1
+    assert proc.returncode == 2
     assert proc.stderr == (
         "run_scenario: error: layout must be one of processes, per_axis, single, got 'pairs'\n"
     )

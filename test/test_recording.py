@@ -582,7 +582,7 @@ def test_runner_refuses_an_existing_bag_with_one_line(ros_env, tmp_path):
         ros_env, 'slotting', '--record', str(bag), '--output', str(tmp_path / 'run'), timeout=120
     )
     lines = [line for line in proc.stderr.splitlines() if line.strip()]
-    assert proc.returncode == 1 and len(lines) == 1, proc.stderr
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert (
         lines[0]
         == f'run_scenario: error: --record: {bag} exists already; a bag is never overwritten'

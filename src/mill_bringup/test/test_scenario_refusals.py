@@ -75,7 +75,7 @@ def test_a_value_nothing_can_run_with_ends_run_scenario_in_one_line(
     capsys, tmp_path: Path, args: list[str], line: str
 ) -> None:
     scenario = [] if args[0] == 'rubio' else ['slotting']
-    assert run_scenario_main([*scenario, *args, '--output', str(tmp_path / 'run')]) == 1
+    assert run_scenario_main([*scenario, *args, '--output', str(tmp_path / 'run')]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f'run_scenario: error: {line}']
     assert not (tmp_path / 'run').exists()  # nothing was started
@@ -89,7 +89,7 @@ def test_the_alias_bomb_is_one_short_line_in_little_memory(tmp_path: Path) -> No
     assert executable is not None
     command = [sys.executable, '-c', PEAK, executable, '--params-file', str(path)]
     done = subprocess.run(command, capture_output=True, text=True, timeout=120)
-    assert done.returncode == 1
+    assert done.returncode == 2
     assert done.stderr.splitlines() == [
         f'run_scenario: error: params_file {path}: an anchor (&a) at line 1, column 4: '
         'anchors are refused'

@@ -269,9 +269,10 @@ def main(argv: list[str] | None = None) -> int:
                 return result.exit_code
     except (ScenarioError, RunError, BagError) as exc:
         print(f'run_scenario: error: {exc}', file=sys.stderr)
-        if pending is not None:
-            write_summary(pending[0], ended(pending[1], Outcome.FAILED, str(exc)))
-        return 1
+        if pending is None:  # refused before anything started: the input's fault
+            return START_REFUSED
+        write_summary(pending[0], ended(pending[1], Outcome.FAILED, str(exc)))
+        return JOB_FAILED
     except KeyboardInterrupt:
         print('run_scenario: interrupted', file=sys.stderr)
         if pending is not None:
