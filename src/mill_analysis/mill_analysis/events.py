@@ -10,7 +10,9 @@ in, never from the status's prose:
   took (`<axis>.invalid_commands`, a NaN command: a tripped controller sends one every
   period): the first a `braked`; and what the machine reports wrong (`<axis>.fault`): a `fault`;
 - a drive's ownership status (`<node>: ownership`, with `foreign_messages`): a
-  `foreign_publisher`, once per drive (what it said in the detail).
+  `foreign_publisher`, once per drive (what it said in the detail), unless it counts
+  `foreign_publishers` 0; with `contested` (two publishers claiming an owner's name, both
+  named): an `owner_contested` once per set of claimants (the value in the detail).
 
 The runner adds what it found itself: a drive that went silent (`drive_silent`), a run
 that stalled (`stall`), a node that died (`node_died`), a run it could not complete
@@ -38,9 +40,24 @@ STALL = 'stall'  # the run made no progress for --stall-timeout
 NODE_DIED = 'node_died'  # a node's process ended while the job ran
 RUN_ERROR = 'run_error'  # the run could not go on (the graph refused it)
 FOREIGN = 'foreign_publisher'  # the drive saw another publisher on its topics (ignored)
-KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN, DRIVE_SILENT, STALL, NODE_DIED, RUN_ERROR)
+# Two publishers claim the name of an axis's owner (the graph shows both): both refused.
+CONTESTED = 'owner_contested'
+KINDS = (
+    TRIP,
+    STOPPED,
+    BRAKED,
+    FAULT,
+    FOREIGN,
+    CONTESTED,
+    DRIVE_SILENT,
+    STALL,
+    NODE_DIED,
+    RUN_ERROR,
+)
 # The events of a status on the machine (the others are the runner's own findings).
-MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN)
+MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN, CONTESTED)
+# Who else than an owner tried to drive the machine: they make a record not intact.
+INTRUSIONS = (FOREIGN, CONTESTED)
 
 TRIP_PART = 'following error'  # mill_controllers.axis_reports.TRIP_PART
 OWNERSHIP_PART = 'ownership'  # mill_plant.ownership.OWNERSHIP_PART
@@ -159,6 +176,7 @@ def events_of(
     counted: dict[tuple[str, str], int] = {}  # (node, key) -> the count told so far
     faults: dict[tuple[str, str], str] = {}
     foreign: set[str] = set()  # drives that told of a foreign publisher
+    contests: set[tuple[str, str]] = set()  # (drive, the claimants it named)
     for s in statuses:
         at = (s.stamp_ns - start_ns) * 1e-9
         values = s.values
@@ -176,9 +194,14 @@ def events_of(
             out.append(Event(axis, TRIP, t - start, detail, s.node))
             continue
         if s.part == OWNERSHIP_PART and 'foreign_messages' in values:
-            if s.node not in foreign:
+            named = _count(values.get('foreign_publishers', '1')) > 0
+            if named and s.node not in foreign:
                 foreign.add(s.node)
                 out.append(Event('', FOREIGN, at, s.message, s.node))
+            claim = values.get('contested')
+            if claim and (s.node, claim) not in contests:
+                contests.add((s.node, claim))
+                out.append(Event('', CONTESTED, at, claim, s.node))
             continue
         if s.part not in topics.DRIVE_STATUSES:
             continue

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from mill_analysis.events import FOREIGN, events_of
+from mill_analysis.events import INTRUSIONS, events_of
 from mill_bag.reader import open_bag
 from mill_bag.writer import counts_note
 
@@ -80,8 +80,9 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
     ranges = {t: r for t, r in job.gaps(record).items() if t in missing}
     short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
-    # A foreign publisher on the drive's topics, told at any time: the record is not intact.
-    foreign = [e.text() for e in events_of(monitor.statuses()) if e.kind == FOREIGN]
+    # A foreign publisher on the drive's topics, or two claiming an owner's name, told at any
+    # time: the record is not intact.
+    foreign = [e.text() for e in events_of(monitor.statuses()) if e.kind in INTRUSIONS]
     return Collected(
         record, missing, ranges, lost, problems, bag, short, peak, session.peak_pss_mb, foreign
     )
