@@ -56,6 +56,7 @@ def qualified(namespace: str, name: str) -> str:
 
 @dataclass
 class _Topic:
+    name: str  # as the node named it (relative to its namespace)
     owner: str
     verdicts: dict[bytes, Sender] = field(default_factory=dict)
     count: int = -1  # publishers at the last look
@@ -72,8 +73,8 @@ class GraphOwners:
         on_contested: Callable[[str, str, tuple[str, ...]], None] | None = None,
     ) -> None:
         """local_publishers: the nodes of this process publishing a (resolved) topic
-        (mill_common.intra_process); on_contested(topic, owner, claimants): told once per
-        set of claimants."""
+        (mill_common.intra_process); on_contested(topic as watched, owner, claimants): told
+        once per set of claimants."""
         self._node = node
         self._namespace = node.get_namespace()
         self._local = local_publishers or (lambda topic: [])
@@ -84,7 +85,7 @@ class GraphOwners:
         """Identify the senders of `topic` against `owner` (a node name in this node's
         namespace); returns the resolved topic name the verdicts are asked with."""
         resolved = self._node.resolve_topic_name(topic)
-        self._topics[resolved] = _Topic(owner)
+        self._topics[resolved] = _Topic(topic, owner)
         return resolved
 
     def verdict(self, topic: str, gid: bytes) -> Sender:
@@ -152,7 +153,7 @@ class GraphOwners:
         t.verdicts = verdicts
         if t.contested and t.contested != t.reported and self._on_contested is not None:
             t.reported = t.contested
-            self._on_contested(topic, t.owner, t.contested)
+            self._on_contested(t.name, t.owner, t.contested)
         elif not t.contested:
             t.reported = ()
 

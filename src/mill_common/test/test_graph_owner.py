@@ -121,7 +121,7 @@ def test_two_nodes_with_the_owners_name_are_both_refused_and_named_once(graph) -
     assert len(gids) == 2 and gids[0] != gids[1]
     (topic, owner, claimants), *more = contests
     assert not more  # told once, however many messages follow
-    assert (topic, owner) == ('/mill/x/joint_command', 'x_controller')
+    assert (topic, owner) == (TOPIC, 'x_controller')
     assert len(claimants) == 2 and all(c.startswith('/x_controller (gid ') for c in claimants)
     named = sorted(c.split('(gid ')[1].rstrip(')').replace('.', '') for c in claimants)
     assert named == gids  # both named, each by its endpoint's GID
