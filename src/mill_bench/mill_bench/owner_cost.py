@@ -16,12 +16,11 @@ import time
 
 def main(argv: list[str] | None = None) -> int:
     import rclpy
+    from mill_common.graph_owner import GidSubscription, GraphOwners
+    from mill_common.ros import joint_state_bytes
     from rclpy.node import Node
     from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import JointState
-
-    from mill_common.graph_owner import GidSubscription, GraphOwners
-    from mill_common.ros import joint_state_bytes
 
     n = int((argv or sys.argv[1:] or ['2000'])[0])
     os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')

@@ -230,7 +230,7 @@ def _libraries() -> tuple[Any, Any]:
     return _RCL, _RCUTILS
 
 
-class GidSubscription(Waitable):  # type: ignore[misc]
+class GidSubscription(Waitable):
     """A raw subscription whose callback gets (bytes, publisher GID) of each message.
 
     Made and destroyed like a node's subscription (`destroy`); in the graph it is the
@@ -297,9 +297,7 @@ class GidSubscription(Waitable):  # type: ignore[misc]
                 self._pointer, ctypes.byref(data), ctypes.byref(info), None
             ):
                 return None  # nothing there after all (RCL_RET_SUBSCRIPTION_TAKE_FAILED)
-            return ctypes.string_at(data.buffer, data.buffer_length), bytes(
-                info.publisher_gid.data
-            )
+            return ctypes.string_at(data.buffer, data.buffer_length), bytes(info.publisher_gid.data)
 
     async def execute(self, taken: tuple[bytes, bytes] | None) -> None:
         if taken is not None:

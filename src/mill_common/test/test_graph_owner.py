@@ -80,7 +80,9 @@ def sender(graph: Any, name: str) -> Callable[[str], None]:
     from sensor_msgs.msg import JointState
 
     pub = graph.node(name).create_publisher(JointState, TOPIC, DATA_QOS)
-    return lambda frame_id: pub.publish(joint_state_bytes(0, ('x',), effort=(1.0,), sender=frame_id))
+    return lambda frame_id: pub.publish(
+        joint_state_bytes(0, ('x',), effort=(1.0,), sender=frame_id)
+    )
 
 
 def test_a_publisher_writing_the_owners_name_in_frame_id_is_told_apart_by_its_gid(graph) -> None:
@@ -107,7 +109,9 @@ def test_two_nodes_with_the_owners_name_are_both_refused_and_named_once(graph) -
     contests: list[tuple[str, str, tuple[str, ...]]] = []
     node, got = receiver(graph, contests)
     first = sender(graph, 'x_controller')
-    assert graph.spin_until(lambda: first('x_controller') or any(w.verdict == OWNER for _, w in got))
+    assert graph.spin_until(
+        lambda: first('x_controller') or any(w.verdict == OWNER for _, w in got)
+    )
     second = sender(graph, 'x_controller')  # a second process started with the same name
 
     def both_refused() -> bool:

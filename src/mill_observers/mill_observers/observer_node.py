@@ -24,6 +24,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
 from mill_common.hold_window import drive_word
@@ -44,7 +45,6 @@ from mill_common.ros_params import NodeParameters
 from mill_common.signals import Estimate
 from mill_common.timebase import period_ns
 from mill_common.timing import timing
-from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from sensor_msgs.msg import JointState

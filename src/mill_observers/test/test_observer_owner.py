@@ -39,7 +39,9 @@ def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
         observer = ObserverNode(
             context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
         )
-        plant, controller, rogue = (Node(n, context=context) for n in ('plant', 'x_controller', 'rogue'))
+        plant, controller, rogue = (
+            Node(n, context=context) for n in ('plant', 'x_controller', 'rogue')
+        )
         nodes += [observer, plant, controller, rogue]
         states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
         commands = controller.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS)
@@ -67,7 +69,15 @@ def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
 
         take = take_serialized
         take(controller, JointState, 'mill/x/estimate', decode_joint_state, answer, DATA_QOS, print)
-        take(plant, JointState, 'mill/x/joint_command', decode_joint_state, next_state, DATA_QOS, print)
+        take(
+            plant,
+            JointState,
+            'mill/x/joint_command',
+            decode_joint_state,
+            next_state,
+            DATA_QOS,
+            print,
+        )
         take(rogue, JointState, 'mill/x/state', decode_joint_state, ratchet, DATA_QOS, print)
         for node in nodes:
             executor.add_node(node)

@@ -7,8 +7,9 @@ mill_common.checks.Sender, from mill_common.graph_owner); what the message says 
 owner's name (the graph shows both), neither drives the axis: each command of either for a
 step the drive expects is taken as a brake request. A brake request from the owner wins over
 a valid command of the same step that arrived before it (the step applies the brake if it
-has not been applied yet, and in real time the held command is replaced). Anything else — anything else — another sender, a stamp that answers no state, an
-unknown joint, no effort for the joint — is `Dropped` with its reason, which the drive front
+has not been applied yet, and in real time the held command is replaced). Anything else —
+another sender, a stamp that answers no state, an unknown joint, no effort for the joint —
+is `Dropped` with its reason, which the drive front
 end (mill_plant.drive_node) counts and reports. A repeat of a step already answered (the
 drive offered the step again) is ignored. A non-finite effort of the axis's joint from the
 owner is `Accepted` as NaN: it is the controller saying it has no valid command, so the axis

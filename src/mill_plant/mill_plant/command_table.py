@@ -79,7 +79,7 @@ class CommandTable:
     def offer(self, axis: str, stamp: int, value: float, arrived_ns: int | None = None) -> bool:
         """An accepted command; False if it is not newer than the one held (dropped)."""
         c = self.by_axis[axis]
-        if stamp < c.stamp or stamp == c.stamp and not (math.isnan(value) and c.value == c.value):
+        if stamp < c.stamp or (stamp == c.stamp and not (math.isnan(value) and c.value == c.value)):
             return False  # older, or the same step again: only a brake replaces a valid one
         again, c.value, c.stamp, c.fresh = stamp == c.stamp, value, stamp, True
         if c.stopped and math.isnan(value):

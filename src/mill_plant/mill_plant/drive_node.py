@@ -31,13 +31,12 @@ from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mill_common.checks import Rejected
+from mill_common.checks import Rejected, Sender
 from mill_common.codec import encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
 from mill_common.hold_window import HoldWindow
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParameterError, ParamSpec
-from mill_common.checks import Sender
 from mill_common.ros import from_stamp, graph_owners, joint_state_bytes
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds

@@ -13,7 +13,7 @@ from functools import partial
 from typing import Any
 
 from geometry_msgs.msg import WrenchStamped
-from mill_common.checks import Rejected
+from mill_common.checks import Rejected, Sender
 from mill_common.codec import decode_joint_state, decode_joint_trajectory
 from mill_common.graph_owner import GraphOwners
 from mill_common.intra_process import DataOutput
@@ -31,7 +31,7 @@ class DriveTopics:
         node: Node,
         axes: Sequence[str],
         simulated: bool,
-        on_command: Callable[[str, Any], None],
+        on_command: Callable[[str, Any, Sender], None],
         on_reference: Callable[[Any], None] | None,  # None: no spindle: reference
         drop: Callable[[str, Rejected], None],
         graph: GraphOwners,

@@ -75,9 +75,7 @@ class Ownership:
             said = [f'{t}: {o}: {"; ".join(c)}' for t, (o, c) in sorted(self.contests.items())]
             parts.append(f'owner claimed by two publishers, both refused: {" | ".join(said)}')
             values['contested'] = ' | '.join(said)
-        return diagnostics.status(
-            DiagnosticStatus.ERROR, OWNERSHIP_PART, '; '.join(parts), values
-        )
+        return diagnostics.status(DiagnosticStatus.ERROR, OWNERSHIP_PART, '; '.join(parts), values)
 
     def _note(self, topic: str, who: str) -> bool:
         seen = self.foreign.setdefault(topic, set())

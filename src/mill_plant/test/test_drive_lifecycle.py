@@ -26,6 +26,7 @@ def test_a_configure_after_a_cleanup_takes_the_same_topics_again(monkeypatch, ti
                 Parameter('timing', value=timing),
             ],
         )
+
         def made_now() -> tuple[int, int]:
             # Commands are taken with their publisher GID (mill_common.graph_owner).
             taking = [w for w in node.waitables if isinstance(w, GidSubscription)]

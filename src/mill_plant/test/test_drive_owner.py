@@ -49,9 +49,7 @@ def machine(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
                 ns = from_stamp(msg.header.stamp)
                 pub.publish(joint_state_bytes(ns, ('x',), effort=(effort,), sender='x_controller'))
 
-            take_serialized(
-                node, JointState, 'mill/x/state', decode_joint_state, answer, 10, print
-            )
+            take_serialized(node, JointState, 'mill/x/state', decode_joint_state, answer, 10, print)
             executor.add_node(node)
 
         def spin_until(self, done: Callable[[], bool], timeout: float = 10.0) -> bool:

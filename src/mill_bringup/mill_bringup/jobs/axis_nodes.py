@@ -125,7 +125,9 @@ class AxisNodes:
         """The machine's events (trips, stops, brakes) of the job's axes."""
         found = events_of(statuses, start_ns, self.axis_of())
         # an intruder is no event of the motion: it makes the record not intact
-        return [e for e in found if e.kind not in INTRUSIONS and (not e.axis or e.axis in self.axes)]
+        return [
+            e for e in found if e.kind not in INTRUSIONS and (not e.axis or e.axis in self.axes)
+        ]
 
 
 def axis_summary(
