@@ -259,6 +259,9 @@ class GidSubscription(Waitable):
         if rcutils.rcutils_uint8_array_init(ctypes.byref(self._bytes), 4096, allocator):
             raise MemoryError(f'no buffer for the messages of {topic}')
         self._info = _MessageInfo()
+        self._gid = self._info.publisher_gid.data  # a view: what each take writes there
+        self._bytes_ref, self._info_ref = ctypes.byref(self._bytes), ctypes.byref(self._info)
+        self._take = self._rcl.rcl_take_serialized_message
         self._pointer = self.handle.pointer
         self._index = 0
         self._node = node
@@ -292,12 +295,10 @@ class GidSubscription(Waitable):
 
     def take_data(self) -> tuple[bytes, bytes] | None:
         with self.handle:
-            info, data = self._info, self._bytes
-            if self._rcl.rcl_take_serialized_message(
-                self._pointer, ctypes.byref(data), ctypes.byref(info), None
-            ):
+            if self._take(self._pointer, self._bytes_ref, self._info_ref, None):
                 return None  # nothing there after all (RCL_RET_SUBSCRIPTION_TAKE_FAILED)
-            return ctypes.string_at(data.buffer, data.buffer_length), bytes(info.publisher_gid.data)
+            data = self._bytes
+            return ctypes.string_at(data.buffer, data.buffer_length), bytes(self._gid)
 
     async def execute(self, taken: tuple[bytes, bytes] | None) -> None:
         if taken is not None:

@@ -70,8 +70,8 @@ def joint_state(
     effort: Sequence[float] = (),
     sender: str = '',
 ) -> JointState:
-    """A stamped JointState; `sender` (header.frame_id) names the publishing node, which
-    the receivers check against the owner of the topic."""
+    """A stamped JointState; `sender` (header.frame_id) names the publishing node: a claim
+    the receivers check agrees with the publisher GID (mill_common.graph_owner)."""
     msg = JointState()
     msg.header.stamp = to_stamp(ns)
     msg.header.frame_id = sender
