@@ -7,8 +7,9 @@ each publisher endpoint with its GID, node name and namespace. So a receiver:
 
 - takes an owned input with `GidSubscription`: the serialized bytes and the publisher GID
   of each message (rclpy's own take drops the GID: its MessageInfo in Jazzy has only the
-  timestamps and sequence numbers, so the take is rcl's, called through ctypes, by a
-  subscription handle whose `take_message` the executors call as they call rclpy's);
+  timestamps and sequence numbers, so the take is rcl's, called through ctypes, inside a
+  Waitable that every rclpy executor runs: the C++ EventsExecutor calls a subscription
+  handle's take in C++, past any Python override);
 - asks `GraphOwners.verdict(topic, gid)`: a `mill_common.checks.Sender` (OWNER, FOREIGN,
   UNKNOWN, CONTESTED) from a table per topic, GID -> verdict, built from
   `get_publishers_info_by_topic` and rebuilt when a GID it does not hold arrives (a new
@@ -32,12 +33,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from rclpy.subscription import Subscription
 from rclpy.type_support import check_is_valid_msg_type
+from rclpy.waitable import NumberOfEntities, Waitable
 
 from mill_common.checks import ANYONE, CONTESTED, FOREIGN, OWNER, UNKNOWN, Sender
 
@@ -231,59 +231,75 @@ def _libraries() -> tuple[Any, Any]:
     return _RCL, _RCUTILS
 
 
-class _GidTake(_rclpy.Subscription):
-    """rclpy's subscription handle whose take also gives the publisher GID: the executors
-    (rclpy's and the C++ EventsExecutor alike) call the handle's `take_message`, and this
-    one takes with rcl's `rcl_take_serialized_message`, which fills rmw's message info."""
+class GidSubscription(Waitable):
+    """A raw subscription whose callback gets (bytes, publisher GID) of each message.
 
-    def __init__(self, node_handle: Any, msg_type: Any, topic: str, qos: Any) -> None:
-        super().__init__(node_handle, msg_type, topic, qos)
-        rcl, rcutils = _libraries()
+    Made and destroyed like a node's subscription (`destroy`); in the graph it is the
+    node's subscription of the topic, with the given QoS.
+    """
+
+    def __init__(
+        self,
+        node: Node,
+        msg_type: Any,
+        topic: str,
+        callback: Callable[[bytes, bytes], None],
+        qos: QoSProfile | int,
+    ) -> None:
+        super().__init__(node.default_callback_group)
+        check_is_valid_msg_type(msg_type)
+        profile = qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos)
+        with node.handle:
+            self.handle = _rclpy.Subscription(
+                node.handle, msg_type, topic, profile.get_c_qos_profile()
+            )
+        self.callback = callback
+        self._rcl, rcutils = _libraries()
         self._bytes = _Bytes()
-        if rcutils.rcutils_uint8_array_init(
-            ctypes.byref(self._bytes), 4096, rcutils.rcutils_get_default_allocator()
-        ):
+        allocator = rcutils.rcutils_get_default_allocator()
+        if rcutils.rcutils_uint8_array_init(ctypes.byref(self._bytes), 4096, allocator):
             raise MemoryError(f'no buffer for the messages of {topic}')
         self._info = _MessageInfo()
-        self._gid = self._info.publisher_gid.data  # a view: what each take writes there
-        self._bytes_ref, self._info_ref = ctypes.byref(self._bytes), ctypes.byref(self._info)
-        self._take = rcl.rcl_take_serialized_message
-        self._rcl_pointer = self.pointer
+        self._pointer = self.handle.pointer
+        self._index = 0
+        self._node = node
+        node.add_waitable(self)
 
-    def take_message(self, msg_type: Any, raw: bool) -> tuple[tuple[bytes, bytes], None] | None:
-        """((bytes, publisher GID), no info) of the next message; None if there is none."""
-        if self._take(self._rcl_pointer, self._bytes_ref, self._info_ref, None):
-            return None  # nothing there after all (RCL_RET_SUBSCRIPTION_TAKE_FAILED)
-        data = self._bytes
-        return (ctypes.string_at(data.buffer, data.buffer_length), bytes(self._gid)), None
+    def get_publisher_count(self) -> int:
+        with self.handle:
+            return int(self.handle.get_publisher_count())
 
+    def destroy(self) -> None:
+        self._node.remove_waitable(self)
+        self.handle.destroy_when_not_in_use()
+        if _RCUTILS is not None:
+            _RCUTILS.rcutils_uint8_array_fini(ctypes.byref(self._bytes))
 
-def GidSubscription(  # noqa: N802 (made and destroyed as a node's subscription)
-    node: Node,
-    msg_type: Any,
-    topic: str,
-    callback: Callable[[bytes, bytes], None],
-    qos: QoSProfile | int,
-) -> Subscription:
-    """A raw subscription of `node` whose callback gets (bytes, publisher GID) of each
-    message: an rclpy Subscription (destroyed by `node.destroy_subscription`) over a
-    handle whose take keeps the GID. Made as `Node.create_subscription` makes one."""
-    check_is_valid_msg_type(msg_type)
-    profile = qos if isinstance(qos, QoSProfile) else QoSProfile(depth=qos)
-    with node.handle:
-        handle = _GidTake(node.handle, msg_type, topic, profile.get_c_qos_profile())
+    # -- Waitable ------------------------------------------------------------------------------
+    def __enter__(self) -> None:
+        self.handle.__enter__()
 
-    def take(pair: tuple[bytes, bytes]) -> None:
-        callback(*pair)
+    def __exit__(self, *exc: Any) -> None:
+        self.handle.__exit__(*exc)
 
-    group = node.default_callback_group
-    subscription = Subscription(
-        handle, msg_type, topic, take, group, profile, True, SubscriptionEventCallbacks()
-    )
-    group.add_entity(subscription)
-    node._subscriptions.append(subscription)
-    node._wake_executor()
-    handlers: Any = subscription.event_handlers  # a list, typed as one handler by rclpy
-    for handler in handlers:
-        node.add_waitable(handler)
-    return subscription
+    def get_num_entities(self) -> NumberOfEntities:
+        return NumberOfEntities(1, 0, 0, 0, 0, 0)
+
+    def add_to_wait_set(self, wait_set: Any) -> None:
+        self._index = wait_set.add_subscription(self.handle)
+
+    def is_ready(self, wait_set: Any) -> bool:
+        return bool(wait_set.is_ready('subscription', self._index))
+
+    def take_data(self) -> tuple[bytes, bytes] | None:
+        with self.handle:
+            info, data = self._info, self._bytes
+            if self._rcl.rcl_take_serialized_message(
+                self._pointer, ctypes.byref(data), ctypes.byref(info), None
+            ):
+                return None  # nothing there after all (RCL_RET_SUBSCRIPTION_TAKE_FAILED)
+            return ctypes.string_at(data.buffer, data.buffer_length), bytes(info.publisher_gid.data)
+
+    async def execute(self, taken: tuple[bytes, bytes] | None) -> None:
+        if taken is not None:
+            self.callback(*taken)

@@ -72,10 +72,10 @@ class _Input:
     topic: str  # resolved name
     callback: Callable[[bytes], None]
     qos: QoSProfile | int
-    dds: Subscription | None = None
+    dds: Subscription | GidSubscription | None = None
     with_gid: Callable[[bytes, bytes], None] | None = None  # the callback wants the GID
 
-    def take_dds(self) -> Subscription:
+    def take_dds(self) -> Subscription | GidSubscription:
         if self.with_gid is not None:
             return GidSubscription(self.node, self.msg_type, self.topic, self.with_gid, self.qos)
         return self.node.create_subscription(
@@ -221,6 +221,8 @@ class IntraProcess:
                     del self.queue[i]  # queued for it already: not delivered either
         elif isinstance(handle, Subscription):
             node.destroy_subscription(handle)
+        elif isinstance(handle, GidSubscription):
+            handle.destroy()
 
     # -- what the spin loop calls ------------------------------------------------------------
     def pending(self) -> bool:
@@ -244,9 +246,11 @@ class IntraProcess:
     # -- internals ---------------------------------------------------------------------------
     @staticmethod
     def _drop_dds(listener: _Input) -> None:
-        if listener.dds is not None:
+        if isinstance(listener.dds, GidSubscription):
+            listener.dds.destroy()
+        elif listener.dds is not None:
             listener.node.destroy_subscription(listener.dds)
-            listener.dds = None
+        listener.dds = None
 
     def _watch(self, node: Node) -> None:
         if self._checking:
