@@ -10,7 +10,9 @@ in, never from the status's prose:
   took (`<axis>.invalid_commands`, a NaN command: a tripped controller sends one every
   period): the first a `braked`; and what the machine reports wrong (`<axis>.fault`): a `fault`;
 - a drive's ownership status (`<node>: ownership`, with `foreign_messages`): a
-  `foreign_publisher`, once per drive (what it said in the detail).
+  `foreign_publisher`, once per drive (what it said in the detail), unless it counts
+  `foreign_publishers` 0; with `contested` (two publishers claiming an owner's name, both
+  named): an `owner_contested` once per set of claimants (the value in the detail).
 
 - the trajectory's job status (`<node>: job`) with an `event` value: a `program_message`
   ((MSG, …), (DEBUG, …), (PRINT, …), a tool change) or a `pause` (M0/M1 reached, a feed
@@ -49,12 +51,15 @@ RUN_ERROR = 'run_error'  # the run could not go on (the graph refused it)
 FOREIGN = 'foreign_publisher'  # the drive saw another publisher on its topics (ignored)
 PROGRAM_MESSAGE = 'program_message'  # a G-code (MSG, …), (DEBUG, …), (PRINT, …) or tool change
 PAUSE = 'pause'  # the program paused (M0/M1) or the operator held the feed, or resumed
+# Two publishers claim the name of an axis's owner (the graph shows both): both refused.
+CONTESTED = 'owner_contested'
 KINDS = (
     TRIP,
     STOPPED,
     BRAKED,
     FAULT,
     FOREIGN,
+    CONTESTED,
     DRIVE_SILENT,
     STALL,
     NODE_DIED,
@@ -76,7 +81,9 @@ EVENT_KINDS = {
     'resume': PAUSE,
 }
 # The events of a status on the machine (the others are the runner's own findings).
-MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN)
+MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN, CONTESTED)
+# Who else than an owner tried to drive the machine: they make a record not intact.
+INTRUSIONS = (FOREIGN, CONTESTED)
 
 TRIP_PART = 'following error'  # mill_controllers.axis_reports.TRIP_PART
 OWNERSHIP_PART = 'ownership'  # mill_plant.ownership.OWNERSHIP_PART
@@ -202,6 +209,7 @@ def events_of(
     faults: dict[tuple[str, str], str] = {}
     foreign: set[str] = set()  # drives that told of a foreign publisher
     braked: set[tuple[str, str]] = set()  # (node, key) whose first brake request was told
+    contests: set[tuple[str, str]] = set()  # (drive, the claimants it named)
     for s in statuses:
         at = (s.stamp_ns - start_ns) * 1e-9
         values = s.values
@@ -219,9 +227,14 @@ def events_of(
             out.append(Event(axis, TRIP, t - start, detail, s.node))
             continue
         if s.part == OWNERSHIP_PART and 'foreign_messages' in values:
-            if s.node not in foreign:
+            named = _count(values.get('foreign_publishers', '1')) > 0
+            if named and s.node not in foreign:
                 foreign.add(s.node)
                 out.append(Event('', FOREIGN, at, s.message, s.node))
+            claim = values.get('contested')
+            if claim and (s.node, claim) not in contests:
+                contests.add((s.node, claim))
+                out.append(Event('', CONTESTED, at, claim, s.node))
             continue
         if s.part not in topics.DRIVE_STATUSES:
             continue

@@ -41,8 +41,10 @@ from mill_analysis.node_intake import Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
+from mill_common.checks import CONTESTED, FOREIGN
 from mill_common.codec import encode_clock
-from mill_common.ros import LATCHED_QOS, RECORD_QOS
+from mill_common.graph_owner import GidSubscription
+from mill_common.ros import LATCHED_QOS, RECORD_QOS, graph_owners
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
@@ -103,7 +105,12 @@ class Monitor(Node):
         late: Iterable[str] = (),
         late_after: Iterable[str] = (),
         steps: RecordedSteps | None = None,
+        owners: Mapping[str, str] | None = None,
     ) -> None:
+        """owners: the node each per-sample topic must come from (the job's owners): a
+        message whose publisher the graph shows as another node (mill_common.graph_owner:
+        its GID), or as one of two claiming the owner's name, is neither kept, recorded nor
+        acknowledged, but counted in `refused` and named in `problems`."""
         rules = [
             arg for rule in remappings if not rule.startswith('__ns:=') for arg in ('-r', rule)
         ]
@@ -111,6 +118,9 @@ class Monitor(Node):
             name, namespace=namespace, cli_args=['--ros-args', *rules] if rules else None
         )
         self.raw = Received()
+        self._owners = {t: o for t, o in (owners or {}).items() if o}
+        self._graph = graph_owners(self) if self._owners else None
+        self.refused: dict[str, dict[str, int]] = {}  # topic -> publisher -> messages left out
         self.arrivals: dict[str, list[int]] = {t: [] for t in timed}
         # Subscribed to only once a message arrived on each topic of `late_after`
         # (subscribe_late): a node that waits for its readers then waits for this monitor to
@@ -197,14 +207,33 @@ class Monitor(Node):
         if topic in self._late:
             self._held.append((topic, msgtype, on_msg))
         else:
+            self._subscribe(topic, msgtype, on_msg)
+
+    def _subscribe(self, topic: str, msgtype: str, on_msg: Callable[[bytes], None]) -> None:
+        """A raw subscription; of an owned topic, with each message's publisher GID."""
+        owner, graph = self._owners.get(topic), self._graph
+        if owner is None or graph is None:
             self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
+            return
+        resolved = graph.watch(topic, owner)
+        refused = self.refused
+
+        def on_owned(data: bytes, gid: bytes) -> None:
+            who = graph.verdict(resolved, gid)
+            if who.verdict in (FOREIGN, CONTESTED):
+                per = refused.setdefault(topic, {})
+                per[who.name] = per.get(who.name, 0) + 1
+                return
+            on_msg(data)
+
+        GidSubscription(self, message_class(msgtype), topic, on_owned, RECORD_QOS)
 
     def subscribe_late(self) -> None:
         """Subscribe to the late topics once every `late_after` topic has a message."""
         if not self._held or not all(self.raw.get(t) for t in self._late_after):
             return
         for topic, msgtype, on_msg in self._held:
-            self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
+            self._subscribe(topic, msgtype, on_msg)
         self._held = []
         self.destroy_timer(self._late_timer)
 
@@ -279,6 +308,13 @@ class Monitor(Node):
                 mine = topics.from_machine(s.hardware_id, self.get_namespace())
                 if mine and s.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR):
                     seen.setdefault(f'{s.name}: {s.message}', None)
+        for topic, per in self.refused.items():
+            for who, n in per.items():
+                seen.setdefault(
+                    f'{self.get_name()}: left out {n} messages on {topic} from {who} '
+                    f'(by its publisher GID, not the owner {self._owners[topic]})',
+                    None,
+                )
         return list(seen)
 
     def close_recording(self) -> None:

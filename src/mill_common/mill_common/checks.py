@@ -182,10 +182,57 @@ def ahead(ns: int, newest_state: int | None, lead_ns: int) -> Rejected | None:
 
 
 def owner_check(frame_id: str, owner: str) -> Rejected | None:
-    """The sender named in header.frame_id must be the input's owner ('' owner: anyone)."""
+    """The sender named in header.frame_id must be the input's owner ('' owner: anyone).
+
+    frame_id is only what the sender says of itself (a bag's messages carry nothing else);
+    a live node identifies the sender by its publisher GID (`Sender`, below)."""
     if not owner or frame_id == owner:
         return None
     return Rejected(f'sent by {frame_id or "an unnamed publisher"!r}, not by its owner {owner!r}')
+
+
+# What the ROS graph says of a message's publisher (mill_common.graph_owner finds it from
+# the publisher GID the message arrived with): the verdicts of `Sender`.
+OWNER = 'owner'  # an endpoint of the expected node, the only node of that name
+FOREIGN = 'foreign'  # an endpoint of another node
+UNKNOWN = 'unknown'  # a GID the graph does not (yet) show
+CONTESTED = 'contested'  # the expected node's name is claimed by two or more publishers
+
+
+@dataclass(frozen=True)
+class Sender:
+    """Who sent a message, as the graph identifies its publisher.
+
+    name: the publisher as the graph names it ('/ns/node', or its GID when it names no
+    node); claimants (CONTESTED): every publisher of the topic whose node has the owner's
+    name, each '/ns/node (gid …)'.
+    """
+
+    verdict: str
+    name: str
+    claimants: tuple[str, ...] = ()
+
+    @property
+    def foreign(self) -> bool:
+        """Not the owner: another node, or a publisher the graph does not show."""
+        return self.verdict in (FOREIGN, UNKNOWN)
+
+
+ANYONE = Sender(OWNER, '')  # an input without an owner: whoever sends it
+
+
+def sender_check(sender: Sender, owner: str) -> Rejected | None:
+    """The publisher must be the input's owner, and the only node of its name."""
+    if sender.verdict == OWNER:
+        return None
+    if sender.verdict == CONTESTED:
+        return Rejected(
+            f'{len(sender.claimants)} publishers claim to be {owner!r}: '
+            f'{"; ".join(sender.claimants)}: refused'
+        )
+    if sender.verdict == UNKNOWN:
+        return Rejected(f'sent by {sender.name}, which the graph does not show as {owner!r}')
+    return Rejected(f'sent by {sender.name}, not by its owner {owner!r}')
 
 
 @dataclass

@@ -42,6 +42,8 @@ from rclpy.qos import QoSProfile
 from rclpy.serialization import serialize_message
 from rclpy.subscription import Subscription
 
+from mill_common.graph_owner import LOCAL, GidSubscription
+
 ENV = 'MILL_INTRA_PROCESS'
 CHECK_PERIOD = 1.0  # s between looks for publishers outside the process on a local topic
 
@@ -70,7 +72,15 @@ class _Input:
     topic: str  # resolved name
     callback: Callable[[bytes], None]
     qos: QoSProfile | int
-    dds: Subscription | None = None
+    dds: Subscription | GidSubscription | None = None
+    with_gid: Callable[[bytes, bytes], None] | None = None  # the callback wants the GID
+
+    def take_dds(self) -> Subscription | GidSubscription:
+        if self.with_gid is not None:
+            return GidSubscription(self.node, self.msg_type, self.topic, self.with_gid, self.qos)
+        return self.node.create_subscription(
+            self.msg_type, self.topic, self.callback, self.qos, raw=True
+        )
 
     def get_publisher_count(self) -> int:
         if self.dds is not None:
@@ -122,6 +132,7 @@ class IntraProcess:
         self._outputs: dict[str, int] = {}  # resolved topic -> local publishers
         self._reported: dict[str, frozenset[str]] = {}
         self._checking = False
+        self._local_nodes: dict[str, list[str]] = {}  # resolved topic -> its local publishers
 
     def enable(self) -> None:
         self.enabled = os.environ.get(ENV, '1') != '0'
@@ -132,6 +143,10 @@ class IntraProcess:
     def local(self, topic: str) -> bool:
         """Whether a node of this process publishes `topic` (resolved)."""
         return self._outputs.get(topic, 0) > 0
+
+    def local_publishers(self, topic: str) -> list[str]:
+        """The nodes of this process ('/ns/name') that publish `topic` (resolved)."""
+        return self._local_nodes.get(topic, [])
 
     # -- what nodes call ---------------------------------------------------------------------
     def publisher(
@@ -149,6 +164,8 @@ class IntraProcess:
             return publisher
         resolved = publisher.topic_name
         self._outputs[resolved] = self._outputs.get(resolved, 0) + 1
+        name = f'{node.get_namespace().rstrip("/")}/{node.get_name()}'
+        self._local_nodes.setdefault(resolved, []).append(name)
         for listener in self.inputs(resolved):
             self._drop_dds(listener)
         self._watch(node)
@@ -159,17 +176,28 @@ class IntraProcess:
         node: Node,
         msg_type: Any,
         topic: str,
-        callback: Callable[[bytes], None],
+        callback: Callable[[bytes], None] | None,
         qos: QoSProfile | int,
+        with_gid: Callable[[bytes, bytes], None] | None = None,
     ) -> DataInput:
-        """A raw (bytes) subscription; takes from this process's publisher when there is one."""
-        if not self.enabled:
-            return node.create_subscription(msg_type, topic, callback, qos, raw=True)
+        """A raw (bytes) subscription; takes from this process's publisher when there is one.
+
+        with_gid (instead of callback): the callback gets each message's publisher GID too
+        (mill_common.graph_owner; LOCAL for a message of this process's publisher)."""
+        if with_gid is not None:
+            gid_callback = with_gid
+
+            def callback(data: bytes) -> None:
+                gid_callback(data, LOCAL)
+
+        assert callback is not None, 'a callback, or with_gid'
         resolved = node.resolve_topic_name(topic)
-        listener = _Input(node, msg_type, resolved, callback, qos)
+        listener = _Input(node, msg_type, resolved, callback, qos, with_gid=with_gid)
+        if not self.enabled:
+            return listener.take_dds()
         self.inputs(resolved).append(listener)
         if not self.local(resolved):
-            listener.dds = node.create_subscription(msg_type, resolved, callback, qos, raw=True)
+            listener.dds = listener.take_dds()
         self._watch(node)
         return listener
 
@@ -193,6 +221,8 @@ class IntraProcess:
                     del self.queue[i]  # queued for it already: not delivered either
         elif isinstance(handle, Subscription):
             node.destroy_subscription(handle)
+        elif isinstance(handle, GidSubscription):
+            handle.destroy()
 
     # -- what the spin loop calls ------------------------------------------------------------
     def pending(self) -> bool:
@@ -216,9 +246,11 @@ class IntraProcess:
     # -- internals ---------------------------------------------------------------------------
     @staticmethod
     def _drop_dds(listener: _Input) -> None:
-        if listener.dds is not None:
+        if isinstance(listener.dds, GidSubscription):
+            listener.dds.destroy()
+        elif listener.dds is not None:
             listener.node.destroy_subscription(listener.dds)
-            listener.dds = None
+        listener.dds = None
 
     def _watch(self, node: Node) -> None:
         if self._checking:

@@ -119,7 +119,8 @@ class AxisNodeParams(InputWatch, RealtimeScheduling):
     )
     plant_node: str = param(
         'plant',
-        'the node whose states this node accepts (header.frame_id); states from any '
+        'the node whose states this node accepts (its publisher GID in the graph; '
+        'header.frame_id must agree); states from any '
         'other node are dropped and reported',
         text,
         read_only=True,

@@ -15,8 +15,9 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from sensor_msgs.msg import JointState
 
 from mill_common import intra_process
-from mill_common.checks import Rejected
+from mill_common.checks import Rejected, Sender
 from mill_common.codec import CodecError, encode_joint_state
+from mill_common.graph_owner import GraphOwners
 from mill_common.intra_process import DataInput as DataInput  # for the nodes
 from mill_common.intra_process import data_mute as data_mute  # for the nodes
 from mill_common.intra_process import data_publisher as data_publisher  # for the nodes
@@ -69,8 +70,8 @@ def joint_state(
     effort: Sequence[float] = (),
     sender: str = '',
 ) -> JointState:
-    """A stamped JointState; `sender` (header.frame_id) names the publishing node, which
-    the receivers check against the owner of the topic."""
+    """A stamped JointState; `sender` (header.frame_id) names the publishing node: a claim
+    the receivers check agrees with the publisher GID (mill_common.graph_owner)."""
     msg = JointState()
     msg.header.stamp = to_stamp(ns)
     msg.header.frame_id = sender
@@ -130,6 +131,54 @@ def take_serialized(
         callback(msg)
 
     return data_subscription(node, msg_type, topic, take, qos)
+
+
+def graph_owners(
+    node: Node, on_contested: Callable[[str, str, tuple[str, ...]], None] | None = None
+) -> GraphOwners:
+    """The senders of a node's owned inputs as the graph identifies them
+    (mill_common.graph_owner), looked at again once a second."""
+    from rclpy.clock import Clock, ClockType
+
+    graph = GraphOwners(node, intra_process.bus().local_publishers, on_contested)
+    node.create_timer(1.0, graph.look, clock=Clock(clock_type=ClockType.STEADY_TIME))
+    return graph
+
+
+def take_owned(
+    node: Node,
+    msg_type: Any,
+    topic: str,
+    decode: Callable[[bytes], Any],
+    callback: Callable[[Any, Sender], None],
+    qos: QoSProfile | int,
+    malformed: Callable[[Rejected], None],
+    graph: GraphOwners,
+    owner: str,
+) -> DataInput:
+    """`take_serialized` of an input that belongs to `owner` (a node name, '' anyone):
+    `callback` gets each message with its `Sender`, the graph's verdict on its publisher
+    GID (mill_common.graph_owner). The message is decoded whoever sent it: a drop names what
+    the sender says it is (frame_id) beside what the graph says."""
+    bus = intra_process.bus()
+    resolved = graph.watch(topic, owner)
+    verdict = graph.verdict
+
+    def take(data: bytes, gid: bytes) -> None:
+        bus.activity += 1
+        last = _last_decoded
+        if data is last[0] and decode is last[1]:
+            msg = last[2]  # the same bytes handed to another reader in this process
+        else:
+            try:
+                msg = decode(data)
+            except CodecError as exc:
+                malformed(Rejected(f'malformed message: {exc}'))
+                return
+            last[:] = (data, decode, msg)
+        callback(msg, verdict(resolved, gid))
+
+    return data_subscription(node, msg_type, topic, None, qos, with_gid=take)
 
 
 _readers_matched: weakref.WeakSet[Any] = weakref.WeakSet()

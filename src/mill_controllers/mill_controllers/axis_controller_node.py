@@ -29,7 +29,7 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mill_common.checks import REFERENCE_LEAD_NS, Rejected, owner_check
+from mill_common.checks import REFERENCE_LEAD_NS, Rejected, Sender, owner_check, sender_check
 from mill_common.hold_window import StallWatch, drive_word
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -39,9 +39,10 @@ from mill_common.ros import (
     data_mute,
     data_publisher,
     from_stamp,
+    graph_owners,
     joint_state_bytes,
     readers_ready,
-    take_serialized,
+    take_owned,
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import Estimate
@@ -117,14 +118,24 @@ class AxisControllerNode(Node):
         for slot in ('position', 'estimate', 'reference'):
             self.guard.watch(self._topics[slot], self._owners[slot])
         self._inputs: dict[str, DataInput] = {}
+        # Each input's sender as the graph identifies its publisher (mill_common.graph_owner).
+        self._graph = graph_owners(self, self._contested)
         for slot, source in INPUTS.items():
             depth = self.timing.depth(history=slot == REFERENCE_INPUT)
             topic = self._topics[slot]
             on_bad = partial(self.guard.drop, topic)
             on_msg = partial(self._on_input, slot)
             qos = DATA_QOS if depth is None else depth
-            self._inputs[slot] = take_serialized(
-                self, source.message, topic, source.decode, on_msg, qos, on_bad
+            self._inputs[slot] = take_owned(
+                self,
+                source.message,
+                topic,
+                source.decode,
+                on_msg,
+                qos,
+                on_bad,
+                self._graph,
+                self._owners[slot],
             )
         self.create_service(Trigger, '~/reset_trip', self._on_reset_trip)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
@@ -174,9 +185,23 @@ class AxisControllerNode(Node):
         self._step_due()
 
     # -- take and check ------------------------------------------------------------------
-    def _on_input(self, slot: str, msg: Any) -> None:
-        topic, sender = self._topics[slot], msg.header.frame_id
-        problem = owner_check(sender, self._owners[slot])
+    def _contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
+        """Two or more publishers of an input claim its owner's name: both refused."""
+        self.get_logger().error(
+            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
+            f'{"; ".join(claimants)}: both refused'
+        )
+        said = f'{topic}: {owner}: {"; ".join(claimants)}'
+        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
+        message = f'owner claimed by two publishers, both refused: {said}'
+        ns = max(self._join.last_ns, 0)
+        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
+
+    def _on_input(self, slot: str, msg: Any, who: Sender) -> None:
+        topic, owner = self._topics[slot], self._owners[slot]
+        sender = who.name or msg.header.frame_id
+        problem = sender_check(who, owner) if owner else None
+        problem = problem or owner_check(msg.header.frame_id, owner)
         if problem is not None:
             self.guard.drop(topic, problem, sender)
             return

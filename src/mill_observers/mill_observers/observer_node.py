@@ -24,7 +24,8 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from mill_common.checks import Rejected, joint_values, owner_check
+from diagnostic_msgs.msg import DiagnosticStatus
+from mill_common.checks import Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
 from mill_common.hold_window import drive_word
 from mill_common.input_guard import InputGuard
@@ -35,9 +36,10 @@ from mill_common.ros import (
     data_mute,
     data_publisher,
     from_stamp,
+    graph_owners,
     joint_state_bytes,
     readers_ready,
-    take_serialized,
+    take_owned,
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import Estimate
@@ -103,13 +105,23 @@ class ObserverNode(Node):
         depth = self.timing.depth()
         self._inputs: dict[str, DataInput] = {}
         self._advancing = False
+        # Each input's sender as the graph identifies its publisher (mill_common.graph_owner).
+        self._graph = graph_owners(self, self._contested)
         for slot, callback in (('state', self._on_state), ('command', self._on_command)):
             topic = self._topics[slot]
             self.guard.watch(topic, self._owners[slot])
             on_bad = partial(self.guard.drop, topic)
             qos = DATA_QOS if depth is None else depth
-            self._inputs[slot] = take_serialized(
-                self, JointState, topic, decode_joint_state, callback, qos, on_bad
+            self._inputs[slot] = take_owned(
+                self,
+                JointState,
+                topic,
+                decode_joint_state,
+                callback,
+                qos,
+                on_bad,
+                self._graph,
+                self._owners[slot],
             )
         self.create_timer(2.0, self._report_waiting, clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(
@@ -134,14 +146,34 @@ class ObserverNode(Node):
         self._commands.clear()
 
     # -- take and check ------------------------------------------------------------------
+    def _contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
+        """Two or more publishers of an input claim its owner's name: both refused."""
+        self.get_logger().error(
+            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
+            f'{"; ".join(claimants)}: both refused'
+        )
+        said = f'{topic}: {owner}: {"; ".join(claimants)}'
+        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
+        message = f'owner claimed by two publishers, both refused: {said}'
+        ns = self._last_ns or 0
+        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
+
+    def _foreign(self, slot: str, msg: JointState, who: Sender) -> bool:
+        """Whether a message is not its owner's (dropped and reported, then)."""
+        owner = self._owners[slot]
+        problem = sender_check(who, owner) if owner else None
+        problem = problem or owner_check(msg.header.frame_id, owner)
+        if problem is not None:
+            self.guard.drop(self._topics[slot], problem, who.name or msg.header.frame_id)
+        return problem is not None
+
     def _accept(self, slot: str, msg: JointState) -> tuple[int, float] | None:
-        """(stamp, value) of a message whose sender, stamp and value are fine, else None."""
+        """(stamp, value) of a message whose stamp and value are fine (its sender is
+        checked before), else None."""
         ns = from_stamp(msg.header.stamp)
         topic, sender, stamps = self._topics[slot], msg.header.frame_id, self._stamps[slot]
         newest_state = self._stamps['state'].newest
-        problem = owner_check(sender, self._owners[slot]) or self.timing.problem(
-            stamps, ns, newest_state, self.timing.period_ns
-        )
+        problem = self.timing.problem(stamps, ns, newest_state, self.timing.period_ns)
         if problem is not None:
             if problem.reason.startswith('stamp') and ns == stamps.newest:
                 return None
@@ -159,15 +191,16 @@ class ObserverNode(Node):
         self.guard.heard(topic)
         return ns, float('nan') if isinstance(value, Rejected) else value[0]
 
-    def _on_state(self, msg: JointState) -> None:
+    def _on_state(self, msg: JointState, who: Sender) -> None:
+        if self._foreign('state', msg, who):
+            return
         ns = from_stamp(msg.header.stamp)
         if self._last_ns is not None and ns <= self._last_ns:
             if not self.timing.WAITS_FOR_INPUTS or ns < self._last_ns:
                 past = Rejected('stamp repeated or in the past')
                 self.guard.drop(self._topics['state'], past, msg.header.frame_id)
             elif ns == self._last_ns and self._last_estimate is not None:
-                if msg.header.frame_id == self._owners['state']:
-                    self.guard.heard(self._topics['state'])  # the plant is there, waiting
+                self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 if self.servo is not None and self._served is not None:
                     self.servo(*self._served)
                 self._pub.publish(self._last_estimate)  # the plant offered this step again
@@ -185,7 +218,9 @@ class ObserverNode(Node):
             self._said[got[0]] = drive_word(msg.effort)
         self._advance()
 
-    def _on_command(self, msg: JointState) -> None:
+    def _on_command(self, msg: JointState, who: Sender) -> None:
+        if self._foreign('command', msg, who):
+            return
         got = self._accept('command', msg)
         if got is not None:
             self.commanded(*got)

@@ -84,12 +84,14 @@ class CommandTable:
     def offer(self, axis: str, stamp: int, value: float, arrived_ns: int | None = None) -> bool:
         """An accepted command; False if it is not newer than the one held (dropped)."""
         c = self.by_axis[axis]
-        if stamp <= max(c.stamp, c.floor):
-            return False
-        c.value, c.stamp, c.fresh = value, stamp, True
+        if stamp <= c.floor or stamp < c.stamp:
+            return False  # older than the held one, or than the axis's release
+        if stamp == c.stamp and not (math.isnan(value) and c.value == c.value):
+            return False  # the same step again: only a brake replaces a valid one
+        again, c.value, c.stamp, c.fresh = stamp == c.stamp, value, stamp, True
         if c.stopped and math.isnan(value):
             c.acknowledged = True  # the owner knows: its next valid command re-arms
-        if arrived_ns is not None:
+        if arrived_ns is not None and not again:
             c.latencies.add(arrived_ns - stamp)
         return True
 

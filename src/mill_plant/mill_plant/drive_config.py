@@ -58,7 +58,8 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
     )
     command_owners: list[str] = param(
         ['x_controller', 'y_controller', 'z_controller'],
-        'the node whose commands each axis x, y, z accepts (header.frame_id); commands from '
+        'the node whose commands each axis x, y, z accepts (its publisher GID in the graph; '
+        'header.frame_id must agree); commands from '
         'any other node are ignored and reported; "" accepts any',
         _owners,
         read_only=True,

@@ -31,13 +31,13 @@ from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mill_common.checks import Rejected
+from mill_common.checks import Rejected, Sender
 from mill_common.codec import encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
 from mill_common.hold_window import HoldWindow
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParameterError, ParamSpec
-from mill_common.ros import from_stamp, joint_state_bytes
+from mill_common.ros import from_stamp, graph_owners, joint_state_bytes
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
 from rclpy.clock import Clock, ClockType
@@ -125,6 +125,7 @@ class DriveNode(LifecycleNode):
         self.spindle = SpindleTrack() if v['spindle'] == 'reference' else None
         if self._made is None:  # once: a configure after a cleanup takes the same topics again
             on_reference = self._on_reference if self.spindle is not None else None
+            self.graph = graph_owners(self, self._on_contested)
             io = DriveTopics(
                 self,
                 self.axes,
@@ -132,6 +133,8 @@ class DriveNode(LifecycleNode):
                 self._on_command,
                 on_reference,
                 self.reports.drop,
+                self.graph,
+                self.owners,
             )
             self._made = (Diagnostics(self), io)
         self.diagnostics, self.io = self._made
@@ -181,20 +184,20 @@ class DriveNode(LifecycleNode):
         self.backend = None
 
     # -- commands ----------------------------------------------------------------------------
-    def _on_command(self, axis: str, msg: JointState) -> None:
+    def _on_command(self, axis: str, msg: JointState, who: Sender) -> None:
         if self.backend is None or (self.cycle.GRID and not self.active):
             return
         topic, sender = topics.joint_command(axis), msg.header.frame_id
         ns = from_stamp(msg.header.stamp)
-        got = self.intake.take(axis, ns, sender, msg.name, msg.effort)
+        got = self.intake.take(axis, ns, sender, msg.name, msg.effort, who)
         if got is None:
             return  # a repeat of an answered step: harmless
         if not isinstance(got, Accepted):
-            named = sender or '(unnamed)'
+            named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
             owned = self.ownership
             if got.foreign and owned is not None and owned.message_from(topic, named):
                 self.reports.foreign(topic, named)
-            self.reports.drop(topic, got.problem, sender)
+            self.reports.drop(topic, got.problem, named)
             return
         if got.brake_request:
             self.reports.axis(
@@ -204,6 +207,13 @@ class DriveNode(LifecycleNode):
             self.reports.axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
         self.table.offer(axis, ns, got.effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
+
+    def _on_contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
+        """The graph shows two or more publishers of `topic` claiming the owner's name:
+        neither drives the axis (mill_plant.command_intake); said once per set."""
+        if self.ownership is not None:
+            self.ownership.contested(topic, owner, claimants)
+        self.reports.contested(topic, owner, claimants)
 
     def _on_reference(self, msg: Any) -> None:
         """The spindle speeds of a reference message (spindle: reference)."""

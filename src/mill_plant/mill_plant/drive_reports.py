@@ -78,6 +78,13 @@ class DriveReports:
         )
         self.status(force=True)
 
+    def contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
+        self.drive.get_logger().error(
+            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
+            f'{"; ".join(claimants)}: both refused, the axis brakes'
+        )
+        self.status(force=True)
+
     def axis(self, axis: str, level: bytes, message: str) -> None:
         """The status `<node>: <axis> axis`, and the log."""
         d = self.drive

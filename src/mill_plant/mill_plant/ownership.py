@@ -3,6 +3,8 @@
 A command topic belongs to its axis's controller, a state topic to the drive itself. A
 foreign sender is found two ways: by a message it sent (`message_from`), and by the ROS
 graph, once a second, even if it never sends (`look`). Each foreign publisher is named once.
+Two publishers claiming an owner's name (mill_common.graph_owner: the graph shows both) are
+`contested`: named, both, in the status while the graph shows them.
 """
 
 from __future__ import annotations
@@ -34,12 +36,17 @@ class Ownership:
         }
         self.foreign: dict[str, set[str]] = {}  # topic -> foreign publishers seen
         self.foreign_messages = 0
+        self.contests: dict[str, tuple[str, tuple[str, ...]]] = {}  # topic -> (owner, claimants)
         self._counts: dict[str, int] = {}  # topic -> publishers at the last look
 
     def message_from(self, topic: str, who: str) -> bool:
         """A message from a foreign sender; True if it is named for the first time."""
         self.foreign_messages += 1
         return self._note(topic, who)
+
+    def contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
+        """The graph shows these publishers of `topic` all claiming the name `owner`."""
+        self.contests[topic] = (owner, claimants)
 
     def look(self) -> list[tuple[str, str]]:
         """Foreign publishers the graph shows for the first time: (topic, node)."""
@@ -51,16 +58,24 @@ class Ownership:
         return new
 
     def status(self, diagnostics: Diagnostics) -> DiagnosticStatus | None:
-        """ERROR naming every foreign publisher seen, or None while there is none."""
-        if not self.foreign:
+        """ERROR naming every foreign publisher seen and every contested owner's name, or
+        None while there is none. Values: `foreign_messages`; `contested` (one line per
+        topic: 'topic: owner: claimant; claimant')."""
+        if not self.foreign and not self.contests:
             return None
-        seen = '; '.join(f'{t}: {", ".join(sorted(w))}' for t, w in self.foreign.items())
-        return diagnostics.status(
-            DiagnosticStatus.ERROR,
-            OWNERSHIP_PART,
-            f'foreign publishers ignored: {seen}',
-            {'foreign_messages': self.foreign_messages},
-        )
+        parts: list[str] = []
+        values: dict[str, object] = {
+            'foreign_messages': self.foreign_messages,
+            'foreign_publishers': sum(len(w) for w in self.foreign.values()),
+        }
+        if self.foreign:
+            seen = '; '.join(f'{t}: {", ".join(sorted(w))}' for t, w in self.foreign.items())
+            parts.append(f'foreign publishers ignored: {seen}')
+        if self.contests:
+            said = [f'{t}: {o}: {"; ".join(c)}' for t, (o, c) in sorted(self.contests.items())]
+            parts.append(f'owner claimed by two publishers, both refused: {" | ".join(said)}')
+            values['contested'] = ' | '.join(said)
+        return diagnostics.status(DiagnosticStatus.ERROR, OWNERSHIP_PART, '; '.join(parts), values)
 
     def _note(self, topic: str, who: str) -> bool:
         seen = self.foreign.setdefault(topic, set())

@@ -171,3 +171,43 @@ def test_accepted_stamps_increase_and_every_brake_request_is_counted(stream: lis
         assert got.released == (not nan and requesting)
         requesting = nan
     assert intake.invalid_commands['x'] == requests
+
+
+def test_the_owners_brake_request_wins_over_its_valid_command_of_the_same_step() -> None:
+    from mill_common.checks import OWNER, Sender
+
+    owner = Sender(OWNER, '/x_controller')
+    intake, step = lockstep()
+    assert intake.take('x', 0, 'x_controller', ['x'], [1.5], owner) == Accepted(1.5)
+    got = intake.take('x', 0, 'x_controller', ['x'], [math.nan], owner)
+    assert isinstance(got, Accepted) and math.isnan(got.effort) and got.brake_request
+    # ... and a valid command after it does not take the step back
+    assert intake.take('x', 0, 'x_controller', ['x'], [1.5], owner) is None
+    step.k = 1
+    assert intake.take('x', T, 'x_controller', ['x'], [0.5], owner) == Accepted(0.5, released=True)
+
+
+def test_a_rogue_with_the_owners_frame_id_is_foreign_by_the_graphs_word() -> None:
+    from mill_common.checks import FOREIGN, Sender
+
+    intake, _ = lockstep()
+    got = intake.take('x', 0, 'x_controller', ['x'], [10.0], Sender(FOREIGN, '/rogue'))
+    assert isinstance(got, Dropped) and got.foreign
+    assert got.problem.reason == "sent by /rogue, not by its owner 'x_controller'"
+    # it moved no stamp: the owner's command for the step still counts
+    assert x(intake, 0, 1.0) == Accepted(1.0)
+
+
+def test_commands_of_two_publishers_claiming_the_owners_name_brake_the_axis() -> None:
+    from mill_common.checks import CONTESTED, Sender
+
+    claim = Sender(CONTESTED, '/x_controller', ('/x_controller (gid a)', '/x_controller (gid b)'))
+    intake, step = lockstep()
+    got = intake.take('x', 0, 'x_controller', ['x'], [3.0], claim)
+    assert isinstance(got, Accepted) and math.isnan(got.effort) and got.contested
+    assert "2 publishers claim to be 'x_controller'" in got.brake_request
+    assert 'gid a' in got.brake_request and 'gid b' in got.brake_request
+    assert intake.take('x', 0, 'x_controller', ['x'], [3.0], claim) is None  # the other's
+    step.k = 5
+    got = intake.take('x', T, 'x_controller', ['x'], [3.0], claim)
+    assert isinstance(got, Dropped)  # not the step the drive expects: dropped

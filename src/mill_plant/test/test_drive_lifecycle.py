@@ -10,6 +10,7 @@ import pytest
 @pytest.mark.parametrize('timing', ['lockstep', 'realtime'])
 def test_a_configure_after_a_cleanup_takes_the_same_topics_again(monkeypatch, timing) -> None:
     import rclpy
+    from mill_common.graph_owner import GidSubscription
     from mill_plant.plant_node import make_node
     from rclpy.parameter import Parameter
 
@@ -25,13 +26,19 @@ def test_a_configure_after_a_cleanup_takes_the_same_topics_again(monkeypatch, ti
                 Parameter('timing', value=timing),
             ],
         )
+
+        def made_now() -> tuple[int, int]:
+            # Commands are taken with their publisher GID (mill_common.graph_owner).
+            taking = [w for w in node.waitables if isinstance(w, GidSubscription)]
+            return len(list(node.publishers)), len(list(node.subscriptions)) + len(taking)
+
         node.trigger_configure()
-        made = (len(list(node.publishers)), len(list(node.subscriptions)))
+        made = made_now()
         node.trigger_cleanup()
         node.trigger_configure()
         # Commands taken twice, states sent by two writers: the first configure's topics
         # must be the ones taken again, not left beside new ones.
-        assert (len(list(node.publishers)), len(list(node.subscriptions))) == made
+        assert made_now() == made
         assert made[1] >= 3  # a command subscription per axis at least
         node.destroy_node()
     finally:

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import replace
 
-from mill_analysis.events import FOREIGN, Event, Status, events_of
+from mill_analysis.events import INTRUSIONS, Event, Status, events_of
 from mill_analysis.metrics import Window
 from mill_analysis.record import RunRecord
 from mill_analysis.report.kinds import AxisRecords
@@ -126,8 +126,10 @@ class AxisNodes:
     ) -> list[Event]:
         """The machine's events (trips, stops, brakes) of the job's axes."""
         found = events_of(statuses, start_ns, self.axis_of(), counted_from)
-        # a foreign publisher is no event of the motion: it makes the record not intact
-        return [e for e in found if e.kind != FOREIGN and (not e.axis or e.axis in self.axes)]
+        # an intruder is no event of the motion: it makes the record not intact
+        return [
+            e for e in found if e.kind not in INTRUSIONS and (not e.axis or e.axis in self.axes)
+        ]
 
 
 def axis_summary(

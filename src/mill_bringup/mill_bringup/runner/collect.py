@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from mill_analysis.events import FOREIGN, events_of
+from mill_analysis.events import INTRUSIONS, events_of
 from mill_bag.reader import open_bag
 from mill_bag.writer import counts_note
 
@@ -82,9 +82,10 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
     ranges = {t: r for t, r in job.RECORD.gaps(record).items() if t in missing}
     short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
-    # A foreign publisher on the drive's topics, told at any time: the record is not intact.
+    # A foreign publisher on the drive's topics, or two claiming an owner's name, told at any
+    # time: the record is not intact.
     heard = monitor.statuses()
-    foreign = [e.text() for e in events_of(heard) if e.kind == FOREIGN]
+    foreign = [e.text() for e in events_of(heard) if e.kind in INTRUSIONS]
     return Collected(
         record,
         missing,

@@ -117,6 +117,7 @@ class Session:
                 late=plan.late,
                 late_after=plan.late_after,
                 steps=plan.steps,
+                owners=job.owners(),
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)

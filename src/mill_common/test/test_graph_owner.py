@@ -1,0 +1,157 @@
+"""The sender of a message as the ROS graph identifies it (issue 37 items 1–2, issue 34
+item 3): real rclpy nodes in a private domain; the publisher GID each message arrives with,
+matched against the graph's endpoints of the owner node."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import pytest
+from mill_common.checks import CONTESTED, FOREIGN, OWNER, Sender, sender_check
+
+TOPIC = 'mill/x/joint_command'
+
+
+@pytest.fixture
+def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(190 + os.getpid() % 25))
+    context = rclpy.Context()
+    rclpy.init(args=[], context=context)
+    executor = SingleThreadedExecutor(context=context)
+    nodes: list[Any] = []
+
+    class Graph:
+        def node(self, name: str) -> Any:
+            from rclpy.node import Node
+
+            nodes.append(Node(name, context=context))
+            executor.add_node(nodes[-1])
+            return nodes[-1]
+
+        def spin_until(self, done: Callable[[], bool], timeout: float = 10.0) -> bool:
+            end = time.monotonic() + timeout
+            while time.monotonic() < end and not done():
+                executor.spin_once(timeout_sec=0.05)
+            return done()
+
+    try:
+        yield Graph()
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
+
+
+def receiver(graph: Any, contests: list[tuple[str, str, tuple[str, ...]]]) -> tuple[Any, list]:
+    """A node taking TOPIC, owned by x_controller: [(frame_id, Sender)] of what it got."""
+    from mill_common.codec import decode_joint_state
+    from mill_common.ros import DATA_QOS, graph_owners, take_owned
+    from sensor_msgs.msg import JointState
+
+    node = graph.node('plant')
+    owners = graph_owners(node, lambda *told: contests.append(told))
+    got: list[tuple[str, Sender]] = []
+    take_owned(
+        node,
+        JointState,
+        TOPIC,
+        decode_joint_state,
+        lambda msg, who: got.append((msg.header.frame_id, who)),
+        DATA_QOS,
+        lambda problem: pytest.fail(problem.reason),
+        owners,
+        'x_controller',
+    )
+    node.owners = owners
+    return node, got
+
+
+def sender(graph: Any, name: str) -> Callable[[str], None]:
+    """A node `name` whose publish(frame_id) sends one command on TOPIC."""
+    from mill_common.ros import DATA_QOS, joint_state_bytes
+    from sensor_msgs.msg import JointState
+
+    pub = graph.node(name).create_publisher(JointState, TOPIC, DATA_QOS)
+    return lambda frame_id: pub.publish(
+        joint_state_bytes(0, ('x',), effort=(1.0,), sender=frame_id)
+    )
+
+
+def test_a_publisher_writing_the_owners_name_in_frame_id_is_told_apart_by_its_gid(graph) -> None:
+    _node, got = receiver(graph, [])
+    real, rogue = sender(graph, 'x_controller'), sender(graph, 'rogue')
+
+    def both_heard() -> bool:
+        real('x_controller')
+        rogue('x_controller')  # what the attack of issue 37 wrote
+        return {w.verdict for _, w in got} >= {OWNER, FOREIGN}
+
+    assert graph.spin_until(both_heard)
+    claims = {f for f, _ in got}
+    assert claims == {'x_controller'}  # the frame_id cannot tell them apart
+    verdicts = {w.name: w.verdict for _, w in got}
+    assert verdicts == {'/x_controller': OWNER, '/rogue': FOREIGN}
+    rogue_verdict = next(w for _, w in got if w.name == '/rogue')
+    problem = sender_check(rogue_verdict, 'x_controller')
+    assert problem is not None
+    assert problem.reason == "sent by /rogue, not by its owner 'x_controller'"
+
+
+def test_two_nodes_with_the_owners_name_are_both_refused_and_named_once(graph) -> None:
+    contests: list[tuple[str, str, tuple[str, ...]]] = []
+    node, got = receiver(graph, contests)
+    first = sender(graph, 'x_controller')
+    assert graph.spin_until(
+        lambda: first('x_controller') or any(w.verdict == OWNER for _, w in got)
+    )
+    second = sender(graph, 'x_controller')  # a second process started with the same name
+
+    def both_refused() -> bool:
+        first('x_controller')
+        second('x_controller')
+        graph.spin_until(lambda: False, 0.1)  # both delivered
+        return len(got) >= 2 and all(w.verdict == CONTESTED for _, w in got[-2:])
+
+    assert graph.spin_until(both_refused)
+    gids = sorted(bytes(i.endpoint_gid).hex() for i in node.get_publishers_info_by_topic(TOPIC))
+    assert len(gids) == 2 and gids[0] != gids[1]
+    (topic, owner, claimants), *more = contests
+    assert not more  # told once, however many messages follow
+    assert (topic, owner) == (TOPIC, 'x_controller')
+    assert len(claimants) == 2 and all(c.startswith('/x_controller (gid ') for c in claimants)
+    named = sorted(c.split('(gid ')[1].rstrip(')').replace('.', '') for c in claimants)
+    assert named == gids  # both named, each by its endpoint's GID
+    assert {w.name for _, w in got[-2:]} == {'/x_controller'}
+    problem = sender_check(got[-1][1], 'x_controller')
+    assert problem is not None and problem.reason.startswith(
+        "2 publishers claim to be 'x_controller': /x_controller (gid "
+    )
+
+
+def test_a_message_larger_than_the_first_buffer_arrives_whole_with_its_gid(graph) -> None:
+    from mill_common.codec import decode_joint_state
+    from mill_common.graph_owner import GidSubscription
+    from mill_common.ros import DATA_QOS, joint_state_bytes
+    from sensor_msgs.msg import JointState
+
+    node = graph.node('reader')
+    got: list[tuple[bytes, bytes]] = []
+    GidSubscription(node, JointState, 'big', lambda data, gid: got.append((data, gid)), DATA_QOS)
+    names = tuple(f'joint_{i}' for i in range(600))  # ~ 16 kB: more than the 4 kB buffer
+    sent = joint_state_bytes(7, names, position=[float(i) for i in range(600)], sender='w')
+    pub = graph.node('writer').create_publisher(JointState, 'big', DATA_QOS)
+    assert graph.spin_until(lambda: pub.publish(sent) or bool(got))
+    data, gid = got[0]
+    assert data == sent and len(sent) > 4096
+    msg = decode_joint_state(data)
+    assert list(msg.position)[-1] == 599.0
+    (info,) = node.get_publishers_info_by_topic('big')
+    assert gid == bytes(info.endpoint_gid)

@@ -1,0 +1,99 @@
+"""States cannot be ratcheted ahead (issue 37 item 3): a publisher writing the plant's name
+in frame_id and stamping each state one period ahead of the newest it hears is dropped as
+foreign, and the real plant's states are still taken, step by step, in lockstep. Real
+rclpy nodes in a private domain: the observer node, a plant, a controller and the rogue."""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+import pytest
+
+T = 1_000_000  # the sample period [ns] (1 ms, the default)
+STEPS = 60
+
+
+def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import rclpy
+    from mill_common.codec import decode_joint_state
+    from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
+    from mill_observers.observer_node import ObserverNode
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from sensor_msgs.msg import JointState
+
+    from mill_common import ros_params
+
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(170 + os.getpid() % 25))
+    monkeypatch.setattr(ros_params, 'command_line', [])
+    context = rclpy.Context()
+    rclpy.init(args=[], context=context)
+    executor = SingleThreadedExecutor(context=context)
+    nodes: list[Any] = []
+    try:
+        observer = ObserverNode(
+            context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
+        )
+        plant, controller, rogue = (
+            Node(n, context=context) for n in ('plant', 'x_controller', 'rogue')
+        )
+        nodes += [observer, plant, controller, rogue]
+        states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
+        commands = controller.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS)
+        forged = rogue.create_publisher(JointState, 'mill/x/state', DATA_QOS)
+        estimated: list[int] = []
+        sent: list[int] = []
+
+        def state(ns: int) -> None:
+            sent.append(ns)
+            states.publish(joint_state_bytes(ns, ('x',), position=(1e-6 * ns / T,), sender='plant'))
+
+        def answer(msg: Any) -> None:  # the controller: a command for each estimate
+            ns = from_stamp(msg.header.stamp)
+            estimated.append(ns)
+            commands.publish(joint_state_bytes(ns, ('x',), effort=(0.0,), sender='x_controller'))
+
+        def next_state(msg: Any) -> None:  # the plant: the next state once answered
+            ns = from_stamp(msg.header.stamp)
+            if ns + T not in sent and len(set(sent)) < STEPS:
+                state(ns + T)
+
+        def ratchet(msg: Any) -> None:  # the rogue: each state one period ahead, as the plant
+            ns = from_stamp(msg.header.stamp)
+            forged.publish(joint_state_bytes(ns + T, ('x',), position=(1.0,), sender='plant'))
+
+        take = take_serialized
+        take(controller, JointState, 'mill/x/estimate', decode_joint_state, answer, DATA_QOS, print)
+        take(
+            plant,
+            JointState,
+            'mill/x/joint_command',
+            decode_joint_state,
+            next_state,
+            DATA_QOS,
+            print,
+        )
+        take(rogue, JointState, 'mill/x/state', decode_joint_state, ratchet, DATA_QOS, print)
+        for node in nodes:
+            executor.add_node(node)
+        end = time.monotonic() + 20.0
+        while time.monotonic() < end and len(set(estimated)) < STEPS:
+            if not estimated:
+                state(0)  # offered again until the observer has matched the plant
+            executor.spin_once(timeout_sec=0.01)
+        # every step of the plant, in order (a step offered again is answered again)
+        assert list(dict.fromkeys(estimated)) == [k * T for k in range(STEPS)]
+        topic = 'mill/x/state'
+        dropped = observer.guard.drops.counts.get(topic, 0)
+        assert dropped >= STEPS // 2  # the rogue's states, one per state it heard
+        assert observer.guard.drops.last_reason[topic] == "sent by /rogue, not by its owner 'plant'"
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
