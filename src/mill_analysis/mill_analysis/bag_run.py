@@ -91,7 +91,8 @@ def build_record(
     ref_topic = topic_names.REFERENCE
     rec = RunRecord.empty(n, dt_ns / 1e9)
     s = rec.signals
-    seen: dict[str, set[int]] = {t: set() for t in listened}
+    # The samples each topic gave, as flags (a set of ints costs ~60 bytes a sample)
+    seen: dict[str, np.ndarray] = {t: np.zeros(n, dtype=bool) for t in listened}
     position, torque, force = s['position'], s['torque'], s['force']
     est_v, est_d = s['estimate_velocity'], s['estimate_disturbance']
     ref_p, ref_v = s['reference'], s['reference_velocity']
@@ -184,7 +185,7 @@ def build_record(
                         i = AXES.index(axis)
                         ref_p[kp, i], ref_v[kp, i] = p_i, v_i
                     if covered is not None:
-                        covered.add(kp)
+                        covered[kp] = True
 
         return put
 
@@ -225,12 +226,20 @@ def build_record(
         if 0 <= k < n:
             put(k)
             if topic in seen and topic != ref_topic:
-                seen[topic].add(k)
+                seen[topic][k] = True
     rec.foreign = intake.drops.per_topic()
     rec.drops = intake.drops
-    missing = {t: n - len(ks) for t, ks in seen.items()}
-    rec.gaps = {t: bag_meta.missing_ranges(ks, n) for t, ks in seen.items() if len(ks) < n}
+    missing = {t: n - int(np.count_nonzero(ks)) for t, ks in seen.items()}
+    rec.gaps = {t: _missing_runs(ks) for t, ks in seen.items() if missing[t]}
     return rec, missing
+
+
+def _missing_runs(have: np.ndarray) -> list[tuple[int, int]]:
+    """The samples whose flag is False, as (first, last) of each run of them (what
+    bag_meta.missing_ranges says of the samples that are True)."""
+    edges = np.diff(np.concatenate(([0], (~have).astype(np.int8), [0])))
+    firsts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    return [(int(a), int(b) - 1) for a, b in zip(firsts, ends, strict=True)]
 
 
 def record_from_raw(
@@ -524,7 +533,7 @@ def read_run(
 def _realtime_run(
     bag: Bag,
     axes: list[str],
-    raw: dict[str, list[bytes]],
+    raw: Mapping[str, Sequence[bytes]],
     walls: dict[str, list[int | None]],
     statuses: list[Any],
     start_ns: int,

@@ -11,7 +11,6 @@ may hold it has a sample within d0 + h/2, and only those segments are measured e
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 # Samples h apart, h the median segment length (a path sampled at T: its vertices), but at
 # most MAX_SAMPLES of them, whatever the path's length
@@ -46,6 +45,8 @@ def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, 
     frac = (np.arange(seg.size) - np.repeat(np.cumsum(pieces) - pieces, pieces)) / pieces[seg]
     samples = np.vstack([start[seg] + frac[:, None] * vec[seg], path[-1:]])
     seg = np.append(seg, len(start) - 1)
+    from scipy.spatial import cKDTree  # here: 37 MB a runner needs only for its summary
+
     tree = cKDTree(samples)
 
     distance = np.full(len(points), np.nan)

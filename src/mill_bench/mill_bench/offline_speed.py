@@ -34,7 +34,7 @@ def run_once(name: str, duration: float | None) -> tuple[int, float, float, floa
     cpu0, wall0 = time.process_time(), time.perf_counter()
     rec = simulate(job)
     cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
-    samples = len(rec.t)  # type: ignore[attr-defined]
+    samples = len(rec.t)
     return samples, job.sim_time, cpu, wall
 
 
