@@ -42,7 +42,14 @@ from mill_common.timing import Lockstep
 from mill_analysis import bag_meta
 from mill_analysis.bag_status import job_approach, job_end, job_start, plant_status
 from mill_analysis.events import events_of, statuses_of
-from mill_analysis.node_intake import Intake, Received, arrival_order, drop_lines, subset
+from mill_analysis.node_intake import (
+    ArrivalOrder,
+    Intake,
+    Received,
+    arrival_order,
+    drop_lines,
+    subset,
+)
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_analysis.record import RunRecord
 from mill_common import topics as topic_names
@@ -444,7 +451,7 @@ def read_run(
         raw[topic] = stream.data
         relative[name] = topic
         walls[topic] = stream.publish_times
-    raw.order = [relative[name] for name in order if name in relative]
+    raw.order = ArrivalOrder(relative[name] for name in order if name in relative)
     feed_stream = kept.get(topic_names.qualify(topic_names.FEED_OVERRIDE, ns))
     feed = (
         []

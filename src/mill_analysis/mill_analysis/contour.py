@@ -18,7 +18,7 @@ import numpy as np
 # most MAX_SAMPLES of them, whatever the path's length
 MAX_SAMPLES = 400_000
 NEIGHBOURS = 16  # samples measured per point before a wider (ball) search is needed
-BLOCK = 4096  # points measured at once
+BLOCK = 1024  # points measured at once
 
 
 def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,7 +59,7 @@ def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, 
         return distance, nearest
     k = min(NEIGHBOURS, len(samples))
     # In blocks of points: each point's answer is its own, and the candidates of all of
-    # them at once take ~1 kB a point (a long run's summary would hold hundreds of MB).
+    # them at once take ~1 kB a point (77 MB for the main job's summary).
     for lo in range(0, ok.size, BLOCK):
         rows_of = ok[lo : lo + BLOCK]
         d, q = _nearest(tree, samples, seg, start, vec, spacing, k, points[rows_of])

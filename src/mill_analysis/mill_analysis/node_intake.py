@@ -189,13 +189,49 @@ class MessageLog(Sequence[bytes]):
         )
 
 
+class ArrivalOrder(Sequence[str]):
+    """Topic names in the order their messages arrived, two bytes a message (the index of
+    the name among those seen), not a list slot each."""
+
+    def __init__(self, names: Iterable[str] = ()) -> None:
+        self._names: list[str] = []
+        self._index: dict[str, int] = {}
+        self._seq = array('H')
+        for name in names:
+            self.append(name)
+
+    def append(self, name: str) -> None:
+        i = self._index.get(name)
+        if i is None:
+            i = self._index[name] = len(self._names)
+            self._names.append(name)
+        self._seq.append(i)
+
+    def __len__(self) -> int:
+        return len(self._seq)
+
+    @overload
+    def __getitem__(self, i: int) -> str: ...
+    @overload
+    def __getitem__(self, i: slice) -> list[str]: ...
+    def __getitem__(self, i: int | slice) -> str | list[str]:
+        if isinstance(i, slice):
+            return [self._names[j] for j in self._seq[i]]
+        return self._names[self._seq[i]]
+
+    def __iter__(self) -> Iterator[str]:
+        names = self._names
+        for i in self._seq:
+            yield names[i]
+
+
 class Received(dict[str, Sequence[bytes]]):
     """Serialized messages per topic, and the topic of each message in the order they arrived
     (what `Intake` needs: the order of one listener)."""
 
     def __init__(self) -> None:
         super().__init__()
-        self.order: list[str] = []
+        self.order = ArrivalOrder()
 
 
 def subset(raw: Mapping[str, Sequence[bytes]], topics: Collection[str]) -> Received:
@@ -204,8 +240,8 @@ def subset(raw: Mapping[str, Sequence[bytes]], topics: Collection[str]) -> Recei
     out = Received()
     out.update({t: raw[t] for t in topics if t in raw})
     order = getattr(raw, 'order', None)
-    out.order = (
-        [t for t in order if t in out] if order is not None else [t for t in out for _ in out[t]]
+    out.order = ArrivalOrder(
+        (t for t in order if t in out) if order is not None else (t for t in out for _ in out[t])
     )
     return out
 

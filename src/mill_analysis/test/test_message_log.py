@@ -5,7 +5,7 @@ from __future__ import annotations
 import struct
 
 import pytest
-from mill_analysis.node_intake import MessageLog, Received, arrival_order, subset
+from mill_analysis.node_intake import ArrivalOrder, MessageLog, Received, arrival_order, subset
 
 
 def _message(k: int) -> bytes:
@@ -44,10 +44,19 @@ def test_the_order_of_arrival_reads_through_logs() -> None:
     raw = Received()
     raw['a'] = MessageLog([b'a0', b'a1'])
     raw['b'] = MessageLog([b'b0'])
-    raw.order = ['a', 'b', 'a']
+    raw.order = ArrivalOrder(['a', 'b', 'a'])
     assert list(arrival_order(raw, ['a', 'b'])) == [('a', b'a0'), ('b', b'b0'), ('a', b'a1')]
     only = subset(raw, ['a'])
-    assert only['a'] is raw['a'] and only.order == ['a', 'a']
+    assert only['a'] is raw['a'] and list(only.order) == ['a', 'a']
+
+
+def test_the_arrival_order_gives_back_the_names_in_order() -> None:
+    names = ['mill/x/state', 'mill/x/estimate', 'mill/x/state', '/clock'] * 1000
+    order = ArrivalOrder()
+    for name in names:
+        order.append(name)
+    assert len(order) == 4000 and list(order) == names
+    assert order[2] == 'mill/x/state' and order[-1] == '/clock' and order[1:3] == names[1:3]
 
 
 def test_the_missing_runs_of_flags_are_those_of_the_sample_set() -> None:

@@ -326,12 +326,12 @@ class KlineCuttingForce(CuttingForceModel):
                     self._programmed.clear()
                 now = self.program.position(t)
                 past = self.program.position(t - self.tooth_period)
-                known = self._programmed[t] = (
-                    now[0] - past[0],
-                    now[1] - past[1],
-                    self.workpiece_top - now[2],
+                known = self._programmed[t] = self._local_force(
+                    t, now[0] - past[0], now[1] - past[1], self.workpiece_top - now[2]
                 )
-            return self.chip_force(t, position, (known[0], known[1]), known[2])
+            if self._outside(position):
+                return (0.0, 0.0, 0.0)
+            return known
         if self._programmed_chip:
             now = self.program.position(t)
             past = self.program.position(t - self.tooth_period)
@@ -373,21 +373,21 @@ class KlineCuttingForce(CuttingForceModel):
         """Eq. (4) with the feed-per-tooth vector `feed` (x, y) [m] (f = |feed|, along it)
         and the depth of cut d_a = depth [m], for the tool at `position` (no force outside
         the workpiece box, above its top, or for d_a <= 0)."""
+        if self._outside(position):
+            return (0.0, 0.0, 0.0)
+        return self._local_force(t, feed[0], feed[1], depth)
+
+    def _outside(self, position: Sequence[float]) -> bool:
+        """The tool centre outside the workpiece's x-y box or not below its top."""
         x = position[0]
         y = position[1]
         lo = self.workpiece_min
         hi = self.workpiece_max
-        fx = feed[0]
-        fy = feed[1]
-        if (
-            depth <= 0.0
-            or position[2] >= self.workpiece_top
-            or x < lo[0]
-            or x > hi[0]
-            or y < lo[1]
-            or y > hi[1]
-            or (fx == 0.0 and fy == 0.0)
-        ):
+        return position[2] >= self.workpiece_top or x < lo[0] or x > hi[0] or y < lo[1] or y > hi[1]
+
+    def _local_force(self, t: float, fx: float, fy: float, depth: float) -> Force3:
+        """Eq. (4) in the machine frame for the tool inside the workpiece (chip_force)."""
+        if depth <= 0.0 or (fx == 0.0 and fy == 0.0):
             return (0.0, 0.0, 0.0)
         s1, s2, sc = self._teeth(t)
         if s1 == 0.0:
