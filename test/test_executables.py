@@ -12,6 +12,7 @@ import sys
 import xml.etree.ElementTree as ET
 
 import pytest
+from mill_bringup.machine_view import parameter_specs as view_specs
 from mill_controllers.config import parameter_specs as controller_specs
 from mill_observers.config import parameter_specs as observer_specs
 from mill_plant.config import parameter_specs as plant_specs
@@ -37,6 +38,7 @@ NODES = [
     ),
     ('mill_observers.observer_node', 'observer_node', observer_specs, ['gpi.omega_o', 'axis']),
     ('mill_trajectory.trajectory_node', 'trajectory_node', trajectory_specs, ['linear.feed_rate']),
+    ('mill_bringup.machine_view', 'machine_view', view_specs, ['robot_description', 'trace_rate']),
 ]
 
 
@@ -73,7 +75,9 @@ def test_node_help_lists_parameters(ros_env, module, executable, specs, required
         assert spec.description.strip(), f'{name} has no description'
 
 
-@pytest.mark.parametrize('module', ['mill_bringup.runner', 'mill_bringup.offline'])
+@pytest.mark.parametrize(
+    'module', ['mill_bringup.runner', 'mill_bringup.offline', 'mill_trajectory.preview']
+)
 def test_tool_help(ros_env, module) -> None:
     done = _help(module, ros_env)
     assert done.returncode == 0, done.stderr

@@ -9,6 +9,8 @@ name), in each layout.
 from __future__ import annotations
 
 import importlib.metadata
+import itertools
+import math
 import subprocess
 import sys
 import time
@@ -19,7 +21,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from mill_bringup import launch_plan
 from mill_common import topics
-from test.conftest import ros_node, wait_until
+from test.conftest import ros_node, spin_until, wait_until
 
 
 def console_script(package: str, executable: str) -> str:
@@ -68,6 +70,52 @@ def launched(n: launch_plan.NodePlan) -> list[str]:
     return cmd
 
 
+def _viewers_topics(node, ns: str) -> dict[str, list]:
+    """Subscribe to what RViz or Foxglove would draw of the machine in `ns`."""
+    from mill_common.ros import LATCHED_QOS
+    from nav_msgs.msg import Path as PathMsg
+    from std_msgs.msg import String
+
+    got: dict[str, list] = {'planned': [], 'trace': [], 'urdf': []}
+    qualified = {
+        'planned': topics.qualify(topics.PLANNED_PATH, ns),
+        'trace': topics.qualify(topics.TOOL_TRACE, ns),
+        'urdf': topics.qualify(topics.ROBOT_DESCRIPTION, ns),
+    }
+    node.create_subscription(PathMsg, qualified['planned'], got['planned'].append, LATCHED_QOS)
+    node.create_subscription(PathMsg, qualified['trace'], got['trace'].append, 1000)
+    node.create_subscription(String, qualified['urdf'], got['urdf'].append, LATCHED_QOS)
+    return got
+
+
+def _check_viewers_topics(views: dict[str, list], plan: launch_plan.Plan) -> None:
+    """The planned path from the job's start to its end; the trace at 20 Hz of the states'
+    stamps (t = 0, 0.05, ..., 0.2 s and on: the plant runs on after the job); the URDF
+    with the job's travel."""
+    from xml.etree import ElementTree
+
+    (planned,) = views['planned']
+    assert planned.header.frame_id == 'machine_l/mill_base' and len(planned.poses) == 5000
+    trace = views['trace']
+    stamps = [p.header.stamp.sec * 10**9 + p.header.stamp.nanosec for p in trace[-1].poses]
+    assert len(stamps) >= 5, stamps
+    # one point per 50 ms of the states' stamps (the plant's 1 ms grid: 50 ms exactly)
+    assert {b - a for a, b in itertools.pairwise(stamps)} == {50_000_000}, stamps
+    # every point measured during the job (its 0.2 s: the planned path's) on the programmed
+    # path (its points 0.12 µm apart), within 0.1 mm
+    path = [(p.pose.position.x, p.pose.position.y, p.pose.position.z) for p in planned.poses]
+    assert path[-1][1] - path[0][1] == pytest.approx(0.2 * 0.003, rel=1e-9)  # 0.2 s at 3 mm/s
+    for pose, stamp in zip(trace[-1].poses, stamps, strict=True):
+        if stamp > 200_000_000:
+            continue
+        here = (pose.pose.position.x, pose.pose.position.y, pose.pose.position.z)
+        assert min(math.dist(here, p) for p in path) < 1e-4, here
+    (urdf,) = views['urdf']
+    travel = plan.config.values('trajectory')['travel.min']  # type: ignore[union-attr]
+    joints = ElementTree.fromstring(urdf.data).iter('joint')
+    assert [float(j.find('limit').get('lower')) for j in joints] == travel
+
+
 @pytest.mark.system
 @pytest.mark.parametrize('layout', ['processes', 'per_axis', 'single'])
 def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path, layout: str) -> None:
@@ -84,10 +132,23 @@ def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path, layout: str)
         )
     clock = next(n.name for n in plan.nodes if n.required and n.name != 'job_watch')
     try:
+        with ros_node('viewer') as (node, executor):
+            views = _viewers_topics(node, 'machine_l')
+            while procs['job_watch'].poll() is None:
+                executor.spin_once(timeout_sec=0.1)
+
+            # what is still on its way, and the latched topics of a viewer that comes late
+            # (the plant runs on after the job: the trace grows on)
+            def enough() -> bool:
+                return bool(views['planned']) and len(views['trace'][-1:][0].poses) >= 5
+
+            spin_until(executor, lambda: views['trace'] and enough(), timeout=60)
+            spin_until(executor, lambda: views['urdf'], timeout=30)
         _out, err = procs['job_watch'].communicate(timeout=600)
         assert procs['job_watch'].returncode == 0, err
         assert 'job done at t = 0.2' in err, err
         assert procs[clock].poll() is None  # still running: launch would now stop it
+        _check_viewers_topics(views, plan)
     finally:
         for p in procs.values():
             if p.poll() is None:

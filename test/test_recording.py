@@ -366,7 +366,7 @@ def sender_of(name: str, data: bytes) -> str:
 
     if name == topics.DIAGNOSTICS:
         statuses = decode(WATCHED[name], data).status
-        return statuses[0].name.partition(': ')[0] if statuses else ''
+        return topics.parse_status_name(statuses[0].name).node if statuses else ''
     if name == '/rosout':
         return decode(WATCHED[name], data).name
     if name == '/parameter_events':

@@ -13,6 +13,8 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/launch', glob('launch/*.launch.py')),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        # the RViz config and the Foxglove layout
+        ('share/' + package_name + '/config', glob('config/*.rviz') + glob('config/*.json')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
@@ -26,6 +28,7 @@ setup(
             'offline_sim = mill_bringup.offline:main',
             'tune = mill_bringup.tuning.cli:main',
             'job_watch = mill_bringup.executables:job_watch',
+            'machine_view = mill_bringup.executables:machine_view',
             'mill_container = mill_bringup.executables:mill_container',
             'docs_figures = mill_bringup.docs_figures.cli:main',
             'docs_params = mill_bringup.docs_params:main',

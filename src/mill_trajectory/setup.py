@@ -19,6 +19,7 @@ setup(
     entry_points={
         'console_scripts': [
             'trajectory_node = mill_trajectory.executables:trajectory_node',
+            'gcode-preview = mill_trajectory.executables:gcode_preview',
         ],
     },
 )

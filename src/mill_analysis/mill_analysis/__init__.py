@@ -5,8 +5,9 @@ nothing starts or simulates a graph, so this package imports neither mill_bringu
 any role package.
 
     metrics          RunRecord (the three-axis job's signals) and summarize
-    bag_run       messages or a bag -> RunRecord (build_record, read_run)
-    node_intake    the nodes' checks on a listener's messages in arrival order (Intake)
+    lockstep_record  messages -> RunRecord on the sample grid (build_record)
+    bag_run          a bag -> its record and status (read_run)
+    node_intake      the nodes' checks on a listener's messages in arrival order (Intake)
     realtime_record  the same on the drive's own stamps (a realtime run), command timing
     bag_status       what a run's /diagnostics say: job start and end, the plant's status
     force_record     ForceRecord of a cutting-force job (Rubio 2013), J_c of eq. (14)

@@ -12,6 +12,11 @@ in, never from the status's prose:
 - a drive's ownership status (`<node>: ownership`, with `foreign_messages`): a
   `foreign_publisher`, once per drive (what it said in the detail).
 
+- the trajectory's job status (`<node>: job`) with an `event` value: a `program_message`
+  ((MSG, …), (DEBUG, …), (PRINT, …), a tool change) or a `pause` (M0/M1 reached, a feed
+  hold, a resume), at the job time of its line (`program_events_of`; not among the machine's
+  events, which a run and its offline twin must share).
+
 The runner adds what it found itself: a drive that went silent (`drive_silent`), a run
 that stalled (`stall`), a node that died (`node_died`), a run it could not complete
 (`run_error`). The offline simulator makes its trips as the controllers report them.
@@ -38,7 +43,32 @@ STALL = 'stall'  # the run made no progress for --stall-timeout
 NODE_DIED = 'node_died'  # a node's process ended while the job ran
 RUN_ERROR = 'run_error'  # the run could not go on (the graph refused it)
 FOREIGN = 'foreign_publisher'  # the drive saw another publisher on its topics (ignored)
-KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN, DRIVE_SILENT, STALL, NODE_DIED, RUN_ERROR)
+PROGRAM_MESSAGE = 'program_message'  # a G-code (MSG, …), (DEBUG, …), (PRINT, …) or tool change
+PAUSE = 'pause'  # the program paused (M0/M1) or the operator held the feed, or resumed
+KINDS = (
+    TRIP,
+    STOPPED,
+    BRAKED,
+    FAULT,
+    FOREIGN,
+    DRIVE_SILENT,
+    STALL,
+    NODE_DIED,
+    RUN_ERROR,
+    PROGRAM_MESSAGE,
+    PAUSE,
+)
+# The trajectory's job status (`<node>: job`) says what the program and the operator did in
+# its values `event` (EVENT_KINDS: the value -> the kind), `event_text`, `event_where`
+# (file:line:column), `event_channel` and `event_time_s` (the job time of the line).
+EVENT_KINDS = {
+    'message': PROGRAM_MESSAGE,
+    'tool change': PROGRAM_MESSAGE,
+    'paused': PAUSE,
+    'resumed': PAUSE,
+    'feed_hold': PAUSE,
+    'resume': PAUSE,
+}
 # The events of a status on the machine (the others are the runner's own findings).
 MACHINE_KINDS = (TRIP, STOPPED, BRAKED, FAULT, FOREIGN)
 
@@ -94,7 +124,8 @@ class Event:
 @dataclass(frozen=True)
 class Status:
     """One /diagnostics status as it arrived: the stamp of its array [ns], its name
-    (`<node>: <part>`), level (0 OK, 1 WARN, 2 ERROR), message and values."""
+    (`[<namespace>/]<node>: <part>`, topics.status_name), level (0 OK, 1 WARN, 2 ERROR),
+    message and values."""
 
     stamp_ns: int
     name: str
@@ -104,7 +135,7 @@ class Status:
 
     @property
     def node(self) -> str:
-        return self.name.partition(': ')[0]
+        return topics.parse_status_name(self.name).node
 
     @property
     def part(self) -> str:
@@ -211,3 +242,24 @@ def first_stop(events: Iterable[Event], axis: str) -> float | None:
         if e.axis == axis and e.kind in (TRIP, STOPPED, BRAKED) and math.isfinite(e.time)
     ]
     return min(times) if times else None
+
+
+def program_events_of(statuses: Sequence[Status]) -> list[Event]:
+    """What the program said and the operator did (PROGRAM_MESSAGE, PAUSE), once each, in
+    order: from the trajectory's job statuses with an `event` value (EVENT_KINDS), at the
+    job time they carry. The detail is 'file:line:column: CHANNEL: text' (a message) or
+    the event and what it said (a pause, a hold, a resume: refused ones included)."""
+    out: list[Event] = []
+    seen: set[tuple[str, str, str, str]] = set()
+    for s in statuses:
+        values = s.values
+        event = values.get('event')
+        if s.part != topics.JOB_STATUS or event not in EVENT_KINDS:
+            continue
+        t = values.get('event_time_s', '')
+        key = (event, values.get('event_where', ''), values.get('event_text', ''), t)
+        if key in seen:
+            continue
+        seen.add(key)
+        out.append(Event('', EVENT_KINDS[event], _number(t), s.message, s.node))
+    return out

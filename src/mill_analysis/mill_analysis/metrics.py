@@ -120,3 +120,14 @@ def summarize_contour(
         return None
     after = contour.distance[record.t >= skip]
     return ContourMetrics(contour.axes, peak(after), rms(after))
+
+
+def max_difference(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest |a − b| over all entries; 0 where both are NaN, inf where only one is (or the
+    shapes differ)."""
+    if a.shape != b.shape:
+        return math.inf
+    diff = np.abs(a - b)
+    diff[np.isnan(a) & np.isnan(b)] = 0.0
+    diff[np.isnan(diff)] = np.inf
+    return float(diff.max()) if diff.size else 0.0

@@ -12,7 +12,7 @@ Samples missing. A realtime drive sends the state of every axis, and the ground 
 tick with the tick's stamp, and no listener makes it wait: a topic that lacks a tick another of
 these topics holds, between its own first and last, lost it on the way to the listener
 (`missing_ticks`), as a lockstep record lacks a sample of its grid
-(mill_analysis.bag_run.build_record). Ticks lost on every one of them at once cannot be
+(mill_analysis.lockstep_record.build_record). Ticks lost on every one of them at once cannot be
 told from ticks the drive skipped (a late timer skips its periods) by the stamps alone.
 """
 

@@ -1,7 +1,7 @@
 """The record of one run: its signals on the sample grid, and what was left out. ROS-free.
 
 The offline simulator fills a RunRecord directly; the distributed run fills it from the
-messages it received (mill_analysis.bag_run, realtime_record); mill_analysis.metrics
+messages it received (mill_analysis.lockstep_record, realtime_record); mill_analysis.metrics
 computes every figure from it.
 """
 

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 from builtin_interfaces.msg import Duration
-from mill_analysis.bag_run import build_record, read_run, record_from_raw, record_topics
+from mill_analysis.bag_run import read_run
+from mill_analysis.lockstep_record import build_record, record_from_raw, record_topics
 from mill_analysis.metrics import summarize
 from mill_analysis.node_intake import Received, subset
 from mill_analysis.record import SIGNALS

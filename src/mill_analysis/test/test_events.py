@@ -113,3 +113,30 @@ def test_a_foreign_publisher_is_told_once_per_drive_by_its_status_part() -> None
     seen = Status(START, 'plant: ownership', 2, 'foreign publishers ignored: ...', values)
     (event,) = events_of([seen, seen], START)
     assert (event.axis, event.kind, event.source) == ('', 'foreign_publisher', 'plant')
+
+
+def test_program_messages_and_pauses_are_read_from_the_job_status_values() -> None:
+    from mill_analysis.events import PAUSE, PROGRAM_MESSAGE, program_events_of
+
+    def job(message: str, **values: object) -> Status:
+        return Status(START, 'trajectory: job', 0, message, _str({'state': 'running', **values}))
+
+    said = 'part.ngc:2:1: MSG: first cut'
+    statuses = [
+        job('job running', time=0.5),  # a periodic report: no event
+        job(said, event='message', event_where='part.ngc:2:1', event_time_s=0.04),
+        job(said, event='message', event_where='part.ngc:2:1', event_time_s=0.04),  # again
+        job(
+            'paused at part.ngc:4:1: M0',
+            event='paused',
+            event_where='part.ngc:4:1',
+            event_time_s=1.1,
+        ),
+        Status(START, 'plant: realtime', 0, 'x', {'event': 'paused'}),  # not the job's
+    ]
+    events = program_events_of(statuses)
+    assert [(e.kind, e.time, e.detail) for e in events] == [
+        (PROGRAM_MESSAGE, 0.04, said),
+        (PAUSE, 1.1, 'paused at part.ngc:4:1: M0'),
+    ]
+    assert events_of(statuses) == []  # not among the machine's events

@@ -62,11 +62,11 @@ def test_the_arrival_order_gives_back_the_names_in_order() -> None:
 def test_the_missing_runs_of_flags_are_those_of_the_sample_set() -> None:
     import numpy as np
     from mill_analysis.bag_meta import missing_ranges
-    from mill_analysis.bag_run import _missing_runs
+    from mill_analysis.lockstep_record import missing_runs
 
     rng = np.random.default_rng(7)
     for n in (0, 1, 5, 200):
         for share in (0.0, 0.3, 0.9, 1.0):
             have = rng.random(n) < share
             want = missing_ranges(set(np.flatnonzero(have).tolist()), n)
-            assert _missing_runs(have) == want
+            assert missing_runs(have) == want

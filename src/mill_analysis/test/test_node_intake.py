@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 from builtin_interfaces.msg import Duration
-from mill_analysis.bag_run import build_record
+from mill_analysis.lockstep_record import build_record
 from mill_analysis.node_intake import Drops, drop_lines
 from mill_common.checks import Rejected
 from mill_common.timebase import time_ns

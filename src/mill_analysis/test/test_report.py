@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from mill_analysis.bag_run import read_run, record_topics
+from mill_analysis.bag_run import read_run
+from mill_analysis.lockstep_record import record_topics
 from mill_analysis.metrics import contour_error, summarize_contour
 from mill_analysis.report.analysis import amplitude_at, amplitude_spectrum, analyse, max_window_rms
 from mill_analysis.report.plots import contour_planes

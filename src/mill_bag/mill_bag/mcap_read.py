@@ -155,17 +155,29 @@ class McapFile:
         """The records of the chunk at `start`, decompressed and CRC-checked, and where it
         ends: where its frame says (`stop`, None if the frame is no chunk's), else where its
         own records length says. Either may be the damaged one: unless they agree, the end
-        must be where a record can follow. Raises (the first failure) if it does not read."""
+        is the one a message index follows (as it follows every chunk of an indexed file),
+        else one where a record can follow; a compressed stream may read whole with a few
+        bytes more or less (a low byte of the frame's length flipped). Raises (the first
+        failure) if it does not read."""
         failure: Exception | None = None
+        found: list[tuple[bytes, int]] = []
         for bound in ([stop] if stop is not None else []) + [None]:
             try:
                 buf, end, own_end = self._whole_chunk(start, bound)
             except Exception as exc:
                 failure = failure or exc
                 continue
-            if end == stop == own_end or self._record_may_start(end):
+            if end == stop == own_end:
                 return buf, end
-            failure = failure or ValueError(f'no record can start where it ends ({end})')
+            found.append((buf, end))
+        for buf, end in found:
+            if index_ok(self.data, end):
+                return buf, end
+        for buf, end in found:
+            if self._record_may_start(end):
+                return buf, end
+        if found:
+            failure = failure or ValueError(f'no record can start where it ends ({found[0][1]})')
         assert failure is not None
         raise failure
 

@@ -8,11 +8,13 @@
 
 What it starts is decided by mill_bringup.launch_plan (tested without `launch`): the
 scenario file's nodes, each with its merged parameters, in the namespace, and the
-job_watch node; with a layout other than processes, the nodes it puts together run in one
-mill_container process each (they keep their names, parameters and topics). The node
-that clocks the job (plant or force process), or the container holding it, is required:
-when it exits by itself the launch ends with its exit code. When the trajectory reports the job
-done, job_watch exits and the launch ends (code 0). Ctrl-C ends every node.
+job_watch node, the machine_view node (URDF and tool trace) and, where it is installed,
+robot_state_publisher (else an INFO line says it is not); with a layout other than
+processes, the nodes it puts together run in one mill_container process each (they keep
+their names, parameters and topics). The node that clocks the job (plant or force
+process), or the container holding it, is required: when it exits by itself the launch
+ends with its exit code. When the trajectory reports the job done, job_watch exits and the
+launch ends (code 0). Ctrl-C ends every node.
 run_scenario adds the results summary; this launch file only runs the graph.
 """
 
@@ -22,7 +24,13 @@ import os
 import sys
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, OpaqueFunction, RegisterEventHandler, Shutdown
+from launch.actions import (
+    DeclareLaunchArgument,
+    LogInfo,
+    OpaqueFunction,
+    RegisterEventHandler,
+    Shutdown,
+)
 from launch.event_handlers import OnProcessExit
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node
@@ -55,7 +63,7 @@ def _graph(context):
     values = {a.name: LaunchConfiguration(a.name).perform(context) for a in launch_plan.ARGUMENTS}
     plan = launch_plan.plan(**values)
     launch_plan.write_parameters(plan)
-    actions = []
+    actions: list = [LogInfo(msg=note) for note in plan.notes]
     for spec in plan.nodes:
         node = Node(
             package=spec.package,

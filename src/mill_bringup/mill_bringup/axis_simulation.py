@@ -9,7 +9,7 @@ offline one bit for bit (mill_bringup.jobs.axis, the job, runs both).
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from mill_analysis.events import TRIP, Event, trip_detail
@@ -44,12 +44,14 @@ class SimulatedJob(Protocol):
     trajectory: str
     force_controller: str  # '' without one
     dt_ns: int
+    pauses: tuple[Any, ...]  # the program's M0/M1 (mill_trajectory.hold.ProgramEvent)
 
     @property
     def samples(self) -> int: ...
     @property
     def max_samples(self) -> int: ...
     def end_at(self, last_sample: int) -> None: ...
+    def unattended_pause(self) -> str | None: ...
 
 
 def build_axis_loops(
@@ -138,6 +140,9 @@ class AxisSimulation:
         # spindle: reference: the speeds the plant node reads off the reference.
         self.spindle = SpindleTrack() if pv['spindle'] == 'reference' else None
         self.job = job
+        unattended = job.unattended_pause()
+        if unattended is not None:
+            raise ScenarioError(f'scenario {scen.name}: offline: {unattended}')
         self.feed: AdaptiveFeed | None = None
         if job.force_controller:
             if not isinstance(self.schedule, OverrideReference):
@@ -215,6 +220,9 @@ class AxisSimulation:
 
     def finished(self) -> bool:
         last = None if self.feed is None else self.feed.last_sample
+        schedule = self.schedule
+        if self.job.pauses and isinstance(schedule, ClockedReference) and schedule.scaled:
+            last = schedule.scaled.last_sample  # a program that paused ends where its path does
         if last is not None and self.k >= last:
             self.job.end_at(last)
             return True

@@ -71,6 +71,13 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
         "limits) from where the scenario's job starts",
     )
     parser.add_argument(
+        '--resume-after',
+        type=float,
+        metavar='SECONDS',
+        help="a program's pause (M0, M1) ends by itself after this long at rest "
+        '(gcode.resume_after): nobody resumes it in an unattended run',
+    )
+    parser.add_argument(
         '--variant', help="run only this one of the scenario's variants (default: all of them)"
     )
 
@@ -92,6 +99,8 @@ def apply_overrides(scen: Scenario, args: argparse.Namespace) -> None:
         set_tuning(scen)
     if getattr(args, 'program', None):
         set_program(scen, args.program)
+    if getattr(args, 'resume_after', None) is not None:
+        set_resume_after(scen, args.resume_after)
     if args.duration is not None:
         set_duration(scen, args.duration)
 
@@ -187,6 +196,14 @@ def set_tuning(scen: Scenario) -> None:
         for text in _rule_overrides(node.name, declared(OBSERVERS.get(observer))):
             scen.add_override(text)
         scen.add_override(f'{node.name}.design_period=0.0')
+
+
+def set_resume_after(scen: Scenario, seconds: float) -> None:
+    """--resume-after: a program's pauses end by themselves after this long at rest."""
+    if not seconds > 0:
+        raise ScenarioError(f'--resume-after must be > 0, got {seconds}')
+    for node in scen.nodes_of(TRAJECTORY):
+        scen.add_override(f'{node.name}.gcode.resume_after={seconds!r}')
 
 
 def set_duration(scen: Scenario, duration: float) -> None:

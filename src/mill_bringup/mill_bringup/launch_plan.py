@@ -25,15 +25,21 @@ keyed `/**/NAME`, so they apply under the namespace whatever the keys of the sce
 of params_file, and the scenario's `mill_scenario: launch:` list, from which mill_container
 learns what each of its nodes is. The node that clocks the job (plant or force process) is
 required: its exit ends the launch with its exit code. The `job_watch` node ends the launch
-when the trajectory reports the job done.
+when the trajectory reports the job done. The `machine_view` node publishes the job's URDF
+(mill_bringup.machine_model) and the tool trace; robot_state_publisher, given the same URDF
+and the namespace as its `frame_prefix`, is started where it is installed (it is not on
+PyPI), else the plan says so in a note the launch prints at INFO.
 """
 
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from mill_common.machine_urdf import frame_prefix
 
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
@@ -59,51 +65,80 @@ LOG_LEVELS = ('debug', 'info', 'warn', 'error', 'fatal')
 SWITCHES = {'true': True, 'false': False, '': None}  # a boolean argument; '': the scenario's
 # The node that ends the launch once the job is done (mill_bringup.job_watch).
 JOB_WATCH = NodeLaunch('job_watch', 'mill_bringup', 'job_watch')
+# The node that publishes the URDF and the tool trace (mill_bringup.machine_view), and the
+# one that makes /tf of them where it is installed (it is not on PyPI).
+MACHINE_VIEW = NodeLaunch('machine_view', 'mill_bringup', 'machine_view')
+STATE_PUBLISHER = NodeLaunch(
+    'robot_state_publisher', 'robot_state_publisher', 'robot_state_publisher'
+)
+
+
+def installed(package: str) -> bool:
+    """Whether a ROS package is in the ament index of this environment."""
+    try:
+        from ament_index_python.packages import get_package_prefix
+
+        get_package_prefix(package)
+    except (LookupError, OSError, ImportError):  # not found, no index at all
+        return False
+    return True
 
 
 @dataclass(frozen=True)
 class Argument:
+    """A launch argument, declared once: the launch file declares it (its description is
+    what `--show-args` prints) and docs_params writes the user guide's table of it."""
+
     name: str
     default: str
     description: str
+    empty: str = 'none'  # what an empty default stands for, as the user guide says it
 
 
 ARGUMENTS = (
     Argument(
         'scenario',
         'slotting',
-        'scenario name (config/NAME.yaml) or path to a scenario file; its mill_scenario '
+        'scenario name (`config/NAME.yaml`) or path to a scenario file; its `mill_scenario` '
         'entry lists the nodes',
     ),
     Argument(
         'namespace',
         '',
-        "machine namespace of every node, e.g. machine2; empty: the scenario's, else /. "
-        '/diagnostics stays global, and /clock unless private_clock is true',
+        'machine namespace of every node, e.g. `machine2`; `/diagnostics` stays global, and '
+        '`/clock` unless `private_clock` is true',
+        "the scenario's, else `/`",
     ),
     Argument(
         'params_file',
         '',
-        'ROS 2 parameter file applied on top of the scenario (entries /**, NODE, /NODE or '
-        '/**/NODE)',
+        'ROS 2 parameter file applied on top of the scenario; entries `/**` (or another '
+        'wildcard such as `/**/x_*`) give each name to the nodes that declare it; `NODE`, '
+        '`/NODE` or `/**/NODE` must name a node of the scenario and hold only names it declares',
     ),
     Argument(
         'timing',
         '',
-        "lockstep or realtime, as run_scenario --timing sets it; empty: the scenario's",
+        '`lockstep` or `realtime`, given to every node as its `timing` parameter, as '
+        '`run_scenario --timing` sets it',
+        "the scenario's",
     ),
-    Argument('log_level', 'info', 'log level of every node: ' + ', '.join(LOG_LEVELS)),
+    Argument('log_level', 'info', '`--log-level` of every node: ' + ', '.join(LOG_LEVELS)),
     Argument(
         'layout',
         '',
-        'which nodes share a process: ' + ', '.join(LAYOUTS) + "; empty: the scenario's",
+        'which nodes share a process: ' + ', '.join(f'`{x}`' for x in LAYOUTS) + '; the nodes '
+        'a layout puts together run in one `mill_container` process and keep their names, '
+        'parameters and topics',
+        "the scenario's, else `processes`",
     ),
     Argument(
         'private_clock',
         '',
-        'true: remap /clock to NAMESPACE/clock for every node (needs a namespace), so that '
-        'machines launched in one domain under two namespaces keep their own clocks; empty: '
-        "the scenario's",
+        '`true`: every node of the launch has `/clock` remapped to `NAMESPACE/clock`, as '
+        '`run_scenario --private-clock` does, so that two simulated machines launched side '
+        'by side in one domain each step to their own plant; needs a `namespace`',
+        "the scenario's, else off",
     ),
 )
 # What runs the nodes a layout puts together (mill_bringup.container).
@@ -133,6 +168,7 @@ class Plan:
     nodes: list[NodePlan] = field(default_factory=list)
     parameters: dict[str, Any] = field(default_factory=dict)  # the file every node gets
     config: JobConfig | None = None  # the job's configuration, checked (job_config)
+    notes: list[str] = field(default_factory=list)  # INFO lines for the launch to print
 
 
 def plan(
@@ -143,9 +179,13 @@ def plan(
     log_level: str = 'info',
     layout: str = '',
     private_clock: str = '',
+    *,
+    found: Callable[[str], bool] = installed,
 ) -> Plan:
-    """The nodes a launch of this scenario starts; ScenarioError (one line) for bad input."""
+    """The nodes a launch of this scenario starts; ScenarioError (one line) for bad input.
+    `found(package)` says whether a package outside mill is installed."""
     from mill_bringup.jobs.registry import job_for
+    from mill_bringup.machine_model import robot_description
 
     scen = load(scenario)
     if namespace:
@@ -179,8 +219,26 @@ def plan(
     launch = [f'{n.name} {n.package} {n.executable}' for n in scen.nodes]
     entry = {SCENARIO_KEY: {'ros__parameters': {'launch': launch}}}
     out = Plan(scen, parameters={**entry, **scen.node_parameters()}, config=job.config)
+    # The viewers' nodes: the URDF of this job's machine, and /tf of it where possible.
+    urdf = robot_description(job.config)
+    views = [MACHINE_VIEW]
+    out.parameters[f'/**/{MACHINE_VIEW.name}'] = {'ros__parameters': {'robot_description': urdf}}
+    if found(STATE_PUBLISHER.package):
+        views.append(STATE_PUBLISHER)
+        out.parameters[f'/**/{STATE_PUBLISHER.name}'] = {
+            'ros__parameters': {
+                'robot_description': urdf,
+                'frame_prefix': frame_prefix(scen.namespace),
+            }
+        }
+    else:
+        out.notes.append(
+            'robot_state_publisher is not installed: no /tf of the machine (the URDF is on '
+            f'{topics.qualify(topics.ROBOT_DESCRIPTION, scen.namespace)})'
+        )
     processes = layout_processes(scen, chosen, config=job.config)
-    for process in [*processes, Process(JOB_WATCH.name, (JOB_WATCH,))]:
+    extra = [Process(n.name, (n,)) for n in (JOB_WATCH, *views)]
+    for process in [*processes, *extra]:
         first = process.nodes[0]
         out.nodes.append(
             NodePlan(

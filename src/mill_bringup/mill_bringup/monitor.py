@@ -257,10 +257,13 @@ class Monitor(Node):
         return -1 if stamp is None else stamp
 
     def status(self, name: str) -> dict[str, str] | None:
-        """The newest /diagnostics status of this name: its values, 'message' and 'level'."""
+        """The newest /diagnostics status of this machine with this name's node and part
+        (topics.status_key: the name may leave out the namespace): its values, 'message'
+        and 'level'."""
+        key, ns = topics.status_key(name), self.get_namespace()
         for array in reversed(self.diagnostics):
             for s in array.status:
-                if s.name == name and topics.from_machine(s.hardware_id, self.get_namespace()):
+                if topics.status_key(s.name) == key and topics.from_machine(s.hardware_id, ns):
                     values = {kv.key: kv.value for kv in s.values}
                     level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
                     return values | {'message': s.message, 'level': str(level)}

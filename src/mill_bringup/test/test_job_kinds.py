@@ -260,3 +260,18 @@ def test_the_graph_plan_is_what_the_runner_hears_of_the_job_as_prepared() -> Non
     assert plan.steps is None and not plan.sim_time
     assert plan.late == {topics.REFERENCE} and topics.joint_command('x') in plan.timed
     assert plan.late_after == tuple(topics.state(a) for a in 'xyz')
+
+
+def test_the_record_kind_says_how_two_records_of_a_job_differ() -> None:
+    # what `--compare-offline` prints: the record kind compares, signal by signal
+    from mill_bringup.cli import set_duration
+    from mill_bringup.jobs.base import simulate
+
+    scen = scenario.load('slotting')
+    set_duration(scen, 0.3)
+    job = job_for(scen)
+    rec, again = simulate(job), simulate(job)
+    assert job.RECORD.differences(rec, again) == {'tracking_error': 0.0, 'cutting_force': 0.0}
+    again.signals['position'][100, 1] += 1e-6  # y 1 µm off at one sample
+    assert job.RECORD.differences(rec, again)['tracking_error'] == pytest.approx(1e-6, rel=1e-6)
+    assert job.RECORD.gaps(rec) == {} and job.RECORD.foreign(rec) == {}

@@ -42,7 +42,7 @@ def documented_arguments() -> dict[str, str]:
     text = USER_GUIDE.read_text()
     section = text[text.index('## With a full ROS 2 install') :]
     table = section[section.index('| argument | default | meaning |') :].split('\n\n')[0]
-    rows = [line.split('|')[1:3] for line in table.splitlines()[2:]]
+    rows = [line.split('|')[1:3] for line in table.splitlines()[2:] if line.startswith('|')]
     return {name.strip().strip('`'): default.strip() for name, default in rows}
 
 
@@ -71,7 +71,12 @@ def test_every_planned_node_is_an_executable_of_its_package(name: str, tmp_path:
     clock = 'force_process_node' if name == 'rubio' else 'plant_node'
     assert required == sorted([clock, 'job_watch'])
     written = parse_yaml(path.read_text())
-    assert set(written) == {'mill_scenario'} | {f'/**/{n.name}' for n in plan.scenario.nodes}
+    views = {'/**/machine_view'} | (
+        {'/**/robot_state_publisher'} if launch_plan.installed('robot_state_publisher') else set()
+    )
+    assert (
+        set(written) == {'mill_scenario'} | {f'/**/{n.name}' for n in plan.scenario.nodes} | views
+    )
     lines = written['mill_scenario']['ros__parameters']['launch']
     assert lines == [f'{n.name} {n.package} {n.executable}' for n in plan.scenario.nodes]
 
@@ -90,7 +95,8 @@ def test_namespace_params_file_timing_and_log_level(tmp_path: Path) -> None:
     assert written['/**/y_controller']['ros__parameters']['pd.omega_c'] == 12.0  # the file's
     assert written['/**/plant']['ros__parameters']['substeps'] == 8
     del written['mill_scenario']  # the nodes' names and kinds (for mill_container)
-    for entry in written.values():
+    for name in plan.scenario.nodes:
+        entry = written[f'/**/{name.name}']
         # what run_scenario --timing realtime sets: no sim time, one sample of delay
         assert entry['ros__parameters']['timing'] == 'realtime'
         assert entry['ros__parameters']['use_sim_time'] is False
@@ -227,7 +233,8 @@ def test_layouts_start_containers_that_keep_the_node_names(tmp_path: Path) -> No
         if node.nodes:
             assert (node.package, node.executable) == ('mill_bringup', 'mill_container')
             assert not node.required
-    (single, watch) = launch_plan.plan('rubio', layout='single').nodes
+    (single, watch, view, *_rsp) = launch_plan.plan('rubio', layout='single').nodes
+    assert (view.name, view.required) == ('machine_view', False)
     assert single.nodes == ('force_process', 'trajectory', 'force_controller')
     assert single.required  # it holds the clock node
     assert (watch.name, watch.nodes, watch.required) == ('job_watch', (), True)
@@ -302,6 +309,39 @@ def test_an_unknown_name_names_the_params_file_and_its_entry(
     assert str(info.value) == f'params_file {params}: {message}'
 
 
+def test_the_viewers_nodes_get_the_jobs_urdf_and_robot_state_publisher_only_if_found(
+    tmp_path: Path,
+) -> None:
+    from xml.etree import ElementTree
+
+    for found in (True, False):
+        plan = launch_plan.plan('slotting', 'machine_a', found=lambda _package, f=found: f)
+        path = launch_plan.write_parameters(plan, str(tmp_path))
+        written = parse_yaml(path.read_text())
+        names = [n.name for n in plan.nodes]
+        assert names[-2:] == (
+            ['machine_view', 'robot_state_publisher'] if found else ['job_watch', 'machine_view']
+        )
+        urdf = written['/**/machine_view']['ros__parameters']['robot_description']
+        travel = plan.config.values('trajectory')  # type: ignore[union-attr]
+        joints = ElementTree.fromstring(urdf).iter('joint')
+        assert [float(j.find('limit').get('upper')) for j in joints] == travel['travel.max']
+        if found:
+            rsp = written['/**/robot_state_publisher']['ros__parameters']
+            assert rsp == {'robot_description': urdf, 'frame_prefix': 'machine_a/'}
+            assert plan.nodes[-1].package == 'robot_state_publisher'
+            assert plan.notes == []
+        else:
+            assert '/**/robot_state_publisher' not in written
+            assert plan.notes == [
+                'robot_state_publisher is not installed: no /tf of the machine (the URDF is '
+                'on /machine_a/robot_description)'
+            ]
+        assert not any(
+            n.required for n in plan.nodes if n.name in names[-2:] and n.name != 'job_watch'
+        )
+
+
 def test_exit_codes_as_a_shell_reports_them() -> None:
     assert [launch_plan.exit_code(c) for c in (0, 3, -2, -9, 300)] == [0, 3, 130, 137, 255]
 
@@ -335,11 +375,18 @@ def _stand_ins(values: dict[str, str]) -> dict[str, types.ModuleType]:
             'OpaqueFunction',
             'RegisterEventHandler',
             'Shutdown',
+            'LogInfo',
             'OnProcessExit',
             'Node',
         )
     }
-    actions = ('DeclareLaunchArgument', 'OpaqueFunction', 'RegisterEventHandler', 'Shutdown')
+    actions = (
+        'DeclareLaunchArgument',
+        'LogInfo',
+        'OpaqueFunction',
+        'RegisterEventHandler',
+        'Shutdown',
+    )
     return {
         'launch': module('launch', LaunchDescription=kinds['LaunchDescription']),
         'launch.actions': module('launch.actions', **{k: kinds[k] for k in actions}),
@@ -387,6 +434,8 @@ def test_launch_file_declares_the_arguments_and_starts_the_plan(
     assert all(n['remappings'] == [('/clock', '/machine2/clock')] for n in nodes)
     assert all(n['ros_arguments'] == ['--log-level', 'warn'] for n in nodes)
     assert all(Path(n['parameters'][0]).is_file() for n in nodes)
+    notes = [a.kwargs['msg'] for a in actions if type(a).__name__ == 'LogInfo']
+    assert notes == plan.notes  # robot_state_publisher not installed here: one INFO line
     handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']
     watched = sorted(h.kwargs['target_action'].kwargs['name'] for h in handlers)
     assert watched == ['job_watch', 'plant']
@@ -424,6 +473,7 @@ def test_launch_file_starts_a_container_without_a_node_name(
     assert [(n['executable'], n['name'], n['arguments']) for n in nodes] == [
         ('mill_container', None, [n.name for n in launch_plan.load('slotting').nodes]),
         ('job_watch', 'job_watch', []),
+        ('machine_view', 'machine_view', []),
     ]
     handlers = [a.args[0] for a in actions if type(a).__name__ == 'RegisterEventHandler']
     assert len(handlers) == 2  # the container holds the plant: required, as job_watch

@@ -1,8 +1,9 @@
-"""A node's statuses on /diagnostics: one publisher per node, names `<node>: <part>`.
+"""A node's statuses on /diagnostics: one publisher per node, names `[<ns>/]<node>: <part>`.
 
 Every node reports through one `Diagnostics`: its statuses are named after the node and
 the topic or part they are about (`x_controller: inputs`, `plant: x axis`,
-`trajectory: job`), their hardware_id is the machine's namespace, and `report` also puts
+`trajectory: job`; in a namespace, `machine_a/x_controller: inputs`: topics.status_name),
+their hardware_id is the machine's namespace, and `report` also puts
 the message in the node's log at the matching severity. A reader finds a status by its
 part whatever the node is called (mill_common.topics.part_of).
 """
@@ -31,7 +32,7 @@ class Diagnostics:
     def status(
         self, level: bytes, part: str, message: str, values: Mapping[str, object] | None = None
     ) -> DiagnosticStatus:
-        name = topics.status_name(self.node.get_name(), part)
+        name = topics.status_name(self.node.get_name(), part, self.node.get_namespace())
         return diagnostic_status(level, name, message, self.machine, values)
 
     def publish(self, stamp_ns: int, statuses: Sequence[DiagnosticStatus]) -> None:

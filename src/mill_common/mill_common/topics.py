@@ -5,16 +5,20 @@ namespace, so the default namespace gives `/mill/x/state` and a machine started 
 `-r __ns:=/machine2` uses `/machine2/mill/x/state`. `/clock` and `/diagnostics` are
 absolute and stay global, as ROS tools expect them.
 
-A node's diagnostic statuses carry its namespace as `hardware_id` (`machine_id`), so that
-the statuses of several machines on the shared `/diagnostics` can be told apart, and are
-named `<node>: <part>` (`status_name`): a reader finds one by its part (`part_of`), whatever
-the node is called.
+A node's diagnostic statuses carry its namespace twice, so that the statuses of several
+machines on the shared `/diagnostics` never merge: as `hardware_id` (`machine_id`), and in
+the name, `<node>: <part>` at the root and `<namespace>/<node>: <part>` in a namespace
+(`machine_a/x_controller: inputs`), so that a tool keyed on names (diagnostic_aggregator,
+rqt_robot_monitor) keeps two machines apart too. `status_name` makes a name and
+`parse_status_name` reads one back; a reader finds a status by its part (`part_of`) or by
+node and part (`status_key`), whatever the node is called and wherever it runs.
 """
 
 from __future__ import annotations
 
 import re
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 REFERENCE = 'mill/reference'
 CUTTING_FORCE = 'mill/cutting_force'
@@ -27,6 +31,17 @@ FORCE_CONTROL_STATE = 'mill/force_control/state'
 # The newest step a lockstep run's recorder holds whole (rosgraph_msgs/Clock): a plant with
 # `recorder_window` does not run further ahead of it (mill_bringup.bag_handshake).
 RECORDED = 'mill/recorded'
+# For the viewers (RViz, Foxglove): the job's programmed path (nav_msgs/Path, transient
+# local, the trajectory publishes it once a job is loaded), the measured tool trace
+# (nav_msgs/Path, mill_bringup.machine_view), the machine's URDF (std_msgs/String,
+# transient local) and the axes' joint states (sensor_msgs/JointState, the drive's).
+PLANNED_PATH = 'mill/planned_path'
+TOOL_TRACE = 'mill/tool_trace'
+ROBOT_DESCRIPTION = 'robot_description'
+JOINT_STATES = 'joint_states'
+# What robot_state_publisher gives from them (absolute, as tf2 expects).
+TF = '/tf'
+TF_STATIC = '/tf_static'
 CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'
 
@@ -38,13 +53,40 @@ DRIVE_STATUSES = ('lockstep', 'realtime')
 _TOKEN = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 
 
-def status_name(node: str, part: str) -> str:
-    return f'{node}: {part}'
+@dataclass(frozen=True)
+class StatusName:
+    """A diagnostic status's name read back: the namespace of the machine ('/' at the root),
+    the node's own name and the part the status is about."""
+
+    namespace: str
+    node: str
+    part: str
+
+
+def status_name(node: str, part: str, ns: str = ROOT) -> str:
+    """The name of the status of node `node` in namespace `ns` about `part`:
+    `x_controller: inputs` at the root, `machine_a/x_controller: inputs` in /machine_a."""
+    prefix = namespace(ns).strip('/')
+    return f'{prefix}/{node}: {part}' if prefix else f'{node}: {part}'
+
+
+def parse_status_name(name: str) -> StatusName:
+    """What `status_name` put into a name (a name without ': ' is a node's, with no part)."""
+    qualified, _, part = name.partition(': ')
+    ns, _, node = qualified.rpartition('/')
+    return StatusName('/' + ns.strip('/'), node, part)
 
 
 def part_of(name: str) -> str:
     """The part a status is about (what follows the node's name)."""
-    return name.partition(': ')[2]
+    return parse_status_name(name).part
+
+
+def status_key(name: str) -> tuple[str, str]:
+    """(node, part) of a status name, without its namespace: how a reader that has already
+    kept its machine's statuses (by hardware_id, `from_machine`) finds one."""
+    parsed = parse_status_name(name)
+    return parsed.node, parsed.part
 
 
 def state(axis: str) -> str:

@@ -4,6 +4,8 @@ applying it says what was done or refused."""
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 
 import pytest
 from mill_common.node_params import realtime_specs
@@ -42,3 +44,26 @@ def test_nothing_asked_nothing_done_and_an_affinity_is_applied() -> None:
     finally:
         for tid in os.listdir('/proc/self/task'):
             os.sched_setaffinity(int(tid), before)
+
+
+def test_a_listener_runs_below_the_graph_and_what_it_starts_runs_normally() -> None:
+    assert realtime_setup.listener_priority(80) == 80 - realtime_setup.LISTENER_BELOW
+    assert realtime_setup.listener_priority(3) == 1  # never off, never above the graph
+    # in a process of its own, so that pytest stays on the normal scheduler
+    script = (
+        'import os, subprocess, sys\n'
+        'from mill_common.realtime_setup import listen_at\n'
+        'refused = listen_at(7)\n'
+        'child = subprocess.run([sys.executable, "-c", "import os; '
+        'print(os.sched_getscheduler(0))"], capture_output=True, text=True)\n'
+        'print(os.sched_getscheduler(0), os.sched_getparam(0).sched_priority,'
+        ' child.stdout.strip(), refused)\n'
+    )
+    out = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    policy, priority, child, refused = out.stdout.strip().split(maxsplit=3)
+    if refused != '[]':  # no rtprio limit here: said in one line, nothing changed
+        assert 'listener priority 7' in refused and int(policy) == os.SCHED_OTHER
+        return
+    assert int(policy) & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO and int(priority) == 7
+    assert int(child) == os.SCHED_OTHER  # the node processes it starts take their own

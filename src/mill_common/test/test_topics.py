@@ -63,3 +63,18 @@ def test_statuses_belong_to_their_machine() -> None:
     assert not topics.from_machine('/machine2', '/')
     assert not topics.from_machine('/', 'machine2')
     assert topics.from_machine('mill_plant', 'machine2')  # not a namespace: anyone's
+
+
+def test_status_names_carry_the_namespace_and_read_back() -> None:
+    assert topics.status_name('x_controller', 'inputs') == 'x_controller: inputs'
+    a = topics.status_name('x_controller', 'inputs', 'machine_a')
+    b = topics.status_name('x_controller', 'inputs', '/machine_b')
+    assert (a, b) == ('machine_a/x_controller: inputs', 'machine_b/x_controller: inputs')
+    assert topics.status_name('plant', 'x axis', '/shop/m2') == 'shop/m2/plant: x axis'
+    for ns in ('/', '/machine_a', '/shop/m2'):
+        for node, part in (('x_controller', 'inputs'), ('plant', 'x axis'), ('t', 'a: b')):
+            parsed = topics.parse_status_name(topics.status_name(node, part, ns))
+            assert parsed == topics.StatusName(ns, node, part)
+            assert topics.part_of(topics.status_name(node, part, ns)) == part
+            assert topics.status_key(topics.status_name(node, part, ns)) == (node, part)
+    assert topics.parse_status_name('plant') == topics.StatusName('/', 'plant', '')

@@ -132,7 +132,9 @@ class AxisControllerNode(Node):
         if not self.timing.WAITS_FOR_INPUTS:  # realtime: who stalled, when a gap comes
             self.create_timer(WATCH_NS * 1e-9, self._watch_self, clock=steady)
             # The drive's reason for a stop it declares (its axis status), for the trip.
-            self._drive_status = topics.status_name(self._owners[CLOCK_INPUT], f'{axis} axis')
+            self._drive_status = topics.status_name(
+                self._owners[CLOCK_INPUT], f'{axis} axis', self.get_namespace()
+            )
             self._machine = topics.machine_id(self.get_namespace())
             self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_diagnostics, 20)
         self.get_logger().info(

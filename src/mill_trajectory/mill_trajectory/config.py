@@ -35,6 +35,7 @@ from mill_trajectory.feed_override import (
     TimeScaledPath,
 )
 from mill_trajectory.gcode_program import GcodeTrajectory
+from mill_trajectory.hold import Holds
 from mill_trajectory.planner import xyz
 from mill_trajectory.registry import TRAJECTORIES
 from mill_trajectory.schedule import (
@@ -258,20 +259,47 @@ def build_schedule(
     enabled, paced = feed.enabled, feed.lockstep
     if enabled and node.timing == 'realtime':
         raise ValueError('feed_override is not available with timing realtime')
+    holds = job_holds(path, T, enabled and limit is not None)
+    if holds is not None and node.timing == 'realtime':
+        first = holds.pauses[0]
+        raise ValueError(
+            f'{first.where}: {first.text}: timing realtime does not pause yet; '
+            'run it in lockstep or set gcode.optional_stop false for M1'
+        )
     if paced and not feed.period > 0:
         # The force job: samples are stamped by the override's sender (T need not be whole ns).
-        scaled = TimeScaledPath(path, T, limit=limit)
+        scaled = TimeScaledPath(path, T, limit=limit, holds=holds)
         return OverrideReference(scaled, override, T), JobProgress(job.end_time)
     dt_ns = period_ns(T)
     end = JobEnd.of(path.end_time, node.settle_time, node.duration, dt_ns)
     if paced:
         periodic = PeriodicOverridePath(path, dt_ns, feed.period, override, end, limit)
+        periodic.scaled.holds = holds
         reference = OverrideReference(periodic.scaled, override, T, periodic)
         return reference, JobProgress(job.end_time, periodic.scaled, dt_ns)
     preview = preview_samples(values, dt_ns)
     if node.timing == 'realtime':
         count = preview + math.ceil(node.publish_period * 1e9 / dt_ns) + 2
         return WallClockReference(path, dt_ns, count), JobProgress(job.end_time)
-    timed = TimeScaledPath(path, seconds(dt_ns), end, limit) if enabled else None
-    clocked = ClockedReference(path, dt_ns, preview, timed, override)
+    # A program that pauses runs on its own time too: its end is found where its path ends.
+    timed = (
+        TimeScaledPath(path, seconds(dt_ns), end, limit, holds)
+        if enabled or holds is not None
+        else None
+    )
+    clocked = ClockedReference(path, dt_ns, preview, timed, override if enabled else None)
     return clocked, JobProgress(job.end_time, timed, dt_ns)
+
+
+def job_holds(path: Trajectory, sample_period: float, can_hold: bool) -> Holds | None:
+    """The pauses and feed hold of a G-code job (None: a path that never pauses)."""
+    if not isinstance(path, GcodeTrajectory):
+        return None
+    why = (
+        None
+        if can_hold
+        else 'feed hold needs feed_override.enabled: only then does the plan leave the '
+        'acceleration and jerk to decelerate along the path within the limits'
+    )
+    holds = Holds(path.pauses, sample_period, path.resume_after, why)
+    return holds if path.pauses or can_hold else None

@@ -4,3 +4,4 @@
 from mill_common.executable import entry
 
 trajectory_node = entry('mill_trajectory.trajectory_node')
+gcode_preview = entry('mill_trajectory.preview')

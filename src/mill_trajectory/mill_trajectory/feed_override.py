@@ -32,7 +32,10 @@ from dataclasses import dataclass
 from mill_common.timebase import control_instant, job_steps, sample_index
 
 from mill_trajectory.base import Trajectory, TrajectorySample
+from mill_trajectory.hold import Holds
 from mill_trajectory.override_limit import FollowedOverride, OverrideLimit
+
+_STILL = (0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -95,9 +98,12 @@ class TimeScaledPath:
         sample_period: float,
         end: JobEnd | None = None,
         limit: OverrideLimit | None = None,
+        holds: Holds | None = None,
     ) -> None:
         self.path = path
         self.followed = None if limit is None else FollowedOverride(limit)
+        # Pauses (M0/M1) and the feed hold (mill_trajectory.hold): None, the path runs on.
+        self.holds = holds
         self._T = sample_period
         self._k = 0
         self._tau = 0.0
@@ -132,6 +138,16 @@ class TimeScaledPath:
         slope ȯ [1/s]: the override ramps as o(k) + ȯ·τ over the sample (a β-hold);
         the path time then advances by o·T + ȯ·T²/2 and ẍ_ref gains ȯ·p'.
         """
+        holds = self.holds
+        if holds is not None:
+            held = holds.hold_at(self._tau)
+            if held is not None:  # paused: exactly at rest at the pause, the clock runs on
+                self._tau = held
+                s = self.path.sample(held)
+                self._find_end()  # a duration may end the job during a pause
+                self._k += 1
+                return TrajectorySample(s.position, _STILL, _STILL, s.spindle)
+            override = holds.target(override)  # 0 under a feed hold
         s = self.path.sample(self._tau)
         self._find_end()
         self._k += 1

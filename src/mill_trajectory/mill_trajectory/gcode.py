@@ -10,8 +10,11 @@ length offset (G43). G53 moves and G28/G30 land on machine positions.
 The spindle is a signed speed [rev/min]: S for M3, -S for M4, 0 off. Where it changes (M3,
 M4, M5, or a new S while it runs) the program has a `spindle` move: the axes come to rest,
 and the spindle takes its new speed there (a CNC waits for its spindle as well). A tool
-change (M6) is a `stop` with a message (there is no cycle-start button: the program goes
-on); "(MSG, text)" is a `message` move (nothing moves). Coolant (M7 mist, M8 flood, M9 off)
+change (M6) is a `stop` with a message (the machine is taken to have a changer: the program
+goes on). M0, and M1 with the optional stop switch on (Setup.optional_stop, LinuxCNC's
+default), are a `stop` that pauses: the trajectory holds there until the operator resumes
+(mill_trajectory.hold). "(MSG, text)", "(DEBUG, text)" and "(PRINT, text)" are `message`
+moves (nothing moves). Coolant (M7 mist, M8 flood, M9 off)
 and the path tolerance (G64 P) are carried by each move; G61/G61.1 mark moves that end at
 rest. Between G41/G42 and G40 the moves are offset to the tool's centre
 (mill_trajectory.gcode_comp).
@@ -116,6 +119,7 @@ class Setup:
     tool_table: str = ''
     block_delete: bool = False
     peck_clearance: float = 0.001  # LinuxCNC's default on a metric machine: 1 mm
+    optional_stop: bool = True  # M1 pauses as M0 (LinuxCNC's optional-stop switch on)
 
 
 @dataclass
@@ -538,8 +542,8 @@ def _run_line(state: _State, block: Block, line: Where) -> bool:
         used.add('N')
     codes = {c: w for c, w in gs.values()}
     m_codes = {c: w for c, w in ms.values()}
-    for text, where in block.messages:
-        state.move('message', state.here, where, message=text)
+    for channel, text, where in block.messages:
+        state.move('message', state.here, where, message=text, channel=channel)
     if 'F' in values:
         f = values['F']
         if not f.value > 0.0:
@@ -607,8 +611,9 @@ def _run_line(state: _State, block: Block, line: Where) -> bool:
         if letter not in used:
             raise GcodeError(w.where, f'word {w.text} is not used on this line')
     for code, w in m_codes.items():
-        if code == 0:
-            state.move('stop', state.here, w.where, message='M0: program stop')
+        if code == 0 or (code == 1 and state.setup.optional_stop):
+            what = 'M0: program stop' if code == 0 else 'M1: optional stop'
+            state.move('stop', state.here, w.where, message=what, pause=True)
         elif code in (2, 30):
             return True
     return False

@@ -10,19 +10,26 @@ per-axis limits and the path tolerance (mill_trajectory.planner). Any problem is
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from mill_common.declared import ParamSet, param
-from mill_common.parameters import ParameterError, number_list, positive
+from mill_common.parameters import (
+    ParameterError,
+    boolean,
+    non_negative,
+    number_list,
+    positive,
+)
 
 from mill_trajectory.base import Trajectory, TrajectorySample
 from mill_trajectory.feed_report import block_feeds, feed_summary, pieces_by_block
 from mill_trajectory.gcode import Setup, read_program, read_tool_table
-from mill_trajectory.gcode_words import GcodeError
+from mill_trajectory.gcode_words import GcodeError, Move
+from mill_trajectory.hold import MESSAGE, PAUSE, TOOL_CHANGE, ProgramEvent
 from mill_trajectory.override_limit import RESERVE, OverrideLimit
-from mill_trajectory.planner import Limits, PlanError, PlannedPath, plan, xyz
+from mill_trajectory.planner import Limits, Piece, PlanError, PlannedPath, plan, xyz
 from mill_trajectory.toolpath import Travel, check_travel
 
 # A small machine (the Beltrán 2013 axes: 3.175 mm pitch screws, 10 N·m): 3 m/min,
@@ -113,6 +120,18 @@ class GcodeParams(ParamSet):
         _limit,
     )
     max_jerk: list[float] = param(DEFAULT_JERK, 'per-axis jerk limit [m/s^3]; 0 = none', _limit)
+    optional_stop: bool = param(
+        True,
+        "M1 pauses as M0 does (LinuxCNC's optional-stop switch, on); false: M1 does nothing",
+        boolean,
+    )
+    resume_after: float = param(
+        0.0,
+        'a pause (M0, M1) ends by itself after this long at rest [s], for unattended runs '
+        "and the offline simulator; 0 = it holds until the trajectory's ~/resume is called",
+        non_negative,
+        unit='s',
+    )
     tolerance: float = param(
         DEFAULT_TOLERANCE,
         'path tolerance: how far a blended corner or an arc chord may leave the '
@@ -133,11 +152,16 @@ class GcodeTrajectory(Trajectory):
         self,
         planned: PlannedPath,
         override_limit: OverrideLimit | None = None,
-        messages: tuple[str, ...] = (),
+        events: tuple[ProgramEvent, ...] = (),
+        resume_after: float = 0.0,
     ) -> None:
         self.planned = planned
-        # The program's (MSG, ...) and tool changes, 'file:line:column: text', in order.
-        self.messages = messages
+        # The program's messages, pauses and tool changes at the path time their line runs.
+        self.events = events
+        self.pauses = tuple(e for e in events if e.kind == PAUSE)
+        self.resume_after = resume_after  # gcode.resume_after [s]; 0: wait for ~/resume
+        self.moves: tuple[Move, ...] = ()  # the program read (from_parameters)
+        self.tolerance = DEFAULT_TOLERANCE  # the path tolerance it was planned with [m]
         self.end_time = planned.end_time
         # How fast a feed override may change on it (None: no override, or no limit binds).
         self.override_limit = override_limit
@@ -179,6 +203,7 @@ class GcodeTrajectory(Trajectory):
                 home2=xyz(v.home2),
                 tools=read_tool_table(table) if table else None,
                 tool_table=table,
+                optional_stop=v.optional_stop,
             )
         except GcodeError as exc:
             raise ParameterError('tool_table', v.tool_table, str(exc)) from None
@@ -193,10 +218,34 @@ class GcodeTrajectory(Trajectory):
             planned = plan(pieces, limits)
         except (GcodeError, PlanError) as exc:
             raise ParameterError('file', v.file, str(exc)) from None
-        messages = tuple(f'{m.where}: {m.message}' for m in moves if m.message)
-        out = cls(planned, override_limit, messages)
+        events = program_events(moves, pieces, blocks, planned)
+        out = cls(planned, override_limit, events, v.resume_after)
+        out.moves, out.tolerance = tuple(moves), limits.tolerance  # for a preview
         out.feed_summary = feed_summary(block_feeds(moves, pieces, blocks, planned))
         return out
 
     def sample(self, t: float) -> TrajectorySample:
         return self.planned.sample(t)
+
+
+def program_events(
+    moves: Sequence[Move], pieces: Sequence[Piece], blocks: Sequence[int], planned: PlannedPath
+) -> tuple[ProgramEvent, ...]:
+    """The program's messages, pauses and tool changes, each at the path time its line runs:
+    a message where the next piece begins (so one before a stop shows once at rest), a
+    pause or a tool change when the reference has come to rest for it."""
+    starts = planned.piece_starts(pieces)
+    out: list[ProgramEvent] = []
+    k = 0  # the first piece of the move at hand or after it
+    for b, m in enumerate(moves):
+        while k < len(blocks) and blocks[k] < b:
+            k += 1
+        if not m.message:
+            continue
+        t = starts[k] if k < len(starts) else planned.end_time
+        if m.kind == 'message':
+            out.append(ProgramEvent(t, MESSAGE, str(m.where), m.message, m.channel))
+        elif m.kind == 'stop':
+            kind = PAUSE if m.pause else TOOL_CHANGE
+            out.append(ProgramEvent(t, kind, str(m.where), m.message))
+    return tuple(out)

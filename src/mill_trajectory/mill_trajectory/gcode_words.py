@@ -2,7 +2,9 @@
 
 As LinuxCNC reads a line: spaces and tabs outside comments do not count ("X 1 0" is X10),
 case does not matter, comments are in parentheses or from ';' to the end of the line, and
-a comment "(MSG, text)" is a message. A '/' first is block delete. A word is a letter and a
+a comment "(MSG, text)", "(DEBUG, text)" or "(PRINT, text)" is a message (DEBUG and PRINT
+with #<name> and #123 replaced by their values). A '/' first is block delete. A word is a
+letter and a
 value: a number ("X-1.5"), a parameter ("#1", "#<depth>", "#<_global>", "#[#1+1]"), an
 expression in brackets ("[#1 * 2 + 0.5]") or a function ("SIN[30]"); "#1 = value" sets a
 parameter. Values are read when the line runs, with the parameters as they stand before
@@ -132,7 +134,9 @@ class Block:
     words: list[Word] = field(default_factory=list)
     settings: list[tuple[Key, float, Where]] = field(default_factory=list)
     oword: OWord | None = None
-    messages: list[tuple[str, Where]] = field(default_factory=list)
+    # (channel, text, where): channel MSG, DEBUG or PRINT; DEBUG and PRINT with their
+    # parameters' values in the text, as they stand when the line runs
+    messages: list[tuple[str, str, Where]] = field(default_factory=list)
     delete: bool = False  # '/' first: block delete
 
 
@@ -410,6 +414,21 @@ def _binary(op: str, a: float, b: float, where: Where) -> float:
     return table[op](a, b)
 
 
+CHANNELS = ('MSG', 'DEBUG', 'PRINT')  # comments that reach the operator (LinuxCNC's)
+_IN_TEXT = re.compile(r'#<([^>]*)>|#(\d+)')
+
+
+def _with_values(text: str, params: Parameters, where: Where) -> str:
+    """A DEBUG or PRINT text with each #<name> and #123 replaced by its value (as LinuxCNC,
+    six decimals); a parameter that is not set is refused as anywhere else."""
+
+    def value(m: re.Match[str]) -> str:
+        key: Key = m.group(1).lower() if m.group(1) is not None else int(m.group(2))
+        return f'{params.read(key, where):.6f}'
+
+    return _IN_TEXT.sub(value, text)
+
+
 def read_block(text: str, file: str, number: int, params: Parameters = SHAPE_ONLY) -> Block:
     """One line read into a block (see the module doc); GcodeError names the first bad column."""
     block = Block()
@@ -418,8 +437,14 @@ def read_block(text: str, file: str, number: int, params: Parameters = SHAPE_ONL
     line = _Line(text, file, number)
     for comment, column in line.comments:
         body = comment.strip()
-        if body[:4].upper() == 'MSG,':
-            block.messages.append((body[4:].strip(), line.at(column)))
+        channel, _, said = body.partition(',')
+        channel = channel.strip().upper()
+        if channel in CHANNELS and _:
+            where = line.at(column)
+            said = said.strip()
+            if channel != 'MSG' and params is not SHAPE_ONLY:
+                said = _with_values(said, params, where)
+            block.messages.append((channel, said, where))
     reader = _Reader(line, params)
     if line.peek() == '/':
         line.take()
@@ -525,6 +550,8 @@ class Move:
     duration: float = 0.0  # dwell [s]
     spindle: float = 0.0  # spindle speed during this move [rev/min], signed; 0 off
     coolant: str = ''  # '', 'mist', 'flood' or 'mist+flood'
-    message: str = ''  # stop (why: a tool change), message
+    message: str = ''  # stop (why: a tool change, M0, M1), message (its text)
+    channel: str = ''  # message: MSG, DEBUG or PRINT
+    pause: bool = False  # stop: M0, or M1 with the optional stop on: wait for the operator
     tolerance: float | None = None  # path tolerance from G64 P [m]; None: the machine's
     exact_stop: bool = False  # G61/G61.1 and canned cycles: the move ends at rest

@@ -46,7 +46,9 @@ forwards and backwards, with a the share of the acceleration a curve leaves (u²
 acceleration and u³κ² of the jerk taken, and speeding up by a_t adding 3·u·a_t·κ to the
 jerk). A straight piece slowed by a corner at one of its ends is cut there, if the rest
 holds the ramps up to its cap: a short piece runs at the corner's speed and the rest at the
-feed, so that the corner slows only its neighbourhood. The start and end are junctions with
+feed, so that the corner slows only its neighbourhood; a piece slow at one end only (an
+arc's first chord after a sharp corner) is cut there too if the corner piece takes at most
+half of it, so that the rest ramps on into the pieces after it. The start and end are junctions with
 rest; an acceleration or jerk limit of inf is no limit (with both inf, the velocity steps at
 each corner, as the straight cuts of Beltrán 2013 eq. (19)-(22), and pieces are not cut).
 
@@ -94,6 +96,7 @@ MAX_PASSES = 400
 PATIENCE = 20  # slowings of a piece before its steps are at least STUBBORN
 STUBBORN = 0.97
 MAX_STRETCH = 8.0  # a transition lengthened at most this many times its shortest
+LONE_CUT = 0.5  # a piece slow at one end is cut there if its corner piece takes at most this
 PARALLEL = 1e-12  # |d_a − d_b| below this: the same direction
 ZERO_LENGTH = 1e-12  # [m]: a shorter move is no move
 
@@ -273,6 +276,33 @@ class PlannedPath(Trajectory):
         np.add.at(time, src[keep], self._profile.duration[keep])
         np.maximum.at(speed, src[keep], v[keep])
         return time, speed
+
+    def piece_starts(self, pieces: Sequence[Piece]) -> list[float]:
+        """For each of the planned input pieces, when it begins [s]: a move, where the sharp
+        path begins it; a rest, the instant the reference has come to rest for it (after
+        the dwells of the rests before it that it was merged with, which the reference
+        keeps exactly still through); a dropped (zero-length) move, where the next begins."""
+        n = len(pieces)
+        out = [self.end_time] * n
+        if self._profile is None:
+            return out
+        speed = self._profile.speed.tolist()
+        src = self.sources
+        for s, j in enumerate(src):
+            if j < 0 or (s > 0 and src[s - 1] == j):  # the path's own rests; a cut's rest
+                continue
+            if speed[s] > 0.0:
+                out[j] = self._starts[s]
+                continue
+            t = self._starts[s] + 0.5 * self._corners[s]
+            following = next((k for k in src[s + 1 :] if k >= 0), n)
+            for i in range(j, following):  # the rests merged into this one
+                out[i] = t
+                t += pieces[i].dwell if pieces[i].rest else 0.0
+        for i in range(n - 2, -1, -1):  # dropped moves: where the next piece begins
+            if not pieces[i].rest and math.dist(pieces[i].start, pieces[i].end) <= ZERO_LENGTH:
+                out[i] = out[i + 1]
+        return out
 
     @property
     def transitions(self) -> list[float]:
@@ -472,6 +502,10 @@ def _cut(c: _Chain, limits: Limits) -> _Chain:
     with np.errstate(invalid='ignore'):
         middle = np.nan_to_num(0.5 * c.cap * ramps, nan=np.inf)
     fits = (a + b + middle <= c.length) & (a + b > 0.0)
+    # A piece slow at one end only (an arc's first chord after a sharp corner, a short line
+    # into a curve): its corner piece alone, so that the rest ramps on into the pieces after
+    # it instead of crawling at the corner's speed from end to end.
+    fits |= (slow_in != slow_out) & (a + b > 0.0) & (a + b <= LONE_CUT * c.length)
     a, b = np.where(fits, a, 0.0), np.where(fits, b, 0.0)
     if not fits.any():
         return c

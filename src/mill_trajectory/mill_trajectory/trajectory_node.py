@@ -2,10 +2,10 @@
 
 Publishes /mill/reference (trajectory_msgs/JointTrajectory: point i holds positions,
 velocities and accelerations of x, y, z at stamp + time_from_start; a path that
-programs the spindle, G-code, adds the joint `spindle`, its position the speed [rev/min])
-and the job's status on /diagnostics ("running" with progress, then "done" with its
-end_time). Which points go
-out, and when, is decided by the ROS-free schedules of mill_trajectory.schedule, the ones
+programs the spindle, G-code, adds the joint `spindle`, its position the speed [rev/min]),
+the job's status on /diagnostics ("running" with progress, then "done" with its end_time)
+and the job's path, once loaded, on mill/planned_path (mill_trajectory.planned_path). Which
+points go out, and when, is decided by the ROS-free schedules of mill_trajectory.schedule, the ones
 the offline simulator uses too; this node takes what paces it, checks it and publishes:
 
 - lockstep, /clock: each tick is answered with `preview_time` of points ahead. With
@@ -53,6 +53,7 @@ from mill_common.timebase import period_ns
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 from trajectory_msgs.msg import JointTrajectory
 
 from mill_common import topics
@@ -63,6 +64,9 @@ from mill_trajectory.config import (
     parameter_specs,
 )
 from mill_trajectory.feed_override import FeedOverride
+from mill_trajectory.gcode_program import GcodeTrajectory
+from mill_trajectory.hold import PAUSE, Command, EventClock, Holds
+from mill_trajectory.planned_path import PlannedPath, job_path
 from mill_trajectory.schedule import (
     ClockedReference,
     OverrideReference,
@@ -78,10 +82,15 @@ class TrajectoryNode(Node):
         self._name = self.get_name()  # the sender of every message; asked once
         self._schedule: Schedule | None = None
         self._override: FeedOverride  # set by _configure
+        self._planned: PlannedPath | None = None  # the path on mill/planned_path, once made
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         self._ref_pub = data_publisher(self, JointTrajectory, topics.REFERENCE, DATA_QOS)
+        self._planned = PlannedPath(self)
+        self._planned.publish(job_path(self._schedule), self.progress.end_time)
         self._answer: tuple[int, bytes] | None = None  # lockstep overrides: the last answer
+        self._job_time = 0.0  # the job time last reported
+        self._held_report_ns = 0  # lockstep: the next tick to report a pause or hold at
         self._ticks = StampCheck(None)  # lockstep: the /clock ticks (or overrides) answered
         schedule = self._schedule
         self.guard = InputGuard(
@@ -102,6 +111,8 @@ class TrajectoryNode(Node):
             self.create_subscription(Clock, topics.CLOCK, self._on_clock, DATA_QOS)
             if v['feed_override.enabled']:
                 self._take_override(self._on_user_override, 10)
+        self.create_service(Trigger, '~/feed_hold', self._on_feed_hold)
+        self.create_service(Trigger, '~/resume', self._on_resume)
         self.get_logger().info(
             f'{v["trajectory"]} path, job ends at t = {self.progress.end_time:.3f} s'
         )
@@ -118,6 +129,72 @@ class TrajectoryNode(Node):
             return
         self._override = FeedOverride(feed.min, feed.max)
         self._schedule, self.progress = build_schedule(values, self._override)
+        path = self._path()
+        self._events = EventClock(path.events if isinstance(path, GcodeTrajectory) else ())
+        self._publish_planned()
+
+    def _publish_planned(self) -> None:
+        """The job's path on mill/planned_path, once a parameter change has loaded it."""
+        if self._planned is not None and self._schedule is not None:
+            self._planned.later(job_path(self._schedule), self.progress.end_time)
+
+    def _path(self) -> Any:
+        s = self._schedule
+        return s.scaled.path if isinstance(s, OverrideReference) else s.path if s else None
+
+    @property
+    def holds(self) -> Holds | None:
+        """The job's pauses and feed hold (None: a path that cannot pause nor hold)."""
+        s = self._schedule
+        scaled = s.scaled if isinstance(s, ClockedReference | OverrideReference) else None
+        return None if scaled is None else scaled.holds
+
+    # -- the operator --------------------------------------------------------------------
+    def _on_feed_hold(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        return self._command(response, 'feed_hold')
+
+    def _on_resume(self, request: Trigger.Request, response: Trigger.Response) -> Any:
+        return self._command(response, 'resume')
+
+    def _command(self, response: Any, what: str) -> Any:
+        holds = self.holds
+        if holds is None:
+            answer = Command(False, f'{what}: this job has no pause and cannot hold its feed')
+        else:
+            answer = holds.feed_hold() if what == 'feed_hold' else holds.resume()
+        response.success, response.message = answer.accepted, answer.message
+        if answer.accepted:  # rclpy wants one severity per call site
+            self.get_logger().info(f'{what}: {answer.message}')
+        else:
+            self.get_logger().warning(f'{what} refused: {answer.message}')
+        self.report(
+            self._job_time,
+            'running',
+            answer.message,
+            level=DiagnosticStatus.OK if answer.accepted else DiagnosticStatus.WARN,
+            event=(what, answer.message, ''),
+        )
+        return response
+
+    def _tell(self, t: float) -> None:
+        """The program's messages and the pauses reached by path time t, logged and on
+        /diagnostics."""
+        for e in self._events.due(t):
+            if e.kind == PAUSE:
+                continue  # the holds say it, with how to go on
+            self.get_logger().info(str(e))
+            said = (e.kind, e.text, e.where, e.channel)
+            self.report(t, 'running', str(e), level=DiagnosticStatus.OK, event=said)
+        holds = self.holds
+        for n in holds.drain() if holds is not None else ():
+            level = DiagnosticStatus.OK
+            if n.kind == 'paused':
+                self.get_logger().warning(n.text)
+                level = DiagnosticStatus.WARN
+            else:
+                self.get_logger().info(n.text)
+            said = (n.kind, n.event.text, n.event.where, '')
+            self.report(t, 'running', n.text, level=level, event=said)
 
     def _override_scales(self) -> bool:
         s = self._schedule
@@ -145,7 +222,15 @@ class TrajectoryNode(Node):
         points = schedule.answer(ns)
         if points is not None:
             self.publish(points)
-        self.job_status(schedule.job_time(ns))
+        t = schedule.job_time(ns)
+        self._job_time = t
+        self._tell(t)
+        self.job_status(t)
+        holds = self.holds
+        if holds is not None and holds.state != 'running' and ns >= self._held_report_ns:
+            # The path time stands still while paused or held: say so once a second of clock.
+            self._held_report_ns = ns + 1_000_000_000
+            self.report(t, 'running', f'job {holds.state}')
 
     def _on_user_override(self, msg: Any) -> None:
         offered = msg.position[0] if len(msg.position) else math.nan
@@ -177,6 +262,8 @@ class TrajectoryNode(Node):
         out = self._message(points)
         self._ref_pub.publish(out)
         self._answer = (ns, out)
+        self._job_time = t
+        self._tell(t)
         self.job_status(t)
 
     # -- what goes out -------------------------------------------------------------------
@@ -219,6 +306,7 @@ class TrajectoryNode(Node):
         problem: str | None = None,
         level: bytes | None = None,
         end_time: float | None = None,
+        event: tuple[str, ...] | None = None,
     ) -> None:
         values: dict[str, object] = {
             'state': state,
@@ -226,6 +314,13 @@ class TrajectoryNode(Node):
             'end_time': self.progress.end_time if end_time is None else end_time,
             'feed_override': self._override.value,
         }
+        holds = self.holds
+        if holds is not None:
+            values['hold'] = holds.state  # running, paused or held
+        if event is not None:  # what the program or the operator did (mill_analysis.events)
+            keys = ('event', 'event_text', 'event_where', 'event_channel')
+            values.update(zip(keys, event, strict=False))
+            values['event_time_s'] = t
         schedule = self._schedule
         if isinstance(schedule, WallClockReference) and schedule.t0 is not None:
             values['start_stamp_ns'] = schedule.t0

@@ -233,7 +233,11 @@ def test_modal_words_bom_percent_coolant_path_modes_and_units() -> None:
     # LinuxCNC sets F before G20 on a line: 'G20 F10' is 10 mm/min (then shown in inches).
     assert inch.feed == pytest.approx(0.01 / 60) and _mm([inch]) == [(25.4, 1, 1)]
     assert _mm(_at(ms, 15)) == [(9, 1, 1)]
-    assert ms[-1].kind == 'stop' and ms[-1].where.line == 17  # M1 off, M0; then '%' ends it
+    # M1 (the optional stop on, as LinuxCNC's default switch) and M0 pause; '%' ends it.
+    assert [(m.where.line, m.kind, m.pause) for m in ms[-2:]] == [
+        (16, 'stop', True),
+        (17, 'stop', True),
+    ]
 
 
 def test_the_plan_comes_to_rest_at_the_bottom_of_a_hole() -> None:

@@ -93,3 +93,34 @@ def test_a_fine_polyline_circle_runs_at_the_speed_the_limits_allow() -> None:
         return out
 
     _check_limits_and_path(path, off)
+
+
+def test_the_first_chord_after_a_sharp_corner_does_not_crawl() -> None:
+    # One turn of r 50 mm at 50 mm/s right after the approach's 90 degree corner: the arc's
+    # first chord (1 mm) is slow at its start only. It used to run whole at the corner's
+    # 1.85 mm/s (0.54 s for 1 mm, the turn at 91 % of F); cut at its corner end, the rest
+    # ramps on into the curve.
+    r, feed = 50.0, 50.0
+    text = f'G21 G90 G17\nG0 X{r:g} Y0\nG3 X{r:g} Y0 I{-r:g} J0 F{60 * feed:g}\nM30\n'
+    moves = parse_program(text, 'circle.ngc', (0.0, 0.0, 0.0))
+    pieces, blocks = pieces_by_block(moves, TOL)
+    path = plan(pieces, LIMITS)
+    (arc,) = [f for f in block_feeds(moves, pieces, blocks, path) if f.kind == 'arc']
+    assert arc.mean >= 0.95 * feed * 1e-3, arc.mean
+    starts = path.piece_starts(pieces)
+    first = next(k for k, b in enumerate(blocks) if moves[b].kind == 'arc')
+    assert starts[first + 1] - starts[first] < 0.2  # the first chord, 1 mm
+    # Within the limits around the corner (the first 0.6 s of the arc) and on the path.
+    ts = np.arange(starts[first] - 0.2, starts[first] + 0.6, 2e-4)
+    s = [path.sample(float(t)) for t in ts]
+    v = np.array([x.velocity for x in s])
+    a = np.array([x.acceleration for x in s])
+    p = np.array([x.position for x in s])
+    assert np.abs(v).max() <= V * (1 + 1e-9) and np.abs(a).max() <= A * (1 + 1e-9)
+    assert np.abs(np.diff(a, axis=0)).max() / 2e-4 <= J * (1 + 1e-6)
+    rm = r * 1e-3
+    off = np.minimum(
+        np.abs(np.hypot(p[:, 0] - 0.0, p[:, 1]) - rm),
+        np.hypot(p[:, 1], p[:, 0] - np.clip(p[:, 0], 0.0, rm)),
+    )
+    assert off.max() <= TOL * (1 + 1e-9)

@@ -22,7 +22,7 @@ Per run and axis, over t >= --skip (the start transient excluded):
 
 max |e|, RMS e, the RMS of xi_hat - xi and of xi and the contour error come from
 `mill_analysis.metrics` (summarize, contour_error) on a RunRecord built by
-`mill_analysis.bag_run.build_record`: the code the runner uses for the summary it
+`mill_analysis.lockstep_record.build_record`: the code the runner uses for the summary it
 prints, so both agree on the same run.
 
 The bag is read by topic names and types only (see mill_analysis.bag_run), so a

@@ -18,6 +18,7 @@ back through the same object and summarises with the same `summarize`
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from abc import ABC, abstractmethod
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar, Generic, TypeVar
 
+import numpy as np
 from mill_bag.errors import BagError
 from mill_bag.reader import open_bag
 from mill_common.progress import Progress
@@ -33,7 +35,8 @@ from mill_common.progress import Progress
 from mill_analysis import bag_meta
 from mill_analysis.bag_run import read_run
 from mill_analysis.force_record import ForceBagRun, ForceRecord, is_force_bag, read_force_run
-from mill_analysis.record import RunRecord
+from mill_analysis.metrics import max_difference
+from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.report.analysis import RunReport, analyse
 from mill_analysis.report.force import force_figure, force_markdown, force_table
 from mill_analysis.report.plots import plot_all
@@ -82,6 +85,25 @@ class RecordKind(ABC, Generic[R]):
     @abstractmethod
     def plot(self, runs: Sequence[R], out: Path) -> Figures:
         """The plots, written to `out`."""
+
+    # -- what a record of this kind left out, and how two of them differ -----------------
+    def foreign(self, record: Any) -> dict[str, int]:
+        """Messages the record left out per topic: what the nodes drop (another sender, a
+        stamp they refuse, malformed; mill_analysis.node_intake)."""
+        return {}
+
+    def dropped(self, record: Any) -> dict[str, list[tuple[int, str]]]:
+        """The same per topic and reason: (messages, the first one's reason), most first."""
+        return {}
+
+    def gaps(self, record: Any) -> dict[str, list[tuple[int, int]]]:
+        """Per topic with samples missing, the runs (first, last) of them."""
+        return dict(record.gaps)
+
+    @abstractmethod
+    def differences(self, record: Any, other: Any) -> dict[str, float]:
+        """Largest difference per signal between two records of this kind (inf: a gap): a
+        distributed run against its offline twin."""
 
 
 class BagProgress:
@@ -156,6 +178,24 @@ class AxisRecords(RecordKind[RunReport]):
         workers = min(2, os.cpu_count() or 1) if big else 1  # long runs: two forked renderers
         return plot_all(list(runs), out, workers)
 
+    def foreign(self, record: RunRecord) -> dict[str, int]:
+        return dict(record.foreign)
+
+    def dropped(self, record: RunRecord) -> dict[str, list[tuple[int, str]]]:
+        return record.drops.reasons()
+
+    def differences(self, record: RunRecord, other: RunRecord) -> dict[str, float]:
+        out = {'tracking_error': max_difference(record.tracking_error, other.tracking_error)}
+        if not np.isnan(record['force']).all():  # recorded (--record): the plant's force too
+            out['cutting_force'] = max_difference(record['force'], other['force'])
+        a, b = record.force_control, other.force_control
+        if a is not None and b is not None:
+            for i, name in enumerate(FORCE_CONTROL[1:], 1):
+                out[f'force_control.{name}'] = (
+                    max_difference(a[:, i], b[:, i]) if a.shape == b.shape else math.inf
+                )
+        return out
+
 
 class LockstepAxisRecords(AxisRecords):
     """A lockstep run: samples on the grid t = k T."""
@@ -170,8 +210,13 @@ class RealtimeAxisRecords(AxisRecords):
     NAME = bag_meta.AXIS_REALTIME
     REALTIME = True
 
+    def differences(self, record: RunRecord, other: RunRecord) -> dict[str, float]:
+        raise ValueError('a realtime run has no offline twin (it depends on the timing)')
+
 
 ForceRun = tuple[str, ForceBagRun]  # (label, run)
+# What a distributed force job must equal its offline twin in (ForceRecord's fields).
+FORCE_COMPARED = ('force', 'override', 'slope', 'beta', 'feed_command')
 
 
 class ForceRecords(RecordKind[ForceRun]):
@@ -196,6 +241,14 @@ class ForceRecords(RecordKind[ForceRun]):
 
     def plot(self, runs: Sequence[ForceRun], out: Path) -> Figures:
         return force_figure(list(runs), out)
+
+    def differences(self, record: ForceRecord, other: ForceRecord) -> dict[str, float]:
+        out = {}
+        for key in FORCE_COMPARED:
+            a, b = getattr(record, key), getattr(other, key)
+            out[key] = float(np.max(np.abs(a - b))) if a.shape == b.shape else math.inf
+        out['j_c_relative'] = abs(record.j_c - other.j_c) / abs(other.j_c)
+        return out
 
 
 LOCKSTEP_AXIS = LockstepAxisRecords()

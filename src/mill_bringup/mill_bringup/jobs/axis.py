@@ -27,8 +27,8 @@ from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from mill_analysis.bag_run import record_from_raw
 from mill_analysis.events import Event, Status
+from mill_analysis.lockstep_record import record_from_raw
 from mill_analysis.node_intake import subset
 from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.report import kinds
@@ -91,8 +91,29 @@ class AxisJob(Job[RunRecord]):
         )
         self._bound = self._samples
         self._found: int | None = None  # the samples of a run whose end was found
+        # A program that pauses (M0/M1) ends later than planned: a length the run finds too.
+        path = c.trajectory_job().trajectory
+        self.pauses: tuple[Any, ...] = getattr(path, 'pauses', ())
+        self.resume_after: float = getattr(path, 'resume_after', 0.0)
+        self.open_end = self.override or bool(self.pauses)
         if self.override:
             self._check_override(tv)
+        if self.pauses and self.resume_after > 0:
+            # The bound of the offline loop: each pause at rest for resume_after, and more.
+            each = math.ceil(self.resume_after / seconds(self.dt_ns)) + 2
+            self._bound = max(self._bound, self._samples) + len(self.pauses) * each
+
+    def unattended_pause(self) -> str | None:
+        """Why nobody would end this job's first pause (None: it has none, or they end by
+        themselves after gcode.resume_after)."""
+        if not self.pauses or self.resume_after > 0:
+            return None
+        first = self.pauses[0]
+        return (
+            f"{first.where}: {first.text} waits for the trajectory's ~/resume, which nobody "
+            'calls in this run: give --resume-after SECONDS (gcode.resume_after), or run the '
+            'launch file and resume by hand'
+        )
 
     def _check_override(self, tv: dict[str, Any]) -> None:
         name = self.scenario.name
@@ -229,7 +250,7 @@ class AxisJob(Job[RunRecord]):
             )
 
     def complete(self, source: MessageSource) -> bool:
-        if self.override and self._found is None:
+        if self.open_end and self._found is None:
             # The trajectory says where the job ends, once its path has ended.
             status = source.status(topics.status_name(self.trajectory, topics.JOB_STATUS))
             if status is None or status.get('state') != 'done':
@@ -269,37 +290,6 @@ class AxisJob(Job[RunRecord]):
             self.RECORD, self.scenario, rec, skip, self.FAILING, ending, force_control=stretches
         )
         return replace(summary, planned_feed=self.feed_summary)
-
-    def foreign(self, rec: RunRecord) -> dict[str, int]:
-        return dict(rec.foreign)
-
-    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
-        return rec.drops.reasons()
-
-    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
-        return dict(rec.gaps)
-
-    def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
-        out = {'tracking_error': max_difference(rec.tracking_error, other.tracking_error)}
-        if not np.isnan(rec['force']).all():  # recorded (--record): the plant's force too
-            out['cutting_force'] = max_difference(rec['force'], other['force'])
-        if rec.force_control is not None and other.force_control is not None:
-            a, b = rec.force_control, other.force_control
-            for i, name in enumerate(FORCE_CONTROL[1:], 1):
-                out[f'force_control.{name}'] = (
-                    max_difference(a[:, i], b[:, i]) if (a.shape == b.shape) else math.inf
-                )
-        return out
-
-
-def max_difference(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest |a − b| over all entries; 0 where both are NaN, inf where only one is."""
-    if a.shape != b.shape:
-        return math.inf
-    diff = np.abs(a - b)
-    diff[np.isnan(a) & np.isnan(b)] = 0.0
-    diff[np.isnan(diff)] = np.inf
-    return float(diff.max()) if diff.size else 0.0
 
 
 def depth_stretches(rows: np.ndarray, min_instants: int = 10) -> list[DepthStretch]:

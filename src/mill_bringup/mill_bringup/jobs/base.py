@@ -17,10 +17,11 @@ differs between the kinds sits in one class per kind (mill_bringup.jobs.axis, .r
   /diagnostics statuses heard until the job ended: `Ending`), and which of them fail the job
   (FAILING);
 - the summary of a record (one value, mill_analysis.summary: the text and summary.json print
-  from it), and the differences of two records of the same job;
+  from it);
 - the kind of record a run gives (RECORD, the kind object of mill_analysis.report.kinds: its
   name goes in the bag, `report` reads the bag through the same object, and both summarise
-  with it), and what to note before the paper's verdicts (PAPER_NOTE).
+  with it; it also says what a record left out and how two records differ), and what to
+  note before the paper's verdicts (PAPER_NOTE).
 
 The state of a run (what the runner heard when the job ended) is not kept by the job: the
 runner takes it once, as an `Ending`, and hands it to `summary`.
@@ -214,26 +215,9 @@ class Job(ABC, Generic[R]):
         """The summary of a record (figures `skip` seconds after the job's path started), the
         events of its ending with it (None: an offline run, whose record has its events)."""
 
-    def foreign(self, rec: R) -> dict[str, int]:
-        """Messages the record left out per topic: what the nodes drop (another sender, a
-        stamp they refuse, malformed; mill_analysis.node_intake)."""
-        return {}
-
-    def dropped(self, rec: R) -> dict[str, list[tuple[int, str]]]:
-        """The same per topic and reason: (messages, the first one's reason), most first."""
-        return {}
-
-    def gaps(self, rec: R) -> dict[str, list[tuple[int, int]]]:
-        """Per topic with samples missing, the runs (first, last) of them."""
-        return {}
-
     def owners(self) -> dict[str, str]:
         """The node each per-sample topic must come from (header.frame_id)."""
         return {}
-
-    @abstractmethod
-    def differences(self, rec: R, other: R) -> dict[str, float]:
-        """Largest difference per signal between two records of this job (inf: a gap)."""
 
 
 def simulate(

@@ -15,7 +15,6 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-import numpy as np
 from mill_analysis.force_record import FORCE_TOPICS, ForceRecord, continuous_cost
 from mill_analysis.force_record import record_from_messages as force_record_from_messages
 from mill_analysis.report import kinds
@@ -34,8 +33,6 @@ from mill_bringup.jobs.base import RECORDER_WINDOW, Ending, GraphPlan, Job, Mess
 from mill_bringup.scenario import LAYOUTS, Scenario, ScenarioError
 from mill_bringup.simulation import CoreTimer
 from mill_common import topics
-
-COMPARED = ('force', 'override', 'slope', 'beta', 'feed_command')
 
 
 def _only(scen: Scenario, role: str) -> str:
@@ -163,9 +160,6 @@ class ForceJob(Job[ForceRecord]):
         )
         return rec, missing
 
-    def gaps(self, rec: ForceRecord) -> dict[str, list[tuple[int, int]]]:
-        return dict(rec.gaps)
-
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> ForceLoopSimulation:
         cv = self.controller_values
@@ -194,11 +188,3 @@ class ForceJob(Job[ForceRecord]):
         if ending is not None and ending.failure is not None:
             summary = replace(summary, failures=(ending.failure,))
         return summary
-
-    def differences(self, rec: ForceRecord, other: ForceRecord) -> dict[str, float]:
-        out = {}
-        for key in COMPARED:
-            a, b = getattr(rec, key), getattr(other, key)
-            out[key] = float(np.max(np.abs(a - b))) if a.shape == b.shape else math.inf
-        out['j_c_relative'] = abs(rec.j_c - other.j_c) / abs(other.j_c)
-        return out

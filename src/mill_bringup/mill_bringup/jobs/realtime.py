@@ -229,20 +229,8 @@ class RealtimeAxisJob(Job[RunRecord]):
         # the controllers' trips on the system clock, the drive's statuses stamped on it
         return self.nodes.events(statuses, self.start_ns or 0)
 
-    def foreign(self, rec: RunRecord) -> dict[str, int]:
-        return dict(rec.foreign)
-
-    def dropped(self, rec: RunRecord) -> dict[str, list[tuple[int, str]]]:
-        return rec.drops.reasons()
-
-    def gaps(self, rec: RunRecord) -> dict[str, list[tuple[int, int]]]:
-        return dict(rec.gaps)
-
     # -- offline ---------------------------------------------------------------------------
     def simulation(self, times: CoreTimer | None = None) -> Any:
-        raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
-
-    def differences(self, rec: RunRecord, other: RunRecord) -> dict[str, float]:
         raise ScenarioError('a realtime run has no offline twin (it depends on the timing)')
 
     # -- results ---------------------------------------------------------------------------
@@ -280,9 +268,11 @@ class RealtimeAxisJob(Job[RunRecord]):
 
 
 def last_values(statuses: Sequence[Status], name: str) -> dict[str, str]:
-    """The values of the newest status of this name ({}: none heard)."""
+    """The values of the newest status with this name's node and part ({}: none heard;
+    the statuses are one machine's, so the namespace may be left out: topics.status_key)."""
+    key = topics.status_key(name)
     for s in reversed(statuses):
-        if s.name == name:
+        if topics.status_key(s.name) == key:
             return dict(s.values)
     return {}
 

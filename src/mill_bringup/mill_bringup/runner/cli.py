@@ -13,6 +13,7 @@ from typing import Any
 
 from mill_bag.errors import BagError
 from mill_common.executable import STOP_SIGNALS, interrupt_once, release_stop_signals
+from mill_common.realtime_setup import LISTENER_BELOW, listener_priority
 
 from mill_analysis import papers
 from mill_bringup.cli import add_scenario_arguments, load_scenario, run_parameters
@@ -120,8 +121,9 @@ def parser() -> argparse.ArgumentParser:
         type=int,
         metavar='N',
         help='SCHED_FIFO priority 1-98 of the drive and of the processes of the axis nodes '
-        '(their realtime_priority parameter: memory locked, garbage collector frozen); where '
-        'the system refuses, each says so in one line and goes on',
+        '(their realtime_priority parameter: memory locked, garbage collector frozen), and of '
+        f"the runner's listener {LISTENER_BELOW} below it (at least 1); where the system "
+        'refuses, each says so in one line and goes on',
     )
     parser.add_argument(
         '--layout',
@@ -161,6 +163,9 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         respawn=args.respawn,
         external=frozenset(args.external),
         layout=args.layout,
+        listener_priority=(
+            None if args.realtime_priority is None else listener_priority(args.realtime_priority)
+        ),
     )
 
 
@@ -196,6 +201,10 @@ def main(argv: list[str] | None = None) -> int:
             check_layout(args.layout)
         _apply_namespace(scen, runs, args.namespace, args.private_clock)
         jobs = {name: job_for(variant) for name, variant in runs.items()}  # all checked first
+        for job in jobs.values():  # nobody resumes a pause in a run_scenario run
+            unattended = getattr(job, 'unattended_pause', lambda: None)()
+            if unattended is not None:
+                raise RunError(unattended)
         if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
             raise RunError('--compare-offline: a realtime run has no offline twin')
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')

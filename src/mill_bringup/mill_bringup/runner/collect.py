@@ -77,7 +77,7 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
             recorder.note(bag_meta.MISSING_SAMPLES, counts_note(absolute))
     finally:
         bag = _close_bag(session, options)
-    ranges = {t: r for t, r in job.gaps(record).items() if t in missing}
+    ranges = {t: r for t, r in job.RECORD.gaps(record).items() if t in missing}
     short = _missing_from_bag(session, options) if bag is not None else {}
     problems = graph.notes + monitor.problems()
     # A foreign publisher on the drive's topics, told at any time: the record is not intact.
@@ -165,8 +165,8 @@ def result(
         missing_from_bag=collected.missing_from_bag,
         summary=job.summary(record, options.skip, ending),
         problems=collected.problems,
-        foreign=job.foreign(record),
-        dropped=job.dropped(record),
+        foreign=job.RECORD.foreign(record),
+        dropped=job.RECORD.dropped(record),
         lost_with_restarts=collected.lost,
         foreign_publishers=collected.foreign_publishers,
         error=None if ending.failure is None else ending.failure.detail,
@@ -177,5 +177,5 @@ def result(
         sim = job.sim_time
         out.bag['bytes_per_sim_second'] = out.bag['size_bytes'] / sim if sim > 0 else None
     if options.compare_offline and ending.failure is None:
-        out.differences = job.differences(record, simulate(job))
+        out.differences = job.RECORD.differences(record, simulate(job))
     return out

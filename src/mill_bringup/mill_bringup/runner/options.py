@@ -45,3 +45,6 @@ class RunOptions:
     respawn: bool = False
     external: frozenset[str] = frozenset()
     layout: str | None = None
+    # SCHED_FIFO priority of the runner's listener (mill_common.realtime_setup.listen_at),
+    # None: the normal scheduler
+    listener_priority: int | None = None

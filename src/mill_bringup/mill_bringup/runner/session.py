@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import time
 from pathlib import Path
 from types import TracebackType
@@ -58,6 +59,7 @@ class Session:
         self._monitor: Monitor | None = None
         self._graph: Graph | None = None
         self._executor: Any = None
+        self._refused: list[str] = []  # scheduling the system refused, said once
 
     @property
     def domain_id(self) -> str:
@@ -116,6 +118,7 @@ class Session:
             )
             self._executor = make_executor()
             self._executor.add_node(self._monitor)
+            self.listen()
             respawn = self.restartable if options.respawn else ()
             self._graph = Graph(job.scenario, self.run_dir, self.env, respawn=respawn)
             self._never = Future()
@@ -123,6 +126,22 @@ class Session:
             self.close()
             raise
         return self
+
+    def listen(self) -> None:
+        """The listener's threads at its SCHED_FIFO priority, if the run has one; called
+        again once the graph runs (the middleware starts threads as it discovers peers)."""
+        priority = self.options.listener_priority
+        if priority is None:
+            return
+        from mill_common.realtime_setup import listen_at
+
+        for line in listen_at(priority):
+            if line not in self._refused:
+                self._refused.append(line)
+                if self.progress.quiet:  # a refusal is said even in a quiet run
+                    print(f'WARNING: {line}', file=sys.stderr, flush=True)
+                else:
+                    self.progress.note(f'WARNING: {line}')
 
     def __exit__(
         self,

@@ -107,3 +107,4 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
         f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={session.domain_id}); '
         'waiting for discovery'
     )
+    session.listen()
