@@ -16,7 +16,7 @@ reads only that machine's statuses.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -40,7 +40,7 @@ from mill_analysis.lockstep_record import (
     record_from_raw,
     record_topics,
 )
-from mill_analysis.node_intake import Received, drop_lines, subset
+from mill_analysis.node_intake import ArrivalOrder, Received, drop_lines, subset
 from mill_analysis.realtime_record import command_timing, realtime_record
 from mill_analysis.record import RunRecord
 from mill_common import topics as topic_names
@@ -214,7 +214,7 @@ def read_run(
         raw[topic] = stream.data
         relative[name] = topic
         walls[topic] = stream.publish_times
-    raw.order = [relative[name] for name in order if name in relative]
+    raw.order = ArrivalOrder(relative[name] for name in order if name in relative)
     feed_stream = kept.get(topic_names.qualify(topic_names.FEED_OVERRIDE, ns))
     feed = (
         []
@@ -303,7 +303,7 @@ def read_run(
 def _realtime_run(
     bag: Bag,
     axes: list[str],
-    raw: dict[str, list[bytes]],
+    raw: Mapping[str, Sequence[bytes]],
     walls: dict[str, list[int | None]],
     statuses: list[Any],
     start_ns: int,

@@ -37,7 +37,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_analysis.events import Status, statuses_of
-from mill_analysis.node_intake import Received
+from mill_analysis.node_intake import MessageLog, Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
@@ -170,7 +170,10 @@ class Monitor(Node):
             self._late_timer = self.create_timer(0.05, self.subscribe_late)
 
     def _keep(self, topic: str, msgtype: str) -> None:
-        store = self.raw.setdefault(topic, [])
+        store = self.raw.get(topic)
+        if not isinstance(store, MessageLog):  # compact: a few bytes a message, not an object
+            store = MessageLog()
+            self.raw[topic] = store
         order = self.raw.order
         arrivals = self.arrivals.get(topic)
         if arrivals is None:

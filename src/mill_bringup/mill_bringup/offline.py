@@ -2,6 +2,7 @@
 
     offline_sim slotting --controller pd
     offline_sim rubio --variant scheme1
+    offline_sim slotting --sweep '*_controller.adrc.omega_c=8,12,16'   # a grid, every core
 
 It performs, sample by sample, exactly the calls the distributed graph makes (for an axis
 job: plant measure -> observer correct -> controller -> plant step, observer predict), so
@@ -59,7 +60,22 @@ def main(argv: list[str] | None = None) -> int:
         'its metrics.',
     )
     add_scenario_arguments(parser)
+    parser.add_argument(
+        '--sweep',
+        action='append',
+        default=[],
+        metavar='NODE.NAME=V1,V2,...',
+        help='run the grid of every --sweep (each point with the --param overrides, then '
+        'its own) on every core and print a table of the figures (mill_bringup.sweep)',
+    )
+    parser.add_argument(
+        '--jobs', type=int, help='--sweep: worker processes (default: one per core)'
+    )
     args = parser.parse_args(argv)
+    if args.sweep:
+        from mill_bringup.sweep import main_sweep
+
+        return main_sweep(args)
     records: dict[str, Any] = {}
     try:
         scen, runs = load_scenario(args)

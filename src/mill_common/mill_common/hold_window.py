@@ -174,6 +174,9 @@ class GapVerdict:
     report: str = ''  # a gap to report, not a trip ('' none)
 
 
+_NO_GAP = GapVerdict()
+
+
 def state_gap(
     gap_ns: int,
     period_ns: int,
@@ -193,6 +196,8 @@ def state_gap(
     between its two steps on its monotonic clock, to report beside the stamps' gap; reason:
     the drive's own reason for its stop, where the controller knows it.
     """
+    if 0 <= gap_ns <= period_ns and not drive_stopped:
+        return _NO_GAP  # every state in time: the verdict the rules below give, at once
     if drive_stopped:
         said = 'the drive says it has stopped the axis (effort NaN in its state)'
         return GapVerdict(trip=f'{said}: {reason}' if reason else said)

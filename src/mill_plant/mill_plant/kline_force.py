@@ -91,6 +91,8 @@ PATHS = ('programmed', 'tool')  # whose path sets the chip and the depth (module
 # 5 mm below the top, at 3 mm/s.
 BELTRAN_PROGRAM = ((-0.075, -0.105, -0.005), (-0.075, -0.025, -0.005), (0.005, -0.025, -0.005))
 BELTRAN_FEED_RATE = 0.003
+# Instants whose time-only parts of the force are kept (a handful are asked again).
+_CACHED_TIMES = 16
 
 
 class ProgrammedPath:
@@ -238,6 +240,12 @@ class KlineCuttingForce(CuttingForceModel):
         # The accepted tool states (t, x, y, v_x, v_y), oldest first, back to 2 T_z ago.
         self._t: list[float] = []
         self._path: list[tuple[float, float, float, float]] = []
+        # What depends on t alone, by t (the plant asks the same instant several times: RK4's
+        # two midpoint stages, a substep's end and the next one's start, the measurement):
+        # the teeth's sums (s1, s2, sc), and with the programmed chip and depth, the feed and
+        # the depth. Computed once per t by the same expressions: the same bits.
+        self._sums: dict[float, tuple[float, float, float]] = {}
+        self._programmed: dict[float, tuple[float, float, float]] = {}
 
     def feed_per_tooth(self, feed_speed: float) -> float:
         """f [m/tooth] at a steady x-y feed speed [m/s]: the path of one tooth period."""
@@ -311,6 +319,19 @@ class KlineCuttingForce(CuttingForceModel):
     def force(self, t: float, position: Sequence[float], velocity: Sequence[float]) -> Force3:
         """Eq. (4) at time t [s] for the tool at `position`; the chip and the depth come from
         the programmed or the tool's path (module docstring). velocity is not used."""
+        if self._programmed_chip and self._programmed_depth:
+            known = self._programmed.get(t)
+            if known is None:
+                if len(self._programmed) > _CACHED_TIMES:
+                    self._programmed.clear()
+                now = self.program.position(t)
+                past = self.program.position(t - self.tooth_period)
+                known = self._programmed[t] = self._local_force(
+                    t, now[0] - past[0], now[1] - past[1], self.workpiece_top - now[2]
+                )
+            if self._outside(position):
+                return (0.0, 0.0, 0.0)
+            return known
         if self._programmed_chip:
             now = self.program.position(t)
             past = self.program.position(t - self.tooth_period)
@@ -324,31 +345,13 @@ class KlineCuttingForce(CuttingForceModel):
             depth = self.workpiece_top - position[2]
         return self.chip_force(t, position, feed, depth)
 
-    def chip_force(
-        self, t: float, position: Sequence[float], feed: Sequence[float], depth: float
-    ) -> Force3:
-        """Eq. (4) with the feed-per-tooth vector `feed` (x, y) [m] (f = |feed|, along it)
-        and the depth of cut d_a = depth [m], for the tool at `position` (no force outside
-        the workpiece box, above its top, or for d_a <= 0)."""
-        x = position[0]
-        y = position[1]
-        lo = self.workpiece_min
-        hi = self.workpiece_max
-        fx = feed[0]
-        fy = feed[1]
-        if (
-            depth <= 0.0
-            or position[2] >= self.workpiece_top
-            or x < lo[0]
-            or x > hi[0]
-            or y < lo[1]
-            or y > hi[1]
-            or (fx == 0.0 and fy == 0.0)
-        ):
-            return (0.0, 0.0, 0.0)
-        f = math.hypot(fx, fy)
-        # Beltrán 2013 eq. (4): u_s d_a f, common factor of all components
-        k = self.specific_energy * depth * f
+    def _teeth(self, t: float) -> tuple[float, float, float]:
+        """(sum sin v_i, sum sin^2 v_i, sum sin v_i cos v_i) over the teeth in cut at t."""
+        sums = self._sums.get(t)
+        if sums is not None:
+            return sums
+        if len(self._sums) > _CACHED_TIMES:
+            self._sums.clear()
         exit_angle = self.exit_angle
         base = self._omega * t
         s2 = 0.0  # sum of sin^2 v_i over teeth in cut
@@ -361,8 +364,37 @@ class KlineCuttingForce(CuttingForceModel):
                 s1 += s
                 s2 += s * s
                 sc += s * math.cos(v)
+        sums = self._sums[t] = (s1, s2, sc)
+        return sums
+
+    def chip_force(
+        self, t: float, position: Sequence[float], feed: Sequence[float], depth: float
+    ) -> Force3:
+        """Eq. (4) with the feed-per-tooth vector `feed` (x, y) [m] (f = |feed|, along it)
+        and the depth of cut d_a = depth [m], for the tool at `position` (no force outside
+        the workpiece box, above its top, or for d_a <= 0)."""
+        if self._outside(position):
+            return (0.0, 0.0, 0.0)
+        return self._local_force(t, feed[0], feed[1], depth)
+
+    def _outside(self, position: Sequence[float]) -> bool:
+        """The tool centre outside the workpiece's x-y box or not below its top."""
+        x = position[0]
+        y = position[1]
+        lo = self.workpiece_min
+        hi = self.workpiece_max
+        return position[2] >= self.workpiece_top or x < lo[0] or x > hi[0] or y < lo[1] or y > hi[1]
+
+    def _local_force(self, t: float, fx: float, fy: float, depth: float) -> Force3:
+        """Eq. (4) in the machine frame for the tool inside the workpiece (chip_force)."""
+        if depth <= 0.0 or (fx == 0.0 and fy == 0.0):
+            return (0.0, 0.0, 0.0)
+        s1, s2, sc = self._teeth(t)
         if s1 == 0.0:
             return (0.0, 0.0, 0.0)
+        f = math.hypot(fx, fy)
+        # Beltrán 2013 eq. (4): u_s d_a f, common factor of all components
+        k = self.specific_energy * depth * f
         r = self.radial_ratio
         # Beltrán 2013 eq. (4): F_x = u_s d_a f sum(0.3 sin^2 v + sin v cos v) (local x)
         f_lx = k * (r * s2 + sc)
