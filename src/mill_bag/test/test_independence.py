@@ -18,6 +18,7 @@ ALLOWED = {
     'mill_common.timebase',
     'mill_common.ros_params',
     'mill_common.one_line_parser',
+    'mill_common.yaml_files',
 }
 MODULES = sorted(Path(mill_bag.__file__).parent.glob('*.py'))
 

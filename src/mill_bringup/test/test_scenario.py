@@ -80,7 +80,7 @@ def test_a_file_that_is_no_scenario_ends_run_scenario_in_one_line(
 ) -> None:
     path = tmp_path / 'scen.yaml'
     path.write_text(text)
-    assert run_scenario_main([str(path), '--output', str(tmp_path / 'run')]) == 1
+    assert run_scenario_main([str(path), '--output', str(tmp_path / 'run')]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f'run_scenario: error: {path}: {message}']
     assert not (tmp_path / 'run').exists()  # nothing was started
@@ -94,7 +94,7 @@ def test_a_file_that_is_no_scenario_ends_run_scenario_in_one_line(
     ],
 )
 def test_bad_namespace_options_end_in_one_line(capsys, args: list[str], message: str) -> None:
-    assert run_scenario_main(['slotting', *args]) == 1
+    assert run_scenario_main(['slotting', *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith('run_scenario: error: ') and message in err[0]
 
