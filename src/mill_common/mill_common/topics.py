@@ -27,6 +27,9 @@ FORCE_CONTROL_STATE = 'mill/force_control/state'
 # The newest step a lockstep run's recorder holds whole (rosgraph_msgs/Clock): a plant with
 # `recorder_window` does not run further ahead of it (mill_bringup.bag_handshake).
 RECORDED = 'mill/recorded'
+# Every axis of the machine in one sensor_msgs/JointState (position, velocity, effort), as
+# RViz, Foxglove and robot_state_publisher read it, at `joint_states_rate` (the drive).
+JOINT_STATES = 'joint_states'
 CLOCK = '/clock'
 DIAGNOSTICS = '/diagnostics'
 

@@ -79,6 +79,15 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
         'rapid traverse',
         in_range(1e-4, 100.0),
     )
+    joint_states_rate: float = param(
+        50.0,
+        f'how often the drive publishes {topics.JOINT_STATES} (every axis: measured position, '
+        'velocity and the effort applied; for RViz, Foxglove, robot_state_publisher): every '
+        'N samples, N the fewest that keep it at or below this rate; 0: not at all',
+        in_range(0.0, 100.0),
+        unit='Hz',
+        read_only=True,
+    )
     command_report_time: float = param(
         0.5,
         'wall time without the command an axis waits for before /diagnostics says so',

@@ -57,6 +57,7 @@ from mill_plant.drive_counts import DriveCounts
 from mill_plant.drive_cycle import CYCLES, DriveCycle, Machine
 from mill_plant.drive_reports import DriveReports
 from mill_plant.drive_topics import DriveTopics
+from mill_plant.joint_states import JointStates
 from mill_plant.ownership import Ownership
 from mill_plant.spindle import SpindleTrack, spindle_values
 
@@ -125,6 +126,7 @@ class DriveNode(LifecycleNode):
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
+        self.joint_states = JointStates(self.axes, v['joint_states_rate'], self.dt)
         # spindle: reference
         self.spindle = SpindleTrack() if v['spindle'] == 'reference' else None
         if self._made is None:  # once: a configure after a cleanup takes the same topics again
@@ -306,6 +308,11 @@ class DriveNode(LifecycleNode):
         else:
             for axis, y in zip(self.axes, positions, strict=True):
                 publishers[axis].publish(joint_state_bytes(ns, (axis,), position=(y,), sender=name))
+        joints = self.joint_states.sample(ns, positions, self._written)
+        if joints is not None and self.io.joint_states.get_subscription_count():
+            self.io.joint_states.publish(
+                joint_state_bytes(ns, joints.names, joints.position, joints.velocity, joints.effort)
+            )
         # The cutting force of sample ns depends on its state, not on its commands: sent
         # with the states, a force controller can answer within the sample.
         force_pub = self.io.force
