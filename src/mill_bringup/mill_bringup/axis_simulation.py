@@ -12,17 +12,22 @@ import math
 from typing import Any, Protocol
 
 import numpy as np
-from mill_analysis.events import TRIP, Event, trip_detail
+from mill_analysis.events import STOPPED, TRIP, Event, trip_detail
 from mill_analysis.record import FORCE_CONTROL, RunRecord
+from mill_common.hold_window import HoldWindow
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AXES, axis_index
 from mill_common.timebase import seconds
+from mill_common.travel import MachineTravel
 from mill_controllers.config import build_loop
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.force_control import ForceFeedLoop, ForceSampler, tool_depth
 from mill_observers.config import build_observer_loop
 from mill_observers.observer_loop import ObserverLoop
 from mill_plant.command_delay import CommandDelay
+from mill_plant.command_table import CommandTable
+from mill_plant.motion_guard import MotionGuard
+from mill_plant.protection import Protection
 from mill_plant.simulated_machine import SimulatedMachine
 from mill_plant.spindle import SpindleTrack
 from mill_trajectory.config import build_schedule
@@ -137,6 +142,14 @@ class AxisSimulation:
         self.clock_every = max(1, round(pv['clock_period'] * 1e9 / self.dt_ns))
         self.buffers = {i: ReferenceBuffer() for i in self.active}
         self.delay = CommandDelay(pv['command_delay'], len(self.active))
+        # The drive's protection of the axes, as the lockstep plant node steps it: the same
+        # command table, motion guard and latched stop (mill_plant.protection).
+        axes = list(self.machine.axes)
+        self.table = CommandTable(axes, HoldWindow.from_node_values(pv), self.dt_ns)
+        travel = MachineTravel.from_node_values(pv).limits(''.join(axes))
+        guard = MotionGuard(axes, pv['speed_limit'], pv['hold_deviation'], travel)
+        self.protection = Protection(self.table, guard)
+        self.stops: list[Event] = []  # as the plant's status tells them
         # spindle: reference: the speeds the plant node reads off the reference.
         self.spindle = SpindleTrack() if pv['spindle'] == 'reference' else None
         self.job = job
@@ -207,7 +220,13 @@ class AxisSimulation:
             s['estimate_disturbance'][k, i] = est.disturbance
             s['torque'][k, i] = u
             self.buffers[i].forget_before(ns)
-        machine.write(self.delay(efforts))
+        for axis, u in zip(self.table.axes, efforts, strict=True):
+            # What the plant node's intake offers: a non-finite effort is a brake request.
+            self.table.offer(axis, ns, u if math.isfinite(u) else math.nan)
+        protected = self.protection.lockstep_step(ns, measured, self.delay)
+        for axis, reason in protected.stopped.items():
+            self.stops.append(Event(axis, STOPPED, seconds(ns), reason))
+        machine.write(protected.efforts)
         if self.spindle is not None:  # as the plant node's write: the step k -> k + 1
             machine.spindle(self.spindle.at(ns))
             self.spindle.forget_before(ns)
@@ -238,5 +257,5 @@ class AxisSimulation:
             Event(AXES[i], TRIP, trip.time, trip_detail(trip.error, trip.limit, trip.cause))
             for i, loop in sorted(self.controllers.items())
             if (trip := loop.trip.trip) is not None
-        ]
+        ] + self.stops
         return self.rec

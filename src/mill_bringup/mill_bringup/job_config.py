@@ -22,6 +22,9 @@ reads which two values disagree without parsing a message:
   provides one (PROVIDES_MODEL);
 - `following_band`: every axis, anywhere within its following-error limit of the path,
   stays inside the trajectory's travel;
+- `travel`: the trajectory's travel lies inside the drive's (whose motion guard stops an
+  axis about to leave it, mill_plant.motion_guard): a path the trajectory allows is never
+  cut short by the drive;
 - with a force controller: `force_model`, it designs with the process model the force
   process runs; `feed_limits`, the force process's feed range is the controller's override
   range times its nominal feed; `override_range`, the trajectory clamps the override to the
@@ -438,6 +441,36 @@ def following_band(c: JobConfig) -> list[Failure]:
     return out
 
 
+def travel_inside(c: JobConfig) -> list[Failure]:
+    """The trajectory's travel (which the path is checked against) lies inside the drive's
+    (which its motion guard keeps every axis in): both are the machine's travel, declared
+    once (mill_common.travel); the drive's may only be the wider."""
+    if c.plant is None or c.trajectory is None:
+        return []
+    pv, tv = c.node(c.plant).values, c.node(c.trajectory).values
+    if 'travel.min' not in pv:  # a plant without a drive's guard (the force process)
+        return []
+    out = []
+    for i, axis in enumerate(AXES):
+        for side, sign in (('min', -1.0), ('max', 1.0)):
+            name = f'travel.{side}'
+            path, drive = tv[name][i], pv[name][i]
+            if sign * (path - drive) > 0.0:
+                out.append(
+                    Failure(
+                        'travel',
+                        (
+                            Side(c.trajectory, f'{name} ({axis})', path),
+                            Side(c.plant, f'{name} ({axis})', drive),
+                        ),
+                        f'scenario {c.scenario}: axis {axis}: the trajectory allows {name} '
+                        f"{path:g} m ({c.trajectory}) beyond the drive's {drive:g} m "
+                        f'({c.plant}), which stops the axis there; give them one travel',
+                    )
+                )
+    return out
+
+
 def _one(c: JobConfig, role: str) -> NodeConfig | None:
     nodes = c.of_role(role)
     return nodes[0] if len(nodes) == 1 else None
@@ -555,6 +588,7 @@ RULES: tuple[Rule, ...] = (
     disturbance_unit,
     model_provided,
     following_band,
+    travel_inside,
     force_model,
     feed_limits,
     override_range,

@@ -28,6 +28,7 @@ from mill_bringup.job_config import (
     one_sample_period,
     override_period,
     override_range,
+    travel_inside,
 )
 from mill_bringup.jobs.registry import job_for
 from mill_controllers.pd_law import AdrcController
@@ -237,6 +238,24 @@ def test_a_missing_axis_node_is_refused_before_the_rules() -> None:
         build(scen)
 
 
+def test_the_trajectory_travel_lies_inside_the_drive_travel() -> None:
+    # The drive's guard would stop y at -0.2 m, where the trajectory allows -1 m.
+    scen = broken('slotting', 'plant.travel.min=[-1.0,-0.2,-1.0]')
+    (failure,) = travel_inside(build_unchecked(scen))
+    assert failure.rule == 'travel'
+    assert failure.sides == (
+        Side('trajectory', 'travel.min (y)', -1.0),
+        Side('plant', 'travel.min (y)', -0.2),
+    )
+    assert "axis y: the trajectory allows travel.min -1 m (trajectory) beyond the drive's" in (
+        failure.message
+    )
+    # A drive's travel wider than the trajectory's is what a job near the end needs.
+    wider = broken('slotting', 'trajectory.travel.max=[0.5,0.5,0.5]')
+    assert travel_inside(build_unchecked(wider)) == []
+    assert failures_of(broken('slotting', 'plant.travel.max=[1.0,1.0,0.9]'))[0].rule == 'travel'
+
+
 def build_unchecked(scen: scenario.Scenario) -> JobConfig:
     """The configuration without its rules checked (to test one rule alone)."""
     return build(scen, rules=())
@@ -252,6 +271,7 @@ def test_every_rule_is_in_the_table() -> None:
         disturbance_unit,
         model_provided,
         following_band,
+        travel_inside,
         force_model,
         feed_limits,
         override_range,

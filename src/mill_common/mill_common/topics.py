@@ -34,7 +34,8 @@ RECORDED = 'mill/recorded'
 # For the viewers (RViz, Foxglove): the job's programmed path (nav_msgs/Path, transient
 # local, the trajectory publishes it once a job is loaded), the measured tool trace
 # (nav_msgs/Path, mill_bringup.machine_view), the machine's URDF (std_msgs/String,
-# transient local) and the axes' joint states (sensor_msgs/JointState, the drive's).
+# transient local) and the axes' joint states (sensor_msgs/JointState: every axis's position,
+# velocity and effort in one message, at the drive's `joint_states_rate`).
 PLANNED_PATH = 'mill/planned_path'
 TOOL_TRACE = 'mill/tool_trace'
 ROBOT_DESCRIPTION = 'robot_description'

@@ -3,7 +3,8 @@
 Every command names the state it answers by its stamp. The drive front end
 (mill_plant.drive_node) offers each accepted command here and asks, per period:
 
-- lockstep: `complete(stamp)` — has every axis answered the state of this step?
+- lockstep: `complete(stamp)` — has every axis answered the state of this step? — then
+  `step()`: every command is fresh, and a stopped axis may be re-armed;
 - real time: `take(ns, speeds)` at each tick — the newest command of every axis (zero-order
   hold: a command stays applied until a newer one arrives). A command is fresh if it
   arrived since the last tick; a tick without a fresh command counts as late (from the
@@ -104,6 +105,19 @@ class CommandTable:
 
     def values(self) -> list[float]:
         return [c.value for c in self.by_axis.values()]
+
+    def step(self) -> list[str]:
+        """The step every axis has answered: each command is fresh, none late. A stopped axis
+        whose owner has acknowledged the stop is re-armed by a valid command; returns the
+        axes re-armed."""
+        rearmed = []
+        for axis, c in self.by_axis.items():
+            c.fresh = False
+            if c.stopped and c.acknowledged and math.isfinite(c.value):
+                self._release(c)
+                rearmed.append(axis)
+            c.braked = bool(c.stopped)
+        return rearmed
 
     # -- real time -----------------------------------------------------------------------------
     def take(self, ns: int, speeds: Mapping[str, float] | None = None) -> Tick:

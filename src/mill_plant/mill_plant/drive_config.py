@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from mill_common.declared import ParamSet, param
@@ -15,6 +15,7 @@ from mill_common.parameters import (
     non_negative_int,
     one_of,
 )
+from mill_common.travel import MachineTravel
 
 from mill_common import topics
 
@@ -74,9 +75,19 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
     )
     speed_limit: float = param(
         0.5,
-        'realtime: an axis faster than this over a period is stopped (braked until '
-        "re-armed), fresh commands or not [m/s]; set it to the machine's rapid traverse",
+        'an axis faster than this over a period is stopped (braked until re-armed), '
+        "in real time and in lockstep, whatever its commands [m/s]; set it to the machine's "
+        'rapid traverse',
         in_range(1e-4, 100.0),
+    )
+    joint_states_rate: float = param(
+        50.0,
+        f'how often the drive publishes {topics.JOINT_STATES} (every axis: measured position, '
+        'velocity and the effort applied; for RViz, Foxglove, robot_state_publisher): every '
+        'N samples, N the fewest that keep it at or below this rate; 0: not at all',
+        in_range(0.0, 100.0),
+        unit='Hz',
+        read_only=True,
     )
     command_report_time: float = param(
         0.5,
@@ -101,4 +112,8 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
     )
 
 
-DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = tuple(DriveParams.named_specs())
+# The machine's travel (mill_common.travel): the motion guard stops an axis about to leave it.
+DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
+    *DriveParams.named_specs(),
+    *((name, replace(spec, name=name)) for name, spec in MachineTravel.named_specs(True)),
+)

@@ -3,12 +3,22 @@
 The drive front end (mill_plant.drive_node) checks and holds the commands, publishes and
 reports; its cycle says when a period runs and what counts as late:
 
+The cycle owns the loop and reaches the machine through a narrow port (`DrivePort`:
+publish a sample's states, write its efforts, let time pass), as a ros2_control hardware
+interface offers read() and write(); what else it works with is handed to it at configure
+(`Machine`: the command table, the reports, the parameters' values, the logger, and the few
+things only the graph and the lifecycle know, as functions). Both cycles protect the axes
+the same way (mill_plant.protection: the motion guard's travel, speed limit and hold
+window, a latched stop, the same re-arm).
+
 - `LockstepCycle` (simulation only): the plant is the clock. It publishes /clock and the
   states of step k (stamp kT), waits for the command stamped k of every active axis, then
-  integrates to k + 1 with each command N steps late (`command_delay`, as the offline
-  simulator); with `spindle: reference` it waits for the spindle speed of step k on
-  the reference too (mill_plant.spindle). A step that stays unanswered is offered again
-  every second (a restarted node rejoins); a missing command is reported after
+  stops the axes its guard forbids to move on (braked, latched until re-armed: no sender
+  moves an axis beyond the travel or faster than `speed_limit`) and integrates to k + 1
+  with each command N steps late (`command_delay`), exactly as the offline simulator;
+  with `spindle: reference` it waits for the spindle speed of step k on the reference too
+  (mill_plant.spindle). A step that stays unanswered is offered again every second (a
+  restarted node rejoins); a missing command is reported after
   `command_report_time`, naming the axis, the topic and the node that should send it,
   and when commands return, with the length of the silence; after `lockstep_timeout`
   the node ends with that message.
@@ -41,25 +51,25 @@ import os
 import time
 from abc import ABC, abstractmethod
 from collections import deque
-from collections.abc import Collection
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
-from mill_common.codec import encode_clock
 from mill_common.hold_window import HoldWindow, Stall, StallWatch
 from mill_common.lockstep import Action, LockstepWatchdog, RecorderGate
-from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp
 from mill_common.timebase import seconds
 from mill_common.timing import TIMINGS
-from rclpy.clock import Clock, ClockType
-from rosgraph_msgs.msg import Clock as ClockMsg
+from mill_common.travel import MachineTravel
 
 from mill_common import topics
 from mill_plant.command_delay import CommandDelay
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_reports import DriveReports
 from mill_plant.motion_guard import MotionGuard
+from mill_plant.protection import Protection
+from mill_plant.spindle import SpindleTrack
 
 # How a stopped axis is released, said with every stop.
 REARM = "the controller's brake request, then a valid command; or ~/release"
@@ -69,55 +79,80 @@ RECENT_STAMPS = 200  # realtime: published state stamps a command may answer
 CATCH_UP = 20
 
 
-class Drive(Protocol):
-    """What a cycle uses of the drive front end (mill_plant.drive_node.DriveNode)."""
+class DrivePort(Protocol):
+    """The machine as a cycle reaches it through the drive front end
+    (mill_plant.drive_node.DriveNode), the way a ros2_control hardware interface offers
+    read() and write(): publish a sample's states, write its efforts, let time pass."""
 
-    params: Any  # NodeParameters: .values
-    backend: Any  # DriveBackend | None
-    table: CommandTable
+    def publish(self, ns: int, say_stops: bool = False) -> list[float]:
+        """Read the positions of sample ns, publish them (and what goes with them); return
+        them in the order of the cycle's axes."""
+        ...
+
+    def write(self, ns: int, efforts: list[float]) -> None:
+        """Apply these efforts from sample ns on (NaN: brake that axis)."""
+        ...
+
+    def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None:
+        """Let dt seconds pass from ns with the efforts written."""
+        ...
+
+
+@dataclass(frozen=True)
+class Machine:
+    """What the drive hands its cycle at configure: the port, and the explicit collaborators
+    a cycle works with (none of them the node)."""
+
+    port: DrivePort
     axes: list[str]
-    dt: float
-    dt_ns: int
-    active: bool
+    table: CommandTable  # the commands held (mill_plant.command_table)
     reports: DriveReports  # its axis events and its status
+    values: Callable[[], Mapping[str, Any]]  # the parameters' values now
+    owners: Mapping[str, str]  # axis -> the node its commands come from ('' anyone)
+    spindle: SpindleTrack | None  # spindle: reference
+    log: Any  # the node's logger
+    # What only the graph and the lifecycle know, as functions:
+    missing_peers: Callable[[], list[str]]
+    publishers_of: Callable[[str], list[str]]  # node names publishing on a topic
+    activate: Callable[[], object]  # the lifecycle transition activate
+    end: Callable[[int, str], None]  # end the node with this code and message
+    clock: Callable[[int], None] | None = None  # publish /clock (lockstep)
 
-    def publish_states(self, ns: int, say_stops: bool = False) -> list[float]: ...
-    def spindle_known(self, ns: int) -> bool: ...
-    def write(self, ns: int, efforts: list[float]) -> None: ...
-    def advance(self, ns: int, dt: float, held: Collection[str] = ()) -> None: ...
-    def owner_of(self, axis: str) -> str: ...
-    def missing_peers(self) -> list[str]: ...
-    def end(self, code: int, message: str) -> None: ...
-    def add_timer(self, timer: Any) -> None: ...
-    def get_logger(self) -> Any: ...
-    def get_name(self) -> str: ...
-    def trigger_activate(self) -> Any: ...
-    def create_publisher(self, *args: Any, **kwargs: Any) -> Any: ...
-    def create_subscription(self, *args: Any, **kwargs: Any) -> Any: ...
-    def create_timer(self, *args: Any, **kwargs: Any) -> Any: ...
-    def get_publishers_info_by_topic(self, topic: str) -> Any: ...
+    def owner_of(self, axis: str) -> str:
+        return self.owners[axis] or 'its controller'
 
 
 class DriveCycle(ABC):
     TIMING: ClassVar[str]  # the `timing` it is
     STATUS: ClassVar[str]  # the part of the drive's status `<node>: <part>` on /diagnostics
     GRID: ClassVar[bool]  # command stamps lie on the sample grid
+    TICKS: ClassVar[bool]  # the drive calls `tick` every sample period of wall time
+    m: Machine  # by configure
 
-    def __init__(self, drive: Drive) -> None:
-        self.drive = drive
+    def __init__(self, dt_ns: int, name: str) -> None:
+        self.dt_ns = dt_ns
+        self.dt = seconds(dt_ns)
+        self.name = name  # the drive's node name
         self.k = 0  # steps (lockstep) or ticks (realtime) so far
+        self.active = False  # applying commands
         # how a stamp reads in the log: job time, or the time of day (mill_common.timing)
-        self.when = TIMINGS[self.TIMING](drive.dt_ns).when
+        self.when = TIMINGS[self.TIMING](dt_ns).when
 
-    @abstractmethod
-    def configure(self) -> None:
-        """Build what the cycle needs once the backend and the topics exist."""
+    def configure(self, machine: Machine) -> None:
+        """Take the machine, and build what the cycle needs once it exists."""
+        self.m = machine
+        v = machine.values()
+        travel = MachineTravel.from_node_values(v).limits(''.join(machine.axes))
+        guard = MotionGuard(machine.axes, v['speed_limit'], v['hold_deviation'], travel)
+        self._protection = Protection(machine.table, guard)
+        self.stops = dict.fromkeys(machine.axes, 0)  # times each axis was stopped
 
     def activate(self) -> None:  # noqa: B027 (nothing to do by default)
         """The lifecycle transition activate."""
 
-    def deactivate(self) -> None:  # noqa: B027 (nothing to do by default)
-        """The lifecycle transition deactivate (the drive has braked every axis)."""
+    def deactivate(self) -> None:
+        """The lifecycle transition deactivate (the drive brakes every axis)."""
+        self.active = False
 
     @abstractmethod
     def expected(self, ns: int) -> Rejected | None:
@@ -128,11 +163,38 @@ class DriveCycle(ABC):
         return None
 
     def command_taken(self) -> None:  # noqa: B027 (nothing to do by default)
-        """A command was accepted into the drive's table."""
+        """A command (or the spindle speed) was taken: a step may be whole."""
+
+    def tick(self) -> None:  # noqa: B027 (lockstep: no tick)
+        """Every sample period of wall time (TICKS)."""
+
+    def recorded(self, ns: int) -> None:  # noqa: B027 (realtime: no recorder handshake)
+        """The recorder acknowledged the step stamped ns."""
+
+    def _refresh_guard(self) -> None:
+        """The guard's limits as the parameters are now (they may be set at run time)."""
+        v = self.m.values()
+        guard = self._protection.guard
+        guard.speed_limit, guard.hold_deviation = v['speed_limit'], v['hold_deviation']
+
+    def _stopped(self, axis: str, reason: str) -> None:
+        self.stops[axis] += 1
+        self.m.reports.axis(
+            axis, DiagnosticStatus.ERROR, f'stopped: {reason}; braked until re-armed ({REARM})'
+        )
+        self.m.reports.status(force=True)
 
     def release(self) -> list[str]:
-        """The operator's release of the stopped axes; those it released."""
-        return []  # lockstep stops no axis by itself
+        """The operator's release (~/release): the stopped axes, now released."""
+        m = self.m
+        released = [a for a in m.axes if m.table.release(a)]
+        for axis in released:
+            m.reports.axis(
+                axis,
+                DiagnosticStatus.OK,
+                'released by ~/release: braked until its next fresh command',
+            )
+        return released
 
     @abstractmethod
     def watch(self, now: float) -> None:
@@ -142,49 +204,49 @@ class DriveCycle(ABC):
     def stamp_now(self) -> int:
         """The stamp of a status published now."""
 
-    @abstractmethod
     def status_values(self) -> dict[str, object]:
-        """The cycle's figures for the drive's status."""
+        """The cycle's figures for the drive's status: per axis, its stops."""
+        stopped = self.m.table.stop_reasons()
+        values: dict[str, object] = {}
+        for axis in self.m.axes:
+            values[f'{axis}.stops'] = self.stops[axis]
+            values[f'{axis}.stopped'] = stopped.get(axis, '')
+        return values
 
 
 class LockstepCycle(DriveCycle):
     TIMING = 'lockstep'
     STATUS = topics.DRIVE_STATUSES[0]
     GRID = True
-    _clock_pub: Any = None  # made by the first configure, taken again after a cleanup
-    _recorded_sub: Any = None
+    TICKS = False
 
-    def configure(self) -> None:
-        d = self.drive
-        v = d.params.values
-        self._delay = CommandDelay(v['command_delay'], len(d.axes))
-        if self._clock_pub is None:
-            self._clock_pub = d.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
-        self._clock_every = max(1, round(v['clock_period'] * 1e9 / d.dt_ns))
+    def configure(self, machine: Machine) -> None:
+        super().configure(machine)
+        v = machine.values()
+        self._delay = CommandDelay(v['command_delay'], len(machine.axes))
+        self._clock_every = max(1, round(v['clock_period'] * 1e9 / self.dt_ns))
         self._watchdog = LockstepWatchdog(
             time.monotonic(),
-            lambda: d.params.values['startup_timeout'],
-            lambda: d.params.values['lockstep_timeout'],
+            lambda: machine.values()['startup_timeout'],
+            lambda: machine.values()['lockstep_timeout'],
         )
         self.allowed = False  # activated (by autostart or the lifecycle)
         self._wait_sum = self._wait_max = 0.0
         self._last_publish = time.monotonic()
         self._missing: set[str] = set()  # axes reported missing
-        self._recorder = RecorderGate(v['recorder_window'], d.dt)
-        if self._recorder.window and self._recorded_sub is None:
-            self._recorded_sub = d.create_subscription(
-                ClockMsg, topics.RECORDED, self._on_recorded, LATCHED_QOS
-            )
+        self._recorder = RecorderGate(v['recorder_window'], self.dt)
+        self._positions: list[float] = []  # read at the step's publish
 
     def activate(self) -> None:
         self.allowed = True  # stepping starts once the peers are matched (see watch)
 
     def deactivate(self) -> None:
+        super().deactivate()
         self.allowed = False
 
     @property
     def stamp(self) -> int:
-        return self.k * self.drive.dt_ns
+        return self.k * self.dt_ns
 
     def expected(self, ns: int) -> Rejected | None:
         if ns != self.stamp:
@@ -195,111 +257,121 @@ class LockstepCycle(DriveCycle):
 
     def _whole(self) -> bool:
         """Whether the step has all it needs: every command, and the spindle's speed."""
-        d = self.drive
-        return d.table.complete(self.stamp) and d.spindle_known(self.stamp)
+        m = self.m
+        spindle = m.spindle is None or m.spindle.known(self.stamp)
+        return m.table.complete(self.stamp) and spindle
 
     def command_taken(self) -> None:
-        if self._whole() and self._recorder_caught_up():
+        if self.active and self._whole() and self._recorder_caught_up():
             self._advance()
 
     def _recorder_caught_up(self) -> bool:
         """Whether the next step may go out: the recorder is at most the window behind it."""
         return self._recorder.allows(self.k + 1)
 
-    def _on_recorded(self, msg: ClockMsg) -> None:
-        self._recorder.acknowledged(from_stamp(msg.clock))
-        d = self.drive
-        started = d.active and self._watchdog.started
+    def recorded(self, ns: int) -> None:
+        self._recorder.acknowledged(ns)
+        started = self.active and self._watchdog.started
         if started and self._whole() and self._recorder_caught_up():
             self._advance()
 
     def _publish_step(self, again: bool = False) -> None:
-        if again or self.k % self._clock_every == 0:
-            self._clock_pub.publish(encode_clock(self.stamp))
-        self.drive.publish_states(self.stamp)
+        clock = self.m.clock
+        if clock is not None and (again or self.k % self._clock_every == 0):
+            clock(self.stamp)
+        self._positions = self.m.port.publish(self.stamp)
         if not again:
             self._last_publish = time.monotonic()
 
     def _advance(self) -> None:
-        d = self.drive
+        m = self.m
         now = time.monotonic()
         wait = now - self._last_publish
         self._wait_sum += wait
         self._wait_max = max(self._wait_max, wait)
-        d.write(self.stamp, self._delay(d.table.values()))
-        d.advance(self.stamp, d.dt)
+        # The drive's protection (mill_plant.protection), as in real time and offline.
+        self._refresh_guard()
+        step = self._protection.lockstep_step(self.stamp, self._positions, self._delay)
+        for axis, reason in step.stopped.items():
+            self._stopped(axis, reason)
+        for axis in step.rearmed:
+            m.reports.axis(axis, DiagnosticStatus.OK, f're-armed by {m.owner_of(axis)}: released')
+        m.port.write(self.stamp, step.efforts)
+        m.port.advance(self.stamp, self.dt)
         self.k += 1
         if self._missing:  # the step waited this long: the outage's length
             waited = self._watchdog.waited(now)
             for axis in self._missing if self.k > 1 else ():  # not the start-up's wait
-                d.reports.axis(
+                m.reports.axis(
                     axis,
                     DiagnosticStatus.OK,
                     f'commands arriving again after {waited:.2f} s of silence',
                 )
             self._missing.clear()
         self._watchdog.progressed(now)
-        if self.k % max(1, round(1.0 / d.dt)) == 0:
-            d.reports.status(force=True)
+        if self.k % max(1, round(1.0 / self.dt)) == 0:
+            m.reports.status(force=True)
         self._publish_step()
 
     def watch(self, now: float) -> None:
-        d = self.drive
-        if not self.allowed and not d.params.values['autostart']:
+        m = self.m
+        v = m.values()
+        if not self.allowed and not v['autostart']:
             return  # waiting for the lifecycle transition activate
-        action = self._watchdog.tick(now, d.missing_peers)
+        action = self._watchdog.tick(now, m.missing_peers)
         if action is Action.START:
             if not self.allowed:
-                d.trigger_activate()  # autostart
-            d.active = True
-            d.get_logger().info('all peers matched: starting lockstep')
+                m.activate()  # autostart
+            self.active = True
+            m.log.info('all peers matched: starting lockstep')
             self._publish_step()
         elif action is Action.OFFER_AGAIN and not self._whole():
             self._publish_step(again=True)  # (a step waiting only for the recorder is whole)
         elif action is Action.PEERS_MISSING:
-            d.end(3, 'peers never appeared: ' + '; '.join(d.missing_peers()))
+            m.end(3, 'peers never appeared: ' + '; '.join(m.missing_peers()))
         elif action is Action.STALLED:
-            d.end(3, self._timeout_message())
-        report_time = d.params.values['command_report_time']
+            m.end(3, self._timeout_message())
+        report_time = v['command_report_time']
         if self._watchdog.started and self._watchdog.waited(now) >= report_time:
-            for axis in d.table.missing(self.stamp):
+            for axis in m.table.missing(self.stamp):
                 if axis not in self._missing:
                     self._missing.add(axis)
                     waited = self._watchdog.waited(now)
                     message = (
                         f'no command for step {self.k} on {topics.joint_command(axis)} from '
-                        f'{d.owner_of(axis)} for {waited:.1f} s'
+                        f'{m.owner_of(axis)} for {waited:.1f} s'
                     )
                     if self.k == 0:
                         # Start-up: the route of the first command may still be settling
                         # (discovery); the lockstep timeout ends a start that never comes.
-                        d.get_logger().info(message + ' (start-up)')
+                        m.log.info(message + ' (start-up)')
                     else:
-                        d.reports.axis(axis, DiagnosticStatus.WARN, message)
+                        m.reports.axis(axis, DiagnosticStatus.WARN, message)
 
     def _timeout_message(self) -> str:
-        d = self.drive
-        if d.table.complete(self.stamp) and not d.spindle_known(self.stamp):
+        m = self.m
+        timeout = m.values()['lockstep_timeout']
+        if m.table.complete(self.stamp) and not self._whole():
             return (
                 f'lockstep timeout: no spindle speed for t = {seconds(self.stamp):.3f} s '
                 f'(step {self.k}) on {topics.REFERENCE} after '
-                f'{d.params.values["lockstep_timeout"]:g} s (spindle: reference)'
+                f'{timeout:g} s (spindle: reference)'
             )
-        if d.table.complete(self.stamp):
+        if m.table.complete(self.stamp):
             return (
                 f'lockstep timeout: step {self.k} waited '
-                f'{d.params.values["lockstep_timeout"]:g} s for the recorder (its newest '
+                f'{timeout:g} s for the recorder (its newest '
                 f'acknowledgement on {topics.RECORDED}: {self._recorder.describe()})'
             )
         parts = []
-        for axis in d.table.missing(self.stamp):
+        for axis in m.table.missing(self.stamp):
             topic = topics.joint_command(axis)
-            nodes = sorted({i.node_name for i in d.get_publishers_info_by_topic(topic)})
+            nodes = m.publishers_of(topic)
             who = f'from {", ".join(nodes)}' if nodes else 'and no node publishes it'
             parts.append(f'{topic} ({who})')
         return (
             f'lockstep timeout: no command for t = {seconds(self.stamp):.3f} s (step {self.k}) '
-            f'after {d.params.values["lockstep_timeout"]:g} s on ' + ', '.join(parts)
+            f'after {timeout:g} s on ' + ', '.join(parts)
         )
 
     def stamp_now(self) -> int:
@@ -312,7 +384,8 @@ class LockstepCycle(DriveCycle):
             'max_wait_ms': 1e3 * self._wait_max,
         }
         if self._recorder.window:
-            out['recorded_s'] = seconds(max(self._recorder.recorded, 0) * self.drive.dt_ns)
+            out['recorded_s'] = seconds(max(self._recorder.recorded, 0) * self.dt_ns)
+        out.update(super().status_values())
         return out
 
 
@@ -320,9 +393,10 @@ class RealtimeCycle(DriveCycle):
     TIMING = 'realtime'
     STATUS = topics.DRIVE_STATUSES[1]
     GRID = False
+    TICKS = True
 
-    def configure(self) -> None:
-        d = self.drive
+    def configure(self, machine: Machine) -> None:
+        super().configure(machine)
         self._recent: deque[int] = deque(maxlen=RECENT_STAMPS)
         self._held: Collection[str] = ()  # axes held braked before their first command
         self._moved_to = 0  # the wall time [ns] up to which the machine has moved
@@ -330,20 +404,16 @@ class RealtimeCycle(DriveCycle):
         # sample rate), in all and since the last report; ticks while active, their basis.
         self.overruns = self._overruns_reported = self.active_ticks = 0
         self._missing: set[str] = set()
-        v = d.params.values
-        self._guard = MotionGuard(d.axes, v['speed_limit'], v['hold_deviation'])
-        self.stops = dict.fromkeys(d.axes, 0)  # times each axis was stopped
+        v = machine.values()
         # The drive's own stalls: ticks that woke late on the monotonic clock.
-        self._stalls = StallWatch(d.dt_ns, round(v['stall_report'] * 1e9))
+        self._stalls = StallWatch(self.dt_ns, round(v['stall_report'] * 1e9))
         self._stalls_reported = 0
         self._worst_new: Stall | None = None  # the longest since the last report
         self._window_values = self._window_key()
-        wall = Clock(clock_type=ClockType.STEADY_TIME)
-        d.add_timer(d.create_timer(d.dt, self._tick, clock=wall))
 
     def activate(self) -> None:
-        self.drive.active = True
-        self.drive.get_logger().info('active: applying commands')
+        self.active = True
+        self.m.log.info('active: applying commands')
 
     def expected(self, ns: int) -> Rejected | None:
         if ns not in self._recent:
@@ -353,12 +423,11 @@ class RealtimeCycle(DriveCycle):
     def arrival_ns(self) -> int | None:
         return time.time_ns()
 
-    def _tick(self) -> None:
-        d = self.drive
-        if d.backend is None:
-            return
+    def tick(self) -> None:
+        m = self.m
+        port, table, axes, dt_ns = m.port, m.table, m.axes, self.dt_ns
         ns = time.time_ns()  # acquisition time on the system clock
-        if d.active:  # its own stalls while it drives (the watch starts afresh when active)
+        if self.active:  # its own stalls while it drives (the watch starts afresh when active)
             stall = self._stalls.wake(time.monotonic_ns(), ns)
             if stall is not None and (
                 self._worst_new is None or stall.length_ns > self._worst_new.length_ns
@@ -367,99 +436,72 @@ class RealtimeCycle(DriveCycle):
         else:
             self._stalls.last_ns = None
         behind = ns - self._moved_to
-        if self._moved_to and behind > d.dt_ns // CATCH_UP:  # a late tick: it moved on
-            d.advance(self._moved_to, behind * 1e-9, self._held)
+        if self._moved_to and behind > dt_ns // CATCH_UP:  # a late tick: it moved on
+            port.advance(self._moved_to, behind * 1e-9, self._held)
             self._moved_to = ns
-        if d.active:
+        if self.active:
             self.active_ticks += 1
-            if self._recent and ns - self._recent[-1] > 1.5 * d.dt_ns:
+            if self._recent and ns - self._recent[-1] > 1.5 * dt_ns:
                 self.overruns += 1
-        positions = d.publish_states(ns, say_stops=True)
+        positions = port.publish(ns, say_stops=True)
         self._recent.append(ns)
-        held: Collection[str] = d.axes  # inactive: every axis held braked, as expected
-        if d.active:
+        held: Collection[str] = axes  # inactive: every axis held braked, as expected
+        if self.active:
             self._guard_motion(ns, positions)
-            tick = d.table.take(ns, {a: self._guard.speed(a) for a in d.axes})
+            guard = self._protection.guard
+            tick = table.take(ns, {a: guard.speed(a) for a in axes})
             efforts = tick.efforts
-            held = [a for a, c in d.table.by_axis.items() if c.stamp < 0]  # none came yet
+            held = [a for a, c in table.by_axis.items() if c.stamp < 0]  # none came yet
             for axis in tick.stopped:
-                reason = d.table.by_axis[axis].stopped
-                moved = self._guard.moved(axis)
+                reason = table.by_axis[axis].stopped
+                moved = guard.moved(axis)
                 self._stopped(
                     axis,
-                    f'{reason} on {topics.joint_command(axis)} (from {d.owner_of(axis)}); '
+                    f'{reason} on {topics.joint_command(axis)} (from {m.owner_of(axis)}); '
                     f'{1e3 * moved:.3f} mm from where it stood at the last one',
                 )
             for axis in tick.returned:
-                d.reports.axis(
+                m.reports.axis(
                     axis,
                     DiagnosticStatus.ERROR,
-                    f'commands arriving, but stopped ({d.table.by_axis[axis].stopped}): '
+                    f'commands arriving, but stopped ({table.by_axis[axis].stopped}): '
                     f'braked until re-armed ({REARM})',
                 )
             for axis in tick.resumed:
-                d.reports.axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
+                m.reports.axis(axis, DiagnosticStatus.OK, 'fresh commands: released')
         else:
-            efforts = [math.nan] * len(d.axes)
-        d.write(ns, efforts)
+            efforts = [math.nan] * len(axes)
+        port.write(ns, efforts)
         self._held = held
         # The period that starts now, at once, so that the next tick reads without waiting;
         # a late tick adds what passed beyond it (above): the machine keeps the wall clock.
         start = max(ns, self._moved_to)
-        d.advance(start, d.dt, held)
-        self._moved_to = start + d.dt_ns
+        port.advance(start, self.dt, held)
+        self._moved_to = start + dt_ns
         self.k += 1
 
     def _guard_motion(self, ns: int, positions: list[float]) -> None:
         """Stop the axes whose motion the drive does not allow (before any command applies)."""
-        d = self.drive
-        v = d.params.values
-        self._guard.speed_limit, self._guard.hold_deviation = v['speed_limit'], v['hold_deviation']
-        table = d.table.by_axis
-        under_way = {
-            a: x
-            for a, x in zip(d.axes, positions, strict=True)
-            if table[a].stamp >= 0 and not table[a].stopped
-        }
-        holding = {a: not table[a].fresh for a in under_way}
-        for axis, reason in self._guard.check(ns, under_way, holding).items():
-            d.table.stop(axis, reason)
+        self._refresh_guard()
+        for axis, reason in self._protection.check(ns, positions).items():
             self._stopped(axis, reason)
 
-    def _stopped(self, axis: str, reason: str) -> None:
-        self.stops[axis] += 1
-        self.drive.reports.axis(
-            axis, DiagnosticStatus.ERROR, f'stopped: {reason}; braked until re-armed ({REARM})'
-        )
-        self.drive.reports.status(force=True)
-
-    def release(self) -> list[str]:
-        """The operator's release (~/release): the stopped axes, now released."""
-        d = self.drive
-        released = [a for a in d.axes if d.table.release(a)]
-        for axis in released:
-            d.reports.axis(
-                axis,
-                DiagnosticStatus.OK,
-                'released by ~/release: braked until its next fresh command',
-            )
-        return released
-
     def watch(self, now: float) -> None:
-        d = self.drive
-        if not d.active:
+        m = self.m
+        if not self.active:
             return
-        if self.overruns > self._overruns_reported and now >= d.reports.next_status:
+        reports = m.reports
+        if self.overruns > self._overruns_reported and now >= reports.next_status:
             late = self.overruns - self._overruns_reported
             self._overruns_reported = self.overruns
             text = (
                 f'sample rate not held: {late} ticks came more than half a period '
-                f'({0.5e-6 * d.dt_ns:g} ms) late in the last second; lower the rate or '
+                f'({0.5e-6 * self.dt_ns:g} ms) late in the last second; lower the rate or '
                 'compose the nodes (run_scenario --layout single)'
             )
-            d.get_logger().warning(text)
-            d.reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
-        if self._worst_new is not None and now >= d.reports.next_status:
+            m.log.warning(text)
+            reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
+        if self._worst_new is not None and now >= reports.next_status:
             new = self._stalls.count - self._stalls_reported
             self._stalls_reported = self._stalls.count
             stall, self._worst_new = self._worst_new, None
@@ -468,33 +510,33 @@ class RealtimeCycle(DriveCycle):
                 f'{self.stalled(stall)}{more}: the drive did not run, so no state went out and '
                 'no command was missing for it'
             )
-            d.get_logger().warning(text)
-            d.reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
+            m.log.warning(text)
+            reports.status(force=True, message=text, level=DiagnosticStatus.WARN)
         self._refresh_window()
         now_ns = time.time_ns()
-        report_time = d.params.values['command_report_time']
-        for axis, c in d.table.by_axis.items():
+        report_time = m.values()['command_report_time']
+        for axis, c in m.table.by_axis.items():
             quiet = (now_ns - c.stamp) * 1e-9 if c.stamp >= 0 else math.inf
             if quiet >= report_time and axis not in self._missing:
                 self._missing.add(axis)
                 message = (
-                    f'no fresh command on {topics.joint_command(axis)} from {d.owner_of(axis)}'
+                    f'no fresh command on {topics.joint_command(axis)} from {m.owner_of(axis)}'
                 )
                 if c.stamp < 0:
                     # Start-up: no command yet (discovery); the axis holds until one comes.
-                    d.get_logger().info(message + ' yet (start-up)')
+                    m.log.info(message + ' yet (start-up)')
                 else:
-                    d.reports.axis(axis, DiagnosticStatus.WARN, message)
+                    reports.axis(axis, DiagnosticStatus.WARN, message)
             elif quiet < report_time and axis in self._missing:
                 self._missing.discard(axis)
 
     def stalled(self, stall: Stall) -> str:
         """'drive plant (pid 123) stalled 112 ms (monotonic) at 12:00:01.234 UTC'."""
-        who = f'drive {self.drive.get_name()} (pid {os.getpid()})'
+        who = f'drive {self.name} (pid {os.getpid()})'
         return f'{stall.describe(who)} {self.when(stall.wall_ns)}'
 
     def _window_key(self) -> tuple[float, ...]:
-        v = self.drive.params.values
+        v = self.m.values()
         return tuple(v[s.name] for s in HoldWindow.specs())
 
     def _refresh_window(self) -> None:
@@ -505,15 +547,15 @@ class RealtimeCycle(DriveCycle):
             return
         self._window_values = key
         try:
-            self.drive.table.window = HoldWindow.from_node_values(self.drive.params.values)
+            self.m.table.window = HoldWindow.from_node_values(self.m.values())
         except ValueError as exc:
-            self.drive.get_logger().error(f'hold window kept as it was: {exc}')
+            self.m.log.error(f'hold window kept as it was: {exc}')
 
     def stamp_now(self) -> int:
         return time.time_ns()
 
     def status_values(self) -> dict[str, object]:
-        table = self.drive.table
+        table = self.m.table
         values: dict[str, object] = {'overruns': self.overruns, 'active_ticks': self.active_ticks}
         longest = self._stalls.longest
         values['pid'] = os.getpid()
@@ -522,7 +564,7 @@ class RealtimeCycle(DriveCycle):
         values['longest_stall'] = self.stalled(longest) if longest else ''
         values['stall_report_ms'] = 1e-6 * self._stalls.threshold_ns
         stopped = table.stop_reasons()
-        for axis in self.drive.axes:
+        for axis in self.m.axes:
             values[f'{axis}.stops'] = self.stops[axis]
             values[f'{axis}.stopped'] = stopped.get(axis, '')
             values[f'{axis}.late_fraction'] = table.late_fraction(axis)

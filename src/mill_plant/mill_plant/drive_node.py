@@ -32,18 +32,20 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected, Sender
-from mill_common.codec import encode_wrench_stamped
+from mill_common.codec import encode_clock, encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
 from mill_common.hold_window import HoldWindow
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParameterError, ParamSpec
-from mill_common.ros import from_stamp, graph_owners, joint_state_bytes
+from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp, graph_owners, joint_state_bytes
 from mill_common.ros_params import NodeParameters
 from mill_common.timebase import period_ns, seconds
+from mill_common.travel import MachineTravel
 from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.service import Service
 from rclpy.timer import Timer
+from rosgraph_msgs.msg import Clock as ClockMsg
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
@@ -52,9 +54,10 @@ from mill_plant.backend import DriveBackend
 from mill_plant.command_intake import Accepted, CommandIntake
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_counts import DriveCounts
-from mill_plant.drive_cycle import CYCLES, DriveCycle
+from mill_plant.drive_cycle import CYCLES, DriveCycle, Machine
 from mill_plant.drive_reports import DriveReports
 from mill_plant.drive_topics import DriveTopics
+from mill_plant.joint_states import JointStates
 from mill_plant.ownership import Ownership
 from mill_plant.spindle import SpindleTrack, spindle_values
 
@@ -78,13 +81,14 @@ class DriveNode(LifecycleNode):
         v = self.params.values
         self.dt_ns = period_ns(v['sample_period'])
         self.dt = seconds(self.dt_ns)
-        self.cycle: DriveCycle = CYCLES[v['timing']](self)
-        self.active = False
+        self.cycle: DriveCycle = CYCLES[v['timing']](self.dt_ns, self._name)
         self.reports = DriveReports(self)
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
         self._release_service: Service | None = None
         self._made: tuple[Diagnostics, DriveTopics] | None = None  # by the first configure
+        self._clock_pub: Any = None  # lockstep: /clock, by the first configure
+        self._recorded_sub: Any = None  # lockstep with a recorder window
         self.get_logger().info(
             f'drive {name}: timing {v["timing"]}, T = {self.dt * 1e3:g} ms; '
             + ('configuring by itself' if v['autostart'] else 'waiting for configure')
@@ -113,6 +117,7 @@ class DriveNode(LifecycleNode):
         self.ownership = Ownership(self, self.owners)
         try:
             window = HoldWindow.from_node_values(v)
+            MachineTravel.from_node_values(v)  # the guard's travel (refused here, in one line)
         except ParameterError as exc:
             self.get_logger().error(f'cannot configure the machine: {exc}')
             return TransitionCallbackReturn.FAILURE
@@ -121,6 +126,7 @@ class DriveNode(LifecycleNode):
         grid = self.dt_ns if self.cycle.GRID else None
         self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
+        self.joint_states = JointStates(self.axes, v['joint_states_rate'], self.dt)
         # spindle: reference
         self.spindle = SpindleTrack() if v['spindle'] == 'reference' else None
         if self._made is None:  # once: a configure after a cleanup takes the same topics again
@@ -142,12 +148,56 @@ class DriveNode(LifecycleNode):
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
         if self._release_service is None:
             self._release_service = self.create_service(Trigger, '~/release', self._on_release)
-        self.cycle.configure()
+        self.cycle.configure(self._machine())
+        if self.cycle.TICKS:
+            self.add_timer(self.create_timer(self.dt, self._tick, clock=wall))
         self.get_logger().info(
             f'configured: axes {", ".join(self.axes)}, commands from '
             + ', '.join(f'{a}: {o or "anyone"}' for a, o in self.owners.items())
         )
         return TransitionCallbackReturn.SUCCESS
+
+    def _machine(self) -> Machine:
+        """What the cycle is handed: this node as its port, and its collaborators."""
+        v = self.params.values
+        clock = None
+        if self.cycle.GRID:  # once: a configure after a cleanup takes the same topics again
+            if self._clock_pub is None:
+                self._clock_pub = self.create_publisher(ClockMsg, topics.CLOCK, DATA_QOS)
+            if v['recorder_window'] and self._recorded_sub is None:
+                self._recorded_sub = self.create_subscription(
+                    ClockMsg,
+                    topics.RECORDED,
+                    self._on_recorded,
+                    LATCHED_QOS,
+                )
+            pub = self._clock_pub
+            clock = lambda ns: pub.publish(encode_clock(ns))  # noqa: E731
+        return Machine(
+            port=self,
+            axes=self.axes,
+            table=self.table,
+            reports=self.reports,
+            values=lambda: self.params.values,
+            owners=self.owners,
+            spindle=self.spindle,
+            log=self.get_logger(),
+            missing_peers=self.missing_peers,
+            publishers_of=self._publishers_of,
+            activate=self.trigger_activate,
+            end=self.end,
+            clock=clock,
+        )
+
+    def _on_recorded(self, msg: ClockMsg) -> None:
+        self.cycle.recorded(from_stamp(msg.clock))
+
+    def _publishers_of(self, topic: str) -> list[str]:
+        return sorted({i.node_name for i in self.get_publishers_info_by_topic(topic)})
+
+    def _tick(self) -> None:
+        if self.backend is not None:
+            self.cycle.tick()
 
     def add_timer(self, timer: Timer) -> None:
         """A timer that lives until cleanup."""
@@ -158,7 +208,6 @@ class DriveNode(LifecycleNode):
         return TransitionCallbackReturn.SUCCESS
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.active = False
         self.cycle.deactivate()
         if self.backend is not None:
             self.table.brake_all()
@@ -185,7 +234,7 @@ class DriveNode(LifecycleNode):
 
     # -- commands ----------------------------------------------------------------------------
     def _on_command(self, axis: str, msg: JointState, who: Sender) -> None:
-        if self.backend is None or (self.cycle.GRID and not self.active):
+        if self.backend is None or (self.cycle.GRID and not self.cycle.active):
             return
         topic, sender = topics.joint_command(axis), msg.header.frame_id
         ns = from_stamp(msg.header.stamp)
@@ -227,12 +276,8 @@ class DriveNode(LifecycleNode):
         ns = from_stamp(msg.header.stamp)
         stamps = [ns + from_stamp(p.time_from_start) for p in msg.points]
         self.spindle.offer(stamps, speeds)
-        if self.cycle.GRID and self.active:
+        if self.cycle.GRID and self.cycle.active:
             self.cycle.command_taken()  # the step may have waited only for this
-
-    def spindle_known(self, ns: int) -> bool:
-        """Whether the spindle of sample ns is known (always, without spindle: reference)."""
-        return self.spindle is None or self.spindle.known(ns)
 
     def _on_release(self, request: Trigger.Request, response: Trigger.Response) -> Any:
         """The operator's release of the stopped axes (mill_plant.command_table)."""
@@ -250,11 +295,8 @@ class DriveNode(LifecycleNode):
         """End the node after this callback (run_node exits with code and message)."""
         request_exit(self, code, message)
 
-    def owner_of(self, axis: str) -> str:
-        return self.owners[axis] or 'its controller'
-
     # -- one period: states out, efforts in ------------------------------------------------
-    def publish_states(self, ns: int, say_stops: bool = False) -> list[float]:
+    def publish(self, ns: int, say_stops: bool = False) -> list[float]:
         """Read and publish the positions of sample ns; returns them.
 
         say_stops (realtime): each state's `effort` says whether the drive has stopped the
@@ -276,6 +318,11 @@ class DriveNode(LifecycleNode):
         else:
             for axis, y in zip(self.axes, positions, strict=True):
                 publishers[axis].publish(joint_state_bytes(ns, (axis,), position=(y,), sender=name))
+        joints = self.joint_states.sample(ns, positions, self._written)
+        if joints is not None and self.io.joint_states.get_subscription_count():
+            self.io.joint_states.publish(
+                joint_state_bytes(ns, joints.names, joints.position, joints.velocity, joints.effort)
+            )
         # The cutting force of sample ns depends on its state, not on its commands: sent
         # with the states, a force controller can answer within the sample.
         force_pub = self.io.force

@@ -30,6 +30,7 @@ class Clocked(Protocol):
 
     STATUS: ClassVar[str]
     k: int
+    active: bool  # applying commands
 
     def stamp_now(self) -> int: ...
 
@@ -48,7 +49,6 @@ class Reported(Protocol):
     intake: CommandIntake
     ownership: Ownership | None
     dt_ns: int
-    active: bool
 
     def get_logger(self) -> Any: ...
 
@@ -116,7 +116,7 @@ class DriveReports:
             'step': k,
             'time': seconds(k * d.dt_ns),
             'wall_s': now - self.wall_start,
-            'active': d.active,
+            'active': d.cycle.active,
             'dropped': self.drops.total,
             **d.cycle.status_values(),
         }
@@ -126,7 +126,7 @@ class DriveReports:
             level = DiagnosticStatus.ERROR if faults else DiagnosticStatus.OK
         elif level is None:
             level = DiagnosticStatus.ERROR
-        text = message or ('running' if d.active else 'waiting')
+        text = message or ('running' if d.cycle.active else 'waiting')
         statuses = [d.diagnostics.status(level, d.cycle.STATUS, text, values)]
         foreign = d.ownership.status(d.diagnostics) if d.ownership is not None else None
         if foreign is not None:

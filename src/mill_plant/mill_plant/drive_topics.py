@@ -1,7 +1,8 @@
 """The topics a drive (mill_plant.drive_node) makes at configure, and which peers they lack.
 
 Per axis it publishes the state and takes the command, each with the graph's word on its
-publisher (mill_common.graph_owner); over a simulated machine it also
+publisher (mill_common.graph_owner); for the ROS tools it publishes every axis in one
+message (`joint_states`, mill_plant.joint_states); over a simulated machine it also
 publishes the ground truth and the cutting force; with `spindle: reference` it takes the
 reference (mill_plant.spindle). Bytes that are no message go to `drop` with their topic.
 """
@@ -40,6 +41,7 @@ class DriveTopics:
         """on_command(axis, msg, sender): sender is the graph's verdict on its publisher
         against owners[axis] (mill_common.graph_owner)."""
         self.states = {a: data_publisher(node, JointState, topics.state(a), DATA_QOS) for a in axes}
+        self.joint_states = data_publisher(node, JointState, topics.JOINT_STATES, DATA_QOS)
         self.truth: DataOutput | None = None
         self.force: DataOutput | None = None
         if simulated:

@@ -1,9 +1,17 @@
-"""What a drive checks of each axis's motion by itself, in real time, as a servo amplifier
-does. ROS-free.
+"""What a drive checks of each axis's motion by itself, as a servo amplifier does, in real
+time and in lockstep alike. ROS-free.
 
-The drive reads every axis's position at each tick and asks `check` which axes to stop
-(braked and latched, mill_plant.command_table), before it applies any command:
+The drive reads every axis's position at each tick (each step in lockstep) and asks `check`
+which axes to stop (braked and latched, mill_plant.command_table, through
+mill_plant.protection), before it applies any command:
 
+- travel: an axis that is outside the machine's travel (`travel.min`, `travel.max`, the
+  declaration mill_common.travel that the trajectory reads too), or would be at the next
+  tick extrapolated at constant acceleration from its last three positions, and moves
+  outwards, is stopped, whatever its commands: it stops inside the travel but for what a
+  change of its acceleration moves it in the one period beyond the extrapolation
+  (½·Δa·T², 21 µm for a 10 N·m jump on Beltrán's x axis at T = 1 ms) plus the brake's
+  stopping distance (zero in the simulation). An axis outside may move back in;
 - speed: an axis that moved faster than `speed_limit` over the last period is stopped,
   whether its commands are fresh or not (a runaway);
 - hold: while an axis has no fresh command, the drive holds the last one only while the
@@ -28,6 +36,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 
@@ -45,9 +54,17 @@ class AxisMotion:
 
 
 class MotionGuard:
-    def __init__(self, axes: list[str], speed_limit: float, hold_deviation: float) -> None:
+    def __init__(
+        self,
+        axes: list[str],
+        speed_limit: float,
+        hold_deviation: float,
+        travel: Mapping[str, tuple[float, float]] | None = None,
+    ) -> None:
         self.speed_limit = speed_limit  # [m/s]
         self.hold_deviation = hold_deviation  # [m]
+        # axis -> (lowest, highest) position [m]; an axis left out has no travel limit
+        self.travel = dict(travel or {})
         self.by_axis = {a: AxisMotion() for a in axes}
 
     def check(
@@ -65,7 +82,10 @@ class MotionGuard:
             x = positions[axis]
             m.recent.append((ns, x))
             speed = self._speed(m)
-            if abs(speed) > self.speed_limit:
+            leaves = self._leaves(axis, m)
+            if leaves:
+                out[axis] = leaves
+            elif abs(speed) > self.speed_limit:
                 out[axis] = (
                     f'speed {1e3 * abs(speed):.1f} mm/s above the limit '
                     f'{1e3 * self.speed_limit:g} mm/s'
@@ -86,6 +106,20 @@ class MotionGuard:
                 m.recent.clear()
                 m.anchor = None
         return out
+
+    def _leaves(self, axis: str, m: AxisMotion) -> str:
+        """Why the axis is leaving the travel ('' if it is not): outside it now or at the
+        next tick, and moving outwards."""
+        if axis not in self.travel:
+            return ''
+        lo, hi = self.travel[axis]
+        x, ahead = m.recent[-1][1], self._next(m)
+        moving = ahead - x
+        if ahead > hi and moving > 0.0:
+            return f'at {x:.6f} m it would leave the travel (travel.max {hi:g} m)'
+        if ahead < lo and moving < 0.0:
+            return f'at {x:.6f} m it would leave the travel (travel.min {lo:g} m)'
+        return ''
 
     @staticmethod
     def _speed(m: AxisMotion) -> float:

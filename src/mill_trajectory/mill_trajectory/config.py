@@ -20,12 +20,12 @@ from mill_common.parameters import (
     in_range,
     non_negative,
     non_negative_int,
-    number_list,
     one_of,
     positive,
 )
 from mill_common.signals import AXES
 from mill_common.timebase import MAX_JOB_TIME, period_ns, seconds
+from mill_common.travel import MachineTravel
 
 from mill_trajectory.base import Trajectory
 from mill_trajectory.feed_override import (
@@ -170,26 +170,8 @@ class FeedOverrideParams(ParamSet):
 
 
 @dataclass(frozen=True)
-class TravelParams(ParamSet):
-    """The machine's travel."""
-
-    PREFIX: ClassVar[str] = 'travel'
-    min: list[float] = param(
-        [-1.0, -1.0, -1.0],
-        "the machine's travel: lowest x, y, z the reference may reach [m]; a path "
-        'that leaves the travel is refused before anything moves',
-        number_list(3),
-    )
-    max: list[float] = param(
-        [1.0, 1.0, 1.0], "the machine's travel: highest x, y, z", number_list(3), unit='m'
-    )
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if any(lo > hi for lo, hi in zip(self.min, self.max, strict=True)):
-            raise ParameterError(
-                'travel.min', self.min, 'travel.min must not exceed travel.max on any axis'
-            )
+class TravelParams(MachineTravel):
+    """The machine's travel (mill_common.travel: the drive reads the same declaration)."""
 
     @property
     def travel(self) -> Travel:

@@ -42,7 +42,7 @@ GROUPS = {
         Group(
             'beltran_specific_energy',
             'offline_sim beltran --variant adrc -p plant.kline.specific_energy=3.0e10'
-            ' (and --variant pd)',
+            ' (and --variant pd -p plant.speed_limit=5.0)',
             beltran.specific_energy_figures,
         ),
         Group(
