@@ -156,6 +156,10 @@ class AxisSummary:
     drive: DriveFigures | None = None  # a realtime run's
     start_stamp_ns: int | None = None  # a realtime run's start on the system clock
     planned_feed: str = ''  # a G-code program's: how much of its feed the plan holds
+    # a lockstep run's: how many steps the plant waited over each threshold [ms] (the graph
+    # stalled), and the longest wait (mill_common.step_waits)
+    step_waits: Mapping[int, int] | None = None
+    longest_wait_ms: float = math.nan
 
     # -- text --------------------------------------------------------------------------------
     def figure_lines(self) -> list[str]:
@@ -195,6 +199,13 @@ class AxisSummary:
         out += [e.text() for e in self.events]
         if self.drive is not None:
             out += self.drive.lines()
+        if self.step_waits is not None:
+            over = ' / '.join(str(n) for n in self.step_waits.values())
+            limits = ' / '.join(str(t) for t in self.step_waits)
+            out.append(
+                f'lockstep steps that waited over {limits} ms: {over} '
+                f'(the longest {self.longest_wait_ms:.1f} ms)'
+            )
         if self.force_control:
             out += [
                 'force control, per constant depth of cut told (second half of each stretch, '
@@ -248,6 +259,11 @@ class AxisSummary:
             out['start_stamp_ns'] = self.start_stamp_ns
         if self.planned_feed:
             out['planned_feed'] = self.planned_feed
+        if self.step_waits is not None:
+            out['step_waits'] = {
+                'over_ms': {str(t): n for t, n in self.step_waits.items()},
+                'longest_ms': self.longest_wait_ms,
+            }
         return out
 
     @classmethod
@@ -268,6 +284,7 @@ class AxisSummary:
                 stall_report_ms=str(stalls.get('report_ms', '?')),
             )
         force = d.get('force_control')
+        waits = d.get('step_waits')
         return cls(
             skip=float(w['skip']),
             approach=float(w['approach']),
@@ -283,6 +300,10 @@ class AxisSummary:
             drive=drive,
             start_stamp_ns=d.get('start_stamp_ns'),
             planned_feed=d.get('planned_feed', ''),
+            step_waits=None
+            if waits is None
+            else {int(t): int(n) for t, n in waits['over_ms'].items()},
+            longest_wait_ms=math.nan if waits is None else float(waits['longest_ms']),
         )
 
 

@@ -23,7 +23,7 @@ import sys
 import tempfile
 from collections import Counter
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from mill_common.env import ros_environment
@@ -50,13 +50,20 @@ class RunOutcome:
     longest_stall_ms: float
     warnings: list[str]  # the run's WARNING lines
     load: float  # the one-minute load average at its end
+    # a lockstep run's steps that waited over each threshold [ms] (mill_common.step_waits)
+    waits_over: dict[int, int] = field(default_factory=dict)
+    longest_wait_ms: float = 0.0
 
     def line(self, i: int) -> str:
         stall = f', longest {self.longest_stall_ms:.0f} ms' if self.stalls else ''
+        waits = ''
+        if self.waits_over:
+            over = ' / '.join(f'{n}' for n in self.waits_over.values())
+            waits = f', steps waiting over {"/".join(map(str, self.waits_over))} ms: {over}'
         return (
             f'run {i}: exit {self.exit_code}, {self.missing} samples missing, '
             f'{self.stalls} drive stalls{stall}, {len(self.warnings)} warnings, '
-            f'load {self.load:.1f}'
+            f'load {self.load:.1f}{waits}'
         )
 
 
@@ -78,6 +85,7 @@ def outcome(run_dir: Path, code: int, output: str) -> RunOutcome:
     except (OSError, ValueError):
         summary = {}
     stalls = summary.get('drive_stalls') or {}  # mill_analysis.summary: a realtime run's
+    waits = summary.get('step_waits') or {}  # a lockstep run's
     with open('/proc/loadavg') as f:
         load = float(f.read().split()[0])
     return RunOutcome(
@@ -87,6 +95,8 @@ def outcome(run_dir: Path, code: int, output: str) -> RunOutcome:
         longest_stall_ms=float(stalls.get('longest_ms', 0.0)),
         warnings=[ln for ln in output.splitlines() if ln.startswith('WARNING')],
         load=load,
+        waits_over={int(t): int(n) for t, n in (waits.get('over_ms') or {}).items()},
+        longest_wait_ms=float(waits.get('longest_ms', 0.0)),
     )
 
 
@@ -110,6 +120,18 @@ def table(outcomes: Sequence[RunOutcome]) -> str:
     lines = [f'{n} runs: ' + ', '.join(f'exit {c}: {k}' for c, k in sorted(codes.items()))]
     lines.append(f'runs that lost a sample of their record: {sum(o.missing > 0 for o in outcomes)}')
     lines.append(f'runs with a WARNING line: {sum(bool(o.warnings) for o in outcomes)}')
+    waited = [o for o in outcomes if o.waits_over]
+    if waited:
+        totals = Counter[int]()
+        for o in waited:
+            totals.update(o.waits_over)
+        lines.append(
+            'lockstep steps that waited over '
+            + ', '.join(f'{t} ms: {n}' for t, n in sorted(totals.items()))
+            + f' (in {sum(any(n for t, n in o.waits_over.items() if t >= 100) for o in waited)}'
+            f' of {len(waited)} runs over 100 ms; the longest '
+            f'{max(o.longest_wait_ms for o in waited):.1f} ms)'
+        )
     stalled = [o.longest_stall_ms for o in outcomes if o.stalls]
     if stalled:
         lines.append(

@@ -34,3 +34,20 @@ def test_a_runs_ending_is_read_from_its_summary_and_counted(tmp_path: Path) -> N
     assert 'lost a sample of their record: 1' in text
     assert 'with a WARNING line: 1' in text
     assert 'reported a stall: 1, the longest 32 ms' in text
+
+
+def test_a_lockstep_runs_step_waits_are_counted_over_the_runs(tmp_path: Path) -> None:
+    quiet, stalled = tmp_path / 'quiet', tmp_path / 'stalled'
+    for d, over, longest in ((quiet, [2, 0, 0], 12.5), (stalled, [5, 1, 1], 2807.5)):
+        d.mkdir()
+        waits = {
+            'over_ms': dict(zip(('10', '100', '1000'), over, strict=True)),
+            'longest_ms': longest,
+        }
+        (d / 'summary.json').write_text(json.dumps({'step_waits': waits}))
+    runs = [outcome(quiet, 0, ''), outcome(stalled, 0, '')]
+    assert runs[1].waits_over == {10: 5, 100: 1, 1000: 1}
+    assert 'steps waiting over 10/100/1000 ms: 5 / 1 / 1' in runs[1].line(2)
+    text = table(runs)
+    assert 'waited over 10 ms: 7, 100 ms: 1, 1000 ms: 1 (in 1 of 2 runs over 100 ms' in text
+    assert 'the longest 2807.5 ms' in text

@@ -117,6 +117,7 @@ class Monitor(Node):
         super().__init__(
             name, namespace=namespace, cli_args=['--ros-args', *rules] if rules else None
         )
+        self.ns = self.get_namespace()  # kept: read after the node is destroyed too
         self.raw = Received()
         self._owners = {t: o for t, o in (owners or {}).items() if o}
         self._graph = graph_owners(self) if self._owners else None
@@ -289,7 +290,7 @@ class Monitor(Node):
         """The newest /diagnostics status of this machine with this name's node and part
         (topics.status_key: the name may leave out the namespace): its values, 'message'
         and 'level'."""
-        key, ns = topics.status_key(name), self.get_namespace()
+        key, ns = topics.status_key(name), self.ns
         for array in reversed(self.diagnostics):
             for s in array.status:
                 if topics.status_key(s.name) == key and topics.from_machine(s.hardware_id, ns):
@@ -301,14 +302,14 @@ class Monitor(Node):
     def statuses(self) -> list[Status]:
         """Every /diagnostics status of this machine heard so far, in order, with its values
         (mill_analysis.events reads them)."""
-        return statuses_of(self.diagnostics, self.get_namespace())
+        return statuses_of(self.diagnostics, self.ns)
 
     def problems(self) -> list[str]:
         """Every WARN or ERROR status heard on /diagnostics, once each, in order."""
         seen: dict[str, None] = {}
         for array in self.diagnostics:
             for s in array.status:
-                mine = topics.from_machine(s.hardware_id, self.get_namespace())
+                mine = topics.from_machine(s.hardware_id, self.ns)
                 if mine and s.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR):
                     seen.setdefault(f'{s.name}: {s.message}', None)
         for topic, per in self.refused.items():

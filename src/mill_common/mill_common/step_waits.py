@@ -9,6 +9,7 @@ its status; the runner's summary and the repeat_runs benchmark print them.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 THRESHOLDS_MS = (10, 100, 1000)  # a wait counts over each it exceeds
@@ -46,7 +47,7 @@ class StepWaits:
         return out
 
 
-def from_status(values: dict[str, str]) -> dict[int, int] | None:
+def from_status(values: Mapping[str, str]) -> dict[int, int] | None:
     """The counts over each threshold from a plant status's values (None: it has none)."""
     try:
         return {t: int(float(values[status_key(t)])) for t in THRESHOLDS_MS}

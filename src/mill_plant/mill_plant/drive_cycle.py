@@ -59,6 +59,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected
 from mill_common.hold_window import HoldWindow, Stall, StallWatch
 from mill_common.lockstep import Action, LockstepWatchdog, RecorderGate
+from mill_common.step_waits import StepWaits
 from mill_common.timebase import seconds
 from mill_common.timing import TIMINGS
 from mill_common.travel import MachineTravel
@@ -231,7 +232,7 @@ class LockstepCycle(DriveCycle):
             lambda: machine.values()['lockstep_timeout'],
         )
         self.allowed = False  # activated (by autostart or the lifecycle)
-        self._wait_sum = self._wait_max = 0.0
+        self._waits = StepWaits()  # how long each step waited (mill_common.step_waits)
         self._last_publish = time.monotonic()
         self._missing: set[str] = set()  # axes reported missing
         self._recorder = RecorderGate(v['recorder_window'], self.dt)
@@ -286,9 +287,7 @@ class LockstepCycle(DriveCycle):
     def _advance(self) -> None:
         m = self.m
         now = time.monotonic()
-        wait = now - self._last_publish
-        self._wait_sum += wait
-        self._wait_max = max(self._wait_max, wait)
+        self._waits.add(now - self._last_publish)
         # The drive's protection (mill_plant.protection), as in real time and offline.
         self._refresh_guard()
         step = self._protection.lockstep_step(self.stamp, self._positions, self._delay)
@@ -378,11 +377,7 @@ class LockstepCycle(DriveCycle):
         return self.stamp
 
     def status_values(self) -> dict[str, object]:
-        steps = max(self.k, 1)
-        out: dict[str, object] = {
-            'mean_wait_ms': 1e3 * self._wait_sum / steps,
-            'max_wait_ms': 1e3 * self._wait_max,
-        }
+        out: dict[str, object] = dict(self._waits.status_values())
         if self._recorder.window:
             out['recorded_s'] = seconds(max(self._recorder.recorded, 0) * self.dt_ns)
         out.update(super().status_values())

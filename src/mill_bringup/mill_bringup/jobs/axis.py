@@ -34,6 +34,7 @@ from mill_analysis.record import FORCE_CONTROL, RunRecord
 from mill_analysis.report import kinds
 from mill_analysis.summary import AxisSummary, DepthStretch
 from mill_bag.types import decode
+from mill_common.step_waits import from_status
 from mill_common.timebase import job_steps, seconds
 from mill_trajectory.config import build_job
 from mill_trajectory.feed_override import JobEnd
@@ -289,7 +290,16 @@ class AxisJob(Job[RunRecord]):
         summary = axis_summary(
             self.RECORD, self.scenario, rec, skip, self.FAILING, ending, force_control=stretches
         )
-        return replace(summary, planned_feed=self.feed_summary)
+        summary = replace(summary, planned_feed=self.feed_summary)
+        source = ending.source if ending is not None else None
+        status = None
+        if source is not None:  # the plant's steps' waits, as its last status told them
+            status = source.status(topics.status_name(self.state_owner, topics.DRIVE_STATUSES[0]))
+        over = from_status(status) if status is not None else None
+        if status is None or over is None:
+            return summary
+        longest = float(status.get('max_wait_ms', 'nan'))
+        return replace(summary, step_waits=over, longest_wait_ms=longest)
 
 
 def depth_stretches(rows: np.ndarray, min_instants: int = 10) -> list[DepthStretch]:
