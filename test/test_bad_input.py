@@ -114,7 +114,8 @@ def test_switch_to_a_law_needing_a_model_waits_for_one(start_node) -> None:
     controller = start_node(
         CONTROLLER[0], 'x_controller', '-p', 'x_controller:controller:=machine_pi'
     )
-    with ros_node('param_tester') as (node, executor):
+    # the observer the controller trusts (observer_node: x_observer), as the graph names it
+    with ros_node('x_observer') as (node, executor):
         params = ParameterClient(node, executor, 'x_controller')
         assert params.set('adaptive_pi.model_source', 'observer').successful  # not running
         refused = params.set('controller', 'adaptive_pi')

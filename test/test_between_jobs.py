@@ -45,7 +45,7 @@ from rclpy.node import Node
 from sensor_msgs.msg import JointState
 
 rclpy.init()
-node = Node('probe')
+node = Node('x_controller')  # the owner the drive expects (its publisher GID is checked)
 pub = node.create_publisher(JointState, 'mill/x/joint_command', 10)
 answered = []
 

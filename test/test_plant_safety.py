@@ -114,7 +114,7 @@ def test_non_finite_command_brakes_the_axis(start_node) -> None:
     def on_diagnostics(msg: DiagnosticArray) -> None:
         errors.extend(s for s in msg.status if s.level == DiagnosticStatus.ERROR)
 
-    with ros_node('fake_x_controller') as (node, executor):
+    with ros_node('x_controller') as (node, executor):  # the owner the drive expects
         node.create_subscription(JointState, topics.GROUND_TRUTH, on_truth, DATA_QOS)
         node.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, on_diagnostics, 10)
         fake = FakeController(node, braking_torque, STEPS)
@@ -183,7 +183,7 @@ def test_plant_ends_when_a_command_stops_coming(start_node) -> None:
         ),
     )
     answered = 20
-    with ros_node('stalling_x_controller') as (node, executor):
+    with ros_node('x_controller') as (node, executor):  # the owner, then silent
         fake = FakeController(node, lambda k: FINITE, answered)
         assert wait_until(fake.matched, 60), 'plant never matched'
         assert spin_until(
@@ -195,7 +195,7 @@ def test_plant_ends_when_a_command_stops_coming(start_node) -> None:
     assert 'lockstep timeout' in err
     assert f'step {answered}' in err
     assert 'mill/x/joint_command' in err
-    assert 'stalling_x_controller' in err
+    assert 'x_controller' in err
 
 
 @pytest.mark.system

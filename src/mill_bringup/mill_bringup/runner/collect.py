@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import resource
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +42,8 @@ class Collected:
     foreign_publishers: list[str]  # what the drives said of foreign publishers they ignored
     warnings: list[str]  # what the job says once of the statuses heard (Job.warnings)
     rearmed: dict[str, str]  # axes the start handshake released (--rearm), and why stopped
+    # messages the monitor left out per topic, their publisher GID another node's
+    refused: dict[str, int] = field(default_factory=dict)
 
 
 def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending) -> Collected:
@@ -99,6 +101,7 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
         foreign,
         job.warnings(heard),
         dict(session.rearmed),
+        {t: sum(per.values()) for t, per in monitor.refused.items()},
     )
 
 
@@ -180,7 +183,7 @@ def result(
         missing_from_bag=collected.missing_from_bag,
         summary=job.summary(record, options.skip, ending),
         problems=collected.problems,
-        foreign=job.RECORD.foreign(record),
+        foreign=_added(job.RECORD.foreign(record), collected.refused),
         dropped=job.RECORD.dropped(record),
         lost_with_restarts=collected.lost,
         foreign_publishers=collected.foreign_publishers,
@@ -196,3 +199,8 @@ def result(
     if options.compare_offline and ending.failure is None:
         out.differences = job.RECORD.differences(record, simulate(job))
     return out
+
+
+def _added(a: dict[str, int], b: dict[str, int]) -> dict[str, int]:
+    """Counts per topic of both."""
+    return {t: a.get(t, 0) + b.get(t, 0) for t in {**a, **b}}
