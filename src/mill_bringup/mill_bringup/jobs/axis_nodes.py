@@ -21,6 +21,7 @@ from mill_analysis.summary import (
     axis_figures,
     first_stops,
 )
+from mill_common.signals import AXES
 from mill_common.timebase import period_ns, seconds
 
 from mill_bringup.axis_simulation import build_axis_loops
@@ -108,6 +109,13 @@ class AxisNodes:
             axis = node.values['axis']
             topic = topics.joint_command(axis) if node.kind.role == CONTROLLER else None
             out[topic or topics.estimate(axis)] = node.name
+        # the commands' owners as the drive takes them (its command_owners: x, y, z), where
+        # it names them (a benchmark's echo node owns them instead of the controllers)
+        drive = next((n for n in self.config.nodes if n.name == self.plant), None)
+        named = drive.values.get('command_owners') if drive is not None else None
+        for axis, who in zip(AXES, named or (), strict=False):
+            if who and axis in self.axes:
+                out[topics.joint_command(axis)] = who
         for axis in self.axes:
             out[topics.state(axis)] = self.state_owner
         out[topics.REFERENCE] = self.trajectory
