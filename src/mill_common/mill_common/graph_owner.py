@@ -16,8 +16,13 @@ each publisher endpoint with its GID, node name and namespace. So a receiver:
   publisher: at most every REFRESH_S per topic) or when the number of publishers changed
   (`look`, from the node's timer). The per-message cost is one dict look-up;
 - CONTESTED: two or more publishers on the topic whose node has the owner's name and
-  namespace (a second process started with the same node name): the receiver refuses both,
-  and `look` names them once (`on_contested`).
+  namespace (a second process started with the same node name), both alive: the receiver
+  refuses both, and names them once per set (`on_contested`). A claimant is alive while it
+  speaks: heard since the other claimant appeared in the graph, or within LIVE_S. A killed
+  node's endpoints stay in the graph until its lease runs out (Fast DDS: 20 s), so the
+  node started again in its place (ros2 launch's respawn, run_scenario --respawn) would
+  otherwise share its name with a ghost; the dead one is silent since before its successor
+  appeared, and a process takes far longer than LIVE_S to start again.
 
 A message delivered inside this process (mill_common.intra_process) has no GID: it comes
 from the topic's publisher in this process, which the bus names (LOCAL).
@@ -43,6 +48,7 @@ from mill_common.checks import ANYONE, CONTESTED, FOREIGN, OWNER, UNKNOWN, Sende
 
 LOCAL = b''  # the GID of a message delivered inside this process (no DDS endpoint)
 REFRESH_S = 0.05  # the least time between two looks at one topic's publishers for a new GID
+LIVE_S = 0.2  # a claimant heard this recently is alive, whenever it appeared
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 
 
@@ -62,7 +68,9 @@ class _Topic:
     verdicts: dict[bytes, Sender] = field(default_factory=dict)
     count: int = -1  # publishers at the last look
     looked: float = -1e9  # monotonic time of the last look
-    contested: tuple[str, ...] = ()  # the claimants at the last look (two or more)
+    claimants: dict[bytes, str] = field(default_factory=dict)  # GID -> name, of the owner's name
+    appeared: dict[bytes, float] = field(default_factory=dict)  # claimant GID -> first seen
+    heard: dict[bytes, float] = field(default_factory=dict)  # claimant GID -> last message
     reported: tuple[str, ...] = ()  # the claimants named last
 
 
@@ -75,7 +83,7 @@ class GraphOwners:
     ) -> None:
         """local_publishers: the nodes of this process publishing a (resolved) topic
         (mill_common.intra_process); on_contested(topic as watched, owner, claimants): told
-        once per set of claimants."""
+        once per set of live claimants."""
         self._node = node
         self._namespace = node.get_namespace()
         self._local = local_publishers or (lambda topic: [])
@@ -94,51 +102,62 @@ class GraphOwners:
         t = self._topics.get(topic)
         if t is None or not t.owner:
             return ANYONE
-        got = t.verdicts.get(gid)
-        if got is not None:
-            return got
         if gid == LOCAL:
             return self._local_verdict(topic, t)
-        if time.monotonic() - t.looked >= REFRESH_S:
-            self._refresh(topic, t)
-            got = t.verdicts.get(gid)
-            if got is not None:
-                return got
-        return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})')
+        got = t.verdicts.get(gid)
+        if got is None:
+            if time.monotonic() - t.looked >= REFRESH_S:
+                self._refresh(topic, t)
+                got = t.verdicts.get(gid)
+            if got is None:
+                return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})')
+        if got.verdict != OWNER:
+            return got
+        now = time.monotonic()
+        t.heard[gid] = now
+        if len(t.claimants) < 2:
+            return got
+        return self._contest(t, gid, got, now)
 
     def look(self) -> None:
         """From a timer: look again at each topic whose number of publishers changed
-        (counting costs a tenth of listing), and name new claimants of an owner's name."""
+        (counting costs a tenth of listing)."""
         for topic, t in self._topics.items():
             if t.owner and self._node.count_publishers(topic) != t.count:
                 self._refresh(topic, t)
 
-    def contested(self, topic: str) -> tuple[str, ...]:
-        t = self._topics.get(topic)
-        return t.contested if t is not None else ()
+    def _contest(self, t: _Topic, gid: bytes, mine: Sender, now: float) -> Sender:
+        """The verdict on a claimant's message while others claim the owner's name too: it
+        is contested if another claimant is alive (heard since this one appeared, or
+        within LIVE_S)."""
+        since = min(t.appeared.get(gid, now), now - LIVE_S)
+        alive = [g for g in t.claimants if g != gid and t.heard.get(g, -1e9) >= since]
+        if not alive:
+            return mine
+        names = tuple(sorted(t.claimants[g] for g in (gid, *alive)))
+        if names != t.reported:
+            t.reported = names
+            if self._on_contested is not None:
+                self._on_contested(t.name, t.owner, names)
+        return Sender(CONTESTED, mine.name, names)
 
     def _local_verdict(self, topic: str, t: _Topic) -> Sender:
+        """A message from this process's publisher: the owner if it is the owner's node. No
+        other process can contest it: while a node of this process publishes the topic, its
+        readers here take nothing from DDS (mill_common.intra_process), and that module
+        names the other publishers."""
         own = qualified(self._namespace, t.owner)
         local = self._local(topic)
         if own not in local:
             return Sender(FOREIGN, ', '.join(local) or 'a publisher in this process')
-        if t.contested:
-            return Sender(CONTESTED, own, t.contested)
         return Sender(OWNER, own)
 
     def _refresh(self, topic: str, t: _Topic) -> None:
-        t.looked = time.monotonic()
+        t.looked = now = time.monotonic()
         infos = self._node.get_publishers_info_by_topic(topic)
         t.count = len(infos)
-        claimants = [
-            i for i in infos if i.node_name == t.owner and i.node_namespace == self._namespace
-        ]
-        claiming = {id(i) for i in claimants}
-        names = tuple(
-            f'{qualified(i.node_namespace, i.node_name)} (gid {gid_text(bytes(i.endpoint_gid))})'
-            for i in claimants
-        )
-        t.contested = names if len(claimants) > 1 else ()
+        own = qualified(self._namespace, t.owner)
+        claimants: dict[bytes, str] = {}
         verdicts: dict[bytes, Sender] = {}
         for info in infos:
             gid = bytes(info.endpoint_gid)
@@ -146,17 +165,14 @@ class GraphOwners:
                 t.count = -1  # discovery has not named it yet: look again next time
                 continue
             who = qualified(info.node_namespace, info.node_name)
-            if id(info) in claiming:
-                mine = Sender(CONTESTED, who, names) if t.contested else Sender(OWNER, who)
+            if who == own:
+                claimants[gid] = f'{who} (gid {gid_text(gid)})'
+                verdicts[gid] = Sender(OWNER, who)
             else:
-                mine = Sender(FOREIGN, who)
-            verdicts[gid] = mine
-        t.verdicts = verdicts
-        if t.contested and t.contested != t.reported and self._on_contested is not None:
-            t.reported = t.contested
-            self._on_contested(t.name, t.owner, t.contested)
-        elif not t.contested:
-            t.reported = ()
+                verdicts[gid] = Sender(FOREIGN, who)
+        t.appeared = {g: t.appeared.get(g, now) for g in claimants}
+        t.heard = {g: h for g, h in t.heard.items() if g in claimants}
+        t.claimants, t.verdicts = claimants, verdicts
 
 
 # -- the take: serialized bytes and the publisher GID of each message ----------------------

@@ -136,6 +136,33 @@ def test_two_nodes_with_the_owners_name_are_both_refused_and_named_once(graph) -
     )
 
 
+def test_a_node_started_again_in_place_of_a_silent_one_is_the_owner_until_both_speak(
+    graph,
+) -> None:
+    # A killed node's endpoint stays in the graph until its lease runs out: here the first
+    # node stops speaking (as a killed one would) and a second of the same name takes over.
+    from mill_common.graph_owner import LIVE_S
+
+    contests: list[tuple[str, str, tuple[str, ...]]] = []
+    _node, got = receiver(graph, contests)
+    first = sender(graph, 'x_controller')
+    assert graph.spin_until(lambda: first('x_controller') or bool(got))
+    graph.spin_until(lambda: False, 2 * LIVE_S)  # silent since
+    again = sender(graph, 'x_controller')
+    heard = len(got)
+    assert graph.spin_until(lambda: again('x_controller') or len(got) >= heard + 5)
+    assert [w.verdict for _, w in got[heard:]] == [OWNER] * (len(got) - heard)
+    assert contests == []
+    first('x_controller')  # it was alive after all: from now on both are refused
+
+    def both_refused() -> bool:
+        again('x_controller')
+        return got[-1][1].verdict == CONTESTED
+
+    assert graph.spin_until(both_refused)
+    assert len(contests) == 1 and len(contests[0][2]) == 2
+
+
 def test_a_message_larger_than_the_first_buffer_arrives_whole_with_its_gid(graph) -> None:
     from mill_common.codec import decode_joint_state
     from mill_common.graph_owner import GidSubscription

@@ -258,7 +258,7 @@ class DriveNode(LifecycleNode):
         self.cycle.command_taken()
 
     def _on_contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
-        """The graph shows two or more publishers of `topic` claiming the owner's name:
+        """Two or more live publishers of `topic` claim the owner's name:
         neither drives the axis (mill_plant.command_intake); said once per set."""
         if self.ownership is not None:
             self.ownership.contested(topic, owner, claimants)

@@ -3,8 +3,8 @@
 A command topic belongs to its axis's controller, a state topic to the drive itself. A
 foreign sender is found two ways: by a message it sent (`message_from`), and by the ROS
 graph, once a second, even if it never sends (`look`). Each foreign publisher is named once.
-Two publishers claiming an owner's name (mill_common.graph_owner: the graph shows both) are
-`contested`: named, both, in the status while the graph shows them.
+Two live publishers claiming an owner's name (mill_common.graph_owner: both speak) are
+`contested`: named, both, in the status from then on.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ class Ownership:
         return self._note(topic, who)
 
     def contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
-        """The graph shows these publishers of `topic` all claiming the name `owner`."""
+        """These publishers of `topic`, all alive, claim the name `owner`."""
         self.contests[topic] = (owner, claimants)
 
     def look(self) -> list[tuple[str, str]]:
