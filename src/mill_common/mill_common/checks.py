@@ -231,9 +231,9 @@ def sender_check(sender: Sender, owner: str) -> Rejected | None:
             f'{"; ".join(sender.claimants)}: refused'
         )
     if sender.verdict == UNKNOWN:
-        # a publisher discovery has not shown yet (the first commands of a drive's start):
-        # its frame_id claim decides (owner_check) until the graph names it, at most
-        # graph_owner.REFRESH_S later
+        # a publisher discovery has not shown yet, while no endpoint of the owner speaks
+        # (the first commands of a drive's start, an owner started again): its frame_id
+        # claim decides (owner_check) until the graph names it
         return None
     return Rejected(f'sent by {sender.name}, not by its owner {owner!r}')
 
