@@ -25,8 +25,14 @@ _domains = itertools.count()
 
 
 def _next_domain() -> str:
-    # Spread over 1..100 from the pid so two test runs on one machine rarely meet.
-    return str(1 + (os.getpid() * 13 + next(_domains)) % 100)
+    # Spread over 1..100 from the pid so two test runs on one machine rarely meet; the
+    # workers of one run (pytest-xdist: gw0, gw1, ...) never share a domain: each has its own
+    # residue modulo their number.
+    worker = os.environ.get('PYTEST_XDIST_WORKER', 'gw0')
+    workers = int(os.environ.get('PYTEST_XDIST_WORKER_COUNT', '1'))
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    slot = (os.getpid() * 13 + next(_domains)) % (100 // workers)
+    return str(1 + slot * workers + index)
 
 
 @pytest.fixture

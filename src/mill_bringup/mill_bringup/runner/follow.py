@@ -49,7 +49,7 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> WallTime:
             if t_first is None:
                 t_first, cpu_first = now, graph.cpu_by_process()
         if t_first is None:
-            if now - t_start > options.startup_timeout:
+            if now > session.startup_deadline:
                 raise RunError(
                     f'no step within {options.startup_timeout:g} s of the start'
                     f'{_silent_external(session, job, options)}'

@@ -9,6 +9,7 @@ the process (std::terminate) and leave the graph running and the bag unclosed.
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import sys
@@ -57,6 +58,8 @@ class Session:
         self._stop: list[int] = []  # signals received (install_stop_handlers)
         # axes the start handshake released (--rearm), with the stop each was latched by
         self.rearmed: dict[str, str] = {}
+        # until the first sample (runner.start sets it from --startup-timeout)
+        self.startup_deadline = math.inf
         self._never: Any = None
         self._monitor: Monitor | None = None
         self._graph: Graph | None = None

@@ -102,10 +102,12 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
     """The start handshake, then every node, the clock node last; held and external clock
     nodes activated."""
     monitor, graph = session.monitor, session.graph
+    # One budget from here to the first sample: the handshake, the graph's start, an
+    # external drive's activation and the first step share it (runner.follow).
+    deadline = session.startup_deadline = time.monotonic() + options.startup_timeout
     handshake(session, job, options)
     graph.launch(launch.first)
     upstream = launch.graph.upstream
-    deadline = time.monotonic() + options.startup_timeout
     while any(monitor.count_publishers(t) < 1 for t in upstream):
         if time.monotonic() > deadline:
             silent = [t for t in upstream if monitor.count_publishers(t) < 1]
@@ -121,7 +123,7 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
                 node.name,
                 session.progress,
                 started=lambda: job.progress(monitor) > -math.inf,
-                wait=options.startup_timeout,
+                wait=max(deadline - time.monotonic(), 0.0),
             )
     session.progress.note(
         f'started {len(graph.procs)} processes (ROS_DOMAIN_ID={session.domain_id}); '
