@@ -13,9 +13,12 @@ ownership, table and protection as a mill controller's (`take`); the first axis 
 command is dropped as foreign ends the message, so that a foreign message is counted and
 named once, not once per joint.
 
-QoS: RELIABLE, KEEP_LAST 1, VOLATILE both ways, only the newest matters. The hardware
-interface publishes its commands RELIABLE (depth 1) and reads its states BEST_EFFORT
-(rclcpp's SensorDataQoS), which a reliable writer serves.
+QoS: the commands are taken as mill's are (DATA_QOS: RELIABLE, KEEP_LAST 2000): a reader's
+history is shared by every writer of a topic, so at depth 1 a foreign publisher's flood
+would replace the owner's commands before the drive took them (the axes would brake on the
+owner's silence, seen in the test). The states go out RELIABLE, KEEP_LAST 1, VOLATILE (only
+the newest matters). The hardware interface publishes its commands RELIABLE (depth 1) and
+reads its states BEST_EFFORT (rclcpp's SensorDataQoS), which a reliable writer serves.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from typing import Any
 from mill_common.checks import FOREIGN, Rejected, Sender
 from mill_common.codec import decode_joint_state
 from mill_common.graph_owner import GraphOwners
-from mill_common.ros import data_publisher, joint_state_bytes, take_owned
+from mill_common.ros import DATA_QOS, data_publisher, joint_state_bytes, take_owned
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
@@ -35,7 +38,7 @@ from mill_plant.command_intake import Accepted, Dropped
 from mill_plant.joint_states import JointStates
 from mill_plant.topic_pair import Ros2ControlParams, command_shape
 
-PAIR_QOS = QoSProfile(
+STATES_QOS = QoSProfile(
     reliability=ReliabilityPolicy.RELIABLE,
     history=HistoryPolicy.KEEP_LAST,
     depth=1,
@@ -68,14 +71,14 @@ class Ros2ControlPair:
         self._drop = drop
         self._foreign = foreign
         self._joints = JointStates(self.axes, 1.0 / period, period)  # every sample
-        self.states = data_publisher(node, JointState, self.states_topic, PAIR_QOS)
+        self.states = data_publisher(node, JointState, self.states_topic, STATES_QOS)
         self.commands = take_owned(
             node,
             JointState,
             self.commands_topic,
             decode_joint_state,
             self._on_message,
-            PAIR_QOS,
+            DATA_QOS,
             lambda problem: drop(self.commands_topic, problem, ''),
             graph,
             self.owner,
