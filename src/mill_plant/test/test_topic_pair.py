@@ -91,3 +91,36 @@ def test_mills_own_commands_still_need_their_frame_id() -> None:
     intake = CommandIntake({'x': 'x_controller'}, None, lambda ns: None)
     got = intake.take('x', 10, '', ['x'], [0.5], Sender(OWNER, '/x_controller'))
     assert isinstance(got, Dropped) and got.foreign
+
+
+def test_the_documented_ros2_control_block_agrees_with_the_drives_defaults() -> None:
+    from pathlib import Path
+    from xml.etree import ElementTree
+
+    from mill_common.machine_urdf import joint_limits, machine_urdf
+
+    doc = Path(__file__).resolve().parents[3] / 'docs' / 'hardware-driver.md'
+    text = doc.read_text()
+    section = text[text.index('### A `<ros2_control>` block') :]
+    xml = section[section.index('```xml') + len('```xml') : section.index('```\n', 10)]
+    block = ElementTree.fromstring(xml)
+    hardware = block.find('hardware')
+    assert hardware is not None
+    assert hardware.findtext('plugin') == 'topic_based_ros2_control/TopicBasedSystem'
+    params = {p.get('name'): p.text for p in hardware.findall('param')}
+    defaults = Ros2ControlParams(commands_topic='robot_joint_commands')
+    # The drive's relative names resolve so in the root namespace.
+    assert params['joint_commands_topic'] == '/' + defaults.commands_topic
+    assert params['joint_states_topic'] == '/' + defaults.states_topic
+    assert params['trigger_joint_command_threshold'] == '-1'
+    assert f'topic_based_ros2_control_{block.get("name")}' == defaults.owner
+    # Its joints are the machine's, each commanded by effort alone.
+    urdf = ElementTree.fromstring(machine_urdf(joint_limits([-1] * 3, [1] * 3, 0.5, [10] * 3)))
+    machine = [j.get('name') for j in urdf.findall('joint')]
+    joints = block.findall('joint')
+    assert [j.get('name') for j in joints] == machine == list(AXES)
+    for joint in joints:
+        assert [c.get('name') for c in joint.findall('command_interface')] == ['effort']
+        states = {s.get('name'): s for s in joint.findall('state_interface')}
+        assert set(states) == {'position', 'velocity', 'effort'}
+        assert states['effort'].find('param').text == 'nan'  # type: ignore[union-attr]
