@@ -117,6 +117,6 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
 # ros2_control's topic pair (mill_plant.topic_pair).
 DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
     *DriveParams.named_specs(),
-    *Ros2ControlParams.named_specs(),
+    *((name, replace(spec, name=name)) for name, spec in Ros2ControlParams.named_specs()),
     *((name, replace(spec, name=name)) for name, spec in MachineTravel.named_specs(True)),
 )
