@@ -37,30 +37,27 @@ from typing import Any, ClassVar
 
 from mill_common.checks import Rejected
 from mill_common.declared import ParamSet, param
+from mill_common.parameters import Constraint
 
 # A topic name as ROS accepts it, relative or absolute ('' is checked apart).
 _TOPIC = re.compile(r'^[~/]?[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$')
 _NODE = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 
 
-def _topic_or_off(value: Any) -> str | None:
-    if not isinstance(value, str):
-        return 'must be a string'
-    if value and not _TOPIC.match(value):
-        return 'must be a ROS topic name (letters, digits, _ between /), or "" for off'
-    return None
+class RosName(Constraint):
+    """A ROS topic name (relative or absolute; `off`: '' too) or node name (`node`)."""
 
+    def __init__(self, node: bool = False, off: bool = False) -> None:
+        self.pattern, what = (_NODE, 'a node name') if node else (_TOPIC, 'a topic name')
+        self.off = off
+        self.text = what + (', or "" for off' if off else '')
 
-def _topic(value: Any) -> str | None:
-    if isinstance(value, str) and not value:
-        return 'must name a topic'
-    return _topic_or_off(value)
-
-
-def _node_name(value: Any) -> str | None:
-    if not isinstance(value, str) or not _NODE.match(value):
-        return 'must be a node name (letters, digits, _; not empty)'
-    return None
+    def __call__(self, value: Any) -> str | None:
+        if not isinstance(value, str):
+            return 'must be a string'
+        if (value or not self.off) and not self.pattern.match(value):
+            return f"must be {self.text} (letters, digits, _; a topic's parts between /)"
+        return None
 
 
 @dataclass(frozen=True)
@@ -75,7 +72,7 @@ class Ros2ControlParams(ParamSet):
         "(topic_based_ros2_control's joint_commands_topic: one sensor_msgs/JointState naming "
         'the joints x, y, z with one effort each; position or velocity commands are refused); '
         '"" = off. Relative names take the node\'s namespace',
-        _topic_or_off,
+        RosName(off=True),
         read_only=True,
     )
     states_topic: str = param(
@@ -83,7 +80,7 @@ class Ros2ControlParams(ParamSet):
         'with commands_topic: where the drive publishes every sample the measured position, '
         'velocity and applied effort (NaN: braked) of x, y, z in one sensor_msgs/JointState '
         "(topic_based_ros2_control's joint_states_topic)",
-        _topic,
+        RosName(),
         read_only=True,
     )
     owner: str = param(
@@ -91,7 +88,7 @@ class Ros2ControlParams(ParamSet):
         'with commands_topic: the node whose commands the drive takes (its publisher GID in the '
         'graph): topic_based_ros2_control names its node topic_based_ros2_control_<the '
         "ros2_control block's name>; commands from any other node are ignored and reported",
-        _node_name,
+        RosName(node=True),
         read_only=True,
     )
 
