@@ -50,6 +50,7 @@ class RosName(Constraint):
     def __init__(self, node: bool = False, off: bool = False) -> None:
         self.pattern, what = (_NODE, 'a node name') if node else (_TOPIC, 'a topic name')
         self.off = off
+        self.form = 'letters, digits, _' + ('' if node else ', its parts between /')
         self.text = what + (', or "" for off' if off else '')
 
     def __call__(self, value: Any) -> str | None:
