@@ -57,7 +57,7 @@ class RosName(Constraint):
         if not isinstance(value, str):
             return 'must be a string'
         if (value or not self.off) and not self.pattern.match(value):
-            return f"must be {self.text} (letters, digits, _; a topic's parts between /)"
+            return f'must be {self.text} ({self.form})'
         return None
 
 
