@@ -15,6 +15,11 @@ drive offered the step again) is ignored. A non-finite effort of the axis's join
 owner is `Accepted` as NaN: it is the controller saying it has no valid command, so the axis
 brakes for that period. The start of such a brake request, and the first valid command after
 it, are flagged once each: a tripped controller asks for it every sample.
+
+Commands that do not name their sender (`frame_id_says=False`: topic_based_ros2_control
+leaves header.frame_id empty, mill_plant.topic_pair) are judged by the graph alone: a
+publisher the graph does not show yet is refused until it does (at most
+mill_common.graph_owner.REFRESH_S later), and a frame_id, if one is given, must agree.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from dataclasses import dataclass
 
 from mill_common.checks import (
     CONTESTED,
+    UNKNOWN,
     Rejected,
     Sender,
     StampCheck,
@@ -54,11 +60,15 @@ class CommandIntake:
         owners: Mapping[str, str],
         grid_ns: int | None,
         expected: Callable[[int], Rejected | None],
+        frame_id_says: bool = True,
     ) -> None:
         """owners: axis -> the node its commands must come from ('' = anyone); grid_ns: the
         sample grid of command stamps (lockstep), None in real time; expected: whether a stamp
-        answers a state of the drive (None: it does; the drive cycle's `expected`)."""
+        answers a state of the drive (None: it does; the drive cycle's `expected`);
+        frame_id_says: the commands name their sender in header.frame_id (mill's
+        controllers), or not (ros2_control): then the graph's word alone decides."""
         self.owners = dict(owners)
+        self._frame_id_says = frame_id_says
         self._expected = expected
         self._stamps = {a: StampCheck(grid_ns) for a in self.owners}  # newest: its last answer
         self._brake_requested: set[str] = set()  # axes whose last command was not finite
@@ -83,7 +93,7 @@ class CommandIntake:
         who = sender_check(graph, owner) if graph is not None and owner else None
         if graph is not None and graph.verdict == CONTESTED and owner:
             return self._contested(axis, ns, who)
-        foreign = who or owner_check(sender, owner)
+        foreign = who or self._claim_check(sender, owner, graph)
         problem = foreign or stamps.check(ns) or self._expected(ns)
         repeat = stamps.is_repeat(ns)
         if problem is not None:
@@ -105,6 +115,17 @@ class CommandIntake:
         self._brake_requested.discard(axis)
         self._finite[axis] = True
         return Accepted(value[0], released=released)
+
+    def _claim_check(self, sender: str, owner: str, graph: Sender | None) -> Rejected | None:
+        """What frame_id says against the owner, where the graph has not refused it."""
+        if self._frame_id_says or not owner:
+            return owner_check(sender, owner)
+        if graph is None or graph.verdict == UNKNOWN:
+            return Rejected(
+                'sent by a publisher the graph does not show yet (and frame_id names none): '
+                'refused until it does'
+            )
+        return owner_check(sender, owner) if sender else None
 
     def _brake(self, axis: str, reason: str, contested: bool = False) -> Accepted:
         self.invalid_commands[axis] += 1

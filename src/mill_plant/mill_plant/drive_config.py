@@ -18,6 +18,7 @@ from mill_common.parameters import (
 from mill_common.travel import MachineTravel
 
 from mill_common import topics
+from mill_plant.topic_pair import Ros2ControlParams
 
 TIMINGS = ('lockstep', 'realtime')
 
@@ -112,8 +113,10 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
     )
 
 
-# The machine's travel (mill_common.travel): the motion guard stops an axis about to leave it.
+# The machine's travel (mill_common.travel): the motion guard stops an axis about to leave it;
+# ros2_control's topic pair (mill_plant.topic_pair).
 DRIVE_PARAMETERS: tuple[tuple[str, ParamSpec], ...] = (
     *DriveParams.named_specs(),
+    *((name, replace(spec, name=name)) for name, spec in Ros2ControlParams.named_specs()),
     *((name, replace(spec, name=name)) for name, spec in MachineTravel.named_specs(True)),
 )

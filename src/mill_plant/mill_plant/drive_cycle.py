@@ -71,6 +71,7 @@ from mill_plant.drive_reports import DriveReports
 from mill_plant.motion_guard import MotionGuard
 from mill_plant.protection import Protection
 from mill_plant.spindle import SpindleTrack
+from mill_plant.topic_pair import sender_clock
 
 # How a stopped axis is released, said with every stop.
 REARM = "the controller's brake request, then a valid command; or ~/release"
@@ -118,6 +119,8 @@ class Machine:
     activate: Callable[[], object]  # the lifecycle transition activate
     end: Callable[[int, str], None]  # end the node with this code and message
     clock: Callable[[int], None] | None = None  # publish /clock (lockstep)
+    # the topic an axis's commands come on (ros2_control: the pair's, mill_plant.topic_pair)
+    command_topic: Callable[[str], str] = topics.joint_command
 
     def owner_of(self, axis: str) -> str:
         return self.owners[axis] or 'its controller'
@@ -162,6 +165,11 @@ class DriveCycle(ABC):
     def arrival_ns(self) -> int | None:
         """When a command arrived, if the cycle keeps its latency."""
         return None
+
+    def sender_stamped(self, ns: int) -> Rejected | None:
+        """Whether a command stamped on its sender's own clock, not with the state it
+        answers (ros2_control's, mill_plant.topic_pair), is recent (None: it is)."""
+        return Rejected(f'{self.TIMING} takes only commands that answer its states')
 
     def command_taken(self) -> None:  # noqa: B027 (nothing to do by default)
         """A command (or the spindle speed) was taken: a step may be whole."""
@@ -418,6 +426,10 @@ class RealtimeCycle(DriveCycle):
     def arrival_ns(self) -> int | None:
         return time.time_ns()
 
+    def sender_stamped(self, ns: int) -> Rejected | None:
+        oldest = self._recent[0] if self._recent else None
+        return sender_clock(ns, oldest, time.time_ns(), self.dt_ns)
+
     def tick(self) -> None:
         m = self.m
         port, table, axes, dt_ns = m.port, m.table, m.axes, self.dt_ns
@@ -452,7 +464,7 @@ class RealtimeCycle(DriveCycle):
                 moved = guard.moved(axis)
                 self._stopped(
                     axis,
-                    f'{reason} on {topics.joint_command(axis)} (from {m.owner_of(axis)}); '
+                    f'{reason} on {m.command_topic(axis)} (from {m.owner_of(axis)}); '
                     f'{1e3 * moved:.3f} mm from where it stood at the last one',
                 )
             for axis in tick.returned:
@@ -514,9 +526,7 @@ class RealtimeCycle(DriveCycle):
             quiet = (now_ns - c.stamp) * 1e-9 if c.stamp >= 0 else math.inf
             if quiet >= report_time and axis not in self._missing:
                 self._missing.add(axis)
-                message = (
-                    f'no fresh command on {topics.joint_command(axis)} from {m.owner_of(axis)}'
-                )
+                message = f'no fresh command on {m.command_topic(axis)} from {m.owner_of(axis)}'
                 if c.stamp < 0:
                     # Start-up: no command yet (discovery); the axis holds until one comes.
                     m.log.info(message + ' yet (start-up)')

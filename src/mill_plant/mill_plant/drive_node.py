@@ -18,6 +18,12 @@ owner) once when it starts, and once when valid commands return. What it says on
 /diagnostics and in its log is its reports' (mill_plant.drive_reports); the topics it
 makes at configure are mill_plant.drive_topics.
 
+With `ros2_control.commands_topic` set (realtime only) the axes take their efforts from
+topic_based_ros2_control's topic pair instead of mill/<axis>/joint_command
+(mill_plant.topic_pair; its ROS side mill_plant.ros2_control_adapter): the same intake,
+ownership, table and protection, with the pair's owner; mill/<axis>/joint_command is then
+refused.
+
 With `spindle: reference` the drive also reads the spindle speed the reference carries
 (mill_plant.spindle) and gives it to the backend with the efforts of each sample; in
 lockstep a step then waits for it as for its commands.
@@ -51,7 +57,7 @@ from std_srvs.srv import Trigger
 
 from mill_common import topics
 from mill_plant.backend import DriveBackend
-from mill_plant.command_intake import Accepted, CommandIntake
+from mill_plant.command_intake import Accepted, CommandIntake, Dropped
 from mill_plant.command_table import CommandTable
 from mill_plant.drive_counts import DriveCounts
 from mill_plant.drive_cycle import CYCLES, DriveCycle, Machine
@@ -59,7 +65,9 @@ from mill_plant.drive_reports import DriveReports
 from mill_plant.drive_topics import DriveTopics
 from mill_plant.joint_states import JointStates
 from mill_plant.ownership import Ownership
+from mill_plant.ros2_control_adapter import Ros2ControlPair
 from mill_plant.spindle import SpindleTrack, spindle_values
+from mill_plant.topic_pair import Ros2ControlParams
 
 MACHINE_AXES = ('x', 'y', 'z')
 
@@ -86,7 +94,8 @@ class DriveNode(LifecycleNode):
         self.ownership: Ownership | None = None  # set by configure, with the owners
         self._timers: list[Timer] = []
         self._release_service: Service | None = None
-        self._made: tuple[Diagnostics, DriveTopics] | None = None  # by the first configure
+        self._made: tuple[Diagnostics, DriveTopics, Ros2ControlPair | None] | None = None
+        self.pair: Ros2ControlPair | None = None  # ros2_control.commands_topic
         self._clock_pub: Any = None  # lockstep: /clock, by the first configure
         self._recorded_sub: Any = None  # lockstep with a recorder window
         self.get_logger().info(
@@ -110,11 +119,21 @@ class DriveNode(LifecycleNode):
         if self.cycle.GRID and not backend.SIMULATED:
             self.get_logger().error('a real machine cannot run in lockstep: use timing realtime')
             return TransitionCallbackReturn.FAILURE
+        pair = Ros2ControlParams.from_node_values(v)
+        if pair.commands_topic and self.cycle.GRID:
+            self.get_logger().error(
+                'ros2_control.commands_topic needs timing realtime: the controller manager runs '
+                'its own loop on the wall clock and never answers a lockstep step'
+            )
+            return TransitionCallbackReturn.FAILURE
         self.backend = backend
         self.axes = list(backend.axes)
         owners = dict(zip(MACHINE_AXES, v['command_owners'], strict=True))
-        self.owners = {a: owners[a] for a in self.axes}
-        self.ownership = Ownership(self, self.owners)
+        axis_owners = {a: owners[a] for a in self.axes}  # of mill/<axis>/joint_command
+        # who commands each axis: its controller, or the pair's owner
+        self.owners = {a: pair.owner for a in self.axes} if pair.commands_topic else axis_owners
+        more = {pair.commands_topic: pair.owner, pair.states_topic: self._name}
+        self.ownership = Ownership(self, axis_owners, more if pair.commands_topic else None)
         try:
             window = HoldWindow.from_node_values(v)
             MachineTravel.from_node_values(v)  # the guard's travel (refused here, in one line)
@@ -124,7 +143,10 @@ class DriveNode(LifecycleNode):
         self.table = CommandTable(self.axes, window, self.dt_ns)
         self._written: list[float] = [math.nan] * len(self.axes)
         grid = self.dt_ns if self.cycle.GRID else None
-        self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
+        if pair.commands_topic:  # stamped with the sender's write time, frame_id empty
+            self.intake = CommandIntake(self.owners, None, self.cycle.sender_stamped, False)
+        else:
+            self.intake = CommandIntake(self.owners, grid, self.cycle.expected)
         self.counts = DriveCounts(self.axes)
         self.joint_states = JointStates(self.axes, v['joint_states_rate'], self.dt)
         # spindle: reference
@@ -140,10 +162,22 @@ class DriveNode(LifecycleNode):
                 on_reference,
                 self.reports.drop,
                 self.graph,
-                self.owners,
+                axis_owners,
             )
-            self._made = (Diagnostics(self), io)
-        self.diagnostics, self.io = self._made
+            pair_io = None
+            if pair.commands_topic:
+                pair_io = Ros2ControlPair(
+                    self,
+                    self.axes,
+                    pair,
+                    self.dt,
+                    self.graph,
+                    self.take_command,
+                    self.reports.drop,
+                    self._foreign,
+                )
+            self._made = (Diagnostics(self), io, pair_io)
+        self.diagnostics, self.io, self.pair = self._made
         wall = Clock(clock_type=ClockType.STEADY_TIME)
         self.add_timer(self.create_timer(0.05, self._watchdog, clock=wall))
         if self._release_service is None:
@@ -154,6 +188,11 @@ class DriveNode(LifecycleNode):
         self.get_logger().info(
             f'configured: axes {", ".join(self.axes)}, commands from '
             + ', '.join(f'{a}: {o or "anyone"}' for a, o in self.owners.items())
+            + (
+                f' on {pair.commands_topic} (ros2_control), states on {pair.states_topic}'
+                if pair.commands_topic
+                else ''
+            )
         )
         return TransitionCallbackReturn.SUCCESS
 
@@ -187,6 +226,7 @@ class DriveNode(LifecycleNode):
             activate=self.trigger_activate,
             end=self.end,
             clock=clock,
+            command_topic=self.command_topic,
         )
 
     def _on_recorded(self, msg: ClockMsg) -> None:
@@ -233,21 +273,46 @@ class DriveNode(LifecycleNode):
         self.backend = None
 
     # -- commands ----------------------------------------------------------------------------
+    def command_topic(self, axis: str) -> str:
+        """The topic the axis's commands come on."""
+        return self.pair.commands_topic if self.pair is not None else topics.joint_command(axis)
+
     def _on_command(self, axis: str, msg: JointState, who: Sender) -> None:
-        if self.backend is None or (self.cycle.GRID and not self.cycle.active):
+        if self.pair is not None:
+            topic, sender = topics.joint_command(axis), msg.header.frame_id
+            named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
+            problem = Rejected(
+                f'axis {axis} takes its commands on {self.pair.commands_topic} only '
+                '(ros2_control.commands_topic)'
+            )
+            self.reports.drop(topic, problem, named)
             return
-        topic, sender = topics.joint_command(axis), msg.header.frame_id
+        self.take_command(axis, topics.joint_command(axis), msg, who)
+
+    def _foreign(self, topic: str, named: str) -> None:
+        """A message on `topic` from a node the graph says is not its owner."""
+        owned = self.ownership
+        if owned is not None and owned.message_from(topic, named):
+            self.reports.foreign(topic, named)
+
+    def take_command(
+        self, axis: str, topic: str, msg: JointState, who: Sender
+    ) -> Accepted | Dropped | None:
+        """The axis's effort in the command msg that came on `topic` from `who`: taken into
+        the table, or dropped and reported; returns the intake's verdict."""
+        if self.backend is None or (self.cycle.GRID and not self.cycle.active):
+            return None
+        sender = msg.header.frame_id
         ns = from_stamp(msg.header.stamp)
         got = self.intake.take(axis, ns, sender, msg.name, msg.effort, who)
         if got is None:
-            return  # a repeat of an answered step: harmless
+            return None  # a repeat of an answered step: harmless
         if not isinstance(got, Accepted):
             named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
-            owned = self.ownership
-            if got.foreign and owned is not None and owned.message_from(topic, named):
-                self.reports.foreign(topic, named)
+            if got.foreign:
+                self._foreign(topic, named)
             self.reports.drop(topic, got.problem, named)
-            return
+            return got
         if got.brake_request:
             self.reports.axis(
                 axis, DiagnosticStatus.ERROR, f'invalid command ({got.brake_request}): braked'
@@ -256,6 +321,7 @@ class DriveNode(LifecycleNode):
             self.reports.axis(axis, DiagnosticStatus.OK, 'valid commands again: released')
         self.table.offer(axis, ns, got.effort, self.cycle.arrival_ns())
         self.cycle.command_taken()
+        return got
 
     def _on_contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
         """Two or more live publishers of `topic` claim the owner's name:
@@ -325,6 +391,8 @@ class DriveNode(LifecycleNode):
             )
         # The cutting force of sample ns depends on its state, not on its commands: sent
         # with the states, a force controller can answer within the sample.
+        if self.pair is not None:
+            self.pair.publish(ns, positions, self._written)
         force_pub = self.io.force
         if force_pub is not None and force_pub.get_subscription_count():
             force = self.backend.cutting_force()
@@ -363,7 +431,7 @@ class DriveNode(LifecycleNode):
         for axis in first:  # braked for the first time
             self.get_logger().error(
                 f'axis {axis} braked {self.cycle.when(ns)}: no finite command '
-                f'on {topics.joint_command(axis)} to apply'
+                f'on {self.command_topic(axis)} to apply'
             )
             self.reports.status(force=True, message=f'axis {axis} braked')
 

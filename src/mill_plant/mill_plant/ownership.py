@@ -22,8 +22,11 @@ UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not
 
 
 class Ownership:
-    def __init__(self, node: Node, owners: Mapping[str, str]) -> None:
-        """owners: axis -> the node its commands must come from ('' = anyone, not checked)."""
+    def __init__(
+        self, node: Node, owners: Mapping[str, str], more: Mapping[str, str] | None = None
+    ) -> None:
+        """owners: axis -> the node its commands must come from ('' = anyone, not checked);
+        more: other owned topics -> their owner (ros2_control's pair, mill_plant.topic_pair)."""
         self._node = node
         self._owned = {
             topic: owner
@@ -34,6 +37,7 @@ class Ownership:
                 (topics.state(axis), node.get_name()),
             )
         }
+        self._owned.update({t: o for t, o in (more or {}).items() if o})
         self.foreign: dict[str, set[str]] = {}  # topic -> foreign publishers seen
         self.foreign_messages = 0
         self.contests: dict[str, tuple[str, tuple[str, ...]]] = {}  # topic -> (owner, claimants)
