@@ -10,6 +10,9 @@ from pathlib import Path
 
 import pytest
 
+# One worker runs the module, so that the install space is built once (pytest-xdist).
+pytestmark = pytest.mark.xdist_group('colcon_build')
+
 REPO = Path(__file__).resolve().parents[1]
 PACKAGES = sorted(p.parent.name for p in (REPO / 'src').glob('*/package.xml'))
 
