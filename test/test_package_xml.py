@@ -25,6 +25,7 @@ entries of KNOWN_UNUSED.
 from __future__ import annotations
 
 import ast
+import functools
 import itertools
 import sys
 import xml.etree.ElementTree as ET
@@ -85,6 +86,7 @@ def run_modules(tree: ast.AST) -> set[str]:
     return found
 
 
+@functools.cache
 def by_name() -> dict[str, set[str]]:
     """What mill_bringup needs that no import shows (see the module doc)."""
     from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
@@ -104,6 +106,7 @@ def by_name() -> dict[str, set[str]]:
     return {'mill_bringup': needs}
 
 
+@functools.cache
 def needed(package: str) -> tuple[dict[str, str], dict[str, str]]:
     """(run-time needs, test needs): rosdep key -> the first file that needs it."""
     root = SRC / package
