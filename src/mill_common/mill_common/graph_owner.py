@@ -110,7 +110,11 @@ class GraphOwners:
                 self._refresh(topic, t)
                 got = t.verdicts.get(gid)
             if got is None:
-                return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})')
+                # While the graph shows the owner, a publisher it does not name yet is not
+                # taken on its frame_id: it may be a second copy whose first commands would
+                # otherwise drive the axis until discovery names it (issue 37 item 2).
+                known = tuple(sorted(t.claimants.values()))
+                return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})', known)
         if got.verdict != OWNER:
             return got
         now = time.monotonic()
