@@ -41,7 +41,7 @@ from mill_analysis.node_intake import MessageLog, Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
-from mill_common.checks import CONTESTED, FOREIGN
+from mill_common.checks import CONTESTED, FOREIGN, UNKNOWN
 from mill_common.codec import encode_clock
 from mill_common.graph_owner import GidSubscription
 from mill_common.ros import LATCHED_QOS, RECORD_QOS, graph_owners
@@ -128,7 +128,7 @@ class Monitor(Node):
         # hear those topics (a realtime job's trajectory, for the drive's states).
         self._late = set(late)
         self._late_after = list(late_after)
-        self._held: list[tuple[str, str, Callable[[bytes], None]]] = []
+        self._held: list[tuple[str, str, Callable[[bytes], None], Callable | None]] = []
         self.diagnostics: list[DiagnosticArray] = []
         self.recorder: TopicRecorder | None = None
         # A lockstep run's handshake: the steps heard whole (recording: written whole to the
@@ -198,8 +198,9 @@ class Monitor(Node):
         actions = [keep] if keep is not None else []
         if self.recorder is not None:
             actions.append(self.recorder.tap(topic, msgtype))
+        ack = None
         if self.steps is not None and self.steps.stepped(topic):
-            actions.append(self._acknowledger(topic))
+            actions.append(ack := self._acknowledger(topic))
         if len(actions) == 1:
             on_msg = actions[0]
         else:
@@ -209,12 +210,21 @@ class Monitor(Node):
                     action(data)
 
         if topic in self._late:
-            self._held.append((topic, msgtype, on_msg))
+            self._held.append((topic, msgtype, on_msg, ack))
         else:
-            self._subscribe(topic, msgtype, on_msg)
+            self._subscribe(topic, msgtype, on_msg, ack)
 
-    def _subscribe(self, topic: str, msgtype: str, on_msg: Callable[[bytes], None]) -> None:
-        """A raw subscription; of an owned topic, with each message's publisher GID."""
+    def _subscribe(
+        self,
+        topic: str,
+        msgtype: str,
+        on_msg: Callable[[bytes], None],
+        ack: Callable[[bytes], None] | None = None,
+    ) -> None:
+        """A raw subscription; of an owned topic, with each message's publisher GID. A
+        message of a contested owner's name (two publishers claim it) is left out, but still
+        answers its step (`ack`, of a stepped topic): the drive took it as a brake request
+        and stepped, and the plant waits for the runner to acknowledge the step."""
         owner, graph = self._owners.get(topic), self._graph
         if owner is None or graph is None:
             self.create_subscription(message_class(msgtype), topic, on_msg, RECORD_QOS, raw=True)
@@ -227,7 +237,11 @@ class Monitor(Node):
             if who.verdict in (FOREIGN, CONTESTED):
                 per = refused.setdefault(topic, {})
                 per[who.name] = per.get(who.name, 0) + 1
+                if who.verdict == CONTESTED and ack is not None:
+                    ack(data)
                 return
+            if who.verdict == UNKNOWN and who.claimants:
+                return  # not the owner's, whom the graph shows: its drive drops it too
             on_msg(data)
 
         GidSubscription(self, message_class(msgtype), topic, on_owned, RECORD_QOS)
@@ -236,8 +250,8 @@ class Monitor(Node):
         """Subscribe to the late topics once every `late_after` topic has a message."""
         if not self._held or not all(self.raw.get(t) for t in self._late_after):
             return
-        for topic, msgtype, on_msg in self._held:
-            self._subscribe(topic, msgtype, on_msg)
+        for topic, msgtype, on_msg, ack in self._held:
+            self._subscribe(topic, msgtype, on_msg, ack)
         self._held = []
         self.destroy_timer(self._late_timer)
 

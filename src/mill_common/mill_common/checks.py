@@ -205,7 +205,8 @@ class Sender:
 
     name: the publisher as the graph names it ('/ns/node', or its GID when it names no
     node); claimants (CONTESTED): every publisher of the topic whose node has the owner's
-    name, each '/ns/node (gid …)'.
+    name, each '/ns/node (gid …)'; (UNKNOWN) those the graph shows, while it does not name
+    this publisher yet.
     """
 
     verdict: str
@@ -231,9 +232,15 @@ def sender_check(sender: Sender, owner: str) -> Rejected | None:
             f'{"; ".join(sender.claimants)}: refused'
         )
     if sender.verdict == UNKNOWN:
-        # a publisher discovery has not shown yet, while no endpoint of the owner speaks
-        # (the first commands of a drive's start, an owner started again): its frame_id
-        # claim decides (owner_check) until the graph names it
+        # a publisher discovery has not shown yet (the first commands of a drive's start):
+        # its frame_id claim decides (owner_check) until the graph names it, at most
+        # graph_owner.REFRESH_S later; but not while the graph shows the owner (claimants):
+        # then it is refused until named (a second copy, or the owner started again)
+        if sender.claimants:
+            return Rejected(
+                f'{sender.name}, not named by the graph yet, while it shows '
+                f'{"; ".join(sender.claimants)}: refused until named'
+            )
         return None
     return Rejected(f'sent by {sender.name}, not by its owner {owner!r}')
 

@@ -49,7 +49,6 @@ from mill_common.checks import ANYONE, CONTESTED, FOREIGN, OWNER, UNKNOWN, Sende
 LOCAL = b''  # the GID of a message delivered inside this process (no DDS endpoint)
 REFRESH_S = 0.05  # the least time between two looks at one topic's publishers for a new GID
 LIVE_S = 0.2  # a claimant heard this recently is alive, whenever it appeared
-MAX_UNKNOWN = 256  # GIDs the graph does not show yet, remembered per topic
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 
 
@@ -72,7 +71,6 @@ class _Topic:
     claimants: dict[bytes, str] = field(default_factory=dict)  # GID -> name, of the owner's name
     appeared: dict[bytes, float] = field(default_factory=dict)  # claimant GID -> first seen
     heard: dict[bytes, float] = field(default_factory=dict)  # claimant GID -> last message
-    unknown: dict[bytes, float] = field(default_factory=dict)  # GID the graph lacks -> first
     reported: tuple[str, ...] = ()  # the claimants named last
 
 
@@ -112,7 +110,11 @@ class GraphOwners:
                 self._refresh(topic, t)
                 got = t.verdicts.get(gid)
             if got is None:
-                return self._unknown(t, gid)
+                # While the graph shows the owner, a publisher it does not name yet is not
+                # taken on its frame_id: it may be a second copy whose first commands would
+                # otherwise drive the axis until discovery names it (issue 37 item 2).
+                known = tuple(sorted(t.claimants.values()))
+                return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})', known)
         if got.verdict != OWNER:
             return got
         now = time.monotonic()
@@ -142,18 +144,6 @@ class GraphOwners:
             if self._on_contested is not None:
                 self._on_contested(t.name, t.owner, names)
         return Sender(CONTESTED, mine.name, names)
-
-    def _unknown(self, t: _Topic, gid: bytes) -> Sender:
-        """A GID the graph does not show yet: UNKNOWN (its frame_id claim decides) only while
-        no endpoint of the owner speaks (the start, or an owner started again after its
-        predecessor died); beside a speaking owner it is foreign, whatever it claims, even
-        while discovery is too slow to name it (a loaded host: seconds)."""
-        now = time.monotonic()
-        first = t.unknown.setdefault(gid, now) if len(t.unknown) < MAX_UNKNOWN else now
-        since = min(first, now - LIVE_S)
-        if any(h >= since for h in t.heard.values()):
-            return Sender(FOREIGN, f'an unknown publisher (gid {gid_text(gid)}) beside the owner')
-        return Sender(UNKNOWN, f'an unknown publisher (gid {gid_text(gid)})')
 
     def _local_verdict(self, topic: str, t: _Topic) -> Sender:
         """A message from this process's publisher: the owner if it is the owner's node. No
@@ -187,7 +177,6 @@ class GraphOwners:
         t.appeared = {g: t.appeared.get(g, now) for g in claimants}
         t.heard = {g: h for g, h in t.heard.items() if g in claimants}
         t.claimants, t.verdicts = claimants, verdicts
-        t.unknown = {g: f for g, f in t.unknown.items() if g not in verdicts}
 
 
 # -- the take: serialized bytes and the publisher GID of each message ----------------------

@@ -182,3 +182,25 @@ def test_a_message_larger_than_the_first_buffer_arrives_whole_with_its_gid(graph
     assert list(msg.position)[-1] == 599.0
     (info,) = node.get_publishers_info_by_topic('big')
     assert gid == bytes(info.endpoint_gid)
+
+
+def test_a_gid_the_graph_does_not_show_is_unknown_and_refused_once_the_owner_is_known(
+    graph,
+) -> None:
+    from mill_common.checks import UNKNOWN
+
+    node, got = receiver(graph, [])
+    resolved = node.resolve_topic_name(TOPIC)
+    stranger = bytes(range(16))  # no endpoint of this graph
+    before = node.owners.verdict(resolved, stranger)
+    assert before.verdict == UNKNOWN and before.claimants == ()
+    assert sender_check(before, 'x_controller') is None  # its frame_id decides, at a start
+    owner = sender(graph, 'x_controller')
+    assert graph.spin_until(
+        lambda: owner('x_controller') or any(w.verdict == OWNER for _, w in got)
+    )
+    after = node.owners.verdict(resolved, stranger)
+    assert after.verdict == UNKNOWN and len(after.claimants) == 1
+    assert after.claimants[0].startswith('/x_controller (gid ')
+    problem = sender_check(after, 'x_controller')
+    assert problem is not None and problem.reason.endswith(': refused until named')

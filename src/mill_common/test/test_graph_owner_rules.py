@@ -1,13 +1,13 @@
 """The rules of mill_common.graph_owner on a graph and a clock the test sets: who is the
-owner while a killed node's endpoint lingers, and what a publisher the graph does not show
-yet may do beside a speaking owner. (test_graph_owner.py runs them against real DDS.)"""
+owner while a killed node's endpoint lingers, and what a publisher the graph does not name
+yet may do while the graph shows the owner. (test_graph_owner.py runs them against real DDS.)"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import pytest
-from mill_common.checks import CONTESTED, FOREIGN, OWNER, UNKNOWN
+from mill_common.checks import CONTESTED, FOREIGN, OWNER, UNKNOWN, sender_check
 from mill_common.graph_owner import LIVE_S, GraphOwners
 
 from mill_common import graph_owner
@@ -90,32 +90,35 @@ def test_a_second_copy_started_beside_a_speaking_owner_is_refused_from_its_first
     assert graph.verdict(TOPIC, B).verdict == CONTESTED
 
 
-def test_a_publisher_the_graph_does_not_name_yet_is_foreign_beside_a_speaking_owner(
+def test_a_publisher_the_graph_does_not_name_yet_is_refused_while_it_shows_the_owner(
     clock: list[float],
 ) -> None:
-    node = FakeNode([Info(A, 'x_controller')])
+    node = FakeNode()
     graph = owners(node, [])
-    # At the start, before the owner has spoken: its frame_id claim decides (UNKNOWN).
-    assert graph.verdict(TOPIC, R).verdict == UNKNOWN
+    # The start: the graph shows no endpoint of the owner yet, the frame_id claim decides.
+    first = graph.verdict(TOPIC, A)
+    assert first.verdict == UNKNOWN and sender_check(first, 'x_controller') is None
+    node.publishers.append(Info(A, 'x_controller'))
+    clock[0] += 0.1
     assert graph.verdict(TOPIC, A).verdict == OWNER
-    for _ in range(100):  # discovery slow to name it (a loaded host): never the owner
+    for _ in range(100):  # discovery slow to name it (a loaded host): never obeyed
         clock[0] += 0.05
         assert graph.verdict(TOPIC, A).verdict == OWNER
-        assert graph.verdict(TOPIC, R).verdict == FOREIGN
+        unnamed = graph.verdict(TOPIC, R)
+        assert unnamed.verdict == UNKNOWN and sender_check(unnamed, 'x_controller') is not None
     node.publishers.append(Info(R, 'rogue'))
     clock[0] += 0.1
     rogue = graph.verdict(TOPIC, R)
     assert (rogue.verdict, rogue.name) == (FOREIGN, '/rogue')
 
 
-def test_the_owner_started_again_is_judged_by_its_claim_until_the_graph_names_it(
-    clock: list[float],
-) -> None:
+def test_the_owner_started_again_is_obeyed_once_the_graph_names_it(clock: list[float]) -> None:
     node = FakeNode([Info(A, 'x_controller')])
     graph = owners(node, [])
     assert graph.verdict(TOPIC, A).verdict == OWNER
     clock[0] += 1.5  # killed, and its successor speaks before discovery names it
-    assert graph.verdict(TOPIC, B).verdict == UNKNOWN
+    unnamed = graph.verdict(TOPIC, B)
+    assert unnamed.verdict == UNKNOWN and sender_check(unnamed, 'x_controller') is not None
     node.publishers.append(Info(B, 'x_controller'))
     clock[0] += 0.1
     assert graph.verdict(TOPIC, B).verdict == OWNER

@@ -25,7 +25,7 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from mill_common.checks import Rejected, Sender, joint_values, owner_check, sender_check
+from mill_common.checks import CONTESTED, Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
 from mill_common.hold_window import drive_word
 from mill_common.input_guard import InputGuard
@@ -219,11 +219,33 @@ class ObserverNode(Node):
         self._advance()
 
     def _on_command(self, msg: JointState, who: Sender) -> None:
+        if who.verdict == CONTESTED and self._owners['command']:
+            self._contested_command(msg, who)
+            return
         if self._foreign('command', msg, who):
             return
         got = self._accept('command', msg)
         if got is not None:
             self.commanded(*got)
+
+    def _contested_command(self, msg: JointState, who: Sender) -> None:
+        """A command of one of two publishers claiming the controller's name: refused as a
+        command (dropped and named), and taken as what the drive makes of it, a brake
+        request for its step (mill_plant.command_intake: it wins over a valid command of the
+        step not yet used). So the observer predicts the braked axis and goes on: refusing
+        the step outright would stall it, and the real controller behind it, and the copy
+        would then be the only claimant that speaks."""
+        topic = self._topics['command']
+        problem = sender_check(who, self._owners['command'])
+        if problem is not None:
+            self.guard.drop(topic, problem, who.name)
+        ns = from_stamp(msg.header.stamp)
+        if ns in self._commands:  # the step's valid command came first, not used yet
+            self._commands[ns] = math.nan
+            return
+        got = self._accept('command', msg)
+        if got is not None:
+            self.commanded(got[0], math.nan)
 
     def serve(self, servo: Servo) -> None:
         """A servo cycle (mill_bringup.container): hand each estimated sample to this axis's

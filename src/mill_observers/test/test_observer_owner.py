@@ -5,6 +5,7 @@ rclpy nodes in a private domain: the observer node, a plant, a controller and th
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from typing import Any
@@ -92,6 +93,94 @@ def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
         dropped = observer.guard.drops.counts.get(topic, 0)
         assert dropped >= STEPS // 2  # the rogue's states, one per state it heard
         assert observer.guard.drops.last_reason[topic] == "sent by /rogue, not by its owner 'plant'"
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+        rclpy.try_shutdown(context=context)
+
+
+def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Issue 37 item 2: a second x_controller answering beside the real one. The drive takes
+    # their commands as brake requests; the observer refused them outright and stalled (in
+    # a whole run, for 10 s, silencing the real controller behind it).
+    import rclpy
+    from mill_common.codec import decode_joint_state
+    from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
+    from mill_observers.observer_node import ObserverNode
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from sensor_msgs.msg import JointState
+
+    from mill_common import ros_params
+
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(170 + os.getpid() % 25))
+    monkeypatch.setattr(ros_params, 'command_line', [])
+    context = rclpy.Context()
+    rclpy.init(args=[], context=context)
+    executor = SingleThreadedExecutor(context=context)
+    nodes: list[Any] = []
+    try:
+        observer = ObserverNode(
+            context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
+        )
+        plant, real, copy = (
+            Node(n, context=context) for n in ('plant', 'x_controller', 'x_controller')
+        )
+        nodes += [observer, plant, real, copy]
+        states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
+        publishers = [
+            (c.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS), u)
+            for c, u in ((real, 0.0), (copy, 10.0))
+        ]
+        estimated: list[int] = []
+        sent: list[int] = []
+
+        def state(ns: int) -> None:
+            sent.append(ns)
+            states.publish(joint_state_bytes(ns, ('x',), position=(0.0,), sender='plant'))
+
+        def answer(msg: Any) -> None:  # both controllers answer each estimate
+            ns = from_stamp(msg.header.stamp)
+            estimated.append(ns)
+            for pub, u in publishers:
+                pub.publish(joint_state_bytes(ns, ('x',), effort=(u,), sender='x_controller'))
+
+        def next_state(msg: Any) -> None:
+            ns = from_stamp(msg.header.stamp)
+            if ns + T not in sent and len(set(sent)) < STEPS:
+                state(ns + T)
+
+        take = take_serialized
+        take(real, JointState, 'mill/x/estimate', decode_joint_state, answer, DATA_QOS, print)
+        take(
+            plant,
+            JointState,
+            'mill/x/joint_command',
+            decode_joint_state,
+            next_state,
+            DATA_QOS,
+            print,
+        )
+        for node in nodes:
+            executor.add_node(node)
+        end = time.monotonic() + 20.0
+        while time.monotonic() < end and len(set(estimated)) < STEPS:
+            if not estimated:
+                state(0)
+            executor.spin_once(timeout_sec=0.01)
+        # every step estimated, in order: no stall on the contested commands
+        assert list(dict.fromkeys(estimated)) == [k * T for k in range(STEPS)]
+        topic = 'mill/x/joint_command'
+        assert observer.guard.drops.counts.get(topic, 0) >= STEPS // 2  # refused, counted
+        assert observer.guard.drops.last_reason[topic].startswith(
+            "2 publishers claim to be 'x_controller': /x_controller (gid "
+        )
+        # taken as brakes: the observer predicted no 10 N·m (the copy's) after the contest
+        assert observer._newest_command is not None and math.isnan(observer._newest_command)
     finally:
         executor.shutdown()
         for node in nodes:

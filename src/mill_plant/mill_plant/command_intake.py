@@ -99,7 +99,9 @@ class CommandIntake:
         if problem is not None:
             if repeat and problem.reason.startswith('stamp'):
                 return None  # a repeat of an answered step (after a re-offer): harmless
-            return Dropped(problem, foreign is not None)
+            # a publisher the graph does not name yet is not known to be foreign
+            unnamed = graph is not None and graph.verdict == UNKNOWN
+            return Dropped(problem, foreign is not None and not (unnamed and who is not None))
         value = joint_values(names, {'effort': efforts}, axis, ('effort',))
         if isinstance(value, Rejected) and not value.non_finite:
             return None if repeat else Dropped(value, foreign=False)  # malformed

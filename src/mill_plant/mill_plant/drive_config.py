@@ -14,6 +14,7 @@ from mill_common.parameters import (
     in_range,
     non_negative_int,
     one_of,
+    whole_in,
 )
 from mill_common.travel import MachineTravel
 
@@ -70,8 +71,9 @@ class DriveParams(HoldWindow, RealtimeScheduling, RecorderWindow):
         0,
         'lockstep: samples N between the step a command answers and the step the plant '
         'applies it from (a transport delay; the first N steps get zero input); realtime '
-        'has one sample by nature and ignores it',
-        non_negative_int,
+        'has one sample by nature and ignores it; at most 1000, the most the controllers '
+        'and observers compensate (their own command_delay, which must equal it)',
+        whole_in(0, 1000),
         read_only=True,
     )
     speed_limit: float = param(

@@ -211,3 +211,25 @@ def test_commands_of_two_publishers_claiming_the_owners_name_brake_the_axis() ->
     step.k = 5
     got = intake.take('x', T, 'x_controller', ['x'], [3.0], claim)
     assert isinstance(got, Dropped)  # not the step the drive expects: dropped
+
+
+def test_a_publisher_the_graph_has_not_named_is_refused_while_it_shows_the_owner() -> None:
+    # Issue 37 item 2: a second x_controller started mid-job; until discovery named it,
+    # its frame_id decided, and its 10 N·m commands, first for the step, drove x 1 mm.
+    from mill_common.checks import UNKNOWN, Sender
+
+    unnamed = 'an unknown publisher (gid 01.02)'
+    intake, _ = lockstep()
+    copy = Sender(UNKNOWN, unnamed, ('/x_controller (gid 0a.0b)',))
+    got = intake.take('x', 0, 'x_controller', ['x'], [10.0], copy)
+    assert isinstance(got, Dropped) and not got.foreign  # not known to be foreign either
+    assert got.problem.reason == (
+        f'{unnamed}, not named by the graph yet, while it shows /x_controller (gid 0a.0b): '
+        'refused until named'
+    )
+    assert x(intake, 0, 1.0) == Accepted(1.0)  # the owner's command for the step counts
+    # Before the graph shows the owner at all (a drive's start), its frame_id decides.
+    intake, _ = lockstep()
+    assert intake.take('x', 0, 'x_controller', ['x'], [1.0], Sender(UNKNOWN, unnamed)) == (
+        Accepted(1.0)
+    )

@@ -109,3 +109,21 @@ def test_the_simulated_machine_takes_each_input_unit_from_its_axis_model() -> No
     for model, unit in zip(machine.plant.models, machine.input_units().values(), strict=True):
         assert unit == type(model).INPUT_UNIT
     assert SimulatedMachine({**DEFAULTS, 'axes': ['y']}).input_units() == {'y': 'N·m'}
+
+
+def test_the_drive_command_delay_is_bounded_as_the_axis_nodes_compensate() -> None:
+    # Issue 37: command_delay had no bound; the drive fills a line of N commands per axis
+    # at start, so 10^9 ran it out of memory. The bound is the controllers' and
+    # observers' own (they compensate N, and their command_delay must equal the drive's).
+    from mill_common.node_params import AxisNodeParams
+    from mill_common.parameters import validate
+
+    spec = dict(parameter_specs())['command_delay']
+    axis_node = dict(AxisNodeParams.named_specs())['command_delay']
+    assert spec.check.bounds == axis_node.check.bounds == (0, 1000)  # type: ignore[attr-defined]
+    assert validate(spec, 1000) == 1000
+    with pytest.raises(ParameterError) as info:
+        validate(spec, 10**9)
+    assert str(info.value) == (
+        'invalid parameter command_delay=1000000000: must be a whole number in [0, 1000]'
+    )

@@ -186,6 +186,9 @@ def format_result(r: RunResult) -> str:
             f'{r.lost_with_restarts}'
         )
     lines += drop_lines(r.dropped)
+    # who the drives saw publish on their topics besides the owners (the exit code 3 says
+    # 'see above'): each foreign publisher and each contested owner's name, its claimants
+    lines += [f'ERROR: {f}' for f in r.foreign_publishers]
     if r.foreign and not r.dropped:  # a job that counts them without the reasons
         lines.append(f'ERROR: messages from other senders or malformed, left out: {r.foreign}')
     lines += [f'WARNING: {w}' for w in r.warnings]
