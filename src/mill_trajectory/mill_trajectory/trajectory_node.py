@@ -24,6 +24,11 @@ the offline simulator uses too; this node takes what paces it, checks it and pub
   and every `publish_period` the points of the grid t0 + kT from one sample before now to
   `preview_time` ahead go out. The job status says when it started (`start_stamp_ns`).
 
+Realtime, once the job has ended and its path has come to rest: jog an axis (~/jog, by
+increment or continuously until ~/jog_stop), go home (~/home), set home (~/set_home), run one
+G-code line (~/mdi); what moves and why a command is refused is mill_trajectory.manual's,
+and the node publishes its moves from the next sample on.
+
 In lockstep the input that paces the node is watched (mill_common.input_guard): a tick off
 the grid or in the past, an override for another sample, are dropped and counted; silence is
 reported and after input_timeout ends the node (exit code 3).

@@ -10,6 +10,7 @@ takes the axes on /mill/reference.
 from __future__ import annotations
 
 import os
+import random
 import threading
 import time
 from collections.abc import Iterator
@@ -25,7 +26,7 @@ TIMEOUT = 10.0  # [s] for anything to arrive
 class Operator:
     """The operator's client: services of the trajectory, and the reference it publishes."""
 
-    def __init__(self) -> None:
+    def __init__(self, ns: str) -> None:
         from mill_interfaces.srv import Jog, Mdi
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.node import Node
@@ -34,16 +35,16 @@ class Operator:
 
         self.context = rclpy.Context()
         rclpy.init(args=[], context=self.context)
-        self.node = Node('operator', context=self.context)
+        self.node = Node('operator', namespace=ns, context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.types = {'jog': Jog, 'mdi': Mdi}
         self.clients = {
-            name: self.node.create_client(self.types.get(name, Trigger), f'/trajectory/{name}')
+            name: self.node.create_client(self.types.get(name, Trigger), f'trajectory/{name}')
             for name in ('jog', 'jog_stop', 'home', 'set_home', 'mdi', 'resume')
         }
         self.last: Any = None  # the newest reference message
-        self.node.create_subscription(JointTrajectory, '/mill/reference', self._heard, 10)
+        self.node.create_subscription(JointTrajectory, 'mill/reference', self._heard, 10)
 
     def _heard(self, msg: Any) -> None:
         self.last = msg
@@ -105,16 +106,17 @@ class Operator:
 class StandIn:
     """What the trajectory waits for in realtime before the job starts, for axis x alone:
     its state (at 0), an observer's estimate topic, a controller that reads the reference
-    and commands."""
+    and commands once `go` is set."""
 
-    def __init__(self, context: Any) -> None:
+    def __init__(self, context: Any, ns: str) -> None:
         from rclpy.node import Node
         from sensor_msgs.msg import JointState
         from trajectory_msgs.msg import JointTrajectory
 
         from mill_common import topics
 
-        self.node = Node('x_stand_in', context=context)
+        self.node = Node('x_stand_in', namespace=ns, context=context)
+        self.go = False
         self.state = self.node.create_publisher(JointState, topics.state('x'), 10)
         self.node.create_publisher(JointState, topics.estimate('x'), 10)
         self.command = self.node.create_publisher(JointState, topics.joint_command('x'), 10)
@@ -126,11 +128,12 @@ class StandIn:
         msg = self.msg(name=['x'], position=[0.0], velocity=[0.0], effort=[0.0])
         msg.header.stamp = self.node.get_clock().now().to_msg()
         self.state.publish(msg)
-        self.command.publish(self.msg(name=['x'], effort=[0.0]))
+        if self.go:
+            self.command.publish(self.msg(name=['x'], effort=[0.0]))
 
 
 @pytest.fixture
-def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Any, Operator]]:
+def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Any, Operator, StandIn]]:
     """The trajectory node (realtime, a JOB s dwell at the origin) spinning in a thread of its
     own beside its stand-in, and the operator."""
     from mill_common.in_process import node_factory
@@ -138,21 +141,23 @@ def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Any, Operator]]:
     from rclpy.executors import SingleThreadedExecutor
 
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(170 + os.getpid() % 20))
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(150, 220)))
+    ns = f'/manual{os.getpid()}'  # nothing of another test's graph on the same domain
     with node_factory(TrajectoryNode, 'trajectory') as make:
         node = make(
             *('-p', 'timing:=realtime', '-p', 'axes:=[x]', '-p', 'trajectory:=program'),
             *('-p', f'program.segments:=["dwell {JOB}"]', '-p', 'travel.max:=[0.1, 0.1, 0.05]'),
+            *('-r', f'__ns:={ns}'),
         )
-        stand_in = StandIn(node.context)
+        stand_in = StandIn(node.context, ns)
         executor = SingleThreadedExecutor(context=node.context)
         executor.add_node(node)
         executor.add_node(stand_in.node)
         thread = threading.Thread(target=executor.spin, daemon=True)
         thread.start()
-        op = Operator()
+        op = Operator(ns)
         try:
-            yield node, op
+            yield node, op, stand_in
         finally:
             op.close()
             executor.shutdown()
@@ -161,19 +166,26 @@ def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[tuple[Any, Operator]]:
 
 
 def test_jog_home_set_home_and_mdi_between_jobs_and_every_refusal_says_why(
-    graph: tuple[Any, Operator],
+    graph: tuple[Any, Operator, StandIn],
 ) -> None:
-    node, op = graph
+    node, op, stand_in = graph
     # Before the job has started, and while it runs: refused.
     ok, said = op.call('jog', axis='x', distance=0.001)
-    assert not ok and said.startswith(('the job has not started yet', 'a job is running'))
+    assert not ok and said == (
+        'the job has not started yet (it starts once every axis controller commands): '
+        'wait for it to end'
+    )
+    stand_in.go = True  # the job starts
     end = time.monotonic() + TIMEOUT
+    running = []
     while node.progress.done_at is None and time.monotonic() < end:
         ok, said = op.call('home')
-        if not ok and said.startswith('a job is running'):
-            assert said.endswith('s): wait for its end') and '\n' not in said
+        if said.startswith('a job is running'):
+            running.append(said)
         time.sleep(0.02)
     assert node.progress.done_at is not None, 'the job never ended'
+    assert running, 'no command during the job'
+    assert all(s.endswith(' s of 0.30 s): wait for its end') for s in running), running
     assert op.call('resume') == (False, 'resume: this job has no pause and cannot hold its feed')
     assert op.at_rest() == (0.0, 0.0, 0.0)
 
