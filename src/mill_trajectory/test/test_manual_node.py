@@ -230,3 +230,37 @@ def test_jog_home_set_home_and_mdi_between_jobs_and_every_refusal_says_why(
     ok, said = op.call('home')
     assert ok and said.startswith('home to (2.000, '), said
     assert op.moved() == pytest.approx(stopped, abs=1e-12)
+
+
+def test_a_lockstep_job_refuses_manual_commands_and_says_why(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from mill_common.in_process import node_factory
+    from mill_trajectory.trajectory_node import TrajectoryNode
+    from rclpy.executors import SingleThreadedExecutor
+
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(random.randint(150, 220)))
+    ns = f'/lockstep{os.getpid()}'
+    with node_factory(TrajectoryNode, 'trajectory') as make:
+        node = make('-r', f'__ns:={ns}')  # timing lockstep, the default
+        executor = SingleThreadedExecutor(context=node.context)
+        executor.add_node(node)
+        thread = threading.Thread(target=executor.spin, daemon=True)
+        thread.start()
+        op = Operator(ns)
+        try:
+            ok, said = op.call('mdi', line='G0 X1')
+            both = op.call('jog', axis='x', distance=0.001, velocity=0.01)
+        finally:
+            op.close()
+            executor.shutdown()
+            thread.join(timeout=5)
+    assert not ok and said == (
+        "timing lockstep replays a job on the plant's clock, sample by sample: "
+        'manual commands need timing realtime'
+    )
+    assert both == (
+        False,
+        'give a distance (by increment) or a velocity (continuous), not both',
+    )
