@@ -183,3 +183,17 @@ def test_refusals_say_why_in_one_line() -> None:
     assert busy.message == 'jog x +1.000 mm is under way: wait for its end or call ~/jog_stop'
     for order in (running, beyond, fast, busy):
         assert '\n' not in order.message
+
+
+def test_a_stop_from_the_axis_speed_limit_is_prompt_and_within_the_limits() -> None:
+    manual = _manual()
+    assert manual.jog_continuous('x', -VMAX, 0.6).accepted
+    assert manual.path is not None
+    got = [manual.path.sample(k * T) for k in range(600, 1600)]
+    assert got[-1].velocity[0] == pytest.approx(-VMAX, rel=1e-9)
+    assert manual.jog_stop(1.6).accepted
+    rest, t = _run(manual, 1.6)
+    _within_limits(got + rest)
+    # At least v/a + a/j = 0.15 s and 3.75 mm with the whole limits; a quarter is left out.
+    assert t - 1.6 <= 0.25
+    assert got[-1].position[0] - rest[-1].position[0] <= 0.006
