@@ -48,6 +48,20 @@ ensure_venv_module() {
   }
 }
 
+ensure_compiler() {
+  # interfaces/mill_interfaces is compiled (C and C++) against the headers the wheels ship.
+  if command -v cc >/dev/null 2>&1 && command -v c++ >/dev/null 2>&1; then return 0; fi
+  if command -v apt-get >/dev/null 2>&1; then
+    log "no C/C++ compiler; installing gcc and g++ with apt-get"
+    as_root apt-get update -qq || true
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gcc g++ || true
+  fi
+  command -v cc >/dev/null 2>&1 && command -v c++ >/dev/null 2>&1 || {
+    log "error: the interface package needs a C and a C++ compiler: install gcc and g++"
+    exit 1
+  }
+}
+
 write_ros_environment() {
   # Appended to bin/activate (bash, zsh): set on activate, restored on deactivate.
   local activate=$venv/bin/activate
@@ -84,7 +98,8 @@ python=$(pick_python) || {
 }
 
 stamp_file=$venv/.mill-install-stamp
-stamp=$(cd "$root" && cat requirements.txt src/*/setup.py src/*/setup.cfg src/*/package.xml | sha256sum | cut -d' ' -f1)
+stamp=$(cd "$root" && cat requirements.txt src/*/setup.py src/*/setup.cfg src/*/package.xml \
+  interfaces/*/package.xml interfaces/*/srv/* scripts/build_interfaces.py | sha256sum | cut -d' ' -f1)
 if [ -x "$venv/bin/python" ] && [ -f "$stamp_file" ] && [ "$(cat "$stamp_file")" = "$stamp" ]; then
   write_ros_environment
   log "environment up to date ($venv)"
@@ -105,6 +120,10 @@ editable=()
 for p in "${packages[@]}"; do editable+=(-e "$root/src/$p"); done
 log "installing the workspace packages"
 "${pip[@]}" install -q --no-deps "${editable[@]}"
+
+ensure_compiler
+log "building the interface package mill_interfaces (rosidl generators of the wheels, C compiler)"
+"$venv/bin/python" "$root/scripts/build_interfaces.py" --venv "$venv" >/dev/null
 
 write_ros_environment
 echo "$stamp" >"$stamp_file"

@@ -34,8 +34,15 @@ from mill_trajectory.feed_override import (
     PeriodicOverridePath,
     TimeScaledPath,
 )
-from mill_trajectory.gcode_program import GcodeTrajectory
+from mill_trajectory.gcode_program import (
+    GcodeParams,
+    GcodeTrajectory,
+    gcode_setup,
+    machine_limits,
+)
+from mill_trajectory.gcode_words import GcodeError
 from mill_trajectory.hold import Holds
+from mill_trajectory.manual import Machine
 from mill_trajectory.planner import xyz
 from mill_trajectory.registry import TRAJECTORIES
 from mill_trajectory.schedule import (
@@ -127,6 +134,21 @@ class ApproachParams(ParamSet):
 
 
 @dataclass(frozen=True)
+class JogParams(ParamSet):
+    """realtime, between jobs: moving the machine by hand (mill_trajectory.manual)."""
+
+    PREFIX: ClassVar[str] = 'jog'
+    speed: float = param(
+        0.005,
+        'realtime: speed of a jog by increment (~/jog); the axis limits gcode.max_* bound it '
+        'and every manual move',
+        positive,
+        unit='m/s',
+        read_only=True,
+    )
+
+
+@dataclass(frozen=True)
 class FeedOverrideParams(ParamSet):
     """Following /mill/feed_override."""
 
@@ -182,6 +204,7 @@ def parameter_specs() -> list[tuple[str, ParamSpec]]:
     return [
         *TrajectoryNodeParams.named_specs(),
         *ApproachParams.named_specs(),
+        *JogParams.named_specs(),
         *FeedOverrideParams.named_specs(),
         *TravelParams.named_specs(),
         *TRAJECTORIES.parameter_specs(),
@@ -226,6 +249,25 @@ def check_path_travel(path: Trajectory, travel: Travel, sample_period: float) ->
     problem = travel.outside(lo) or travel.outside(hi)
     if problem:
         raise ValueError(f'the path leaves the machine travel: {problem}')
+
+
+def manual_machine(values: Mapping[str, Any]) -> Machine:
+    """What manual moves (jog, home, MDI) are planned within: the planner's limits, the
+    travel, the jog speed, and the G-code setup an MDI line reads with."""
+    node = TrajectoryNodeParams.from_node_values(values)
+    gcode = GcodeParams.from_values(algorithm_values(GcodeTrajectory, values))
+    try:
+        setup = gcode_setup(gcode)
+    except GcodeError as exc:
+        raise ParameterError('gcode.tool_table', gcode.tool_table, str(exc)) from None
+    return Machine(
+        machine_limits(gcode),
+        TravelParams.from_node_values(values).travel,
+        node.sample_period,
+        JogParams.from_node_values(values).speed,
+        setup,
+        xyz(gcode.work_offset),
+    )
 
 
 def preview_samples(values: Mapping[str, Any], dt_ns: int) -> int:

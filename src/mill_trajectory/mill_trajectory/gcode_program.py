@@ -181,12 +181,7 @@ class GcodeTrajectory(Trajectory):
         With a feed override (override_max: its maximum) the plan leaves the override room to
         reach its maximum, and to change (mill_trajectory.override_limit)."""
         v = GcodeParams.from_values(values)
-        machine = Limits(
-            xyz(v.max_velocity),
-            xyz([a if a > 0 else math.inf for a in v.max_acceleration]),
-            xyz([j if j > 0 else math.inf for j in v.max_jerk]),
-            v.tolerance,
-        )
+        machine = machine_limits(v)
         limits, override_limit = machine, None
         if override_max is not None:
             o = max(override_max, 1.0)
@@ -195,16 +190,7 @@ class GcodeTrajectory(Trajectory):
                 machine.velocity, machine.acceleration, machine.jerk, o
             )
         try:
-            table = v.tool_table.strip()
-            others = v.work_offsets
-            setup = Setup(
-                work_offsets=((0.0, 0.0, 0.0), *(xyz(others[i : i + 3]) for i in range(0, 24, 3))),
-                home=xyz(v.home),
-                home2=xyz(v.home2),
-                tools=read_tool_table(table) if table else None,
-                tool_table=table,
-                optional_stop=v.optional_stop,
-            )
+            setup = gcode_setup(v)
         except GcodeError as exc:
             raise ParameterError('tool_table', v.tool_table, str(exc)) from None
         try:
@@ -226,6 +212,30 @@ class GcodeTrajectory(Trajectory):
 
     def sample(self, t: float) -> TrajectorySample:
         return self.planned.sample(t)
+
+
+def gcode_setup(v: GcodeParams) -> Setup:
+    """The machine side of a program from its parameters (GcodeError: a bad tool table)."""
+    table = v.tool_table.strip()
+    others = v.work_offsets
+    return Setup(
+        work_offsets=((0.0, 0.0, 0.0), *(xyz(others[i : i + 3]) for i in range(0, 24, 3))),
+        home=xyz(v.home),
+        home2=xyz(v.home2),
+        tools=read_tool_table(table) if table else None,
+        tool_table=table,
+        optional_stop=v.optional_stop,
+    )
+
+
+def machine_limits(v: GcodeParams) -> Limits:
+    """The per-axis limits and the path tolerance the planner keeps (0: no limit)."""
+    return Limits(
+        xyz(v.max_velocity),
+        xyz([a if a > 0 else math.inf for a in v.max_acceleration]),
+        xyz([j if j > 0 else math.inf for j in v.max_jerk]),
+        v.tolerance,
+    )
 
 
 def program_events(

@@ -24,6 +24,11 @@ the offline simulator uses too; this node takes what paces it, checks it and pub
   and every `publish_period` the points of the grid t0 + kT from one sample before now to
   `preview_time` ahead go out. The job status says when it started (`start_stamp_ns`).
 
+Realtime, once the job has ended and its path has come to rest: jog an axis (~/jog, by
+increment or continuously until ~/jog_stop), go home (~/home), set home (~/set_home), run one
+G-code line (~/mdi); what moves and why a command is refused is mill_trajectory.manual's,
+and the node publishes its moves from the next sample on.
+
 In lockstep the input that paces the node is watched (mill_common.input_guard): a tick off
 the grid or in the past, an override for another sample, are dropped and counted; silence is
 reported and after input_timeout ends the node (exit code 3).
@@ -32,6 +37,7 @@ reported and after input_timeout ends the node (exit code 3).
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable
 from functools import partial
 from typing import Any
@@ -49,7 +55,8 @@ from mill_common.ros import (
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES, SPINDLE
-from mill_common.timebase import period_ns
+from mill_common.timebase import period_ns, seconds
+from mill_interfaces.srv import Jog, Mdi
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import JointState
@@ -61,11 +68,13 @@ from mill_trajectory.config import (
     FeedOverrideParams,
     Schedule,
     build_schedule,
+    manual_machine,
     parameter_specs,
 )
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.gcode_program import GcodeTrajectory
 from mill_trajectory.hold import PAUSE, Command, EventClock, Holds
+from mill_trajectory.manual import Manual, Order
 from mill_trajectory.planned_path import PlannedPath, job_path
 from mill_trajectory.schedule import (
     ClockedReference,
@@ -113,6 +122,13 @@ class TrajectoryNode(Node):
                 self._take_override(self._on_user_override, 10)
         self.create_service(Trigger, '~/feed_hold', self._on_feed_hold)
         self.create_service(Trigger, '~/resume', self._on_resume)
+        # Between jobs, timing realtime: moving the machine by hand (mill_trajectory.manual).
+        self._manual = Manual(manual_machine(v), isinstance(schedule, WallClockReference))
+        self.create_service(Jog, '~/jog', self._on_jog)
+        self.create_service(Trigger, '~/jog_stop', partial(self._on_manual, 'jog_stop'))
+        self.create_service(Trigger, '~/home', partial(self._on_manual, 'home'))
+        self.create_service(Trigger, '~/set_home', partial(self._on_manual, 'set_home'))
+        self.create_service(Mdi, '~/mdi', self._on_mdi)
         self.get_logger().info(
             f'{v["trajectory"]} path, job ends at t = {self.progress.end_time:.3f} s'
         )
@@ -173,6 +189,62 @@ class TrajectoryNode(Node):
             answer.message,
             level=DiagnosticStatus.OK if answer.accepted else DiagnosticStatus.WARN,
             event=(what, answer.message, ''),
+        )
+        return response
+
+    # -- by hand, between jobs (realtime) ------------------------------------------------
+    def _manual_time(self) -> float | None:
+        """The job's time now (None: not started); the manual commands take over the
+        job's path once it has started."""
+        schedule = self._schedule
+        if not isinstance(schedule, WallClockReference):
+            return self._job_time
+        if schedule.t0 is None:
+            return None
+        if self._manual.path is None:
+            self._manual.job_started(schedule.path, self.progress.end_time)
+        return seconds(time.time_ns() - schedule.t0)
+
+    def _on_jog(self, request: Any, response: Any) -> Any:
+        t = self._manual_time()
+        axis, distance, velocity = str(request.axis), request.distance, request.velocity
+        if distance != 0.0 and velocity != 0.0:
+            order = Order(
+                False, 'give a distance (by increment) or a velocity (continuous), not both'
+            )
+        elif velocity != 0.0:
+            order = self._manual.jog_continuous(axis, velocity, t)
+        else:
+            order = self._manual.jog(axis, distance, t)
+        return self._answer_manual('jog', order, t, response)
+
+    def _on_mdi(self, request: Any, response: Any) -> Any:
+        t = self._manual_time()
+        return self._answer_manual('mdi', self._manual.mdi(str(request.line), t), t, response)
+
+    def _on_manual(self, what: str, request: Any, response: Any) -> Any:
+        t = self._manual_time()
+        manual = self._manual
+        command = {'jog_stop': manual.jog_stop, 'home': manual.go_home, 'set_home': manual.set_home}
+        return self._answer_manual(what, command[what](t), t, response)
+
+    def _answer_manual(self, what: str, order: Order, t: float | None, response: Any) -> Any:
+        schedule = self._schedule
+        if order.accepted and isinstance(schedule, WallClockReference):
+            assert self._manual.path is not None
+            schedule.path = self._manual.path  # published from the next sample on
+        response.success, response.message = order.accepted, order.message
+        if order.accepted:
+            self.get_logger().info(f'{what}: {order.message}')
+        else:
+            self.get_logger().warning(f'{what} refused: {order.message}')
+        state = 'done' if self.progress.done_at is not None else 'running'
+        self.report(
+            t or 0.0,
+            state,
+            order.message,
+            level=DiagnosticStatus.OK if order.accepted else DiagnosticStatus.WARN,
+            event=(what, order.message, ''),
         )
         return response
 
