@@ -6,9 +6,13 @@
 # docs' command lines that take minutes: test_docs_commands.py) are left out; run them
 # with `python -m pytest -m slow`.
 #
-# The unit tests run on every core (pytest-xdist; tests marked xdist_group share one worker,
-# so that the offline runs they cache are made once); the system tests one after the other,
-# since each starts a whole graph of processes that shares the machine's cores.
+# Two runs. The first on every core (pytest-xdist; tests marked xdist_group share one worker,
+# so that the offline runs they cache are made once): the unit tests and the system tests
+# whose graphs step in lockstep (their results do not depend on the machine's load, and a
+# graph waits for discovery and messages more than it computes: a run of them one after the
+# other kept one core of two busy). The second alone on the machine, one after the other:
+# the system tests marked `serial`, which check timing under load (realtime runs, busy
+# cores, two graphs side by side).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$root/scripts/install.sh"
@@ -20,5 +24,5 @@ pytest_part() {  # exit code 5: none of the chosen tests is of this part
     "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
 }
 # `slow`: the docs' long command lines (test_docs_commands.py); run them with -m slow.
-pytest_part -m 'not system and not slow' -n auto --dist loadgroup "$@"
-pytest_part -m system "$@"
+pytest_part -m 'not slow and not serial' -n auto --dist loadgroup "$@"
+pytest_part -m 'serial and not slow' "$@"

@@ -28,6 +28,9 @@ import pytest
 from test.conftest import run_scenario
 from test.test_realtime_driver import DRIVER
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 PERIOD = 0.004  # [s]
 # Table 1's machine (the plant's own), the tuning rule for 250 Hz and one sample of delay.
 TOLD = [

@@ -97,6 +97,7 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
 
 
 @pytest.mark.system
+@pytest.mark.serial  # two busy loops: alone on the machine (scripts/test.sh)
 @pytest.mark.parametrize('busy', [0, 2], ids=['quiet', 'both_cores_busy'])
 def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path, busy: int) -> None:
     """Also with both cores busy (issue 21): the force process steps at most its

@@ -35,6 +35,9 @@ from mill_common.hold_window import HoldWindow
 from test.test_realtime_driver import MACHINE, MASS, TOLD
 from test.two_hosts import TwoHosts, finish, wait_for_progress
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 PERIOD = 0.004  # [s]
 WINDOW = HoldWindow()  # the drive's defaults
 HOLD_DEVIATION = WINDOW.hold_deviation  # [m]

@@ -48,6 +48,9 @@ from test.two_hosts import (
     wait_for_progress,
 )
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 PLANT = 'mill_plant.plant_node'
 RUNNER = 'mill_bringup.runner'
 AXES = ('x', 'y', 'z')

@@ -26,6 +26,9 @@ from mill_bag.reader import open_bag
 from mill_common import topics
 from test.conftest import start_scenario
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 DURATION = '0.3'
 SAMPLES = 301  # t = 0 .. 0.3 s at 1 kHz
 

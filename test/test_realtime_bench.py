@@ -14,6 +14,9 @@ import math
 import pytest
 from mill_bench.realtime_sweep import sweep
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 AXES = ('x', 'y', 'z')
 
 

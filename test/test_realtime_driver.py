@@ -42,6 +42,9 @@ from mill_bringup.jobs.registry import job_for
 from mill_bringup import scenario
 from test.conftest import run_scenario
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 LAYOUT = 'single'
 # SCHED_FIFO for the graph and the driver, as docs/hardware-driver.md says to run a machine:
 # the loop then holds its rate whatever else the machine runs (CI's other work included).

@@ -20,6 +20,9 @@ from trajectory_msgs.msg import JointTrajectory
 from mill_common import topics
 from test.conftest import ros_node
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 JOB = 'trajectory: job'
 STATE = topics.state('x')
 COMMAND = topics.joint_command('x')

@@ -43,6 +43,9 @@ from mill_analysis import bag_meta
 from mill_common import topics
 from test.conftest import busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
+# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
+pytestmark = pytest.mark.serial
+
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
 T_NS = 1_000_000
