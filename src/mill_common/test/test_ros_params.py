@@ -44,7 +44,7 @@ def start(monkeypatch: pytest.MonkeyPatch) -> Iterator:
     from rclpy.node import Node
 
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(50 + os.getpid() % 50))
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(101 + os.getpid() % 19))
     contexts = []
     nodes: list[Node] = []
 

@@ -34,7 +34,7 @@ def observer_node(monkeypatch: pytest.MonkeyPatch) -> Iterator:
     from mill_common import ros_params
 
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(50 + os.getpid() % 50))
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(101 + os.getpid() % 19))
     monkeypatch.setattr(ros_params, 'command_line', ['test'])
     made = []
 
