@@ -1,10 +1,14 @@
 #!/usr/bin/env bash
 # Installs everything (scripts/install.sh), checks style and types (ruff, mypy on
-# the packages under src/) and runs the whole test suite: unit tests of every
-# package and system tests that start real ROS 2 processes (on loopback, in
-# private domains). Extra arguments go to pytest (both runs). Tests marked `slow` (the
-# docs' command lines that take minutes: test_docs_commands.py) are left out; run them
-# with `python -m pytest -m slow`.
+# the packages under src/) and runs the test suite: unit tests of every package and
+# system tests that start real ROS 2 processes (on loopback, in private domains). Extra
+# arguments go to pytest (every run).
+#
+# `--all` (first argument) also runs the extended suite, the tests marked `slow`: the docs'
+# command lines that take minutes (test_docs_commands.py), the figures of the papers other
+# than the main job's (test_docs_figures.py), and the further variants of system tests whose
+# first variant runs here (test.conftest.EXTENDED). CI runs without it: on a 2-core machine
+# the whole suite takes about twice CI's 15 minutes.
 #
 # Two runs. The first on every core (pytest-xdist; tests marked xdist_group share one worker,
 # so that the offline runs they cache are made once): the unit tests and the system tests
@@ -14,6 +18,8 @@
 # the system tests marked `serial`, which check timing under load (realtime runs, busy
 # cores, two graphs side by side).
 set -euo pipefail
+extended=false
+if [ "${1:-}" = "--all" ]; then extended=true; shift; fi
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 bash "$root/scripts/install.sh"
 export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
@@ -23,6 +29,9 @@ cd "$root"
 pytest_part() {  # exit code 5: none of the chosen tests is of this part
     "$root/.venv/bin/python" -m pytest "$@" || [ $? -eq 5 ]
 }
-# `slow`: the docs' long command lines (test_docs_commands.py); run them with -m slow.
 pytest_part -m 'not slow and not serial' -n auto --dist loadgroup "$@"
 pytest_part -m 'serial and not slow' "$@"
+if $extended; then
+    pytest_part -m 'slow and not serial' -n auto --dist loadgroup "$@"
+    pytest_part -m 'slow and serial' "$@"
+fi

@@ -22,6 +22,10 @@ from test.two_hosts import TwoHosts, two_hosts
 REPO = Path(__file__).resolve().parents[1]
 SCENARIO = REPO / 'config' / 'slotting.yaml'
 _domains = itertools.count()
+# A further variant of a system test (another layout, signal or paper variant of a claim a
+# first variant makes in CI): in the extended suite (`scripts/test.sh --all`), out of CI's
+# 15 minutes on a 2-core machine.
+EXTENDED = pytest.mark.slow
 
 
 def _next_domain() -> str:

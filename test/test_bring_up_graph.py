@@ -23,9 +23,6 @@ from test.conftest import run_scenario
 from test.test_realtime_driver import LEAD, MASS
 from test.test_realtime_driver import MACHINE as DRIVER_MACHINE
 
-# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
-pytestmark = pytest.mark.serial
-
 # the real-machine issue's machine without its process load (no cutting while identifying)
 MACHINE = [m for m in DRIVER_MACHINE if not m.startswith(('plant.cutting_model', 'plant.load.'))]
 ARGS = [a for text in MACHINE for a in ('-p', text)] + ['--delay', '1', '--layout', 'single']

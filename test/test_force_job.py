@@ -31,13 +31,13 @@ from sensor_msgs.msg import JointState
 
 from mill_bringup import scenario
 from mill_common import topics
-from test.conftest import busy_cores, ros_node, run_scenario, spin_until
+from test.conftest import EXTENDED, busy_cores, ros_node, run_scenario, spin_until
 
 T = 60.0 / 715.0
 
 
 @pytest.mark.system
-@pytest.mark.parametrize('name', ['beta_neg0.3', 'scheme1'])
+@pytest.mark.parametrize('name', [pytest.param('beta_neg0.3', marks=EXTENDED), 'scheme1'])
 def test_distributed_force_job_equals_the_offline_loop(ros_env, tmp_path, name: str) -> None:
     out = tmp_path / 'run'
     proc = run_scenario(
@@ -98,7 +98,9 @@ def test_adaptive_feed_job_equals_its_offline_twin_and_ends_with_its_path(ros_en
 
 @pytest.mark.system
 @pytest.mark.serial  # two busy loops: alone on the machine (scripts/test.sh)
-@pytest.mark.parametrize('busy', [0, 2], ids=['quiet', 'both_cores_busy'])
+@pytest.mark.parametrize(
+    'busy', [pytest.param(0, marks=EXTENDED), 2], ids=['quiet', 'both_cores_busy']
+)
 def test_report_computes_j_c_from_a_force_jobs_bag(ros_env, tmp_path, busy: int) -> None:
     """Also with both cores busy (issue 21): the force process steps at most its
     recorder_window ahead of the revolutions the runner has recorded whole, so a loaded

@@ -131,11 +131,19 @@ def test_the_launch_plan_ends_with_the_job(ros_env, tmp_path: Path, layout: str)
             launched(n), env=ros_env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
         )
     clock = next(n.name for n in plan.nodes if n.required and n.name != 'job_watch')
+    required = [n.name for n in plan.nodes if n.required]
     try:
         with ros_node('viewer') as (node, executor):
             views = _viewers_topics(node, 'machine_l')
-            while procs['job_watch'].poll() is None:
+            # as launch does: the first required node to end ends the launch
+            deadline = time.monotonic() + 300
+            while all(procs[r].poll() is None for r in required):
+                assert time.monotonic() < deadline, 'nothing ended the launch within 300 s'
                 executor.spin_once(timeout_sec=0.1)
+            ended = {r: procs[r].poll() for r in required if procs[r].poll() is not None}
+            assert 'job_watch' in ended, f'{ended} ended the launch before job_watch: ' + next(
+                procs[r].communicate(timeout=30)[1][-3000:] for r in ended
+            )
 
             # what is still on its way, and the latched topics of a viewer that comes late
             # (the plant runs on after the job: the trace grows on)

@@ -7,7 +7,7 @@ import json
 import pytest
 
 from mill_bringup import scenario
-from test.conftest import run_scenario
+from test.conftest import EXTENDED, run_scenario
 from test.dds_sniffer import DdsSniffer
 
 
@@ -49,12 +49,13 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
 # with the rls observer node's estimate (a fourth topic joined by the controller).
 PAPER_RUNS = [
     ('beltran', 'adrc_tool_path', 0.5, 501),
-    ('beltran', 'pd_tool_depth_trip', 0.5, 501),
+    pytest.param('beltran', 'pd_tool_depth_trip', 0.5, 501, marks=EXTENDED),
     ('chavez_conde', 'sliding_gpi_flexible', 0.1, 1001),  # the flexible axis, eq. (4)-(6); 0.1 ms
-    ('chavez_conde', 'gpi_limited', 0.1, 1001),
-    ('maharof', 'pi', 0.3, 3001),  # cascade P/PI with the IMBDO, uncompensated
+    pytest.param('chavez_conde', 'gpi_limited', 0.1, 1001, marks=EXTENDED),
+    # cascade P/PI with the IMBDO, uncompensated
+    pytest.param('maharof', 'pi', 0.3, 3001, marks=EXTENDED),
     ('maharof', 'pi_imbdo_dfo', 0.3, 3001),  # ... with both observers compensating
-    ('hatwesh', 'machine_pi', 1.1, 4401),
+    pytest.param('hatwesh', 'machine_pi', 1.1, 4401, marks=EXTENDED),
     ('hatwesh', 'adaptive_pi_rls', 1.1, 4401),
     # the velocity steps: the first two steps, the RLS warm-up and the first re-tuning
     ('hatwesh_velocity', 'adaptive_pi_pm25', 0.5, 2001),

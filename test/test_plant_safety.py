@@ -20,9 +20,6 @@ from sensor_msgs.msg import JointState
 from mill_common import topics
 from test.conftest import ros_node, wait_until
 
-# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
-pytestmark = pytest.mark.serial
-
 PLANT = 'mill_plant.plant_node'
 CONTROLLER = 'mill_controllers.axis_controller_node'
 T_NS = 1_000_000  # sample_period of the scenario file

@@ -41,7 +41,7 @@ from sensor_msgs.msg import JointState
 
 from mill_analysis import bag_meta
 from mill_common import topics
-from test.conftest import busy_cores, ros_node, run_scenario, start_scenario, wait_until
+from test.conftest import EXTENDED, busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
 # Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
 pytestmark = pytest.mark.serial
@@ -182,7 +182,7 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
 
 
 @pytest.mark.system
-@pytest.mark.parametrize('layout', ['processes', 'single'])
+@pytest.mark.parametrize('layout', ['processes', pytest.param('single', marks=EXTENDED)])
 def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, layout):
     """Issue 21: the plant steps at most its recorder_window ahead of the steps the runner has
     recorded whole, so a loaded machine slows the run down and loses nothing."""
@@ -270,7 +270,9 @@ def processes_mentioning(text: str) -> list[int]:
 
 
 @pytest.mark.system
-@pytest.mark.parametrize('sig', [signal.SIGINT, signal.SIGTERM], ids=['SIGINT', 'SIGTERM'])
+@pytest.mark.parametrize(
+    'sig', [signal.SIGINT, pytest.param(signal.SIGTERM, marks=EXTENDED)], ids=['SIGINT', 'SIGTERM']
+)
 def test_a_signal_to_the_runner_closes_the_bag_and_stops_the_graph(ros_env, tmp_path, sig):
     run_dir = tmp_path / 'run'
     bag = run_dir / 'bag'
@@ -384,7 +386,7 @@ def sender_of(name: str, data: bytes) -> str:
 
 
 @pytest.mark.system
-@pytest.mark.parametrize('load', ['quiet', 'busy'])
+@pytest.mark.parametrize('load', [pytest.param('quiet', marks=EXTENDED), 'busy'])
 def test_a_sigkill_of_the_runner_loses_at_most_a_window_of_steps_and_its_last_write(
     ros_env, tmp_path, load
 ):

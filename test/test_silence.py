@@ -25,9 +25,6 @@ from rosgraph_msgs.msg import Clock
 from mill_common import topics
 from test.conftest import ros_node, wait_until
 
-# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
-pytestmark = pytest.mark.serial
-
 WARN_TIME = 0.5  # [s] input_warn_time of the watching nodes
 TIMEOUT = 3.0  # [s] input_timeout of the watching nodes
 WATCHERS = {  # node -> (module, executable, the input the plant fed it)

@@ -126,7 +126,12 @@ def check_tracking(m: Machine, path: Path, period: float, delay: int | None, air
         assert metric.rms_error <= 2.0 * predicted[metric.axis], (metric, predicted)
 
 
-@pytest.mark.parametrize('m', MACHINES, ids=lambda m: m.name)
+@pytest.mark.parametrize(
+    'm',
+    # the real machine in CI, the light and heavy ones in the extended suite (scripts/test.sh --all)
+    [pytest.param(m, marks=[] if m.name == 'real' else [pytest.mark.slow]) for m in MACHINES],
+    ids=lambda m: m.name,
+)
 def test_a_new_machine_is_identified_tuned_and_tracks_as_predicted(m: Machine, tmp_path) -> None:
     path = identify(m, tmp_path)
     check_model(m, path)

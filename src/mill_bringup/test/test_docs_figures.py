@@ -24,8 +24,16 @@ SHARED = {
     'beltran_step': 'beltran',
     'beltran_specific_energy': 'beltran',
 }  # the same runs
+# The README's main job (beltran and the groups of its runs) is checked in CI; the other
+# papers' groups, minutes of offline runs on a 2-core machine, in the extended suite
+# (`scripts/test.sh --all`, or `python -m mill_bringup.docs_figures.cli --check`).
+IN_CI = {'beltran', *SHARED}
 OFFLINE = [
-    pytest.param(name, marks=pytest.mark.xdist_group(SHARED.get(name, name)))
+    pytest.param(
+        name,
+        marks=[pytest.mark.xdist_group(SHARED.get(name, name))]
+        + ([] if name in IN_CI else [pytest.mark.slow]),
+    )
     for name, g in sorted(GROUPS.items())
     if not g.system
 ]
@@ -98,6 +106,7 @@ def test_the_command_line_refuses_a_tree_without_docs(tmp_path: Path, capsys) ->
     assert capsys.readouterr().err.count('\n') == 1
 
 
+@pytest.mark.slow  # the main job's whole run (the extended suite)
 def test_the_readme_image_is_drawn_from_the_current_run() -> None:
     # The data behind the plot, re-made from the run, equals the committed digest ...
     committed = (REPO / image.DATA).read_text(encoding='utf-8')

@@ -36,7 +36,7 @@ HANGING_NODE = textwrap.dedent(
 @pytest.mark.parametrize('body', ['pass', 'time.sleep(60)'], ids=['python_loop', 'sleep_in_c'])
 def test_a_teardown_that_hangs_ends_the_process_with_its_stacks(body: str) -> None:
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    env['ROS_DOMAIN_ID'] = str(100 + os.getpid() % 50)
+    env['ROS_DOMAIN_ID'] = str(101 + os.getpid() % 49)
     script = HANGING_NODE.format(limit=2.0, body=body)
     done = subprocess.run(
         [sys.executable, '-c', script], env=env, capture_output=True, text=True, timeout=120
