@@ -86,6 +86,7 @@ def _start(tmp_path: Path, env: dict[str, str]) -> dict[str, subprocess.Popen[st
 
 
 @pytest.mark.system
+@pytest.mark.serial  # "the load held no node up": no WARN, timing under load
 def test_dump_load_dump_restores_every_node_and_keeps_a_trip_latched(ros_env, tmp_path):
     from sensor_msgs.msg import JointState
 

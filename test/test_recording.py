@@ -43,9 +43,6 @@ from mill_analysis import bag_meta
 from mill_common import topics
 from test.conftest import EXTENDED, busy_cores, ros_node, run_scenario, start_scenario, wait_until
 
-# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
-pytestmark = pytest.mark.serial
-
 Q = topics.qualify  # a contract name as the bag holds it (default namespace)
 
 T_NS = 1_000_000
@@ -129,6 +126,7 @@ def once_each(ks: list[int], first: int = 0, step: int = 1) -> bool:
 
 
 @pytest.mark.system
+@pytest.mark.xdist_group('recorded_run')  # one worker makes the module's recorded run
 def test_recorded_run_opens_in_both_readers_with_every_published_message(recorded_run):
     bag = recorded_run['dir'] / 'bag'
     by_rosbags, by_mcap, ks = both_readers(bag)
@@ -182,6 +180,7 @@ def test_recorded_run_opens_in_both_readers_with_every_published_message(recorde
 
 
 @pytest.mark.system
+@pytest.mark.serial  # timing under load: alone on the machine (scripts/test.sh)
 @pytest.mark.parametrize('layout', ['processes', pytest.param('single', marks=EXTENDED)])
 def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, layout):
     """Issue 21: the plant steps at most its recorder_window ahead of the steps the runner has
@@ -210,6 +209,7 @@ def test_a_lockstep_bag_misses_nothing_with_both_cores_busy(ros_env, tmp_path, l
 
 
 @pytest.mark.system
+@pytest.mark.xdist_group('recorded_run')  # one worker makes the module's recorded run
 def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
     summary = json.loads((recorded_run['dir'] / 'summary.json').read_text())
     run = read_run(recorded_run['dir'] / 'bag')
@@ -231,6 +231,7 @@ def test_metrics_from_the_bag_equal_the_runner_summary(recorded_run):
 
 
 @pytest.mark.system
+@pytest.mark.xdist_group('recorded_run')  # one worker makes the module's recorded run
 def test_report_on_the_recorded_run(recorded_run, tmp_path):
     out = tmp_path / 'report'
     proc = subprocess.run(
@@ -386,6 +387,7 @@ def sender_of(name: str, data: bytes) -> str:
 
 
 @pytest.mark.system
+@pytest.mark.serial  # timing under load: alone on the machine (scripts/test.sh)
 @pytest.mark.parametrize('load', [pytest.param('quiet', marks=EXTENDED), 'busy'])
 def test_a_sigkill_of_the_runner_loses_at_most_a_window_of_steps_and_its_last_write(
     ros_env, tmp_path, load
@@ -537,6 +539,7 @@ def test_sigint_and_sigterm_leave_a_complete_bag(start_node, tmp_path, sig):
 
 
 @pytest.mark.system
+@pytest.mark.serial  # timing under load: alone on the machine (scripts/test.sh)
 def test_sigkill_loses_at_most_the_last_second(start_node, tmp_path):
     bag = tmp_path / 'bag'
     recorder = start_recorder(start_node, bag)
@@ -618,6 +621,7 @@ def test_recorder_and_report_help(ros_env):
 
 
 @pytest.mark.system
+@pytest.mark.serial  # timing under load: alone on the machine (scripts/test.sh)
 def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_env, tmp_path):
     from mill_analysis.report.kinds import ReportOptions, kind_of
 
