@@ -23,6 +23,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 # The word letters this reader knows (O is the O-word); anything else is unsupported.
 LETTERS = frozenset('DFGHIJKLMNPQRSTXYZ')
@@ -107,6 +108,17 @@ class GcodeError(ValueError):
     def __init__(self, where: Where, message: str) -> None:
         super().__init__(f'{where}: {message}')
         self.where = where
+
+
+def read_file(path: str | Path, encoding: str, what: str) -> str:
+    """The text of a file; a missing or unreadable one is a GcodeError naming the file."""
+    name = str(path)
+    try:
+        return Path(path).read_text(encoding=encoding)
+    except FileNotFoundError:
+        raise GcodeError(Where(name, 0, 0), f'no such {what} file') from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise GcodeError(Where(name, 0, 0), f'cannot read: {exc}') from None
 
 
 @dataclass(frozen=True)
