@@ -14,7 +14,8 @@ Expressions: binary operators, loosest first, AND OR XOR; EQ NE GT GE LT LE; + -
 ** (all left to right, comparisons and logic give 1 or 0); functions SIN COS TAN ASIN ACOS
 ATAN[y]/[x] (degrees), ABS EXP FIX (floor) FUP (ceiling) ROUND LN SQRT, EXISTS[#<name>].
 
-Every error names the file, the line and the column (1-based) where the trouble starts.
+Every error names the file, the line and the column (1-based) where the trouble starts; a
+file that cannot be read (read_file: a program or a tool table) is named alone.
 """
 
 from __future__ import annotations
