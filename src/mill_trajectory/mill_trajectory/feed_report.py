@@ -22,7 +22,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from mill_trajectory.gcode import Move
+from mill_trajectory.gcode_words import Move
 from mill_trajectory.planner import Piece, PlannedPath
 from mill_trajectory.toolpath import pieces_of
 

@@ -14,7 +14,8 @@ Expressions: binary operators, loosest first, AND OR XOR; EQ NE GT GE LT LE; + -
 ** (all left to right, comparisons and logic give 1 or 0); functions SIN COS TAN ASIN ACOS
 ATAN[y]/[x] (degrees), ABS EXP FIX (floor) FUP (ceiling) ROUND LN SQRT, EXISTS[#<name>].
 
-Every error names the file, the line and the column (1-based) where the trouble starts.
+Every error names the file, the line and the column (1-based) where the trouble starts; a
+file that cannot be read (read_file: a program or a tool table) is named alone.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 # The word letters this reader knows (O is the O-word); anything else is unsupported.
 LETTERS = frozenset('DFGHIJKLMNPQRSTXYZ')
@@ -107,6 +109,17 @@ class GcodeError(ValueError):
     def __init__(self, where: Where, message: str) -> None:
         super().__init__(f'{where}: {message}')
         self.where = where
+
+
+def read_file(path: str | Path, encoding: str, what: str) -> str:
+    """The text of a file; a missing or unreadable one is a GcodeError naming the file."""
+    name = str(path)
+    try:
+        return Path(path).read_text(encoding=encoding)
+    except FileNotFoundError:
+        raise GcodeError(Where(name, 0, 0), f'no such {what} file') from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise GcodeError(Where(name, 0, 0), f'cannot read: {exc}') from None
 
 
 @dataclass(frozen=True)

@@ -33,9 +33,8 @@ from mill_common.executable import release_stop_signals
 from mill_common.parameters import ParameterError, validate
 
 from mill_trajectory.config import TravelParams, build_job, parameter_specs
-from mill_trajectory.gcode import Move
 from mill_trajectory.gcode_program import GcodeTrajectory
-from mill_trajectory.gcode_words import GcodeError
+from mill_trajectory.gcode_words import GcodeError, Move
 from mill_trajectory.hold import MESSAGE, PAUSE, TOOL_CHANGE, ProgramEvent
 from mill_trajectory.toolpath import arc_points
 

@@ -16,8 +16,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from mill_trajectory.gcode import Move, Point
-from mill_trajectory.gcode_words import GcodeError, Where
+from mill_trajectory.gcode_words import GcodeError, Move, Point, Where
 from mill_trajectory.planner import Piece
 
 AXIS_NAMES = 'xyz'

@@ -167,7 +167,7 @@ def test_bad_programs_are_one_line_each(
     text: str, where: str, what: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     # A runaway loop is the same refusal after 1,000 passes as after 100,000, in 1 % of the time.
-    monkeypatch.setattr('mill_trajectory.gcode.ITERATIONS', 1000)
+    monkeypatch.setattr('mill_trajectory.gcode_flow.ITERATIONS', 1000)
     with pytest.raises(GcodeError) as err:
         moves(text)
     message = str(err.value)

@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pytest
 from mill_common.parameters import ParameterError
-from mill_trajectory.gcode import Move, Setup, read_program, read_tool_table
+from mill_trajectory.gcode import Setup, read_program, read_tool_table
 from mill_trajectory.gcode_program import GcodeTrajectory
+from mill_trajectory.gcode_words import Move
 
 PROGRAMS = Path(__file__).resolve().parent / 'programs'
 TOOLS = PROGRAMS / 'tools.tbl'
