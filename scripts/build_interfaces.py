@@ -55,9 +55,7 @@ def _generate(package: Path, name: str, venv: Path, out: Path) -> list[str]:
     entry_points.get_entry_points = unique  # type: ignore[assignment]
     from rosidl_cli.command.generate.api import generate
 
-    files = sorted(
-        str(p.relative_to(package)) for k in KINDS for p in (package / k).glob(f'*.{k}')
-    )
+    files = sorted(str(p.relative_to(package)) for k in KINDS for p in (package / k).glob(f'*.{k}'))
     os.environ['AMENT_PREFIX_PATH'] = str(venv)
     here = os.getcwd()
     os.chdir(package)
