@@ -47,7 +47,7 @@ def goal_problem(goal: JobGoal) -> str | None:
     if not goal.job.strip():
         return 'no job: name a scenario or a G-code program file'
     if not math.isfinite(goal.duration) or goal.duration < 0:
-        return f'duration {goal.duration}: must be a finite time >= 0 [s] (0: the scenario\'s)'
+        return f"duration {goal.duration}: must be a finite time >= 0 [s] (0: the scenario's)"
     for rule in goal.overrides:
         name, eq, _value = rule.partition('=')
         if not eq or not name.strip():

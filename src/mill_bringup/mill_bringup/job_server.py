@@ -6,9 +6,10 @@
 
 A goal runs `python -m mill_bringup.runner` in a process of its own, in this node's
 ROS_DOMAIN_ID and namespace, with its run directory under `runs_dir`. Feedback (twice a
-second, once the job runs): the machine time (/clock), the share done, the program line of the latest event,
-the feed override and hold state (the trajectory's job status on /diagnostics), the latest
-warnings of the machine and error lines of the runner. The result: the runner's exit code,
+second once the job runs, and once at its end): the machine time (/clock), the share done,
+the program line of the latest event, the feed override and hold state (the trajectory's
+job status on /diagnostics), the latest warnings of the machine and error lines of the
+runner. The result: the runner's exit code,
 its summary.json's outcome and the summary. One goal at a time; a bad goal is rejected
 with one line (mill_bringup.job_action.goal_problem). A cancel is a controlled stop: the
 trajectory's ~/feed_hold (a deceleration along the path), until every axis velocity of its
