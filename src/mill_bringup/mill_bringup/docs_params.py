@@ -5,9 +5,9 @@ docs_params            # print the parameters page
 docs_params --check    # exit 1 if either differs from what the declarations give
 docs_params --write    # rewrite docs/parameters.md and the user guide's launch table
 
-Every node kind of the catalogue (and the recorder, machine_view and job_server) lists its parameters as
-declared once (mill_common.declared): name, type, default, unit, accepted values, read-only,
-description. The launch arguments are those the launch file declares
+Every node kind of the catalogue (and the recorder, machine_view and job_server) lists its
+parameters as declared once (mill_common.declared): name, type, default, unit, accepted
+values, read-only, description. The launch arguments are those the launch file declares
 (mill_bringup.launch_plan.ARGUMENTS): name, default (or what an empty one stands for) and
 description, between two markers of the user guide. Neither is edited by hand; a test
 checks them, as docs_figures checks the figures.
