@@ -53,6 +53,7 @@ from mill_bringup.job_action import (
     read_result,
     runner_command,
 )
+from mill_bringup.runner.result import JOB_FAILED
 from mill_common import topics
 
 FEEDBACK_PERIOD = 0.5  # [s]
@@ -155,11 +156,19 @@ class JobServer(Node):
         run = self._run
         assert run is not None
         run.handle = handle
-        run.run_dir.mkdir(parents=True, exist_ok=True)
         cmd = runner_command(run.goal, run.run_dir, self.get_namespace())
-        with run.log.open('wb') as log:
-            run.proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=os.environ)
-        self.get_logger().info(f'job {run.goal.job!r} started: {run.run_dir}')
+        try:
+            run.run_dir.mkdir(parents=True, exist_ok=True)
+            with run.log.open('wb') as log:
+                run.proc = subprocess.Popen(
+                    cmd, stdout=log, stderr=subprocess.STDOUT, env=os.environ
+                )
+        except OSError as exc:  # runs_dir not writable, no interpreter: the goal fails
+            said = f'the runner could not start: {exc}'
+            self.get_logger().error(f'job {run.goal.job!r}: {said}')
+            run.done.set_result(read_result(run.run_dir, JOB_FAILED, said, run.goal.job))
+        else:
+            self.get_logger().info(f'job {run.goal.job!r} started: {run.run_dir}')
         result: JobResult = await run.done
         self._run = None
         self._stop_reference()
