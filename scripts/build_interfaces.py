@@ -10,7 +10,7 @@ rosidl_generate_interfaces does for the Python side, with the C compiler:
    __rosidl_typesupport_introspection_c, __rosidl_typesupport_fastrtps_c into <venv>/lib,
    beside those of std_srvs, and the three Python extensions into site-packages/<pkg>/;
 3. register the package in the ament index (share/ament_index/resource_index) with its
-   .srv and .idl files and package.xml, as a colcon install does.
+   .srv, .action and .idl files and package.xml, as a colcon install does.
 
 The Python extensions link all three type-support libraries, so that rmw's dlopen finds
 them loaded already (no LD_LIBRARY_PATH). Two quirks of rosidl_cli 4.6.6 from the wheels
@@ -37,6 +37,9 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 TYPESUPPORTS = ('c', 'introspection_c', 'fastrtps_c')
+KINDS = ('srv', 'action')  # the interface folders, each file named <Type>.<folder>
+# the interface packages the generated code depends on (an action: its goal id and status)
+DEPENDENCIES = ('service_msgs', 'builtin_interfaces', 'action_msgs', 'unique_identifier_msgs')
 
 
 def _generate(package: Path, name: str, venv: Path, out: Path) -> list[str]:
@@ -52,7 +55,7 @@ def _generate(package: Path, name: str, venv: Path, out: Path) -> list[str]:
     entry_points.get_entry_points = unique  # type: ignore[assignment]
     from rosidl_cli.command.generate.api import generate
 
-    files = sorted(str(p.relative_to(package)) for p in (package / 'srv').glob('*.srv'))
+    files = sorted(str(p.relative_to(package)) for k in KINDS for p in (package / k).glob(f'*.{k}'))
     os.environ['AMENT_PREFIX_PATH'] = str(venv)
     here = os.getcwd()
     os.chdir(package)
@@ -97,31 +100,35 @@ def build(package: Path, venv: Path) -> None:
         includes = [f'-I{work / "include"}', f'-I{venv / "include"}']
         includes += [f'-I{d}' for d in sorted((venv / 'include').iterdir()) if d.is_dir()]
         flags = ['-shared', '-fPIC', '-O2', *includes, f'-L{lib}', '-Wl,-rpath,$ORIGIN']
-        base = ['-lservice_msgs__rosidl_generator_c', '-lbuiltin_interfaces__rosidl_generator_c']
+        base = [f'-l{d}__rosidl_generator_c' for d in DEPENDENCIES]
         base += ['-lrosidl_runtime_c', '-lrcutils']
         own = f'-l{name}__rosidl_generator_c'
-        detail = {kind: out / kind / 'srv' / 'detail' for kind in TYPESUPPORTS}
+        kinds = sorted({Path(f).parent.name for f in files})
+
+        def sources(kind: str, pattern: str, sub: str = 'detail') -> list[Path]:
+            return sorted(p for k in kinds for p in (out / kind / k / sub).glob(pattern))
+
+        def deps(suffix: str) -> list[str]:
+            return [f'-l{d}__rosidl_typesupport_{suffix}' for d in DEPENDENCIES]
 
         def link(tool: str, sources: list[Path], output: Path, *libs: str) -> None:
             _run([tool, *flags, *map(str, sources), '-o', str(output), *libs, *base])
 
-        link(cc, sorted(detail['c'].glob('*.c')), lib / f'lib{name}__rosidl_generator_c.so')
+        link(cc, sources('c', '*.c'), lib / f'lib{name}__rosidl_generator_c.so')
         link(
             cc,
-            sorted(detail['introspection_c'].glob('*.c')),
+            sources('introspection_c', '*.c'),
             lib / f'lib{name}__rosidl_typesupport_introspection_c.so',
             own,
-            '-lservice_msgs__rosidl_typesupport_introspection_c',
-            '-lbuiltin_interfaces__rosidl_typesupport_introspection_c',
+            *deps('introspection_c'),
             '-lrosidl_typesupport_introspection_c',
         )
         link(
             cxx,
-            sorted(detail['fastrtps_c'].glob('*.cpp')),
+            sources('fastrtps_c', '*.cpp'),
             lib / f'lib{name}__rosidl_typesupport_fastrtps_c.so',
             own,
-            '-lservice_msgs__rosidl_typesupport_fastrtps_c',
-            '-lbuiltin_interfaces__rosidl_typesupport_fastrtps_c',
+            *deps('fastrtps_c'),
             '-lrosidl_typesupport_fastrtps_c',
             '-lrosidl_typesupport_fastrtps_cpp',
             '-lfastcdr',
@@ -129,10 +136,10 @@ def build(package: Path, venv: Path) -> None:
         )
         link(
             cxx,
-            sorted((out / 'c' / 'srv').glob('*.cpp')),
+            sources('c', '*.cpp', ''),
             lib / f'lib{name}__rosidl_typesupport_c.so',
             own,
-            '-lservice_msgs__rosidl_typesupport_c',
+            *deps('c'),
             '-lrosidl_typesupport_c',
             '-lrcpputils',
         )
@@ -145,7 +152,7 @@ def build(package: Path, venv: Path) -> None:
         import numpy
 
         python.append(f'-I{numpy.get_include()}')
-        py_sources = sorted((out / 'py' / 'srv').glob('*_s.c'))
+        py_sources = sorted(p for k in kinds for p in (out / 'py' / k).glob('*_s.c'))
         # site-packages/<name>/ -> <venv>/lib, where the libraries are.
         rpath = f'-Wl,-rpath,$ORIGIN/{os.path.relpath(lib, target)}'
         everyone = [f'-l{name}__rosidl_typesupport_{ts}' for ts in TYPESUPPORTS]
@@ -162,19 +169,19 @@ def build(package: Path, venv: Path) -> None:
                 '-Wl,--no-as-needed',
                 *everyone,
                 '-Wl,--as-needed',
-                '-lservice_msgs__rosidl_generator_py',
-                '-lbuiltin_interfaces__rosidl_generator_py',
+                *(f'-l{d}__rosidl_generator_py' for d in DEPENDENCIES),
             )
         share = venv / 'share' / name
         shutil.rmtree(share, ignore_errors=True)
-        (share / 'srv').mkdir(parents=True)
+        share.mkdir(parents=True)
         shutil.copy(package / 'package.xml', share / 'package.xml')
         listed = []
         for f in files:
-            stem = Path(f).stem
-            shutil.copy(package / f, share / 'srv' / f'{stem}.srv')
-            shutil.copy(out / 'c' / 'tmp' / 'srv' / f'{stem}.idl', share / 'srv' / f'{stem}.idl')
-            listed += [f'srv/{stem}.idl', f'srv/{stem}.srv']
+            kind, stem = Path(f).parent.name, Path(f).stem
+            (share / kind).mkdir(exist_ok=True)
+            shutil.copy(package / f, share / kind / f'{stem}.{kind}')
+            shutil.copy(out / 'c' / 'tmp' / kind / f'{stem}.idl', share / kind / f'{stem}.idl')
+            listed += [f'{kind}/{stem}.idl', f'{kind}/{stem}.{kind}']
         index = venv / 'share' / 'ament_index' / 'resource_index'
         for kind, text in (('packages', ''), ('rosidl_interfaces', '\n'.join(listed) + '\n')):
             (index / kind).mkdir(parents=True, exist_ok=True)

@@ -12,6 +12,7 @@ import sys
 import xml.etree.ElementTree as ET
 
 import pytest
+from mill_bringup.job_server import parameter_specs as job_server_specs
 from mill_bringup.machine_view import parameter_specs as view_specs
 from mill_controllers.config import parameter_specs as controller_specs
 from mill_observers.config import parameter_specs as observer_specs
@@ -39,6 +40,7 @@ NODES = [
     ('mill_observers.observer_node', 'observer_node', observer_specs, ['gpi.omega_o', 'axis']),
     ('mill_trajectory.trajectory_node', 'trajectory_node', trajectory_specs, ['linear.feed_rate']),
     ('mill_bringup.machine_view', 'machine_view', view_specs, ['robot_description', 'trace_rate']),
+    ('mill_bringup.job_server', 'job_server', job_server_specs, ['runs_dir', 'hold_timeout']),
 ]
 
 

@@ -28,6 +28,7 @@ setup(
             'offline_sim = mill_bringup.offline:main',
             'tune = mill_bringup.tuning.cli:main',
             'job_watch = mill_bringup.executables:job_watch',
+            'job_server = mill_bringup.executables:job_server',
             'machine_view = mill_bringup.executables:machine_view',
             'mill_container = mill_bringup.executables:mill_container',
             'docs_figures = mill_bringup.docs_figures.cli:main',

@@ -5,9 +5,9 @@ docs_params            # print the parameters page
 docs_params --check    # exit 1 if either differs from what the declarations give
 docs_params --write    # rewrite docs/parameters.md and the user guide's launch table
 
-Every node kind of the catalogue (and the recorder and machine_view) lists its parameters as
-declared once (mill_common.declared): name, type, default, unit, accepted values, read-only,
-description. The launch arguments are those the launch file declares
+Every node kind of the catalogue (and the recorder, machine_view and job_server) lists its
+parameters as declared once (mill_common.declared): name, type, default, unit, accepted
+values, read-only, description. The launch arguments are those the launch file declares
 (mill_bringup.launch_plan.ARGUMENTS): name, default (or what an empty one stands for) and
 description, between two markers of the user guide. Neither is edited by hand; a test
 checks them, as docs_figures checks the figures.
@@ -116,6 +116,12 @@ def _machine_view_specs() -> list[tuple[str, ParamSpec]]:
     return parameter_specs()
 
 
+def _job_server_specs() -> list[tuple[str, ParamSpec]]:
+    from mill_bringup.job_server import parameter_specs
+
+    return parameter_specs()
+
+
 def _recorder_specs() -> list[tuple[str, ParamSpec]]:
     from mill_bag.recorder import parameter_specs
 
@@ -134,6 +140,13 @@ def page() -> str:
             'mill_bringup machine_view',
             "the machine's URDF and the measured tool trace, for RViz and Foxglove",
             _machine_view_specs(),
+        )
+    )
+    sections.append(
+        (
+            'mill_bringup job_server',
+            'a job as the ROS 2 action ~/run_job (mill_interfaces/action/RunJob)',
+            _job_server_specs(),
         )
     )
     for title, description, specs in sections:
