@@ -4,7 +4,9 @@ Its inputs (mill_controllers.controller_inputs): the measured position mill/<axi
 the observer's estimate mill/<axis>/estimate, the points of mill/reference and, for a law
 that designs with the observer's model, mill/<axis>/observer_state. Every message is checked
 (sender, joint, finite values, stamp: mill_common.checks) and a bad one is dropped, counted
-and reported on /diagnostics (mill_common.input_guard). The node's `timing` strategy
+and reported on /diagnostics (mill_common.input_guard); a state or estimate two publishers
+sent under its owner's name (contested) is refused too, and its sample answered by a brake
+request without stepping the law (mill_controllers.sample_join). The node's `timing` strategy
 (mill_common.timing) joins them: lockstep by exact stamp, waiting for every input of every
 sample (a state offered again is answered with the same command); realtime on the newest
 state whose estimate has arrived, the reference interpolated at its stamp, nothing stale.
@@ -268,7 +270,7 @@ class AxisControllerNode(Node):
     # -- the servo cycle: the observer of this axis in this process hands each sample --------
     def attach(
         self, plant_node: str, commanded: Callable[[int, float], None]
-    ) -> Callable[[int, float, Estimate], None] | None:
+    ) -> Callable[[int, float, Estimate, bool | None, bool], None] | None:
         """Take state and estimate from this axis's observer in this process, at once, as
         it steps, and hand it each command (mill_bringup.container); None if it listens to
         another plant."""
@@ -279,9 +281,18 @@ class AxisControllerNode(Node):
         self._commanded = commanded
         return self.serve
 
-    def serve(self, ns: int, position: float, estimate: Estimate, said: bool | None = None) -> None:
+    def serve(
+        self,
+        ns: int,
+        position: float,
+        estimate: Estimate,
+        said: bool | None = None,
+        contested: bool = False,
+    ) -> None:
         """A sample the observer took (its sender and stamp checked) and estimated; said:
-        what the drive said of the axis in that state (mill_common.hold_window.drive_word)."""
+        what the drive said of the axis in that state (mill_common.hold_window.drive_word);
+        contested: a state two publishers sent under the plant's name, not estimated (its
+        sample is answered by a brake request)."""
         join = self._join
         for slot in (CLOCK_INPUT, 'estimate'):
             self.guard.heard(self._topics[slot])
@@ -294,8 +305,11 @@ class AxisControllerNode(Node):
         for slot in (CLOCK_INPUT, 'estimate'):
             self._stamps[slot].accept(ns)
         self._said[ns] = said
-        join.offer(CLOCK_INPUT, ns, position)
-        join.offer('estimate', ns, estimate)
+        if contested:
+            join.contest(CLOCK_INPUT, ns, clock=True)
+        else:
+            join.offer(CLOCK_INPUT, ns, position)
+            join.offer('estimate', ns, estimate)
         self._step_due()
 
     def _readers_ready(self) -> bool:
