@@ -80,7 +80,7 @@ from mill_controllers.trip import BRAKE, Trip
 WATCH_NS = 20_000_000  # the period of the process's own stall watch (realtime)
 # Inputs of each sample whose contested owner (two publishers claim its name) gets the
 # sample answered by a brake request (the drive brakes: mill_plant.command_intake).
-BRAKE_ON_CONTEST = (CLOCK_INPUT, 'estimate')
+BRAKE_ON_CONTEST = (CLOCK_INPUT, 'estimate', 'model')
 
 
 def joined(law: AxisController) -> tuple[str, ...]:
