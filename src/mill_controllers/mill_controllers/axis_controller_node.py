@@ -4,7 +4,9 @@ Its inputs (mill_controllers.controller_inputs): the measured position mill/<axi
 the observer's estimate mill/<axis>/estimate, the points of mill/reference and, for a law
 that designs with the observer's model, mill/<axis>/observer_state. Every message is checked
 (sender, joint, finite values, stamp: mill_common.checks) and a bad one is dropped, counted
-and reported on /diagnostics (mill_common.input_guard). The node's `timing` strategy
+and reported on /diagnostics (mill_common.input_guard); a state or estimate two publishers
+sent under its owner's name (contested) is refused too, and its sample answered by a brake
+request without stepping the law (mill_controllers.sample_join). The node's `timing` strategy
 (mill_common.timing) joins them: lockstep by exact stamp, waiting for every input of every
 sample (a state offered again is answered with the same command); realtime on the newest
 state whose estimate has arrived, the reference interpolated at its stamp, nothing stale.
@@ -29,7 +31,14 @@ from functools import partial
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
-from mill_common.checks import REFERENCE_LEAD_NS, Rejected, Sender, owner_check, sender_check
+from mill_common.checks import (
+    CONTESTED,
+    REFERENCE_LEAD_NS,
+    Rejected,
+    Sender,
+    owner_check,
+    sender_check,
+)
 from mill_common.hold_window import StallWatch, drive_word
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
@@ -64,11 +73,14 @@ from mill_controllers.config import (
 )
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.controller_inputs import CLOCK_INPUT, INPUTS, REFERENCE_INPUT, owners
-from mill_controllers.sample_join import SampleJoin
+from mill_controllers.sample_join import SampleJoin, is_contested
 from mill_controllers.switching import SwitchRecord
-from mill_controllers.trip import Trip
+from mill_controllers.trip import BRAKE, Trip
 
 WATCH_NS = 20_000_000  # the period of the process's own stall watch (realtime)
+# Inputs of each sample whose contested owner (two publishers claim its name) gets the
+# sample answered by a brake request (the drive brakes: mill_plant.command_intake).
+BRAKE_ON_CONTEST = (CLOCK_INPUT, 'estimate', 'model')
 
 
 def joined(law: AxisController) -> tuple[str, ...]:
@@ -186,14 +198,17 @@ class AxisControllerNode(Node):
 
     # -- take and check ------------------------------------------------------------------
     def _contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
-        """Two or more publishers of an input claim its owner's name: both refused."""
+        """Two or more publishers of an input claim its owner's name: both refused (the
+        state's or the estimate's: each of their samples answered by a brake request)."""
+        slot = next((s for s, t in self._topics.items() if t == topic), '')  # as watched
+        brakes = ', the axis brakes' if slot in BRAKE_ON_CONTEST else ''
         self.get_logger().error(
             f'{len(claimants)} publishers on {topic} claim to be {owner}: '
-            f'{"; ".join(claimants)}: both refused'
+            f'{"; ".join(claimants)}: both refused{brakes}'
         )
         said = f'{topic}: {owner}: {"; ".join(claimants)}'
         values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
-        message = f'owner claimed by two publishers, both refused: {said}'
+        message = f'owner claimed by two publishers, both refused{brakes}: {said}'
         ns = max(self._join.last_ns, 0)
         self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
 
@@ -201,6 +216,11 @@ class AxisControllerNode(Node):
         topic, owner = self._topics[slot], self._owners[slot]
         sender = who.name or msg.header.frame_id
         problem = sender_check(who, owner) if owner else None
+        # Refused, but answered with a brake request: waiting for it would stall the graph.
+        contested = problem is not None and who.verdict == CONTESTED and slot in BRAKE_ON_CONTEST
+        if problem is not None and contested:
+            self.guard.drop(topic, problem, sender)
+            problem = None
         problem = problem or owner_check(msg.header.frame_id, owner)
         if problem is not None:
             self.guard.drop(topic, problem, sender)
@@ -228,7 +248,7 @@ class AxisControllerNode(Node):
             return
         if slot == CLOCK_INPUT and not self._readers_ready():
             return  # the plant offers the step again
-        if slot == CLOCK_INPUT:
+        if slot == CLOCK_INPUT and not contested:
             self._said[ns] = drive_word(msg.effort)
         self._seen.add(slot)
         again = self.timing.is_offered_again(stamps, ns)
@@ -239,7 +259,9 @@ class AxisControllerNode(Node):
         if again:
             return  # the same sample offered again: the first one counts
         for at, value in samples:
-            if history:
+            if contested:
+                self._join.contest(slot, at, clock=slot == CLOCK_INPUT)
+            elif history:
                 self._join.add_reference(at, value)
             else:
                 self._join.offer(slot, at, value)
@@ -248,7 +270,7 @@ class AxisControllerNode(Node):
     # -- the servo cycle: the observer of this axis in this process hands each sample --------
     def attach(
         self, plant_node: str, commanded: Callable[[int, float], None]
-    ) -> Callable[[int, float, Estimate], None] | None:
+    ) -> Callable[[int, float, Estimate, bool | None, bool], None] | None:
         """Take state and estimate from this axis's observer in this process, at once, as
         it steps, and hand it each command (mill_bringup.container); None if it listens to
         another plant."""
@@ -259,9 +281,18 @@ class AxisControllerNode(Node):
         self._commanded = commanded
         return self.serve
 
-    def serve(self, ns: int, position: float, estimate: Estimate, said: bool | None = None) -> None:
+    def serve(
+        self,
+        ns: int,
+        position: float,
+        estimate: Estimate,
+        said: bool | None = None,
+        contested: bool = False,
+    ) -> None:
         """A sample the observer took (its sender and stamp checked) and estimated; said:
-        what the drive said of the axis in that state (mill_common.hold_window.drive_word)."""
+        what the drive said of the axis in that state (mill_common.hold_window.drive_word);
+        contested: a state two publishers sent under the plant's name, not estimated (its
+        sample is answered by a brake request)."""
         join = self._join
         for slot in (CLOCK_INPUT, 'estimate'):
             self.guard.heard(self._topics[slot])
@@ -274,8 +305,11 @@ class AxisControllerNode(Node):
         for slot in (CLOCK_INPUT, 'estimate'):
             self._stamps[slot].accept(ns)
         self._said[ns] = said
-        join.offer(CLOCK_INPUT, ns, position)
-        join.offer('estimate', ns, estimate)
+        if contested:
+            join.contest(CLOCK_INPUT, ns, clock=True)
+        else:
+            join.offer(CLOCK_INPUT, ns, position)
+            join.offer('estimate', ns, estimate)
         self._step_due()
 
     def _readers_ready(self) -> bool:
@@ -294,6 +328,10 @@ class AxisControllerNode(Node):
     def _step(self, ns: int, inputs: dict[str, Any]) -> None:
         loop = self.loop
         self._waiting_since = None
+        if is_contested(inputs):
+            self._said.pop(ns, None)
+            self._answer(ns, BRAKE)  # the law is not stepped: its state stays finite
+            return
         y, est = inputs['position'], inputs['estimate']
         said = self._said.pop(ns, None)
         for old in [at for at in self._said if at < ns]:
@@ -315,12 +353,7 @@ class AxisControllerNode(Node):
         )
         if cmd.gap:
             self._gap(ns, cmd.gap)
-        self._last_command = joint_state_bytes(
-            ns, (self.axis,), effort=(cmd.effort,), sender=self._name
-        )
-        self._pub.publish(self._last_command)
-        if self._commanded is not None:
-            self._commanded(ns, cmd.effort)
+        self._answer(ns, cmd.effort)
         if cmd.problem:
             self.get_logger().error(
                 f'no valid command {self.timing.when(ns)}: {cmd.problem}: braking',
@@ -337,6 +370,15 @@ class AxisControllerNode(Node):
             self._reported_switch = record
             blend = self.params.values['blend_time']
             self.reports.switched(ns, self._law_name, record, blend)
+
+    def _answer(self, ns: int, effort: float) -> None:
+        """Publish the command answering the state ns (NaN: the brake request)."""
+        self._last_command = joint_state_bytes(
+            ns, (self.axis,), effort=(effort,), sender=self._name
+        )
+        self._pub.publish(self._last_command)
+        if self._commanded is not None:
+            self._commanded(ns, effort)
 
     # -- gaps and this process's own stalls ---------------------------------------------
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:

@@ -6,6 +6,12 @@ ready when every input it needs has the same stamp (mill_common.stamp_join) and 
 reference reaches the stamp the command aims at. The timing (mill_common.timing) says what
 happens to the others: lockstep waits for them and steps every sample in order; realtime
 steps only the newest ready sample and drops one whose reference has not arrived.
+
+An input whose owner's name two publishers claim (mill_common.graph_owner: CONTESTED) is
+refused, but its sample is not waited for in vain: `contest` puts the `CONTESTED` marker in
+its place (a contested state in the place of every input of its sample: the estimate of a
+state nobody owns does not come), and the node answers that sample with a brake request
+instead of stepping the law (`is_contested`), whose state stays as it was.
 """
 
 from __future__ import annotations
@@ -17,6 +23,21 @@ from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AxisReference
 from mill_common.stamp_join import StampJoin
 from mill_common.timing import Timing
+
+
+class Contested:
+    """The marker of an input whose owner's name two publishers claim."""
+
+    def __repr__(self) -> str:
+        return 'CONTESTED'
+
+
+CONTESTED = Contested()
+
+
+def is_contested(inputs: dict[str, Any]) -> bool:
+    """Whether a joined sample holds a contested input (answered by a brake request)."""
+    return any(v is CONTESTED for v in inputs.values())
 
 
 class SampleJoin:
@@ -36,6 +57,16 @@ class SampleJoin:
         inputs = self._join.put(slot, ns, value)
         if inputs is not None:
             self._ready[ns] = inputs
+
+    def contest(self, slot: str, ns: int, clock: bool) -> None:
+        """Sample ns's `slot` input came from a publisher contesting its owner's name;
+        clock: the input that paces the samples (the state), which stands in for every
+        input of its sample not there yet."""
+        slots = self._join.slots if clock else (slot,)
+        for name in (slot, *slots):
+            self.offer(name, ns, CONTESTED)
+            if ns in self._ready:
+                return
 
     def add_reference(self, ns: int, point: AxisReference) -> None:
         self.references.add(ns, point)

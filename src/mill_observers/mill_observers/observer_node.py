@@ -5,6 +5,10 @@ command on mill/<axis>/joint_command (from controller_node). Every message is ch
 (sender, joint, finite values, stamp: mill_common.checks); a bad one is dropped, counted
 and reported on /diagnostics (mill_common.input_guard). A non-finite effort from the
 controller is its brake request: the drive brakes, the observer takes it as no input.
+While two publishers claim an input's owner's name (mill_common.graph_owner) both are
+refused, but the step is not waited on: a contested command is taken as the brake the drive
+makes of it, a contested state's step is passed without an estimate (the controller answers
+it with a brake request).
 
 Each state goes to the ROS-free ObserverLoop (mill_observers.observer_loop) with the command
 that acted over the period before it, the object the offline simulator steps too, and the
@@ -57,8 +61,10 @@ from mill_observers.registry import OBSERVERS
 MAX_COAST = 100  # periods the model runs on without a state before it just resumes
 
 
-# The controller of a servo cycle: (stamp, position, estimate, what the drive said).
-Servo = Callable[[int, float, Estimate, bool | None], None]
+# The controller of a servo cycle: (stamp, position, estimate, what the drive said, and
+# whether the state came from a contested plant: then answered by a brake request).
+Servo = Callable[[int, float, Estimate, bool | None, bool], None]
+UNMEASURED = Estimate(math.nan, math.nan, math.nan)  # handed with a contested state
 
 
 class ObserverNode(Node):
@@ -68,6 +74,7 @@ class ObserverNode(Node):
         self._loop: ObserverLoop | None = None
         self._last_ns: int | None = None  # the last state stepped
         self._states: dict[int, float] = {}
+        self._contested_states: set[int] = set()  # of those, sent by a contested plant
         self._commands: dict[int, float] = {}  # lockstep: by stamp
         self._newest_command: float | None = None  # real time: the newest received
         self.params = NodeParameters(self, parameter_specs(), self._configure)
@@ -91,7 +98,7 @@ class ObserverNode(Node):
         # A controller of this axis in this process, handed each sample at once (its servo
         # cycle: mill_bringup.container connects them): (stamp, position, estimate).
         self.servo: Servo | None = None
-        self._served: tuple[int, float, Estimate, bool | None] | None = None
+        self._served: tuple[int, float, Estimate, bool | None, bool] | None = None
         # What the drive said of the axis in each state not yet stepped (mill_common.
         # hold_window.drive_word), handed on to the controller of a servo cycle.
         self._said: dict[int, bool | None] = {}
@@ -192,18 +199,22 @@ class ObserverNode(Node):
         return ns, float('nan') if isinstance(value, Rejected) else value[0]
 
     def _on_state(self, msg: JointState, who: Sender) -> None:
-        if self._foreign('state', msg, who):
+        contested = who.verdict == CONTESTED and bool(self._owners['state'])
+        if contested:
+            self._refuse_contested('state', who)
+        elif self._foreign('state', msg, who):
             return
         ns = from_stamp(msg.header.stamp)
         if self._last_ns is not None and ns <= self._last_ns:
             if not self.timing.WAITS_FOR_INPUTS or ns < self._last_ns:
                 past = Rejected('stamp repeated or in the past')
                 self.guard.drop(self._topics['state'], past, msg.header.frame_id)
-            elif ns == self._last_ns and self._last_estimate is not None:
+            elif ns == self._last_ns:
                 self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 if self.servo is not None and self._served is not None:
                     self.servo(*self._served)
-                self._pub.publish(self._last_estimate)  # the plant offered this step again
+                if self._last_estimate is not None:  # (none of a contested state)
+                    self._pub.publish(self._last_estimate)  # the plant offered this step again
             return
         got = self._accept('state', msg)
         if got is None:
@@ -214,7 +225,9 @@ class ObserverNode(Node):
             return  # the plant offers the step again
         self._stamps['state'].accept(got[0])
         self._states[got[0]] = got[1]
-        if self.servo is not None:
+        if contested:
+            self._contested_states.add(got[0])
+        elif self.servo is not None:
             self._said[got[0]] = drive_word(msg.effort)
         self._advance()
 
@@ -228,6 +241,11 @@ class ObserverNode(Node):
         if got is not None:
             self.commanded(*got)
 
+    def _refuse_contested(self, slot: str, who: Sender) -> None:
+        problem = sender_check(who, self._owners[slot])
+        if problem is not None:
+            self.guard.drop(self._topics[slot], problem, who.name)
+
     def _contested_command(self, msg: JointState, who: Sender) -> None:
         """A command of one of two publishers claiming the controller's name: refused as a
         command (dropped and named), and taken as what the drive makes of it, a brake
@@ -235,10 +253,7 @@ class ObserverNode(Node):
         step not yet used). So the observer predicts the braked axis and goes on: refusing
         the step outright would stall it, and the real controller behind it, and the copy
         would then be the only claimant that speaks."""
-        topic = self._topics['command']
-        problem = sender_check(who, self._owners['command'])
-        if problem is not None:
-            self.guard.drop(topic, problem, who.name)
+        self._refuse_contested('command', who)
         ns = from_stamp(msg.header.stamp)
         if ns in self._commands:  # the step's valid command came first, not used yet
             self._commands[ns] = math.nan
@@ -276,6 +291,9 @@ class ObserverNode(Node):
         loop = self._loop
         assert loop is not None, 'configured in NodeParameters'
         for ns in self.timing.due(self._states):
+            if ns in self._contested_states:
+                self._pass_contested(ns)
+                continue
             acted, missed, late = self._acted(ns)
             if self.timing.WAITS_FOR_INPUTS and loop.started and acted is None:
                 self._stalled_since = self._stalled_since or time.monotonic()
@@ -287,8 +305,8 @@ class ObserverNode(Node):
                 said = self._said.pop(ns, None)
                 for old in [at for at in self._said if at < ns]:
                     del self._said[old]  # states the timing dropped
-                self._served = (ns, y, est, said)
-                self.servo(ns, y, est, said)
+                self._served = (ns, y, est, said, False)
+                self.servo(*self._served)
             self._last_estimate = joint_state_bytes(
                 ns,
                 (self.axis,),
@@ -304,6 +322,22 @@ class ObserverNode(Node):
                 self._state_pub.publish(
                     joint_state_bytes(ns, tuple(status), values, sender=self._name)
                 )
+
+    def _pass_contested(self, ns: int) -> None:
+        """A state two publishers sent under the plant's name: no estimate of it, but its
+        step is passed, not waited on. The controller answers it with a brake request
+        (mill_controllers.sample_join), the command the next state is estimated with: the
+        braked axis at rest where it is measured then (ObserverLoop)."""
+        self._contested_states.discard(ns)
+        del self._states[ns]
+        if self._last_ns is not None:
+            self._commands.pop(self._last_ns, None)  # it acted before a state not taken
+        self._last_ns, self._stalled_since = ns, None
+        self._last_estimate = None
+        self._said.pop(ns, None)
+        if self.servo is not None:  # its controller takes no state of its own
+            self._served = (ns, math.nan, UNMEASURED, None, True)
+            self.servo(*self._served)
 
     def _acted(self, ns: int) -> tuple[float | None, int, float]:
         """The command that acted before the state ns, the periods missed since the last
