@@ -29,6 +29,10 @@ import pytest
 
 from test.conftest import ParameterClient, ros_node, start_scenario  # noqa: F401
 
+# Each attacker races a 1 s job (it must hear the job's states while the job runs): alone on
+# the machine (scripts/test.sh, serial), so that the job does not end before it has spoken.
+pytestmark = pytest.mark.serial
+
 DURATION = '1'
 PERIOD_NS = 1_000_000  # slotting's sample period (1 kHz)
 MARK = 12345.0  # the effort in the ratchet's states: it answers the plant's only

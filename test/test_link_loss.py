@@ -32,6 +32,7 @@ from pathlib import Path
 import pytest
 from mill_common.hold_window import HoldWindow
 
+from test.conftest import EXTENDED
 from test.test_realtime_driver import MACHINE, MASS, TOLD
 from test.two_hosts import TwoHosts, finish, wait_for_progress
 
@@ -317,6 +318,7 @@ def test_after_a_cut_the_controllers_trip_and_a_reset_re_arms_them_where_the_axe
 
 
 @pytest.mark.system
+@EXTENDED  # a cut past the timeouts in CI: test_multi_host.py (both sides stop, named)
 def test_a_five_second_cut_stops_the_axes_and_ends_the_job(hosts: TwoHosts, tmp_path: Path) -> None:
     code, said, seen, down, back = run_with_cut(hosts, tmp_path, 5.0, UNAWARE)
     check_stops(seen, down, back, said=(tmp_path / 'plant.log').read_text())

@@ -41,7 +41,7 @@ from mill_analysis.node_intake import MessageLog, Received
 from mill_bag.cdr import cdr_stamp_ns
 from mill_bag.recorder import TopicRecorder, message_class
 from mill_bag.types import CLOCK, DIAGNOSTIC_ARRAY
-from mill_common.checks import CONTESTED, FOREIGN, PENDING, UNKNOWN
+from mill_common.checks import CONTESTED, FOREIGN, UNKNOWN
 from mill_common.codec import encode_clock
 from mill_common.graph_owner import GidSubscription
 from mill_common.ros import LATCHED_QOS, RECORD_QOS, graph_owners
@@ -240,8 +240,12 @@ class Monitor(Node):
                 if who.verdict == CONTESTED and ack is not None:
                     ack(data)
                 return
-            if who.verdict in (UNKNOWN, PENDING) and who.claimants:
-                return  # not (yet) the owner's, whom the graph shows: its drive drops it too
+            if who.verdict == UNKNOWN and who.claimants:
+                return  # not the owner's, whom the graph shows: its drive drops it too
+            # PENDING (a claimant beside a silent older one, mill_common.graph_owner) is
+            # recorded: each receiver names it at its own moment, so the runner's grace ends
+            # at another time than its readers', and a node started again must not leave a
+            # gap in the record of what its readers took
             on_msg(data)
 
         GidSubscription(self, message_class(msgtype), topic, on_owned, RECORD_QOS)
