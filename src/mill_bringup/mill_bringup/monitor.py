@@ -242,10 +242,6 @@ class Monitor(Node):
                 return
             if who.verdict == UNKNOWN and who.claimants:
                 return  # not the owner's, whom the graph shows: its drive drops it too
-            # PENDING (a claimant beside a silent older one, mill_common.graph_owner) is
-            # recorded: each receiver names it at its own moment, so the runner's grace ends
-            # at another time than its readers', and a node started again must not leave a
-            # gap in the record of what its readers took
             on_msg(data)
 
         GidSubscription(self, message_class(msgtype), topic, on_owned, RECORD_QOS)

@@ -197,10 +197,6 @@ OWNER = 'owner'  # an endpoint of the expected node, the only node of that name
 FOREIGN = 'foreign'  # an endpoint of another node
 UNKNOWN = 'unknown'  # a GID the graph does not (yet) show
 CONTESTED = 'contested'  # the expected node's name is claimed by two or more publishers
-# a publisher of the expected node's name that appeared beside another one, which has been
-# silent since: refused until that one has been silent long enough to be taken for dead
-# (a node started again in place of a killed one, whose endpoint lingers in the graph)
-PENDING = 'pending'
 
 
 @dataclass(frozen=True)
@@ -210,7 +206,7 @@ class Sender:
     name: the publisher as the graph names it ('/ns/node', or its GID when it names no
     node); claimants (CONTESTED): every publisher of the topic whose node has the owner's
     name, each '/ns/node (gid …)'; (UNKNOWN) those the graph shows, while it does not name
-    this publisher yet; (PENDING) the older, silent ones.
+    this publisher yet.
     """
 
     verdict: str
@@ -246,11 +242,6 @@ def sender_check(sender: Sender, owner: str) -> Rejected | None:
                 f'{"; ".join(sender.claimants)}: refused until named'
             )
         return None
-    if sender.verdict == PENDING:
-        return Rejected(
-            f'{sender.name} claims to be {owner!r} beside {"; ".join(sender.claimants)}, '
-            'silent since it appeared: refused until that one is taken for dead'
-        )
     return Rejected(f'sent by {sender.name}, not by its owner {owner!r}')
 
 

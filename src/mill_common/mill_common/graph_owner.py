@@ -22,9 +22,7 @@ each publisher endpoint with its GID, node name and namespace. So a receiver:
   node's endpoints stay in the graph until its lease runs out (Fast DDS: 20 s), so the
   node started again in its place (ros2 launch's respawn, run_scenario --respawn) would
   otherwise share its name with a ghost; the dead one is silent since before its successor
-  appeared. The newcomer is PENDING (refused) for GRACE_S after it appeared while the older
-  one stays silent: on a loaded host a live owner may not speak for a while, and a second
-  copy started then must not drive the axis in that while.
+  appeared, and a process takes far longer than LIVE_S to start again.
 
 A message delivered inside this process (mill_common.intra_process) has no GID: it comes
 from the topic's publisher in this process, which the bus names (LOCAL).
@@ -46,14 +44,11 @@ from rclpy.qos import QoSProfile
 from rclpy.type_support import check_is_valid_msg_type
 from rclpy.waitable import NumberOfEntities, Waitable
 
-from mill_common.checks import ANYONE, CONTESTED, FOREIGN, OWNER, PENDING, UNKNOWN, Sender
+from mill_common.checks import ANYONE, CONTESTED, FOREIGN, OWNER, UNKNOWN, Sender
 
 LOCAL = b''  # the GID of a message delivered inside this process (no DDS endpoint)
 REFRESH_S = 0.05  # the least time between two looks at one topic's publishers for a new GID
 LIVE_S = 0.2  # a claimant heard this recently is alive, whenever it appeared
-# A claimant that appeared beside an older one, silent since, waits this long before it is
-# obeyed (PENDING until then): the older one may only be slow (a loaded host), not dead.
-GRACE_S = 1.0
 UNKNOWN_NODE = '_NODE_NAME_UNKNOWN_'  # an endpoint whose node discovery has not named yet
 
 
@@ -139,13 +134,9 @@ class GraphOwners:
         """The verdict on a claimant's message while others claim the owner's name too: it
         is contested if another claimant is alive (heard since this one appeared, or
         within LIVE_S)."""
-        appeared = t.appeared.get(gid, now)
-        since = min(appeared, now - LIVE_S)
+        since = min(t.appeared.get(gid, now), now - LIVE_S)
         alive = [g for g in t.claimants if g != gid and t.heard.get(g, -1e9) >= since]
         if not alive:
-            older = [g for g in t.claimants if g != gid and t.appeared.get(g, now) < appeared]
-            if older and now - appeared < GRACE_S:
-                return Sender(PENDING, mine.name, tuple(sorted(t.claimants[g] for g in older)))
             return mine
         names = tuple(sorted(t.claimants[g] for g in (gid, *alive)))
         if names != t.reported:

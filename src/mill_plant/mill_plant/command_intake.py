@@ -30,7 +30,6 @@ from dataclasses import dataclass
 
 from mill_common.checks import (
     CONTESTED,
-    PENDING,
     UNKNOWN,
     Rejected,
     Sender,
@@ -101,7 +100,7 @@ class CommandIntake:
             if repeat and problem.reason.startswith('stamp'):
                 return None  # a repeat of an answered step (after a re-offer): harmless
             # a publisher the graph does not name yet is not known to be foreign
-            unnamed = graph is not None and graph.verdict in (UNKNOWN, PENDING)
+            unnamed = graph is not None and graph.verdict == UNKNOWN
             return Dropped(problem, foreign is not None and not (unnamed and who is not None))
         value = joint_values(names, {'effort': efforts}, axis, ('effort',))
         if isinstance(value, Rejected) and not value.non_finite:
