@@ -653,4 +653,6 @@ def test_a_realtime_run_counts_its_losses_alike_in_summary_bag_and_report(ros_en
     assert len(lines) == sum(1 for n in missing.values() if n)
     printed = [line for line in proc.stdout.splitlines() if line.startswith('WARNING: ')]
     shown = [line for line in kind.table([report]).splitlines() if line.startswith('WARNING: ')]
-    assert [line for line in printed if 'drive ticked' not in line] == lines == shown
+    # the drive's own timing (late ticks, host stalls) is reported beside the losses, not as one
+    timing = ('drive ticked', 'drive stalled')
+    assert [ln for ln in printed if not any(t in ln for t in timing)] == lines == shown
