@@ -26,9 +26,6 @@ from mill_bag.reader import open_bag
 from mill_common import topics
 from test.conftest import start_scenario
 
-# Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
-pytestmark = pytest.mark.serial
-
 DURATION = '0.3'
 SAMPLES = 301  # t = 0 .. 0.3 s at 1 kHz
 
@@ -105,6 +102,7 @@ def test_a_second_clock_in_the_domain_is_refused(ros_env, tmp_path):
 
 
 @pytest.mark.system
+@pytest.mark.serial  # two graphs with no WARN line: alone on the machine (scripts/test.sh)
 def test_two_clean_machines_are_quiet_and_their_statuses_never_merge(ros_env, tmp_path):
     from diagnostic_msgs.msg import DiagnosticArray
 

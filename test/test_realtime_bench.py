@@ -14,6 +14,8 @@ import math
 import pytest
 from mill_bench.realtime_sweep import sweep
 
+from test.conftest import EXTENDED
+
 # Timing under load is what it checks: alone on the machine (scripts/test.sh, serial).
 pytestmark = pytest.mark.serial
 
@@ -21,6 +23,7 @@ AXES = ('x', 'y', 'z')
 
 
 @pytest.mark.system
+@EXTENDED  # checks the benchmark's sweep itself; realtime jobs run in CI elsewhere
 def test_the_hardware_case_and_its_floor_at_one_rate(ros_env: dict[str, str]) -> None:
     points = sweep('slotting', ['single'], [250.0], 1.5, ros_env['ROS_DOMAIN_ID'], lambda _: None)
     assert [(p.case, p.rate_hz) for p in points] == [('floor', 250.0), ('single', 250.0)]
