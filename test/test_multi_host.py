@@ -39,7 +39,7 @@ import pytest
 from mill_common.ros import joint_state
 from rclpy.serialization import serialize_message
 
-from test.conftest import SCENARIO, wait_until
+from test.conftest import EXTENDED, SCENARIO, wait_until
 from test.two_hosts import (
     NamespacesUnavailable,
     TwoHosts,
@@ -129,6 +129,7 @@ def test_job_across_two_hosts_equals_offline(hosts: TwoHosts, tmp_path: Path) ->
 
 
 @pytest.mark.system
+@EXTENDED  # a cut the job survives in CI: test_link_loss.py (one second)
 def test_link_cut_for_two_seconds_job_resumes_both_sides_report(
     hosts: TwoHosts, tmp_path: Path
 ) -> None:
