@@ -15,7 +15,7 @@ import subprocess
 
 import pytest
 
-from test.conftest import start_scenario
+from test.conftest import EXTENDED, start_scenario
 
 
 def run_and_kill(ros_env, tmp_path, victim: str) -> tuple[int, str, dict]:
@@ -64,6 +64,7 @@ def test_killed_adrc_controller_rejoins_and_the_record_equals_offline(ros_env, t
 
 
 @pytest.mark.system
+@EXTENDED  # a killed node rejoining: the controller's test makes that claim in CI
 def test_killed_observer_rejoins_and_the_job_finishes_within_the_limit(ros_env, tmp_path) -> None:
     # The new observer starts from the measurement (velocity and disturbance 0): its
     # estimate differs from the old one's, the run from the offline one, by a transient.

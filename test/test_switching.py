@@ -19,7 +19,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from sensor_msgs.msg import JointState
 
 from mill_common import topics
-from test.conftest import ParameterClient, ros_node, start_scenario, wait_until
+from test.conftest import EXTENDED, ParameterClient, ros_node, start_scenario, wait_until
 
 # Every sample of a run: a job of 1 s at 4 kHz runs faster than real time, and this node
 # must not lose a command it has not taken yet while the machine is busy.
@@ -125,6 +125,7 @@ def test_controller_switch_mid_job_is_bumpless(ros_env) -> None:
 
 
 @pytest.mark.system
+@EXTENDED  # a bumpless switch mid-job: test_controller_switch_mid_job_is_bumpless in CI
 def test_switch_to_a_law_that_joins_the_observer_model_mid_job(ros_env) -> None:
     """hatwesh, machine_pi → adaptive_pi designing with the rls observer's estimate: from
     the switch on the controller also waits for /mill/x/observer_state of each sample."""
