@@ -18,7 +18,10 @@ tested here without a ROS install that has `launch`:
 - private_clock: `true` remaps /clock to NAMESPACE/clock for every node of the launch, as
   `run_scenario --private-clock` does, so that two simulated machines launched in one
   domain under two namespaces each keep their own clock; it needs a namespace (empty: the
-  scenario's `private_clock`).
+  scenario's `private_clock`);
+- end_with_job: `false` keeps the machine up once the job is done (timing realtime only):
+  the trajectory holds the job's last point under control and takes jog, home and MDI
+  (mill_trajectory.manual) until Ctrl-C; no job_watch is started.
 
 Every node gets one parameter file (written by `write_parameters`) with its merged values
 keyed `/**/NAME`, so they apply under the namespace whatever the keys of the scenario and
@@ -140,6 +143,14 @@ ARGUMENTS = (
         'by side in one domain each step to their own plant; needs a `namespace`',
         "the scenario's, else off",
     ),
+    Argument(
+        'end_with_job',
+        'true',
+        '`false`: the launch does not end when the job is done; the machine stays under '
+        'control at the job\'s last point for jog, home and MDI (`~/jog`, `~/home`, `~/mdi` '
+        'of the trajectory) until Ctrl-C; timing realtime only (in lockstep nothing steps '
+        'once the job is done)',
+    ),
 )
 # What runs the nodes a layout puts together (mill_bringup.container).
 CONTAINER_PACKAGE = 'mill_bringup'
@@ -179,6 +190,7 @@ def plan(
     log_level: str = 'info',
     layout: str = '',
     private_clock: str = '',
+    end_with_job: str = 'true',
     *,
     found: Callable[[str], bool] = installed,
 ) -> Plan:
@@ -203,11 +215,19 @@ def plan(
     switch = SWITCHES[private_clock.lower()]
     if switch is not None:
         scen.private_clock = switch
+    ends = SWITCHES.get(end_with_job.lower(), 'bad')
+    if ends not in (True, False):
+        raise ScenarioError(f'end_with_job must be true or false, got {end_with_job!r}')
     if scen.private_clock and scen.namespace == topics.ROOT:
         raise ScenarioError('a private clock needs a namespace (namespace:=NAME)')
     # The job's configuration: every value and cross-node rule checked before anything
     # starts, and the graph (exactly one clock node).
     job = job_for(scen)
+    if not ends and job.config.timing != 'realtime':
+        raise ScenarioError(
+            'end_with_job:=false needs timing realtime (in lockstep nothing steps once the job '
+            'is done)'
+        )
     chosen = check_layout(layout) if layout else scen.layout
     job.prepare_graph(monitored=False, layout=chosen)  # what the layout changes (no monitor)
     clocks = {n.name for n in job.clock_nodes}
@@ -237,7 +257,8 @@ def plan(
             f'{topics.qualify(topics.ROBOT_DESCRIPTION, scen.namespace)})'
         )
     processes = layout_processes(scen, chosen, config=job.config)
-    extra = [Process(n.name, (n,)) for n in (JOB_WATCH, *views)]
+    watch = (JOB_WATCH,) if ends else ()
+    extra = [Process(n.name, (n,)) for n in (*watch, *views)]
     for process in [*processes, *extra]:
         first = process.nodes[0]
         out.nodes.append(

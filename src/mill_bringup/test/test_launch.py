@@ -134,6 +134,18 @@ def test_private_clock_remaps_clock_into_the_namespace_for_every_process(layout:
     assert all(n.remappings == [] for n in launch_plan.plan('slotting', 'machine_a').nodes)
 
 
+def test_a_realtime_machine_can_stay_up_after_its_job() -> None:
+    # Issue 34: jog, home and MDI between jobs need the graph up once the job is done; the
+    # launch ends with the job only while job_watch is in it.
+    def names(**kwargs: str) -> set[str]:
+        return {n.name for n in launch_plan.plan('slotting', timing='realtime', **kwargs).nodes}
+
+    assert launch_plan.JOB_WATCH.name in names()
+    stays = names(end_with_job='false')
+    assert launch_plan.JOB_WATCH.name not in stays
+    assert stays == names() - {launch_plan.JOB_WATCH.name}
+
+
 @pytest.mark.parametrize(
     ('kwargs', 'message'),
     [
@@ -145,6 +157,8 @@ def test_private_clock_remaps_clock_into_the_namespace_for_every_process(layout:
         ({'layout': 'pairs'}, "layout must be one of processes, per_axis, single, got 'pairs'"),
         ({'private_clock': 'yes'}, "private_clock must be true or false, got 'yes'"),
         ({'private_clock': 'true'}, r'a private clock needs a namespace \(namespace:=NAME\)'),
+        ({'end_with_job': 'no'}, "end_with_job must be true or false, got 'no'"),
+        ({'end_with_job': 'false'}, 'end_with_job:=false needs timing realtime'),
     ],
 )
 def test_bad_arguments_end_in_one_line(kwargs: dict[str, str], message: str) -> None:
