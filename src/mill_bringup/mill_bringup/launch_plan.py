@@ -147,7 +147,7 @@ ARGUMENTS = (
         'end_with_job',
         'true',
         '`false`: the launch does not end when the job is done; the machine stays under '
-        'control at the job\'s last point for jog, home and MDI (`~/jog`, `~/home`, `~/mdi` '
+        "control at the job's last point for jog, home and MDI (`~/jog`, `~/home`, `~/mdi` "
         'of the trajectory) until Ctrl-C; timing realtime only (in lockstep nothing steps '
         'once the job is done)',
     ),
