@@ -12,12 +12,20 @@ from test.dds_sniffer import DdsSniffer
 
 
 @pytest.mark.system
-def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
+@pytest.mark.parametrize(
+    'duration',
+    # the whole main job (53.3 s of machine time, about 80 s here) in the extended suite:
+    # issue 35 asks for no WARN line over its full length, where the stalls were seen
+    [5.0, pytest.param(None, marks=EXTENDED, id='whole-job')],
+    ids=lambda d: f'{d}s' if d else 'whole-job',
+)
+def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path, duration):
     out = tmp_path / 'run'
+    length = ('--duration', str(duration)) if duration else ()
     with DdsSniffer() as sniffer:
         proc = run_scenario(
             ros_env,
-            *('slotting', '--duration', '5', '--compare-offline', '--quiet'),
+            *('slotting', *length, '--compare-offline', '--quiet'),
             *('--output', str(out)),
         )
     assert proc.returncode == 0, proc.stderr[-3000:]
@@ -25,7 +33,8 @@ def test_eight_process_run_equals_offline_simulation(ros_env, tmp_path):
     # other traffic, downloads or name lookups, is not RTPS and not counted).
     assert sniffer.count == 0, sniffer.examples
     summary = json.loads((out / 'summary.json').read_text())
-    assert summary['samples'] == 5001  # t = 0 .. 5 s at 1 kHz, the start included
+    if duration:
+        assert summary['samples'] == 5001  # t = 0 .. 5 s at 1 kHz, the start included
     assert summary['missing_samples'] == {}
     # Every sample of every axis: e_distributed == e_offline, bit for bit (the nodes call
     # the same cores in the same order on the same floats; README and docs/papers.md quote
