@@ -69,7 +69,7 @@ def stamp(data: bytes) -> int:
 
 def _node(role: str, steps: int, listener: bool) -> int:
     """One process of the graph; the plant prints the result."""
-    done = serve(f'floor_{role}', build(role, steps, listener), 600.0)
+    done = serve(f'floor_{role}', build(role, steps, listener), 600.0, like_nodes=True)
     if done and done[0] is not True:
         print(json.dumps(done[0]), flush=True)
     return 0
