@@ -15,6 +15,13 @@ the real job runs slower than this is the cost of our own code per step.
 With `listener`, a ninth process takes what the runner of a lockstep job takes (states,
 estimates, reference and the plant's ground truth, which the plant then publishes) and does
 nothing with it: the floor of a job that is watched, the cost of the runner's copies apart.
+
+The JSON gives steps/s, the plant's CPU per step and the CPU per step of every process of
+the graph (together: `cpu_ms_per_step`, as a job's summary counts it), from the first timed
+step to the last. With MILL_FLOOR_TAKE=gid every reader but the clock's takes as the nodes
+and the runner take an owned input (mill_common.graph_owner.GidSubscription: the bytes and
+the publisher GID of each message, a Waitable of rclpy's executor): what the ownership
+check by GID costs in transport alone.
 """
 
 from __future__ import annotations
@@ -25,8 +32,10 @@ import signal
 import struct
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 from mill_common.codec import encode_clock, encode_joint_state, encode_joint_trajectory
@@ -47,6 +56,7 @@ ROLES = ('trajectory', *(f'{a}_{r}' for r in ('observer', 'controller') for a in
 LISTENER = 'listener'  # the ninth process, started last (the plant waits for it)
 GROUND_TRUTH = f'{ROOT}/ground_truth'
 _STAMP = struct.Struct('<iI')
+STARTED = 'timing'  # the plant's line when the timed steps begin
 
 
 def topic(axis: str, name: str) -> str:
@@ -59,7 +69,7 @@ def stamp(data: bytes) -> int:
 
 def _node(role: str, steps: int, listener: bool) -> int:
     """One process of the graph; the plant prints the result."""
-    done = serve(f'floor_{role}', build(role, steps, listener), 600.0)
+    done = serve(f'floor_{role}', build(role, steps, listener), 600.0, like_nodes=True)
     if done and done[0] is not True:
         print(json.dumps(done[0]), flush=True)
     return 0
@@ -83,9 +93,22 @@ def _answer(node: Any, reads: list[str], write: str, frame: str, fields: int) ->
             pub.publish(encode_joint_state(ns, frame, (axis,), *arrays))
 
     for name in reads:
-        node.create_subscription(
-            JointState, name, lambda data, name=name: on(name, data), DATA_QOS, raw=True
-        )
+        _take(node, JointState, name, partial(on, name))
+
+
+def _take(node: Any, msg_type: Any, name: str, callback: Callable[[bytes], None]) -> None:
+    """A raw subscription as rclpy makes it; with MILL_FLOOR_TAKE=gid, as the nodes take an
+    owned input (mill_common.graph_owner.GidSubscription: bytes and publisher GID)."""
+    if os.environ.get('MILL_FLOOR_TAKE') == 'gid':
+        from mill_common.graph_owner import GidSubscription
+
+        GidSubscription(node, msg_type, name, lambda data, gid: callback(data), DATA_QOS)
+    else:
+        node.create_subscription(msg_type, name, callback, DATA_QOS, raw=True)
+
+
+def _ignore(data: bytes) -> None:
+    pass
 
 
 def _clock_reader(node: Any, callback: Callable[[bytes], None] | None = None) -> None:
@@ -101,17 +124,15 @@ def build(role: str, steps: int, listener: bool = False) -> Callable[[Any, list[
 
         reads = [topic(a, name) for a in AXES for name in ('state', 'estimate')]
         for name in (*reads, GROUND_TRUTH):
-            node.create_subscription(JointState, name, lambda data: None, DATA_QOS, raw=True)
-        node.create_subscription(JointTrajectory, REFERENCE, lambda data: None, DATA_QOS, raw=True)
+            _take(node, JointState, name, _ignore)
+        _take(node, JointTrajectory, REFERENCE, _ignore)
 
     def observer(node: Any, done: list[Any]) -> None:
         from sensor_msgs.msg import JointState
 
         axis = role[0]
         _clock_reader(node)
-        node.create_subscription(
-            JointState, topic(axis, 'joint_command'), lambda data: None, DATA_QOS, raw=True
-        )
+        _take(node, JointState, topic(axis, 'joint_command'), _ignore)
         _answer(node, [topic(axis, 'state')], topic(axis, 'estimate'), role, 3)
 
     def controller(node: Any, done: list[Any]) -> None:
@@ -119,7 +140,7 @@ def build(role: str, steps: int, listener: bool = False) -> Callable[[Any, list[
 
         axis = role[0]
         _clock_reader(node)
-        node.create_subscription(JointTrajectory, REFERENCE, lambda data: None, DATA_QOS, raw=True)
+        _take(node, JointTrajectory, REFERENCE, _ignore)
         reads = [topic(axis, 'state'), topic(axis, 'estimate')]
         _answer(node, reads, topic(axis, 'joint_command'), role, 1)
 
@@ -162,6 +183,7 @@ def build(role: str, steps: int, listener: bool = False) -> Callable[[Any, list[
             k[0] += 1
             if k[0] == WARM_UP:
                 timing[:] = [time.perf_counter(), time.process_time()]
+                print(STARTED, flush=True)  # the parent takes the CPU times of the graph
             if k[0] == WARM_UP + steps:
                 wall = time.perf_counter() - timing[0]
                 cpu = time.process_time() - timing[1]
@@ -170,13 +192,8 @@ def build(role: str, steps: int, listener: bool = False) -> Callable[[Any, list[
             publish_step()
 
         for a in AXES:
-            node.create_subscription(
-                JointState,
-                topic(a, 'joint_command'),
-                lambda data, a=a: on_command(a, data),
-                DATA_QOS,
-                raw=True,
-            )
+            command = topic(a, 'joint_command')
+            _take(node, JointState, command, partial(on_command, a))
 
         def ready() -> bool:
             return (
@@ -207,10 +224,16 @@ def measure(
     steps: int, env: dict[str, str], timeout: float = 600.0, listener: bool = False
 ) -> dict[str, float]:
     """Run the eight processes (nine with the listener) for `steps` steps (after a warm-up);
-    steps/s and the plant's CPU per step. The other processes end with the plant."""
+    steps/s, the plant's CPU per step and the CPU per step of every process of the graph
+    together (`cpu_ms_per_step`, as a job's summary counts it). The other processes end
+    with the plant."""
+    from mill_bringup.graph import cpu_seconds
+
     procs = []
     roles = (*ROLES, LISTENER) if listener else ROLES
     extra = [LISTENER] if listener else []
+    lines: list[str] = []
+    by_process: list[list[float]] = []  # CPU times of each process at the start and end
     try:
         for role in roles:
             procs.append(
@@ -221,12 +244,25 @@ def measure(
                     text=True,
                 )
             )
+        plant = procs[ROLES.index('plant')]
+        deadline = time.monotonic() + timeout
+        timer = threading.Timer(timeout, plant.kill)  # a lost run ends the read below
+        timer.start()
         try:
-            out, _ = procs[ROLES.index('plant')].communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
+            assert plant.stdout is not None
+            for line in plant.stdout:
+                if line.strip() == STARTED or line.startswith('{'):
+                    by_process.append([cpu_seconds(p.pid) for p in procs])
+                lines.append(line)
+                if line.startswith('{'):
+                    break
+            plant.wait(timeout=10)  # its result printed, it ends by itself
+        finally:
+            timer.cancel()
+        if not any(line.startswith('{') for line in lines) and time.monotonic() >= deadline:
             raise RuntimeError(
                 f'the empty-callback graph did not run {steps} steps within {timeout:g} s'
-            ) from None
+            )
     finally:
         for proc in procs:
             if proc.poll() is None:
@@ -237,13 +273,18 @@ def measure(
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
-    lines = [line for line in out.splitlines() if line.startswith('{')]
-    if not lines:
+    results = [line for line in lines if line.startswith('{')]
+    if not results:
         raise RuntimeError(
             'the empty-callback plant printed no result '
             f'(exit {procs[ROLES.index("plant")].returncode})'
         )
-    return json.loads(lines[-1])
+    result = json.loads(results[-1])
+    if len(by_process) == 2:
+        used = [1e3 * (b - a) / steps for a, b in zip(*by_process, strict=True)]
+        result['cpu_ms_per_step'] = sum(used)
+        result['cpu_ms_per_step_by_process'] = dict(zip(roles, used, strict=True))
+    return result
 
 
 def main(argv: list[str] | None = None) -> int:

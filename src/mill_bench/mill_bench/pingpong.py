@@ -22,15 +22,25 @@ from mill_common.ros import DATA_QOS, joint_state
 PING, PONG = '/mill_bench/ping', '/mill_bench/pong'
 
 
-def serve(name: str, build: Callable[[Any, list[Any]], None], limit: float) -> list[Any]:
+def serve(
+    name: str, build: Callable[[Any, list[Any]], None], limit: float, like_nodes: bool = False
+) -> list[Any]:
     """One benchmark process: a node `name` whose endpoints `build(node, done)` makes, spun
     until something is put in `done`, SIGINT, or `limit` seconds (never outlive a lost run).
-    Returns `done`."""
+    Returns `done`.
+
+    like_nodes: spun as a node process spins (mill_common.node_main.run_nodes: the executor
+    runs callbacks until a future is done, 0.2 s at most between two looks), not one callback
+    per spin_once: with the C++ EventsExecutor a Waitable's message (a GID take) is two
+    events, its take and its Task, and each spin_once ends after one."""
     import rclpy
+    from rclpy.executors import ExternalShutdownException
     from rclpy.node import Node
+    from rclpy.task import Future
 
     rclpy.init()
-    done: list[Any] = []
+    ended = Future()
+    done: list[Any] = _Done(ended) if like_nodes else []
     try:
         node = Node(name)
         build(node, done)
@@ -38,12 +48,28 @@ def serve(name: str, build: Callable[[Any, list[Any]], None], limit: float) -> l
         executor.add_node(node)
         deadline = time.monotonic() + limit
         while not done and rclpy.ok() and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.2)
-    except KeyboardInterrupt:
-        pass
+            if like_nodes:
+                executor.spin_until_future_complete(ended, timeout_sec=0.2)
+            else:
+                executor.spin_once(timeout_sec=0.2)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass  # SIGINT: in the executor's wait, rclpy's handler shuts the context down
     finally:
         rclpy.try_shutdown()
     return done
+
+
+class _Done(list[Any]):
+    """`done` that also completes a future when something is put in it."""
+
+    def __init__(self, future: Any) -> None:
+        super().__init__()
+        self._future = future
+
+    def append(self, item: Any) -> None:
+        super().append(item)
+        if not self._future.done():
+            self._future.set_result(True)
 
 
 def pong() -> int:
