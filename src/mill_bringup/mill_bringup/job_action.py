@@ -6,8 +6,11 @@ checked before anything starts (`goal_problem`: one line), run as `python -m
 mill_bringup.runner` (`runner_command`), followed from the trajectory's job status and the
 machine's warnings on /diagnostics and from /clock (`JobProgress`, the feedback), and its
 result read from the run directory's summary.json (`read_result`), whose `outcome` is typed
-(runner.result.Outcome). A cancel holds the feed first; the axes are at rest once every axis
-velocity of the trajectory's reference is 0 (`at_rest`).
+(runner.result.Outcome). A machine with a private clock (the server's `private_clock`, or the
+scenario's own `mill_scenario: private_clock`) keeps it on NAMESPACE/clock, not /clock
+(`clock_topic`): the feedback's machine time comes from there. A cancel holds the feed
+first; the axes are at rest once every axis velocity of the trajectory's reference is 0
+(`at_rest`).
 """
 
 from __future__ import annotations
@@ -42,8 +45,11 @@ class JobGoal:
         return Path(self.job).suffix.lower() in PROGRAM_SUFFIXES
 
 
-def goal_problem(goal: JobGoal) -> str | None:
-    """Why this goal cannot run, in one line (None: it can)."""
+def goal_problem(
+    goal: JobGoal, namespace: str = topics.ROOT, private_clock: bool = False
+) -> str | None:
+    """Why this goal cannot run, in one line (None: it can), for a machine in `namespace`
+    asked to keep a private clock or not."""
     if not goal.job.strip():
         return 'no job: name a scenario or a G-code program file'
     if not math.isfinite(goal.duration) or goal.duration < 0:
@@ -57,18 +63,38 @@ def goal_problem(goal: JobGoal) -> str | None:
             check_layout(goal.layout)
         except ScenarioError as exc:
             return f'layout: {exc}'
-    if goal.is_program:
-        path = Path(goal.job)
-        return None if path.is_file() else f'program {goal.job}: no such file'
+    if goal.is_program and not Path(goal.job).is_file():
+        return f'program {goal.job}: no such file'
     try:
-        load(goal.job)
+        clock = clock_topic(goal, namespace, private_clock)
     except (ScenarioError, OSError) as exc:
         return f'scenario {goal.job!r}: {" ".join(str(exc).split())}'
+    if clock is None:
+        return (
+            'a private clock needs a machine namespace: run the job server in one '
+            '(--ros-args -r __ns:=/NAME)'
+        )
     return None
 
 
-def runner_command(goal: JobGoal, run_dir: Path, namespace: str) -> list[str]:
-    """The runner's command line for this goal, in this machine namespace."""
+def clock_topic(goal: JobGoal, namespace: str, private_clock: bool) -> str | None:
+    """The topic of the clock the goal's machine keeps: NAMESPACE/clock with a private clock
+    (asked for, or the scenario's own `private_clock`), else /clock; the namespace is the
+    server's, else the scenario's own. None: a private clock without a namespace (the runner
+    refuses it). ScenarioError: the goal's scenario does not load."""
+    scen = load(PROGRAM_SCENARIO if goal.is_program else goal.job)
+    space = namespace if topics.namespace(namespace) != topics.ROOT else scen.namespace
+    private = private_clock or scen.private_clock
+    if private and topics.namespace(space) == topics.ROOT:
+        return None
+    return topics.clock(space, private=private)
+
+
+def runner_command(
+    goal: JobGoal, run_dir: Path, namespace: str, private_clock: bool = False
+) -> list[str]:
+    """The runner's command line for this goal, in this machine namespace, with a private
+    clock or not (at the root there is none: goal_problem)."""
     scenario = PROGRAM_SCENARIO if goal.is_program else goal.job
     cmd = [sys.executable, '-m', 'mill_bringup.runner', scenario, '--output', str(run_dir)]
     cmd.append('--quiet')  # the server reports the progress
@@ -82,6 +108,8 @@ def runner_command(goal: JobGoal, run_dir: Path, namespace: str) -> list[str]:
         cmd += ['--layout', goal.layout]
     if topics.namespace(namespace) != topics.ROOT:
         cmd += ['--namespace', topics.namespace(namespace)]
+        if private_clock:
+            cmd.append('--private-clock')
     return cmd
 
 

@@ -5,8 +5,11 @@
         "{job: slotting, duration: 0.3}"
 
 A goal runs `python -m mill_bringup.runner` in a process of its own, in this node's
-ROS_DOMAIN_ID and namespace, with its run directory under `runs_dir`. Feedback (twice a
-second once the job runs, and once at its end): the machine time (/clock), the share done,
+ROS_DOMAIN_ID and namespace, with its run directory under `runs_dir`; with `private_clock`
+(in a namespace) the machine keeps its clock on NAMESPACE/clock (run_scenario
+--private-clock), as it does when the goal's scenario asks for a private clock itself.
+Feedback (twice a second once the job runs, and once at its end): the machine time (from the
+clock the goal's machine keeps, mill_bringup.job_action.clock_topic), the share done,
 the program line of the latest event, the feed override and hold state (the trajectory's
 job status on /diagnostics), the latest warnings of the machine and error lines of the
 runner. The result: the runner's exit code,
@@ -31,7 +34,7 @@ from typing import Any, ClassVar
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.declared import ParamSet, param
 from mill_common.node_main import run_node
-from mill_common.parameters import ParamSpec, in_range, text
+from mill_common.parameters import ParamSpec, boolean, in_range, text
 from mill_common.ros_params import NodeParameters
 from mill_interfaces.action import RunJob
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -48,6 +51,7 @@ from mill_bringup.job_action import (
     JobProgress,
     JobResult,
     at_rest,
+    clock_topic,
     goal_problem,
     problem_line,
     read_result,
@@ -77,6 +81,13 @@ class JobServerParams(ParamSet):
         in_range(0.0, 600.0),
         unit='s',
     )
+    private_clock: bool = param(
+        False,
+        "each goal's machine keeps its simulation clock on NAMESPACE/clock instead of /clock "
+        '(run_scenario --private-clock), so that machines in other namespaces of the domain '
+        'run at the same time; needs a namespace (-r __ns:=/NAME)',
+        boolean,
+    )
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -99,6 +110,7 @@ class Run:
         self.hold_deadline = 0.0
         self.rested = False
         self.stopped_at = 0.0
+        self.private_clock = False  # run_scenario --private-clock
 
 
 class JobServer(Node):
@@ -109,7 +121,7 @@ class JobServer(Node):
         self._count = 0
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
         self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_status, qos)
-        self.create_subscription(Clock, '/clock', self._on_clock, 1)
+        self._machine_clock: Any = None  # the clock of the goal's machine, once a goal runs
         self._reference: Any = None  # subscribed while a cancel holds the feed
         self._hold_client: Any = None
         self._server = ActionServer(
@@ -136,7 +148,8 @@ class JobServer(Node):
                 else f'goal {goal.job!r} rejected: shutting down'
             )
             return GoalResponse.REJECT
-        problem = goal_problem(goal)
+        private = self.params.values['private_clock']
+        problem = goal_problem(goal, self.get_namespace(), private)
         if problem is not None:
             self.get_logger().warning(f'goal rejected: {problem}')
             return GoalResponse.REJECT
@@ -144,7 +157,19 @@ class JobServer(Node):
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = Path(self.params.values['runs_dir']) / f'job-{stamp}-{self._count}'
         self._run = Run(None, goal, run_dir)  # type: ignore[arg-type]  # the handle comes next
+        self._run.private_clock = private
+        clock = clock_topic(goal, self.get_namespace(), private)
+        if clock is not None:  # None: goal_problem refused the goal
+            self._follow_clock(clock)
         return GoalResponse.ACCEPT
+
+    def _follow_clock(self, topic: str) -> None:
+        """Take the machine time of the goal's machine from this clock topic."""
+        if self._machine_clock is not None and self._machine_clock.topic_name == topic:
+            return
+        if self._machine_clock is not None:
+            self.destroy_subscription(self._machine_clock)
+        self._machine_clock = self.create_subscription(Clock, topic, self._on_clock, 1)
 
     def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
         run = self._run
@@ -156,7 +181,7 @@ class JobServer(Node):
         run = self._run
         assert run is not None
         run.handle = handle
-        cmd = runner_command(run.goal, run.run_dir, self.get_namespace())
+        cmd = runner_command(run.goal, run.run_dir, self.get_namespace(), run.private_clock)
         try:
             run.run_dir.mkdir(parents=True, exist_ok=True)
             with run.log.open('wb') as log:

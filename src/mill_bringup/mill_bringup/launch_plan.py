@@ -213,7 +213,7 @@ def plan(
     clocks = {n.name for n in job.clock_nodes}
     remappings = []
     if scen.private_clock and scen.namespace != topics.ROOT:
-        remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
+        remappings.append((topics.CLOCK, topics.clock(scen.namespace, private=True)))
     # What mill_container reads to tell which class each of its nodes is (the runner gives
     # it the scenario file itself).
     launch = [f'{n.name} {n.package} {n.executable}' for n in scen.nodes]

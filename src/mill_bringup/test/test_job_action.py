@@ -13,6 +13,7 @@ from mill_bringup.job_action import (
     JobGoal,
     JobProgress,
     at_rest,
+    clock_topic,
     goal_problem,
     problem_line,
     read_result,
@@ -67,6 +68,39 @@ def test_the_runner_command_of_a_scenario_and_of_a_program() -> None:
     assert program[program.index('--program') + 1] == str(PROGRAM)
     assert program[-2:] == ['--namespace', '/machine2']
     assert '--duration' not in program  # 0: the scenario's own
+
+
+def private_scenario(tmp_path: Path, namespace: str = '') -> Path:
+    """The slotting scenario asking for a private clock itself (in `namespace`)."""
+    text = (REPO / 'config' / 'slotting.yaml').read_text()
+    entry = '  ros__parameters:\n    private_clock: true\n'
+    if namespace:
+        entry += f'    namespace: {namespace}\n'
+    path = tmp_path / f'private{namespace}.yaml'
+    head = 'mill_scenario:\n  ros__parameters:\n'
+    path.write_text(text.replace(head, 'mill_scenario:\n' + entry))
+    return path
+
+
+def test_the_clock_of_a_goal_is_the_one_its_machine_keeps(tmp_path: Path) -> None:
+    goal = JobGoal('slotting', 0.3)
+    assert clock_topic(goal, '/', False) == clock_topic(goal, 'machine2', False) == '/clock'
+    assert clock_topic(goal, 'machine2', True) == '/machine2/clock'
+    assert clock_topic(JobGoal(str(PROGRAM)), '/m', True) == '/m/clock'
+    cmd = runner_command(goal, Path('r'), 'machine2', private_clock=True)
+    assert cmd[-3:] == ['--namespace', '/machine2', '--private-clock']
+    # a scenario that asks for a private clock itself: in the server's namespace, or its own
+    own = JobGoal(str(private_scenario(tmp_path)))
+    assert clock_topic(own, '/shop/m2', False) == '/shop/m2/clock'
+    placed = JobGoal(str(private_scenario(tmp_path, 'machine_b')))
+    assert clock_topic(placed, '/', False) == '/machine_b/clock'
+    assert goal_problem(placed) is None
+    # no namespace at all: no private clock, and the goal says why in one line
+    said = 'a private clock needs a machine namespace: run the job server in one'
+    for bad in ((goal, '/', True), (own, '/', False)):
+        assert clock_topic(*bad) is None
+        problem = goal_problem(*bad)
+        assert problem is not None and problem.startswith(said) and '\n' not in problem
 
 
 def test_feedback_follows_the_clock_and_the_job_status() -> None:
