@@ -44,6 +44,7 @@ from mill_common.machine_urdf import frame_prefix
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
+from mill_bringup.machine_model import VIEW_NODE, view_parameters
 from mill_bringup.scenario import (
     LAYOUTS,
     SCENARIO_KEY,
@@ -67,7 +68,7 @@ SWITCHES = {'true': True, 'false': False, '': None}  # a boolean argument; '': t
 JOB_WATCH = NodeLaunch('job_watch', 'mill_bringup', 'job_watch')
 # The node that publishes the URDF and the tool trace (mill_bringup.machine_view), and the
 # one that makes /tf of them where it is installed (it is not on PyPI).
-MACHINE_VIEW = NodeLaunch('machine_view', 'mill_bringup', 'machine_view')
+MACHINE_VIEW = NodeLaunch(VIEW_NODE, 'mill_bringup', 'machine_view')
 STATE_PUBLISHER = NodeLaunch(
     'robot_state_publisher', 'robot_state_publisher', 'robot_state_publisher'
 )
@@ -222,7 +223,7 @@ def plan(
     # The viewers' nodes: the URDF of this job's machine, and /tf of it where possible.
     urdf = robot_description(job.config)
     views = [MACHINE_VIEW]
-    out.parameters[f'/**/{MACHINE_VIEW.name}'] = {'ros__parameters': {'robot_description': urdf}}
+    out.parameters.update(view_parameters(job.config))
     if found(STATE_PUBLISHER.package):
         views.append(STATE_PUBLISHER)
         out.parameters[f'/**/{STATE_PUBLISHER.name}'] = {

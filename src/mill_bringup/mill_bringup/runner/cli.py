@@ -156,6 +156,14 @@ def parser() -> argparse.ArgumentParser:
         "controller of an axis together), single (all in one); default: the scenario's "
         '(mill_scenario: layout:), else processes',
     )
+    parser.add_argument(
+        '--view',
+        action='store_true',
+        help='also start machine_view beside the graph, in its namespace and domain, as the '
+        "launch does: the machine's URDF on robot_description (transient local) and the "
+        'measured tool trace on mill/tool_trace, for RViz or Foxglove; stopped with the graph, '
+        'its output in RUN_DIR/logs/machine_view.log',
+    )
     return parser
 
 
@@ -189,6 +197,7 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         layout=args.layout,
         rearm=args.rearm,
         runner_priority=runner_priority(args),
+        view=args.view,
     )
 
 
