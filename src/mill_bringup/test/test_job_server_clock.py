@@ -15,7 +15,6 @@ import pytest
 def test_a_private_clock_goal_follows_its_own_clock_and_not_the_global_one(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    from builtin_interfaces.msg import Time
     from mill_bringup.job_server import JobServer
     from mill_common.in_process import node_factory
     from mill_interfaces.action import RunJob
@@ -38,15 +37,21 @@ def test_a_private_clock_goal_follows_its_own_clock_and_not_the_global_one(
             assert server._on_goal(goal) == GoalResponse.ACCEPT
             run: Any = server._run
             assert run.private_clock
+
+            def tick(sec: int, nanosec: int = 0) -> Any:
+                msg = Clock()
+                msg.clock.sec, msg.clock.nanosec = sec, nanosec
+                return msg
+
             own = clocks.create_publisher(Clock, f'{ns}/clock', 10)
             other = clocks.create_publisher(Clock, '/clock', 10)
             end = time.monotonic() + 10.0
             while run.progress.machine_time == 0.0 and time.monotonic() < end:
-                other.publish(Clock(clock=Time(sec=7)))  # another machine's, further on
-                own.publish(Clock(clock=Time(sec=2, nanosec=500_000_000)))
+                other.publish(tick(7))  # another machine's, further on
+                own.publish(tick(2, 500_000_000))
                 executor.spin_once(timeout_sec=0.05)
             for _ in range(20):  # the global clock keeps ticking: still not taken
-                other.publish(Clock(clock=Time(sec=7)))
+                other.publish(tick(7))
                 executor.spin_once(timeout_sec=0.01)
             assert run.progress.machine_time == 2.5
             assert server._machine_clock.topic_name == f'{ns}/clock'
