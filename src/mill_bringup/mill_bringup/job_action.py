@@ -77,13 +77,22 @@ def goal_problem(
     return None
 
 
+def machine_namespace(goal: JobGoal, namespace: str) -> str:
+    """The namespace the goal's machine runs in: the server's (the runner's --namespace), else
+    at the root the scenario's own (`mill_scenario: namespace`). ScenarioError: the goal's
+    scenario does not load."""
+    if topics.namespace(namespace) != topics.ROOT:
+        return topics.namespace(namespace)
+    return load(PROGRAM_SCENARIO if goal.is_program else goal.job).namespace
+
+
 def clock_topic(goal: JobGoal, namespace: str, private_clock: bool) -> str | None:
     """The topic of the clock the goal's machine keeps: NAMESPACE/clock with a private clock
-    (asked for, or the scenario's own `private_clock`), else /clock; the namespace is the
-    server's, else the scenario's own. None: a private clock without a namespace (the runner
+    (asked for, or the scenario's own `private_clock`), else /clock, in the machine's
+    namespace (machine_namespace). None: a private clock without a namespace (the runner
     refuses it). ScenarioError: the goal's scenario does not load."""
     scen = load(PROGRAM_SCENARIO if goal.is_program else goal.job)
-    space = namespace if topics.namespace(namespace) != topics.ROOT else scen.namespace
+    space = machine_namespace(goal, namespace)
     private = private_clock or scen.private_clock
     if private and topics.namespace(space) == topics.ROOT:
         return None
@@ -93,8 +102,8 @@ def clock_topic(goal: JobGoal, namespace: str, private_clock: bool) -> str | Non
 def runner_command(
     goal: JobGoal, run_dir: Path, namespace: str, private_clock: bool = False
 ) -> list[str]:
-    """The runner's command line for this goal, in this machine namespace, with a private
-    clock or not (at the root there is none: goal_problem)."""
+    """The runner's command line for this goal, in this machine namespace (the root: the
+    scenario's own), with a private clock or not (goal_problem: only in a namespace)."""
     scenario = PROGRAM_SCENARIO if goal.is_program else goal.job
     cmd = [sys.executable, '-m', 'mill_bringup.runner', scenario, '--output', str(run_dir)]
     cmd.append('--quiet')  # the server reports the progress
@@ -108,8 +117,8 @@ def runner_command(
         cmd += ['--layout', goal.layout]
     if topics.namespace(namespace) != topics.ROOT:
         cmd += ['--namespace', topics.namespace(namespace)]
-        if private_clock:
-            cmd.append('--private-clock')
+    if private_clock:  # in the server's namespace, else the scenario's (goal_problem)
+        cmd.append('--private-clock')
     return cmd
 
 

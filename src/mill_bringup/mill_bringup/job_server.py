@@ -53,6 +53,7 @@ from mill_bringup.job_action import (
     at_rest,
     clock_topic,
     goal_problem,
+    machine_namespace,
     problem_line,
     read_result,
     runner_command,
@@ -111,6 +112,7 @@ class Run:
         self.rested = False
         self.stopped_at = 0.0
         self.private_clock = False  # run_scenario --private-clock
+        self.namespace = topics.ROOT  # the machine's: the server's, else the scenario's
 
 
 class JobServer(Node):
@@ -158,6 +160,7 @@ class JobServer(Node):
         run_dir = Path(self.params.values['runs_dir']) / f'job-{stamp}-{self._count}'
         self._run = Run(None, goal, run_dir)  # type: ignore[arg-type]  # the handle comes next
         self._run.private_clock = private
+        self._run.namespace = machine_namespace(goal, self.get_namespace())
         clock = clock_topic(goal, self.get_namespace(), private)
         if clock is not None:  # None: goal_problem refused the goal
             self._follow_clock(clock)
@@ -276,7 +279,7 @@ class JobServer(Node):
         if run is None:
             return
         for status in msg.status:
-            if not topics.from_machine(status.hardware_id, self.get_namespace()):
+            if not topics.from_machine(status.hardware_id, run.namespace):
                 continue
             if topics.part_of(status.name) == topics.JOB_STATUS:
                 run.progress.on_job_status(status.name, {kv.key: kv.value for kv in status.values})
@@ -291,7 +294,7 @@ class JobServer(Node):
     # -- a controlled stop ---------------------------------------------------------------
     def _start_hold(self, run: Run) -> None:
         trajectory = run.progress.trajectory or 'trajectory'
-        service = topics.qualify(f'{trajectory}/feed_hold', self.get_namespace())
+        service = topics.qualify(f'{trajectory}/feed_hold', run.namespace)
         run.stage = 'holding'
         run.hold_deadline = time.monotonic() + self.params.values['hold_timeout']
         self.get_logger().info(f'cancel: feed hold ({service}), then the runner stops')

@@ -15,6 +15,7 @@ from mill_bringup.job_action import (
     at_rest,
     clock_topic,
     goal_problem,
+    machine_namespace,
     problem_line,
     read_result,
     runner_command,
@@ -94,6 +95,12 @@ def test_the_clock_of_a_goal_is_the_one_its_machine_keeps(tmp_path: Path) -> Non
     assert clock_topic(own, '/shop/m2', False) == '/shop/m2/clock'
     placed = JobGoal(str(private_scenario(tmp_path, 'machine_b')))
     assert clock_topic(placed, '/', False) == '/machine_b/clock'
+    # the machine's namespace: the server's, else the scenario's own (its statuses, services)
+    assert machine_namespace(placed, '/') == '/machine_b'
+    assert machine_namespace(placed, 'shop') == '/shop'
+    assert machine_namespace(goal, '/') == '/'
+    cmd = runner_command(placed, Path('r'), '/', private_clock=True)
+    assert '--namespace' not in cmd and cmd[-1] == '--private-clock'  # the scenario's namespace
     assert goal_problem(placed) is None
     # no namespace at all: no private clock, and the goal says why in one line
     said = 'a private clock needs a machine namespace: run the job server in one'
