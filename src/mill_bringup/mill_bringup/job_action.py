@@ -23,6 +23,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mill_bringup.cli import TUNINGS
+from mill_bringup.launch_plan import TIMINGS
 from mill_bringup.runner.result import INTERRUPTED_CODE, START_REFUSED, Outcome, ended
 from mill_bringup.scenario import ScenarioError, check_layout, load
 from mill_common import topics
@@ -39,6 +41,10 @@ class JobGoal:
     duration: float = 0.0  # machine time [s]; 0 the scenario's
     overrides: tuple[str, ...] = ()  # run_scenario -p NODE.PARAM=VALUE
     layout: str = ''  # processes, per_axis, single; '' the scenario's
+    timing: str = ''  # lockstep, realtime; '' the scenario's
+    tuning: str = ''  # rule: the tuning rule's gains; '' the scenario's
+    stay: bool = False  # realtime: the graph stays up after the job until canceled
+    view: bool = False  # machine_view beside the graph
 
     @property
     def is_program(self) -> bool:
@@ -63,6 +69,15 @@ def goal_problem(
             check_layout(goal.layout)
         except ScenarioError as exc:
             return f'layout: {exc}'
+    if goal.timing and goal.timing not in TIMINGS:
+        return f"timing {goal.timing!r}: one of {', '.join(TIMINGS)} (empty: the scenario's)"
+    if goal.tuning and goal.tuning not in TUNINGS:
+        return f"tuning {goal.tuning!r}: one of {', '.join(TUNINGS)} (empty: the scenario's gains)"
+    if goal.stay and goal.timing != 'realtime':
+        return (
+            'stay: the graph stays up after its job for manual commands, which need timing '
+            'realtime: give timing realtime'
+        )
     if goal.is_program and not Path(goal.job).is_file():
         return f'program {goal.job}: no such file'
     try:
@@ -115,6 +130,11 @@ def runner_command(
         cmd += ['-p', rule]
     if goal.layout:
         cmd += ['--layout', goal.layout]
+    if goal.timing:
+        cmd += ['--timing', goal.timing]
+    if goal.tuning:
+        cmd += ['--tuning', goal.tuning]
+    cmd += ['--stay'] * goal.stay + ['--view'] * goal.view
     if topics.namespace(namespace) != topics.ROOT:
         cmd += ['--namespace', topics.namespace(namespace)]
     if private_clock:  # in the server's namespace, else the scenario's (goal_problem)
@@ -142,6 +162,7 @@ class JobProgress:
     line: str = ''
     feed_override: float = 1.0
     hold: str = ''
+    state: str = ''  # the job's: waiting, running, done, refused ('' not heard yet)
     trajectory: str = ''  # the trajectory node's name, from its status
     problems: deque[str] = field(default_factory=lambda: deque(maxlen=PROBLEMS_KEPT))
 
@@ -160,6 +181,7 @@ class JobProgress:
         self.end_time = _number(values.get('end_time'), self.end_time)
         self.feed_override = _number(values.get('feed_override'), self.feed_override)
         self.hold = values.get('hold', self.hold)
+        self.state = values.get('state', self.state)
         self.line = values.get('event_where') or self.line
 
     def on_problem(self, text: str) -> None:

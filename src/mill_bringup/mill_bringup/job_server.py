@@ -17,7 +17,10 @@ its summary.json's outcome and the summary. One goal at a time; a bad goal is re
 with one line (mill_bringup.job_action.goal_problem). A cancel is a controlled stop: the
 trajectory's ~/feed_hold (a deceleration along the path), until every axis velocity of its
 reference is 0 or `hold_timeout` passed, then SIGINT to the runner, which stops the graph
-and closes its bag; the result says whether the axes were held (`held`).
+and closes its bag; the result says whether the axes were held (`held`). A goal with `stay`
+(timing realtime) keeps its graph up after the job for manual commands until it is canceled;
+a cancel then stops any manual move along its path (~/jog_stop) instead, and the runner ends
+as for a complete job once the reference is at rest.
 """
 
 from __future__ import annotations
@@ -113,6 +116,7 @@ class Run:
         self.stopped_at = 0.0
         self.private_clock = False  # run_scenario --private-clock
         self.namespace = topics.ROOT  # the machine's: the server's, else the scenario's
+        self.manual = False  # canceled while staying up after the job: ~/jog_stop
 
 
 class JobServer(Node):
@@ -140,7 +144,14 @@ class JobServer(Node):
     # -- goals ---------------------------------------------------------------------------
     def _on_goal(self, request: Any) -> GoalResponse:
         goal = JobGoal(
-            request.job, float(request.duration), tuple(request.overrides), request.layout
+            request.job,
+            float(request.duration),
+            tuple(request.overrides),
+            request.layout,
+            request.timing,
+            request.tuning,
+            bool(request.stay),
+            bool(request.view),
         )
         if self._run is not None or self._count < 0:
             self.get_logger().warning(
@@ -294,10 +305,14 @@ class JobServer(Node):
     # -- a controlled stop ---------------------------------------------------------------
     def _start_hold(self, run: Run) -> None:
         trajectory = run.progress.trajectory or 'trajectory'
-        service = topics.qualify(f'{trajectory}/feed_hold', run.namespace)
+        # A job done and staying up (goal.stay): what may move is a manual move, stopped
+        # along its path by ~/jog_stop; else the job, held by ~/feed_hold.
+        run.manual = run.goal.stay and run.progress.state == 'done'
+        stop = 'jog_stop' if run.manual else 'feed_hold'
+        service = topics.qualify(f'{trajectory}/{stop}', run.namespace)
         run.stage = 'holding'
         run.hold_deadline = time.monotonic() + self.params.values['hold_timeout']
-        self.get_logger().info(f'cancel: feed hold ({service}), then the runner stops')
+        self.get_logger().info(f'cancel: {stop} ({service}), then the runner stops')
         self._reference = self.create_subscription(
             JointTrajectory, topics.REFERENCE, lambda m: self._on_reference(run, m), 10
         )
@@ -312,7 +327,10 @@ class JobServer(Node):
 
     def _held(self, run: Run, future: Future) -> None:
         answer = future.result()
-        if answer is None or not answer.success:
+        if answer is not None and not answer.success and run.manual:
+            # no manual move under way: the runner stops once the reference is seen at rest
+            self.get_logger().info(f'cancel: {answer.message}')
+        elif answer is None or not answer.success:
             said = 'no answer' if answer is None else answer.message
             self.get_logger().warning(f'cancel: feed hold refused ({said}); stopping the runner')
             if run.stage == 'holding':
@@ -322,7 +340,7 @@ class JobServer(Node):
         if run.stage != 'holding' or not msg.points:
             return
         velocities = list(msg.points[0].velocities)[:AXIS_COUNT]
-        if at_rest(velocities) and run.progress.hold == 'held':
+        if at_rest(velocities) and (run.manual or run.progress.hold == 'held'):
             run.rested = True
 
     def _stop_runner(self, run: Run) -> None:

@@ -41,6 +41,10 @@ def test_a_known_scenario_and_an_existing_program_are_good_goals() -> None:
         (JobGoal('slotting', float('nan')), 'duration nan: must be a finite time >= 0'),
         (JobGoal('slotting', 0.3, ('trajectory',)), "override 'trajectory': must be"),
         (JobGoal('slotting', 0.3, (), 'everything'), 'layout: '),
+        (JobGoal('slotting', timing='sometimes'), "timing 'sometimes': one of lockstep, realtime"),
+        (JobGoal('slotting', stay=True), 'stay: the graph stays up after its job for manual'),
+        (JobGoal('slotting', tuning='by ear'), "tuning 'by ear': one of rule"),
+        (JobGoal('slotting', timing='lockstep', stay=True), 'stay: '),
     ],
 )
 def test_a_bad_goal_is_refused_in_one_line(goal: JobGoal, said: str) -> None:
@@ -81,6 +85,15 @@ def private_scenario(tmp_path: Path, namespace: str = '') -> Path:
     head = 'mill_scenario:\n  ros__parameters:\n'
     path.write_text(text.replace(head, 'mill_scenario:\n' + entry))
     return path
+
+
+def test_timing_stay_and_view_of_a_goal_are_the_runners_options() -> None:
+    goal = JobGoal(str(PROGRAM), 0.0, (), '', 'realtime', 'rule', stay=True, view=True)
+    assert goal_problem(goal) is None
+    cmd = runner_command(goal, Path('r'), '/')
+    assert cmd[-6:] == ['--timing', 'realtime', '--tuning', 'rule', '--stay', '--view']
+    plain = runner_command(JobGoal('slotting'), Path('r'), '/')
+    assert not {'--timing', '--tuning', '--stay', '--view'} & set(plain)
 
 
 def test_the_clock_of_a_goal_is_the_one_its_machine_keeps(tmp_path: Path) -> None:
@@ -128,6 +141,7 @@ def test_feedback_follows_the_clock_and_the_job_status() -> None:
     )
     f = progress.feedback()
     assert (f.line, f.hold, f.machine_time) == ('part.ngc:4:1', 'held', 2.5)
+    assert progress.state == 'running'  # the job's state, as last heard
     progress.on_job_status('machine2/trajectory: job', {'time': 'junk', 'end_time': 'inf'})
     assert progress.feedback().fraction_done == 2.5 / 4.0  # a bad value changes nothing
     progress.on_clock(9.0)
