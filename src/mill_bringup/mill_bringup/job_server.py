@@ -238,7 +238,7 @@ class JobServer(Node):
         self._read_log(run)
         code = run.proc.poll()
         if code is not None:
-            self._feedback(run)  # the last, however short the job was
+            self._feedback(run, last=True)  # however short the job, heard of or not
             log = run.log.read_text(errors='replace') if run.log.exists() else ''
             scenario = run.goal.job if not run.goal.is_program else Path(run.goal.job).name
             run.done.set_result(read_result(run.run_dir, code, log, scenario))
@@ -257,8 +257,8 @@ class JobServer(Node):
             run.proc.kill()
         self._feedback(run)
 
-    def _feedback(self, run: Run) -> None:
-        if not run.progress.started:  # the graph is starting: nothing to tell yet
+    def _feedback(self, run: Run, last: bool = False) -> None:
+        if not (run.progress.started or last):  # the graph is starting: nothing to tell yet
             return
         f = run.progress.feedback()
         run.handle.publish_feedback(
