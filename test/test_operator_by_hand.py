@@ -31,8 +31,9 @@ pytestmark = [pytest.mark.system, pytest.mark.serial]
 LINE = 'G21 G90 G17 G54\nG1 Y-104 F300 (1 mm in +y at 5 mm/s)\nM30\n'
 # Realtime at 100 Hz, the gains of the tuning rule for it, rapids (MDI G0, home) at 10 mm/s:
 # a command late by a few periods leaves the axis within the drive's guard. Beside other
-# test runs (load average 18 on the 2 cores) the drive still stopped an axis whose commands
-# stalled for longer in one run of three (at 1 kHz in every run): alone on the machine.
+# test runs (load average 12-20 on the 2 cores, stalls of the graph's process up to 0.4 s)
+# the drive still stopped an axis whose commands stalled longer in 3 runs of 8 (at 1 kHz in
+# every run): alone on the machine.
 REALTIME = {
     'timing': 'realtime',
     'tuning': 'rule',
