@@ -99,7 +99,7 @@ python=$(pick_python) || {
 
 stamp_file=$venv/.mill-install-stamp
 stamp=$(cd "$root" && cat requirements.txt src/*/setup.py src/*/setup.cfg src/*/package.xml \
-  interfaces/*/package.xml interfaces/*/srv/* scripts/build_interfaces.py | sha256sum | cut -d' ' -f1)
+  interfaces/*/package.xml interfaces/*/srv/* interfaces/*/action/* scripts/build_interfaces.py | sha256sum | cut -d' ' -f1)
 if [ -x "$venv/bin/python" ] && [ -f "$stamp_file" ] && [ "$(cat "$stamp_file")" = "$stamp" ]; then
   write_ros_environment
   log "environment up to date ($venv)"

@@ -41,7 +41,8 @@ def _runner(ros_env: dict[str, str], out: Path, *args: str) -> subprocess.Popen[
 @pytest.mark.system
 def test_two_machines_in_one_domain_each_equal_their_offline_run(ros_env, tmp_path):
     runs = {
-        'machine_a': ('--controller', 'adrc', '--record', str(tmp_path / 'a_bag')),
+        # --view: machine_view beside machine_a's graph, in its namespace (its URDF in the bag)
+        'machine_a': ('--controller', 'adrc', '--record', str(tmp_path / 'a_bag'), '--view'),
         'machine_b': ('--controller', 'pd'),  # trips at 1 mm on every axis, as offline
     }
     procs = {
@@ -71,6 +72,7 @@ def test_two_machines_in_one_domain_each_equal_their_offline_run(ros_env, tmp_pa
     names = {name for name, *_ in bag.read()}
     assert topics.qualify(topics.state('x'), 'machine_a') in names
     assert '/machine_a/clock' in names and topics.DIAGNOSTICS in names
+    assert topics.qualify(topics.ROBOT_DESCRIPTION, 'machine_a') in names  # --view
     assert not [n for n in names if n.startswith('/machine_b') or n.startswith('/mill/')]
     run = read_run(tmp_path / 'a_bag')
     assert run.n >= SAMPLES and run.missing == {}

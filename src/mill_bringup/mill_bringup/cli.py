@@ -15,6 +15,9 @@ from mill_bringup.catalogue import CONTROLLER, OBSERVER, PLANT, TRAJECTORY
 from mill_bringup.job_config import JobConfig
 from mill_bringup.scenario import Scenario, ScenarioError, apply_params_file, load
 
+# --tuning: the gains of the tuning rule (mill_models.loop_tuning) instead of the scenario's
+TUNINGS = ('rule',)
+
 
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument('scenario', nargs='?', default='slotting', help='name or YAML file')
@@ -54,7 +57,7 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         '--tuning',
-        choices=('rule',),
+        choices=TUNINGS,
         help='rule: the ADRC law and the ESO observer of every axis at the bandwidths of the '
         'tuning rule for the sample period and the command delay (mill_models.loop_tuning), '
         "instead of the scenario's gains, which are designed for its own rate",

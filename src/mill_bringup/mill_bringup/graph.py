@@ -11,6 +11,12 @@ it, whatever ends that process (Linux PR_SET_PDEATHSIG, set in the child before 
 child whose parent is already gone by then ends at once): a killed runner never leaves a
 graph running on its own. The signal follows the thread that started the process: launch
 from the main thread.
+
+Beside the graph, processes that only watch it (`launch_beside`: machine_view for
+run_scenario --view) run in the same namespace and domain with the same remappings, their
+parameters in RUN_DIR/NAME.yaml and output in RUN_DIR/logs/NAME.log; they are stopped with the
+graph, but neither supervised (a viewer that ends does not end the job) nor counted in the
+run's CPU time and memory.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import sys
 import time
 from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from mill_common.executable import hold_stop_signals
 
@@ -110,7 +117,9 @@ class Graph:
         self._log_dir = run_dir / 'logs'
         self._log_dir.mkdir(parents=True, exist_ok=True)
         self._parameters = run_dir / 'parameters.yaml'
+        self._run_dir = run_dir
         self._env = env
+        self.beside: dict[str, subprocess.Popen[bytes]] = {}  # launch_beside
 
     def node_names(self) -> set[str]:
         """The nodes of every process launched."""
@@ -139,6 +148,31 @@ class Graph:
             '--params-file',
             str(self._parameters),
         ]
+
+    def beside_command(self, name: str, module: str) -> list[str]:
+        """How a process beside the graph is started: node `name` of `module`, in the
+        graph's namespace with its remappings, its parameters from RUN_DIR/NAME.yaml."""
+        remaps = [arg for rule in self.scen.remappings() for arg in ('-r', rule)]
+        params = self._run_dir / f'{name}.yaml'
+        return [
+            *(sys.executable, '-m', module, '--ros-args', '-r', f'__node:={name}'),
+            *remaps,
+            *('--params-file', str(params)),
+        ]
+
+    def launch_beside(self, name: str, module: str, parameters: dict[str, Any]) -> None:
+        """Start node `name` of `module` beside the graph (see the module doc) with these
+        parameter file entries."""
+        (self._run_dir / f'{name}.yaml').write_text(dump_parameters(parameters))
+        with open(self._log_dir / f'{name}.log', 'w') as log:
+            self.beside[name] = subprocess.Popen(
+                self.beside_command(name, module),
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                env=self._env,
+                start_new_session=True,
+                preexec_fn=functools.partial(_child_setup, os.getpid()),
+            )
 
     def launch(self, processes: Iterable[Process]) -> None:
         """Start these processes of the scenario's nodes."""
@@ -214,12 +248,14 @@ class Graph:
         return '\n'.join('    ' + t for t in text[-lines:])
 
     def stop(self, grace: float = 5.0) -> None:
-        """SIGINT to every node; SIGKILL to the process group of any still alive after grace."""
-        for p in self.procs.values():
+        """SIGINT to every node and every process beside the graph; SIGKILL to the process
+        group of any still alive after grace."""
+        every = [*self.procs.values(), *self.beside.values()]
+        for p in every:
             if p.poll() is None:
                 p.send_signal(signal.SIGINT)
         deadline = time.monotonic() + grace
-        for p in self.procs.values():
+        for p in every:
             try:
                 p.wait(max(0.1, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:

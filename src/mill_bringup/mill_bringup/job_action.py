@@ -6,8 +6,11 @@ checked before anything starts (`goal_problem`: one line), run as `python -m
 mill_bringup.runner` (`runner_command`), followed from the trajectory's job status and the
 machine's warnings on /diagnostics and from /clock (`JobProgress`, the feedback), and its
 result read from the run directory's summary.json (`read_result`), whose `outcome` is typed
-(runner.result.Outcome). A cancel holds the feed first; the axes are at rest once every axis
-velocity of the trajectory's reference is 0 (`at_rest`).
+(runner.result.Outcome). A machine with a private clock (the server's `private_clock`, or the
+scenario's own `mill_scenario: private_clock`) keeps it on NAMESPACE/clock, not /clock
+(`clock_topic`): the feedback's machine time comes from there. A cancel holds the feed
+first; the axes are at rest once every axis velocity of the trajectory's reference is 0
+(`at_rest`).
 """
 
 from __future__ import annotations
@@ -20,6 +23,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mill_bringup.cli import TUNINGS
+from mill_bringup.launch_plan import TIMINGS
 from mill_bringup.runner.result import INTERRUPTED_CODE, START_REFUSED, Outcome, ended
 from mill_bringup.scenario import ScenarioError, check_layout, load
 from mill_common import topics
@@ -36,14 +41,21 @@ class JobGoal:
     duration: float = 0.0  # machine time [s]; 0 the scenario's
     overrides: tuple[str, ...] = ()  # run_scenario -p NODE.PARAM=VALUE
     layout: str = ''  # processes, per_axis, single; '' the scenario's
+    timing: str = ''  # lockstep, realtime; '' the scenario's
+    tuning: str = ''  # rule: the tuning rule's gains; '' the scenario's
+    stay: bool = False  # realtime: the graph stays up after the job until canceled
+    view: bool = False  # machine_view beside the graph
 
     @property
     def is_program(self) -> bool:
         return Path(self.job).suffix.lower() in PROGRAM_SUFFIXES
 
 
-def goal_problem(goal: JobGoal) -> str | None:
-    """Why this goal cannot run, in one line (None: it can)."""
+def goal_problem(
+    goal: JobGoal, namespace: str = topics.ROOT, private_clock: bool = False
+) -> str | None:
+    """Why this goal cannot run, in one line (None: it can), for a machine in `namespace`
+    asked to keep a private clock or not."""
     if not goal.job.strip():
         return 'no job: name a scenario or a G-code program file'
     if not math.isfinite(goal.duration) or goal.duration < 0:
@@ -57,18 +69,56 @@ def goal_problem(goal: JobGoal) -> str | None:
             check_layout(goal.layout)
         except ScenarioError as exc:
             return f'layout: {exc}'
-    if goal.is_program:
-        path = Path(goal.job)
-        return None if path.is_file() else f'program {goal.job}: no such file'
+    if goal.timing and goal.timing not in TIMINGS:
+        return f"timing {goal.timing!r}: one of {', '.join(TIMINGS)} (empty: the scenario's)"
+    if goal.tuning and goal.tuning not in TUNINGS:
+        return f"tuning {goal.tuning!r}: one of {', '.join(TUNINGS)} (empty: the scenario's gains)"
+    if goal.stay and goal.timing != 'realtime':
+        return (
+            'stay: the graph stays up after its job for manual commands, which need timing '
+            'realtime: give timing realtime'
+        )
+    if goal.is_program and not Path(goal.job).is_file():
+        return f'program {goal.job}: no such file'
     try:
-        load(goal.job)
+        clock = clock_topic(goal, namespace, private_clock)
     except (ScenarioError, OSError) as exc:
         return f'scenario {goal.job!r}: {" ".join(str(exc).split())}'
+    if clock is None:
+        return (
+            'a private clock needs a machine namespace: run the job server in one '
+            '(--ros-args -r __ns:=/NAME)'
+        )
     return None
 
 
-def runner_command(goal: JobGoal, run_dir: Path, namespace: str) -> list[str]:
-    """The runner's command line for this goal, in this machine namespace."""
+def machine_namespace(goal: JobGoal, namespace: str) -> str:
+    """The namespace the goal's machine runs in: the server's (the runner's --namespace), else
+    at the root the scenario's own (`mill_scenario: namespace`). ScenarioError: the goal's
+    scenario does not load."""
+    if topics.namespace(namespace) != topics.ROOT:
+        return topics.namespace(namespace)
+    return load(PROGRAM_SCENARIO if goal.is_program else goal.job).namespace
+
+
+def clock_topic(goal: JobGoal, namespace: str, private_clock: bool) -> str | None:
+    """The topic of the clock the goal's machine keeps: NAMESPACE/clock with a private clock
+    (asked for, or the scenario's own `private_clock`), else /clock, in the machine's
+    namespace (machine_namespace). None: a private clock without a namespace (the runner
+    refuses it). ScenarioError: the goal's scenario does not load."""
+    scen = load(PROGRAM_SCENARIO if goal.is_program else goal.job)
+    space = machine_namespace(goal, namespace)
+    private = private_clock or scen.private_clock
+    if private and topics.namespace(space) == topics.ROOT:
+        return None
+    return topics.clock(space, private=private)
+
+
+def runner_command(
+    goal: JobGoal, run_dir: Path, namespace: str, private_clock: bool = False
+) -> list[str]:
+    """The runner's command line for this goal, in this machine namespace (the root: the
+    scenario's own), with a private clock or not (goal_problem: only in a namespace)."""
     scenario = PROGRAM_SCENARIO if goal.is_program else goal.job
     cmd = [sys.executable, '-m', 'mill_bringup.runner', scenario, '--output', str(run_dir)]
     cmd.append('--quiet')  # the server reports the progress
@@ -80,8 +130,15 @@ def runner_command(goal: JobGoal, run_dir: Path, namespace: str) -> list[str]:
         cmd += ['-p', rule]
     if goal.layout:
         cmd += ['--layout', goal.layout]
+    if goal.timing:
+        cmd += ['--timing', goal.timing]
+    if goal.tuning:
+        cmd += ['--tuning', goal.tuning]
+    cmd += ['--stay'] * goal.stay + ['--view'] * goal.view
     if topics.namespace(namespace) != topics.ROOT:
         cmd += ['--namespace', topics.namespace(namespace)]
+    if private_clock:  # in the server's namespace, else the scenario's (goal_problem)
+        cmd.append('--private-clock')
     return cmd
 
 
@@ -105,6 +162,7 @@ class JobProgress:
     line: str = ''
     feed_override: float = 1.0
     hold: str = ''
+    state: str = ''  # the job's: waiting, running, done, refused ('' not heard yet)
     trajectory: str = ''  # the trajectory node's name, from its status
     problems: deque[str] = field(default_factory=lambda: deque(maxlen=PROBLEMS_KEPT))
 
@@ -123,6 +181,7 @@ class JobProgress:
         self.end_time = _number(values.get('end_time'), self.end_time)
         self.feed_override = _number(values.get('feed_override'), self.feed_override)
         self.hold = values.get('hold', self.hold)
+        self.state = values.get('state', self.state)
         self.line = values.get('event_where') or self.line
 
     def on_problem(self, text: str) -> None:

@@ -5,8 +5,11 @@
         "{job: slotting, duration: 0.3}"
 
 A goal runs `python -m mill_bringup.runner` in a process of its own, in this node's
-ROS_DOMAIN_ID and namespace, with its run directory under `runs_dir`. Feedback (twice a
-second once the job runs, and once at its end): the machine time (/clock), the share done,
+ROS_DOMAIN_ID and namespace, with its run directory under `runs_dir`; with `private_clock`
+(in a namespace) the machine keeps its clock on NAMESPACE/clock (run_scenario
+--private-clock), as it does when the goal's scenario asks for a private clock itself.
+Feedback (twice a second once the job runs, and once at its end): the machine time (from the
+clock the goal's machine keeps, mill_bringup.job_action.clock_topic), the share done,
 the program line of the latest event, the feed override and hold state (the trajectory's
 job status on /diagnostics), the latest warnings of the machine and error lines of the
 runner. The result: the runner's exit code,
@@ -14,7 +17,10 @@ its summary.json's outcome and the summary. One goal at a time; a bad goal is re
 with one line (mill_bringup.job_action.goal_problem). A cancel is a controlled stop: the
 trajectory's ~/feed_hold (a deceleration along the path), until every axis velocity of its
 reference is 0 or `hold_timeout` passed, then SIGINT to the runner, which stops the graph
-and closes its bag; the result says whether the axes were held (`held`).
+and closes its bag; the result says whether the axes were held (`held`). A goal with `stay`
+(timing realtime) keeps its graph up after the job for manual commands until it is canceled;
+a cancel then stops any manual move along its path (~/jog_stop) instead, and the runner ends
+as for a complete job once the reference is at rest.
 """
 
 from __future__ import annotations
@@ -31,7 +37,7 @@ from typing import Any, ClassVar
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.declared import ParamSet, param
 from mill_common.node_main import run_node
-from mill_common.parameters import ParamSpec, in_range, text
+from mill_common.parameters import ParamSpec, boolean, in_range, text
 from mill_common.ros_params import NodeParameters
 from mill_interfaces.action import RunJob
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
@@ -48,7 +54,9 @@ from mill_bringup.job_action import (
     JobProgress,
     JobResult,
     at_rest,
+    clock_topic,
     goal_problem,
+    machine_namespace,
     problem_line,
     read_result,
     runner_command,
@@ -77,6 +85,13 @@ class JobServerParams(ParamSet):
         in_range(0.0, 600.0),
         unit='s',
     )
+    private_clock: bool = param(
+        False,
+        "each goal's machine keeps its simulation clock on NAMESPACE/clock instead of /clock "
+        '(run_scenario --private-clock), so that machines in other namespaces of the domain '
+        'run at the same time; needs a namespace (-r __ns:=/NAME)',
+        boolean,
+    )
 
 
 def parameter_specs() -> list[tuple[str, ParamSpec]]:
@@ -99,6 +114,9 @@ class Run:
         self.hold_deadline = 0.0
         self.rested = False
         self.stopped_at = 0.0
+        self.private_clock = False  # run_scenario --private-clock
+        self.namespace = topics.ROOT  # the machine's: the server's, else the scenario's
+        self.manual = False  # canceled while staying up after the job: ~/jog_stop
 
 
 class JobServer(Node):
@@ -109,7 +127,7 @@ class JobServer(Node):
         self._count = 0
         qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
         self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._on_status, qos)
-        self.create_subscription(Clock, '/clock', self._on_clock, 1)
+        self._machine_clock: Any = None  # the clock of the goal's machine, once a goal runs
         self._reference: Any = None  # subscribed while a cancel holds the feed
         self._hold_client: Any = None
         self._server = ActionServer(
@@ -126,7 +144,14 @@ class JobServer(Node):
     # -- goals ---------------------------------------------------------------------------
     def _on_goal(self, request: Any) -> GoalResponse:
         goal = JobGoal(
-            request.job, float(request.duration), tuple(request.overrides), request.layout
+            request.job,
+            float(request.duration),
+            tuple(request.overrides),
+            request.layout,
+            request.timing,
+            request.tuning,
+            bool(request.stay),
+            bool(request.view),
         )
         if self._run is not None or self._count < 0:
             self.get_logger().warning(
@@ -136,7 +161,8 @@ class JobServer(Node):
                 else f'goal {goal.job!r} rejected: shutting down'
             )
             return GoalResponse.REJECT
-        problem = goal_problem(goal)
+        private = self.params.values['private_clock']
+        problem = goal_problem(goal, self.get_namespace(), private)
         if problem is not None:
             self.get_logger().warning(f'goal rejected: {problem}')
             return GoalResponse.REJECT
@@ -144,7 +170,20 @@ class JobServer(Node):
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
         run_dir = Path(self.params.values['runs_dir']) / f'job-{stamp}-{self._count}'
         self._run = Run(None, goal, run_dir)  # type: ignore[arg-type]  # the handle comes next
+        self._run.private_clock = private
+        self._run.namespace = machine_namespace(goal, self.get_namespace())
+        clock = clock_topic(goal, self.get_namespace(), private)
+        if clock is not None:  # None: goal_problem refused the goal
+            self._follow_clock(clock)
         return GoalResponse.ACCEPT
+
+    def _follow_clock(self, topic: str) -> None:
+        """Take the machine time of the goal's machine from this clock topic."""
+        if self._machine_clock is not None and self._machine_clock.topic_name == topic:
+            return
+        if self._machine_clock is not None:
+            self.destroy_subscription(self._machine_clock)
+        self._machine_clock = self.create_subscription(Clock, topic, self._on_clock, 1)
 
     def _on_cancel(self, handle: ServerGoalHandle) -> CancelResponse:
         run = self._run
@@ -156,7 +195,7 @@ class JobServer(Node):
         run = self._run
         assert run is not None
         run.handle = handle
-        cmd = runner_command(run.goal, run.run_dir, self.get_namespace())
+        cmd = runner_command(run.goal, run.run_dir, self.get_namespace(), run.private_clock)
         try:
             run.run_dir.mkdir(parents=True, exist_ok=True)
             with run.log.open('wb') as log:
@@ -199,7 +238,7 @@ class JobServer(Node):
         self._read_log(run)
         code = run.proc.poll()
         if code is not None:
-            self._feedback(run)  # the last, however short the job was
+            self._feedback(run, last=True)  # however short the job, heard of or not
             log = run.log.read_text(errors='replace') if run.log.exists() else ''
             scenario = run.goal.job if not run.goal.is_program else Path(run.goal.job).name
             run.done.set_result(read_result(run.run_dir, code, log, scenario))
@@ -218,8 +257,8 @@ class JobServer(Node):
             run.proc.kill()
         self._feedback(run)
 
-    def _feedback(self, run: Run) -> None:
-        if not run.progress.started:  # the graph is starting: nothing to tell yet
+    def _feedback(self, run: Run, last: bool = False) -> None:
+        if not (run.progress.started or last):  # the graph is starting: nothing to tell yet
             return
         f = run.progress.feedback()
         run.handle.publish_feedback(
@@ -251,7 +290,7 @@ class JobServer(Node):
         if run is None:
             return
         for status in msg.status:
-            if not topics.from_machine(status.hardware_id, self.get_namespace()):
+            if not topics.from_machine(status.hardware_id, run.namespace):
                 continue
             if topics.part_of(status.name) == topics.JOB_STATUS:
                 run.progress.on_job_status(status.name, {kv.key: kv.value for kv in status.values})
@@ -266,10 +305,14 @@ class JobServer(Node):
     # -- a controlled stop ---------------------------------------------------------------
     def _start_hold(self, run: Run) -> None:
         trajectory = run.progress.trajectory or 'trajectory'
-        service = topics.qualify(f'{trajectory}/feed_hold', self.get_namespace())
+        # A job done and staying up (goal.stay): what may move is a manual move, stopped
+        # along its path by ~/jog_stop; else the job, held by ~/feed_hold.
+        run.manual = run.goal.stay and run.progress.state == 'done'
+        stop = 'jog_stop' if run.manual else 'feed_hold'
+        service = topics.qualify(f'{trajectory}/{stop}', run.namespace)
         run.stage = 'holding'
         run.hold_deadline = time.monotonic() + self.params.values['hold_timeout']
-        self.get_logger().info(f'cancel: feed hold ({service}), then the runner stops')
+        self.get_logger().info(f'cancel: {stop} ({service}), then the runner stops')
         self._reference = self.create_subscription(
             JointTrajectory, topics.REFERENCE, lambda m: self._on_reference(run, m), 10
         )
@@ -284,7 +327,10 @@ class JobServer(Node):
 
     def _held(self, run: Run, future: Future) -> None:
         answer = future.result()
-        if answer is None or not answer.success:
+        if answer is not None and not answer.success and run.manual:
+            # no manual move under way: the runner stops once the reference is seen at rest
+            self.get_logger().info(f'cancel: {answer.message}')
+        elif answer is None or not answer.success:
             said = 'no answer' if answer is None else answer.message
             self.get_logger().warning(f'cancel: feed hold refused ({said}); stopping the runner')
             if run.stage == 'holding':
@@ -294,7 +340,7 @@ class JobServer(Node):
         if run.stage != 'holding' or not msg.points:
             return
         velocities = list(msg.points[0].velocities)[:AXIS_COUNT]
-        if at_rest(velocities) and run.progress.hold == 'held':
+        if at_rest(velocities) and (run.manual or run.progress.hold == 'held'):
             run.rested = True
 
     def _stop_runner(self, run: Run) -> None:

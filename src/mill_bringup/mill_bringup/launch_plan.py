@@ -47,6 +47,7 @@ from mill_common.machine_urdf import frame_prefix
 from mill_bringup.cli import set_timing
 from mill_bringup.layout import Process
 from mill_bringup.layout import processes as layout_processes
+from mill_bringup.machine_model import VIEW_NODE, view_parameters
 from mill_bringup.scenario import (
     LAYOUTS,
     SCENARIO_KEY,
@@ -70,7 +71,7 @@ SWITCHES = {'true': True, 'false': False, '': None}  # a boolean argument; '': t
 JOB_WATCH = NodeLaunch('job_watch', 'mill_bringup', 'job_watch')
 # The node that publishes the URDF and the tool trace (mill_bringup.machine_view), and the
 # one that makes /tf of them where it is installed (it is not on PyPI).
-MACHINE_VIEW = NodeLaunch('machine_view', 'mill_bringup', 'machine_view')
+MACHINE_VIEW = NodeLaunch(VIEW_NODE, 'mill_bringup', 'machine_view')
 STATE_PUBLISHER = NodeLaunch(
     'robot_state_publisher', 'robot_state_publisher', 'robot_state_publisher'
 )
@@ -233,7 +234,7 @@ def plan(
     clocks = {n.name for n in job.clock_nodes}
     remappings = []
     if scen.private_clock and scen.namespace != topics.ROOT:
-        remappings.append((topics.CLOCK, topics.qualify('clock', scen.namespace)))
+        remappings.append((topics.CLOCK, topics.clock(scen.namespace, private=True)))
     # What mill_container reads to tell which class each of its nodes is (the runner gives
     # it the scenario file itself).
     launch = [f'{n.name} {n.package} {n.executable}' for n in scen.nodes]
@@ -242,7 +243,7 @@ def plan(
     # The viewers' nodes: the URDF of this job's machine, and /tf of it where possible.
     urdf = robot_description(job.config)
     views = [MACHINE_VIEW]
-    out.parameters[f'/**/{MACHINE_VIEW.name}'] = {'ros__parameters': {'robot_description': urdf}}
+    out.parameters.update(view_parameters(job.config))
     if found(STATE_PUBLISHER.package):
         views.append(STATE_PUBLISHER)
         out.parameters[f'/**/{STATE_PUBLISHER.name}'] = {

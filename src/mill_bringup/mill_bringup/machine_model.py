@@ -17,6 +17,11 @@ from mill_bringup.catalogue import PLANT, TRAJECTORY, of_role
 if TYPE_CHECKING:
     from mill_bringup.job_config import JobConfig
 
+# The node that publishes the URDF and the tool trace (mill_bringup.machine_view), as the
+# launch and `run_scenario --view` start it.
+VIEW_NODE = 'machine_view'
+VIEW_MODULE = 'mill_bringup.machine_view'
+
 
 def _values(role: str, config: JobConfig | None) -> dict[str, Any]:
     """A role's declared defaults, with the job's values of its node where it has one."""
@@ -37,3 +42,10 @@ def robot_description(config: JobConfig | None = None) -> str:
         plant['max_torque'],
     )
     return machine_urdf(limits)
+
+
+def view_parameters(config: JobConfig | None = None) -> dict[str, Any]:
+    """machine_view's entry of a parameter file, keyed to apply in any namespace: the URDF
+    of this job's machine."""
+    urdf = robot_description(config)
+    return {f'/**/{VIEW_NODE}': {'ros__parameters': {'robot_description': urdf}}}

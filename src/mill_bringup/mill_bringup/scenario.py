@@ -155,7 +155,7 @@ class Scenario:
         if self.namespace != topics.ROOT:
             rules.append(f'__ns:={self.namespace}')
             if self.private_clock:
-                rules.append(f'{topics.CLOCK}:={topics.qualify("clock", self.namespace)}')
+                rules.append(f'{topics.CLOCK}:={topics.clock(self.namespace, private=True)}')
         return rules
 
     def parameters(self, name: str) -> dict[str, Any]:

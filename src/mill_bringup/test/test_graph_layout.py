@@ -45,3 +45,33 @@ def test_messages_name_a_container_with_its_nodes(tmp_path: Path) -> None:
     assert graph.what('plant') == 'node plant'
     assert graph.what('y_axis') == 'process y_axis (nodes y_observer, y_controller)'
     assert graph.node_names() == {n.name for n in scen.nodes}
+
+
+def test_run_scenario_view_starts_machine_view_beside_the_graph_with_the_jobs_urdf(
+    tmp_path: Path,
+) -> None:
+    from xml.etree import ElementTree
+
+    from mill_bringup.job_config import build
+    from mill_bringup.machine_model import VIEW_MODULE, VIEW_NODE, view_parameters
+    from mill_bringup.runner.cli import parser, run_options
+
+    assert not run_options(parser().parse_args(['slotting']), None).view  # off by default
+    assert run_options(parser().parse_args(['slotting', '--view']), None).view
+    scen = load('slotting')
+    scen.set_namespace('machine2')
+    scen.private_clock = True
+    cmd = Graph(scen, tmp_path, {}).beside_command(VIEW_NODE, VIEW_MODULE)
+    assert cmd == [
+        *(sys.executable, '-m', 'mill_bringup.machine_view', '--ros-args'),
+        *('-r', '__node:=machine_view', '-r', '__ns:=/machine2', '-r', '/clock:=/machine2/clock'),
+        *('--params-file', str(tmp_path / 'machine_view.yaml')),
+    ]
+    # its URDF is the job's machine: the travel the job's trajectory holds
+    scen.add_override('trajectory.travel.max=[0.25, 0.5, 0.125]')
+    ((key, entry),) = view_parameters(build(scen)).items()
+    assert key == '/**/machine_view'
+    urdf = ElementTree.fromstring(entry['ros__parameters']['robot_description'])
+    limits = [j.find('limit') for j in urdf.iter('joint')]
+    uppers = [float(limit.get('upper', 'nan')) for limit in limits if limit is not None]
+    assert uppers == [0.25, 0.5, 0.125]

@@ -13,7 +13,9 @@ from mill_bringup.job_action import (
     JobGoal,
     JobProgress,
     at_rest,
+    clock_topic,
     goal_problem,
+    machine_namespace,
     problem_line,
     read_result,
     runner_command,
@@ -39,6 +41,10 @@ def test_a_known_scenario_and_an_existing_program_are_good_goals() -> None:
         (JobGoal('slotting', float('nan')), 'duration nan: must be a finite time >= 0'),
         (JobGoal('slotting', 0.3, ('trajectory',)), "override 'trajectory': must be"),
         (JobGoal('slotting', 0.3, (), 'everything'), 'layout: '),
+        (JobGoal('slotting', timing='sometimes'), "timing 'sometimes': one of lockstep, realtime"),
+        (JobGoal('slotting', stay=True), 'stay: the graph stays up after its job for manual'),
+        (JobGoal('slotting', tuning='by ear'), "tuning 'by ear': one of rule"),
+        (JobGoal('slotting', timing='lockstep', stay=True), 'stay: '),
     ],
 )
 def test_a_bad_goal_is_refused_in_one_line(goal: JobGoal, said: str) -> None:
@@ -69,6 +75,54 @@ def test_the_runner_command_of_a_scenario_and_of_a_program() -> None:
     assert '--duration' not in program  # 0: the scenario's own
 
 
+def private_scenario(tmp_path: Path, namespace: str = '') -> Path:
+    """The slotting scenario asking for a private clock itself (in `namespace`)."""
+    text = (REPO / 'config' / 'slotting.yaml').read_text()
+    entry = '  ros__parameters:\n    private_clock: true\n'
+    if namespace:
+        entry += f'    namespace: {namespace}\n'
+    path = tmp_path / f'private{namespace}.yaml'
+    head = 'mill_scenario:\n  ros__parameters:\n'
+    path.write_text(text.replace(head, 'mill_scenario:\n' + entry))
+    return path
+
+
+def test_timing_stay_and_view_of_a_goal_are_the_runners_options() -> None:
+    goal = JobGoal(str(PROGRAM), 0.0, (), '', 'realtime', 'rule', stay=True, view=True)
+    assert goal_problem(goal) is None
+    cmd = runner_command(goal, Path('r'), '/')
+    assert cmd[-6:] == ['--timing', 'realtime', '--tuning', 'rule', '--stay', '--view']
+    plain = runner_command(JobGoal('slotting'), Path('r'), '/')
+    assert not {'--timing', '--tuning', '--stay', '--view'} & set(plain)
+
+
+def test_the_clock_of_a_goal_is_the_one_its_machine_keeps(tmp_path: Path) -> None:
+    goal = JobGoal('slotting', 0.3)
+    assert clock_topic(goal, '/', False) == clock_topic(goal, 'machine2', False) == '/clock'
+    assert clock_topic(goal, 'machine2', True) == '/machine2/clock'
+    assert clock_topic(JobGoal(str(PROGRAM)), '/m', True) == '/m/clock'
+    cmd = runner_command(goal, Path('r'), 'machine2', private_clock=True)
+    assert cmd[-3:] == ['--namespace', '/machine2', '--private-clock']
+    # a scenario that asks for a private clock itself: in the server's namespace, or its own
+    own = JobGoal(str(private_scenario(tmp_path)))
+    assert clock_topic(own, '/shop/m2', False) == '/shop/m2/clock'
+    placed = JobGoal(str(private_scenario(tmp_path, 'machine_b')))
+    assert clock_topic(placed, '/', False) == '/machine_b/clock'
+    # the machine's namespace: the server's, else the scenario's own (its statuses, services)
+    assert machine_namespace(placed, '/') == '/machine_b'
+    assert machine_namespace(placed, 'shop') == '/shop'
+    assert machine_namespace(goal, '/') == '/'
+    cmd = runner_command(placed, Path('r'), '/', private_clock=True)
+    assert '--namespace' not in cmd and cmd[-1] == '--private-clock'  # the scenario's namespace
+    assert goal_problem(placed) is None
+    # no namespace at all: no private clock, and the goal says why in one line
+    said = 'a private clock needs a machine namespace: run the job server in one'
+    for bad in ((goal, '/', True), (own, '/', False)):
+        assert clock_topic(*bad) is None
+        problem = goal_problem(*bad)
+        assert problem is not None and problem.startswith(said) and '\n' not in problem
+
+
 def test_feedback_follows_the_clock_and_the_job_status() -> None:
     progress = JobProgress(duration=0.0)
     assert not progress.started
@@ -87,6 +141,7 @@ def test_feedback_follows_the_clock_and_the_job_status() -> None:
     )
     f = progress.feedback()
     assert (f.line, f.hold, f.machine_time) == ('part.ngc:4:1', 'held', 2.5)
+    assert progress.state == 'running'  # the job's state, as last heard
     progress.on_job_status('machine2/trajectory: job', {'time': 'junk', 'end_time': 'inf'})
     assert progress.feedback().fraction_done == 2.5 / 4.0  # a bad value changes nothing
     progress.on_clock(9.0)

@@ -44,6 +44,9 @@ JOINT_STATES = 'joint_states'
 TF = '/tf'
 TF_STATIC = '/tf_static'
 CLOCK = '/clock'
+# A machine's private simulation clock, relative to its namespace (NAMESPACE/clock): what
+# /clock is remapped to when several simulated machines share a domain (`clock`).
+PRIVATE_CLOCK = 'clock'
 DIAGNOSTICS = '/diagnostics'
 
 ROOT = '/'
@@ -138,6 +141,13 @@ def qualify(name: str, ns: str = ROOT) -> str:
     if name.startswith('/'):
         return name
     return f'{namespace(ns).rstrip("/")}/{name}'
+
+
+def clock(ns: str = ROOT, private: bool = False) -> str:
+    """The simulation clock's topic of the machine in namespace `ns`: the global /clock, or
+    with a private clock NAMESPACE/clock (a machine at the root has no private clock)."""
+    space = namespace(ns)
+    return qualify(PRIVATE_CLOCK, space) if private and space != ROOT else CLOCK
 
 
 def namespaces_with(names: Iterable[str], relative: str) -> list[str]:

@@ -46,6 +46,13 @@ def test_qualify_resolves_under_the_namespace_and_keeps_absolute_names() -> None
     assert topics.qualify(topics.CLOCK, 'machine2') == '/clock'
 
 
+def test_the_clock_of_a_machine_is_global_unless_it_has_a_private_one() -> None:
+    assert topics.clock() == topics.clock('/', private=True) == '/clock'  # none at the root
+    assert topics.clock('machine_a') == '/clock'
+    assert topics.clock('machine_a', private=True) == '/machine_a/clock'
+    assert topics.clock('/shop/m2', private=True) == '/shop/m2/clock'
+
+
 def test_namespaces_with_finds_every_machine_of_a_topic() -> None:
     names = [
         '/mill/x/state',

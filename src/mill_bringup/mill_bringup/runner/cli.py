@@ -38,6 +38,10 @@ from mill_common import topics
 # job with an incomplete record, 2 a start refused (and usage, argparse), 1 the job failed,
 # 130 interrupted
 SEVERITY = (GOOD, RECORD_INCOMPLETE, START_REFUSED, JOB_FAILED, INTERRUPTED_CODE)
+STAY_NEEDS_REALTIME = (
+    '--stay keeps the graph up after its job for manual commands, which need timing realtime '
+    "(a lockstep job replays on the plant's clock): add --timing realtime"
+)
 
 
 def _apply_namespace(
@@ -156,6 +160,22 @@ def parser() -> argparse.ArgumentParser:
         "controller of an axis together), single (all in one); default: the scenario's "
         '(mill_scenario: layout:), else processes',
     )
+    parser.add_argument(
+        '--view',
+        action='store_true',
+        help='also start machine_view beside the graph, in its namespace and domain, as the '
+        "launch does: the machine's URDF on robot_description (transient local) and the "
+        'measured tool trace on mill/tool_trace, for RViz or Foxglove; stopped with the graph, '
+        'its output in RUN_DIR/logs/machine_view.log',
+    )
+    parser.add_argument(
+        '--stay',
+        action='store_true',
+        help='timing realtime: once the job is done keep the graph up, the axes held at rest, '
+        "for manual commands (the trajectory's ~/jog, ~/home, ~/set_home, ~/mdi), until "
+        'Ctrl-C or SIGTERM, which then end the run as that of a complete job (what the '
+        'machine says meanwhile counts in the summary too: a trip while jogging fails it)',
+    )
     return parser
 
 
@@ -189,6 +209,8 @@ def run_options(args: argparse.Namespace, bag: Path | None) -> RunOptions:
         layout=args.layout,
         rearm=args.rearm,
         runner_priority=runner_priority(args),
+        view=args.view,
+        stay=args.stay,
     )
 
 
@@ -240,6 +262,8 @@ def main(argv: list[str] | None = None) -> int:
             unattended = getattr(job, 'unattended_pause', lambda: None)()
             if unattended is not None:
                 raise RunError(unattended)
+        if args.stay and not all(j.config.timing == 'realtime' for j in jobs.values()):
+            raise RunError(STAY_NEEDS_REALTIME)
         if args.compare_offline and not all(j.HAS_OFFLINE_TWIN for j in jobs.values()):
             raise RunError('--compare-offline: a realtime run has no offline twin')
         stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')

@@ -3,7 +3,10 @@
 The job is followed with a progress bar until it is complete (jobs.base.Job.complete). The
 run ends with RunError when no step comes within the start-up timeout, or no new sample
 for --stall-timeout (for a process --respawn just started again, at least as long as a
-start-up may take). A node that exits ends it too (Session.spin).
+start-up may take). A node that exits ends it too (Session.spin). With --stay (timing
+realtime) the graph then stays up, the job's checks still made (a drive gone silent, a node
+that exits), until Ctrl-C or SIGTERM ends the run as that of a complete job: between jobs the
+trajectory takes the manual commands (jog, home, MDI) and the axes follow them.
 """
 
 from __future__ import annotations
@@ -74,7 +77,22 @@ def follow(session: Session, job: Job[Any], options: RunOptions) -> WallTime:
         name: 1e3 * (used - cpu_first.get(name, 0.0)) / steps
         for name, used in graph.cpu_by_process().items()
     }
+    if options.stay:
+        stay(session, job)
     return WallTime(wall, cpu)
+
+
+def stay(session: Session, job: Job[Any]) -> None:
+    """--stay: the job is complete; the graph stays up until Ctrl-C or SIGTERM."""
+    session.progress.note(
+        'the job is done; the graph stays up for manual commands (--stay) until Ctrl-C'
+    )
+    try:
+        while True:
+            session.spin('after the job (--stay)')
+            job.check(session.monitor)
+    except KeyboardInterrupt:
+        session.take_stop()
 
 
 def _silent_external(session: Session, job: Job[Any], options: RunOptions) -> str:

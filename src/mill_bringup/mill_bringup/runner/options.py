@@ -47,6 +47,9 @@ class RunOptions:
     takes every message of the record, and the middleware's), 0: the normal scheduler.
     rearm: an axis an external drive holds stopped (latched by an earlier job) is released
     through the drive's ~/release before the job starts, instead of refusing the start.
+    view: machine_view runs beside the graph (mill_bringup.graph.Graph.launch_beside).
+    stay: once the job is complete the graph stays up until Ctrl-C or SIGTERM, which end the
+    run as a complete one (runner.follow.stay).
     """
 
     skip: float = 1.0  # the summary's metrics over t >= skip [s]
@@ -61,3 +64,5 @@ class RunOptions:
     layout: str | None = None
     rearm: bool = False
     runner_priority: int = 0
+    view: bool = False
+    stay: bool = False

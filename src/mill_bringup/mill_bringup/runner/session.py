@@ -56,6 +56,7 @@ class Session:
         self._next_check = 0.0
         self._previous: dict[int, Any] = {}
         self._stop: list[int] = []  # signals received (install_stop_handlers)
+        self._stops_taken = 0  # of those, ending a stay (take_stop)
         # axes the start handshake released (--rearm), with the stop each was latched by
         self.rearmed: dict[str, str] = {}
         # until the first sample (runner.start sets it from --startup-timeout)
@@ -178,13 +179,19 @@ class Session:
             # the runner still writes.
             ignore_stop_signals()
 
+    def take_stop(self) -> None:
+        """The stops asked for so far (Ctrl-C, SIGTERM) are the end of the stay after a
+        complete job (run_scenario --stay), not an interruption: the run goes on to collect
+        (a further one interrupts it)."""
+        self._stops_taken = len(self._stop)
+
     def spin(self, when: str) -> None:
         """Take messages for 50 ms, then check the graph (`when`: for its error message).
 
         Polling with spin_once(0) costs tens of µs per call even with nothing to take.
         """
         self.executor.spin_until_future_complete(self._never, timeout_sec=0.05)
-        if self._stop:
+        if len(self._stop) > self._stops_taken:
             raise KeyboardInterrupt
         recorder = self.monitor.recorder
         if recorder is not None and recorder.error:

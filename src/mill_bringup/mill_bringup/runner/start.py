@@ -30,6 +30,7 @@ from mill_analysis.events import REFUSED, Event
 from mill_bringup.jobs.base import GraphPlan, Job
 from mill_bringup.layout import Process, processes
 from mill_bringup.lifecycle_client import activate, release
+from mill_bringup.machine_model import VIEW_MODULE, VIEW_NODE, view_parameters
 from mill_bringup.runner.options import RunError, RunOptions, StartRefused
 from mill_bringup.scenario import NodeLaunch, check_layout
 from mill_common import topics
@@ -106,6 +107,8 @@ def start(session: Session, job: Job[Any], launch: Launch, options: RunOptions) 
     # external drive's activation and the first step share it (runner.follow).
     deadline = session.startup_deadline = time.monotonic() + options.startup_timeout
     handshake(session, job, options)
+    if options.view:  # first: a viewer of the whole job, its URDF latched before it starts
+        graph.launch_beside(VIEW_NODE, VIEW_MODULE, view_parameters(job.config))
     graph.launch(launch.first)
     upstream = launch.graph.upstream
     while any(monitor.count_publishers(t) < 1 for t in upstream):
