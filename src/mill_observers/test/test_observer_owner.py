@@ -133,4 +133,5 @@ def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on() -> No
             "2 publishers claim to be 'x_controller': /x_controller (gid "
         )
         # taken as brakes: the observer predicted no 10 N·m (the copy's) after the contest
-        assert observer._newest_command is not None and math.isnan(observer._newest_command)
+        newest = observer.steps.newest_command
+        assert newest is not None and math.isnan(newest)
