@@ -32,7 +32,7 @@ from typing import Any
 from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import CONTESTED, Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
-from mill_common.hold_window import drive_word
+from mill_common.hold_window import drive_word, said_at
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
@@ -291,9 +291,7 @@ class ObserverNode(Node):
             ns, y = step.ns, step.y
             est = loop.step(y, step.acted, step.missed, step.late)
             if self.servo is not None:  # the command first; the estimate when idle
-                said = self._said.pop(ns, None)
-                for old in [at for at in self._said if at < ns]:
-                    del self._said[old]  # states the timing dropped
+                said = said_at(self._said, ns)  # (and forgets the states the timing dropped)
                 self._served = (ns, y, est, said, False)
                 self.servo(*self._served)
             self._last_estimate = joint_state_bytes(
