@@ -204,15 +204,7 @@ class AxisControllerNode(Node):
         state's or the estimate's: each of their samples answered by a brake request)."""
         slot = next((s for s, t in self._topics.items() if t == topic), '')  # as watched
         brakes = ', the axis brakes' if slot in BRAKE_ON_CONTEST else ''
-        self.get_logger().error(
-            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
-            f'{"; ".join(claimants)}: both refused{brakes}'
-        )
-        said = f'{topic}: {owner}: {"; ".join(claimants)}'
-        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
-        message = f'owner claimed by two publishers, both refused{brakes}: {said}'
-        ns = max(self._join.last_ns, 0)
-        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
+        self.guard.contested(topic, owner, claimants, brakes)
 
     def _on_input(self, slot: str, msg: Any, who: Sender) -> None:
         topic, owner = self._topics[slot], self._owners[slot]

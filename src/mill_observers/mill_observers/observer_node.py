@@ -29,7 +29,6 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import CONTESTED, Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
 from mill_common.hold_window import drive_word, said_at
@@ -108,7 +107,7 @@ class ObserverNode(Node):
         self._inputs: dict[str, DataInput] = {}
         self._advancing = False
         # Each input's sender as the graph identifies its publisher (mill_common.graph_owner).
-        self._graph = graph_owners(self, self._contested)
+        self._graph = graph_owners(self, self.guard.contested)  # both refused
         for slot, callback in (('state', self._on_state), ('command', self._on_command)):
             topic = self._topics[slot]
             self.guard.watch(topic, self._owners[slot])
@@ -150,18 +149,6 @@ class ObserverNode(Node):
             self.steps.forget_commands()
 
     # -- take and check ------------------------------------------------------------------
-    def _contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
-        """Two or more publishers of an input claim its owner's name: both refused."""
-        self.get_logger().error(
-            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
-            f'{"; ".join(claimants)}: both refused'
-        )
-        said = f'{topic}: {owner}: {"; ".join(claimants)}'
-        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
-        message = f'owner claimed by two publishers, both refused: {said}'
-        ns = self.steps.last_ns or 0
-        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
-
     def _foreign(self, slot: str, msg: JointState, who: Sender) -> bool:
         """Whether a message is not its owner's (dropped and reported, then)."""
         owner = self._owners[slot]
