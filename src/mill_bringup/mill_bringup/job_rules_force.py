@@ -24,6 +24,15 @@ def _process_model(values: Mapping[str, Any]) -> dict[str, Any]:
     return algorithm_values(ForceProcessModel, dict(values))
 
 
+Said = tuple[str, str, Any]  # a side of a rule: node, what of it, its value
+
+
+def _failure(c: JobConfig, rule: str, first: Said, second: Said, why: str) -> Failure:
+    """The one way this file says a rule is broken: its two sides, and why, in the job's
+    scenario."""
+    return Failure(rule, (Side(*first), Side(*second)), f'scenario {c.scenario}: {why}')
+
+
 def force_model(c: JobConfig) -> list[Failure]:
     """The force controller designs with the process model the force process runs."""
     plant, ctrl = _one(c, FORCE_PROCESS), _one(c, FORCE_CONTROLLER)
@@ -34,12 +43,14 @@ def force_model(c: JobConfig) -> list[Failure]:
     for key in sorted(k for k in runs if runs[k] != designs.get(k)):
         name = f'{ForceProcessModel.PREFIX}.{key}'
         out.append(
-            Failure(
+            _failure(
+                c,
                 'force_model',
-                (Side(plant.name, name, runs[key]), Side(ctrl.name, name, designs.get(key))),
-                f'scenario {c.scenario}: {plant.name} and {ctrl.name} disagree on {name} '
-                f'({runs[key]!r} and {designs.get(key)!r}): the controller designs with the '
-                'process model the plant runs',
+                (plant.name, name, runs[key]),
+                (ctrl.name, name, designs.get(key)),
+                f'{plant.name} and {ctrl.name} disagree on {name} ({runs[key]!r} and '
+                f'{designs.get(key)!r}): the controller designs with the process model the '
+                'plant runs',
             )
         )
     return out
@@ -56,15 +67,13 @@ def feed_limits(c: JobConfig) -> list[Failure]:
     if given == wanted:
         return []
     return [
-        Failure(
+        _failure(
+            c,
             'feed_limits',
-            (
-                Side(plant.name, 'feed_limits', given),
-                Side(ctrl.name, 'override range × nominal_feed', wanted),
-            ),
-            f"scenario {c.scenario}: {plant.name}'s feed_limits {given} differ from "
-            f"{ctrl.name}'s override range times nominal_feed, [{wanted[0]:g}, {wanted[1]:g}] "
-            'mm/s',
+            (plant.name, 'feed_limits', given),
+            (ctrl.name, 'override range × nominal_feed', wanted),
+            f"{plant.name}'s feed_limits {given} differ from {ctrl.name}'s override range "
+            f'times nominal_feed, [{wanted[0]:g}, {wanted[1]:g}] mm/s',
         )
     ]
 
@@ -82,15 +91,14 @@ def override_range(c: JobConfig) -> list[Failure]:
     if mine == theirs:
         return []
     return [
-        Failure(
+        _failure(
+            c,
             'override_range',
-            (
-                Side(trajectory, 'feed_override.min, .max', mine),
-                Side(ctrl.name, 'override.min, .max', theirs),
-            ),
-            f"scenario {c.scenario}: {trajectory}'s feed_override range [{mine[0]:g}, "
-            f"{mine[1]:g}] differs from the force controller's override range "
-            f"[{theirs[0]:g}, {theirs[1]:g}] ({ctrl.name}'s override.min, .max)",
+            (trajectory, 'feed_override.min, .max', mine),
+            (ctrl.name, 'override.min, .max', theirs),
+            f"{trajectory}'s feed_override range [{mine[0]:g}, {mine[1]:g}] differs from the "
+            f"force controller's override range [{theirs[0]:g}, {theirs[1]:g}] "
+            f"({ctrl.name}'s override.min, .max)",
         )
     ]
 
@@ -109,14 +117,12 @@ def override_period(c: JobConfig) -> list[Failure]:
     if same_period(given, period):
         return []
     return [
-        Failure(
+        _failure(
+            c,
             'override_period',
-            (
-                Side(trajectory, 'feed_override.period', given),
-                Side(ctrl.name, 'spindle revolution 60/S_s', period),
-            ),
-            f"scenario {c.scenario}: {trajectory}'s feed_override.period {given!r} s is not "
-            f"the force controller's control period ({ctrl.name}'s spindle revolution 60/S_s "
-            f'= {period!r} s)',
+            (trajectory, 'feed_override.period', given),
+            (ctrl.name, 'spindle revolution 60/S_s', period),
+            f"{trajectory}'s feed_override.period {given!r} s is not the force controller's "
+            f"control period ({ctrl.name}'s spindle revolution 60/S_s = {period!r} s)",
         )
     ]

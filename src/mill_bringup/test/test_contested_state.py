@@ -11,11 +11,10 @@ name and a trajectory."""
 from __future__ import annotations
 
 import math
-import os
-import time
 from typing import Any
 
 import pytest
+from mill_common.in_process import Graph
 
 T = 1_000_000  # the sample period [ns] (1 ms, the default)
 CONTESTED_STEPS = 40
@@ -23,37 +22,19 @@ AFTER = 20  # finite commands once the copy is gone
 
 
 @pytest.mark.parametrize('servo', [False, True], ids=['separate', 'servo_cycle'])
-def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(
-    monkeypatch: pytest.MonkeyPatch, servo: bool
-) -> None:
-    import rclpy
+def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(servo: bool) -> None:
     from mill_bringup.container import connect_servo_cycles
     from mill_common.codec import decode_joint_state, encode_joint_trajectory
     from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
     from mill_common.signals import AxisReference, ControlInputs, Estimate
     from mill_controllers.axis_controller_node import AxisControllerNode
     from mill_observers.observer_node import ObserverNode
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from sensor_msgs.msg import JointState
     from trajectory_msgs.msg import JointTrajectory
 
-    from mill_common import ros_params
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(150 + os.getpid() % 25))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    nodes: list[Any] = []
-    try:
-        controller = AxisControllerNode(
-            context=context, cli_args=['--ros-args', '-r', '__node:=x_controller']
-        )
-        observer = ObserverNode(
-            context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
-        )
+    with Graph(150, period=0.01) as graph:
+        controller = graph.named(AxisControllerNode, 'x_controller')
+        observer = graph.named(ObserverNode, 'x_observer')
         if servo:
             connect_servo_cycles([observer, controller])
             assert observer.servo is not None
@@ -61,10 +42,7 @@ def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(
             # controller takes no state or estimate of its own, only those handed over.
             for slot in ('position', 'estimate'):
                 controller._inputs[slot].destroy()
-        plant, copy, trajectory = (
-            Node(n, context=context) for n in ('plant', 'plant', 'trajectory')
-        )
-        nodes += [controller, observer, plant, copy, trajectory]
+        plant, copy, trajectory = (graph.node(n) for n in ('plant', 'plant', 'trajectory'))
         publishers = [
             p.create_publisher(JointState, 'mill/x/state', DATA_QOS) for p in (plant, copy)
         ]
@@ -104,21 +82,22 @@ def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(
             DATA_QOS,
             print,
         )
-        for node in nodes:
-            executor.add_node(node)
 
         def resumed() -> int:
             """Finite commands answering steps after the contested ones."""
             return sum(math.isfinite(u) for ns, u in commands.items() if ns >= CONTESTED_STEPS * T)
 
         def run(until: int, finite: int = 0) -> None:
-            end = time.monotonic() + 20.0
-            while time.monotonic() < end and (len(commands) < until or resumed() < finite):
+            def answered() -> bool:
+                if len(commands) >= until and resumed() >= finite:
+                    return True
                 if controller._join.references.newest is None:
                     reference.publish(path)  # again until the controller has it
                 elif not commands:
                     state(0)  # offered again until the nodes have matched the plant
-                executor.spin_once(timeout_sec=0.01)
+                return False
+
+            graph.spin_until(answered, 20.0)
 
         run(CONTESTED_STEPS)
         # every step answered, in order: no stall on the contested states
@@ -137,12 +116,10 @@ def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(
 
         # the copy goes: finite commands again, and only those, once they resume
         publishers.pop()
-        end = time.monotonic() + 20.0
-        executor.remove_node(copy)
-        copy.destroy_node()
-        nodes.remove(copy)
-        while time.monotonic() < end and any(n.count_publishers(topic) > 1 for n in nodes[:2]):
-            executor.spin_once(timeout_sec=0.01)
+        graph.remove(copy)
+        graph.spin_until(
+            lambda: all(n.count_publishers(topic) <= 1 for n in (controller, observer)), 20.0
+        )
         for node in (controller, observer):
             node._graph.look()  # what its once-a-second timer does: the copy is gone
         run(CONTESTED_STEPS, finite=AFTER)
@@ -157,8 +134,3 @@ def test_a_contested_state_is_answered_by_brakes_and_the_axis_goes_on(
         assert all(estimates[ns] == 0.0 for ns in again)  # ... at the measured position
         rest = ControlInputs(0.0, 0.0, AxisReference(1e-3, 0.0, 0.0), Estimate(0.0, 0.0, 0.0))
         assert math.isfinite(controller.loop.law.compute(rest))
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)

@@ -218,6 +218,11 @@ class Sender:
         """Not the owner: another node, or a publisher the graph does not show."""
         return self.verdict in (FOREIGN, UNKNOWN)
 
+    def called(self, frame_id: str) -> str:
+        """How a report names who sent a message that wrote `frame_id`: the graph's name
+        and the frame_id, or the frame_id alone where the graph names none."""
+        return f'{self.name} (frame_id {frame_id!r})' if self.name else frame_id or '(unnamed)'
+
 
 ANYONE = Sender(OWNER, '')  # an input without an owner: whoever sends it
 

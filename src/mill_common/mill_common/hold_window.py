@@ -167,6 +167,24 @@ def drive_word(effort: Sequence[float]) -> bool | None:
     return math.isnan(effort[0])
 
 
+def effort_said(stopped: bool, applied: float) -> float:
+    """The `effort` a drive of this contract puts in a state (what drive_word reads): NaN
+    while it has stopped the axis, else the effort it applied over the period that ends now
+    (0 while the brake holds the axis before its first command)."""
+    if stopped:
+        return math.nan
+    return applied if math.isfinite(applied) else 0.0
+
+
+def said_at(said: dict[int, bool | None], ns: int) -> bool | None:
+    """What the drive said (drive_word) in the state ns, kept by stamp until stepped; the
+    states before it are forgotten too (the timing dropped them)."""
+    word = said.pop(ns, None)
+    for old in [at for at in said if at < ns]:
+        del said[old]
+    return word
+
+
 # -- a gap in the states a controller steps ------------------------------------------------
 @dataclass(frozen=True)
 class GapVerdict:

@@ -97,6 +97,21 @@ class InputGuard:
             )
             self._publish(force=True)
 
+    def contested(self, topic: str, owner: str, claimants: tuple[str, ...], then: str = '') -> None:
+        """Two or more publishers of an input claim its owner's name (mill_common.
+        graph_owner): both refused; logged, and an ERROR `ownership` on /diagnostics at the
+        node's stamp. then: what else follows (', the axis brakes')."""
+        named = '; '.join(claimants)
+        self.node.get_logger().error(
+            f'{len(claimants)} publishers on {topic} claim to be {owner}: {named}: '
+            f'both refused{then}'
+        )
+        said = f'{topic}: {owner}: {named}'
+        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
+        message = f'owner claimed by two publishers, both refused{then}: {said}'
+        ns = self._stamp_ns()
+        self.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
+
     @property
     def started(self) -> bool:
         """The node has stepped past its first sample (its stamp has moved on)."""

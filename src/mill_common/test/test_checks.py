@@ -6,9 +6,11 @@ import math
 
 import pytest
 from mill_common.checks import (
+    FOREIGN,
     REFERENCE_LEAD_NS,
     DropCounter,
     Rejected,
+    Sender,
     StampCheck,
     ahead,
     axis_points,
@@ -156,3 +158,10 @@ def test_input_watch_levels_and_outages() -> None:
     assert w.heard(2.0) == pytest.approx(2.0)  # the outage ends, with its length
     assert w.heard(2.5) is None
     assert w.outages == 1 and w.last_outage == pytest.approx(2.0)
+
+
+def test_a_sender_is_called_by_the_graphs_name_and_what_it_wrote() -> None:
+    assert Sender(FOREIGN, '/rogue').called('x_controller') == "/rogue (frame_id 'x_controller')"
+    assert Sender(FOREIGN, '/rogue').called('') == "/rogue (frame_id '')"
+    assert Sender(FOREIGN, '').called('x_controller') == 'x_controller'  # the graph names none
+    assert Sender(FOREIGN, '').called('') == '(unnamed)'

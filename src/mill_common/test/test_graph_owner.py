@@ -4,50 +4,20 @@ matched against the graph's endpoints of the owner node."""
 
 from __future__ import annotations
 
-import os
-import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
 from mill_common.checks import CONTESTED, FOREIGN, OWNER, Sender, sender_check
+from mill_common.in_process import Graph
 
 TOPIC = 'mill/x/joint_command'
 
 
 @pytest.fixture
-def graph(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
-    import rclpy
-    from rclpy.executors import SingleThreadedExecutor
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(190 + os.getpid() % 25))
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    nodes: list[Any] = []
-
-    class Graph:
-        def node(self, name: str) -> Any:
-            from rclpy.node import Node
-
-            nodes.append(Node(name, context=context))
-            executor.add_node(nodes[-1])
-            return nodes[-1]
-
-        def spin_until(self, done: Callable[[], bool], timeout: float = 10.0) -> bool:
-            end = time.monotonic() + timeout
-            while time.monotonic() < end and not done():
-                executor.spin_once(timeout_sec=0.05)
-            return done()
-
-    try:
-        yield Graph()
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)
+def graph() -> Iterator[Graph]:
+    with Graph(190) as graph:
+        yield graph
 
 
 def receiver(graph: Any, contests: list[tuple[str, str, tuple[str, ...]]]) -> tuple[Any, list]:
@@ -117,7 +87,7 @@ def test_two_nodes_with_the_owners_name_are_both_refused_and_named_once(graph) -
     def both_refused() -> bool:
         first('x_controller')
         second('x_controller')
-        graph.spin_until(lambda: False, 0.1)  # both delivered
+        graph.spin(0.1)  # both delivered
         return len(got) >= 2 and all(w.verdict == CONTESTED for _, w in got[-2:])
 
     assert graph.spin_until(both_refused)
@@ -147,7 +117,7 @@ def test_a_node_started_again_in_place_of_a_silent_one_is_the_owner_until_both_s
     _node, got = receiver(graph, contests)
     first = sender(graph, 'x_controller')
     assert graph.spin_until(lambda: first('x_controller') or bool(got))
-    graph.spin_until(lambda: False, 2 * LIVE_S)  # silent since
+    graph.spin(2 * LIVE_S)  # silent since
     again = sender(graph, 'x_controller')
     heard = len(got)
     assert graph.spin_until(lambda: again('x_controller') or len(got) >= heard + 5)

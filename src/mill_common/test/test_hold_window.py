@@ -1,5 +1,15 @@
+import math
+
 import pytest
-from mill_common.hold_window import HoldWindow, StallWatch, hold_time, state_gap
+from mill_common.hold_window import (
+    HoldWindow,
+    StallWatch,
+    drive_word,
+    effort_said,
+    hold_time,
+    said_at,
+    state_gap,
+)
 from mill_common.parameters import ParameterError
 
 MS = 1_000_000
@@ -91,3 +101,17 @@ def test_a_driver_that_does_not_say_is_judged_by_the_window():
     # A period is no gap, however fast the axis (the drive stops it at the first late tick).
     assert not state_gap(T, T, 2.0, w, drive_stopped=None).trip
     assert state_gap(2 * T, T, 2.0, w, drive_stopped=None).trip
+
+
+def test_the_effort_a_drive_says_reads_back_as_its_word() -> None:
+    assert math.isnan(effort_said(True, 0.3)) and drive_word([effort_said(True, 0.3)]) is True
+    assert effort_said(False, 0.3) == 0.3 and drive_word([0.3]) is False
+    assert effort_said(False, math.nan) == 0.0  # braked before its first command: not stopped
+    assert drive_word([]) is None  # a driver of the old contract says nothing
+
+
+def test_said_at_takes_the_steps_word_and_forgets_the_states_before_it() -> None:
+    said: dict[int, bool | None] = {1: True, 2: None, 3: False, 5: True}
+    assert said_at(said, 3) is False
+    assert said == {5: True}  # 1 and 2 were dropped by the timing
+    assert said_at(said, 4) is None and said == {5: True}  # a step whose state said nothing

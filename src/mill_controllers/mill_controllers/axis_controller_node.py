@@ -32,14 +32,13 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from mill_common.checks import (
-    CONTESTED,
     REFERENCE_LEAD_NS,
     Rejected,
     Sender,
     owner_check,
     sender_check,
 )
-from mill_common.hold_window import StallWatch, drive_word
+from mill_common.hold_window import StallWatch, drive_word, said_at
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
@@ -64,23 +63,27 @@ from std_srvs.srv import Trigger
 
 from mill_common import topics
 from mill_controllers.axis_reports import AxisReports
-from mill_controllers.base import BASE_INPUTS, AxisController
+from mill_controllers.base import AxisController
 from mill_controllers.config import (
     build_controller,
     build_loop,
     check_other_laws,
     parameter_specs,
+    rebuilds_law,
+    unseen_input,
 )
 from mill_controllers.control_loop import AxisControlLoop
 from mill_controllers.controller_inputs import CLOCK_INPUT, INPUTS, REFERENCE_INPUT, owners
-from mill_controllers.sample_join import SampleJoin, is_contested
+from mill_controllers.sample_join import (
+    BRAKE_ON_CONTEST,
+    SampleJoin,
+    brakes_on_contest,
+    is_contested,
+)
 from mill_controllers.switching import SwitchRecord
 from mill_controllers.trip import BRAKE, Trip
 
 WATCH_NS = 20_000_000  # the period of the process's own stall watch (realtime)
-# Inputs of each sample whose contested owner (two publishers claim its name) gets the
-# sample answered by a brake request (the drive brakes: mill_plant.command_intake).
-BRAKE_ON_CONTEST = (CLOCK_INPUT, 'estimate', 'model')
 
 
 def joined(law: AxisController) -> tuple[str, ...]:
@@ -179,16 +182,15 @@ class AxisControllerNode(Node):
             return
         law = build_controller(values)  # raises, with the reason, before anything changes
         check_other_laws(values, self.params.values)  # a law to switch to later builds too
-        for slot in law.required_inputs():
-            if slot not in BASE_INPUTS and slot not in self._seen:
-                source = INPUTS[slot]
-                raise ValueError(
-                    f'{values["controller"]} needs the {slot} input each sample, and none '
-                    f'has arrived on {source.topic(self.axis)} ({source.hint})'
-                )
-        loop, old = self.loop, self.params.values
-        law_values = ('blend_time', 'following_error_limit', 'input_warn_time', 'input_timeout')
-        if any(values[k] != old[k] for k in values if k not in law_values):
+        slot = unseen_input(law, self._seen)
+        if slot is not None:
+            source = INPUTS[slot]
+            raise ValueError(
+                f'{values["controller"]} needs the {slot} input each sample, and none '
+                f'has arrived on {source.topic(self.axis)} ({source.hint})'
+            )
+        loop = self.loop
+        if rebuilds_law(values, self.params.values):
             loop.replace(law)
             self._law_name = values['controller']  # params.values changes after we return
             self._join.require(joined(law))
@@ -202,22 +204,14 @@ class AxisControllerNode(Node):
         state's or the estimate's: each of their samples answered by a brake request)."""
         slot = next((s for s, t in self._topics.items() if t == topic), '')  # as watched
         brakes = ', the axis brakes' if slot in BRAKE_ON_CONTEST else ''
-        self.get_logger().error(
-            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
-            f'{"; ".join(claimants)}: both refused{brakes}'
-        )
-        said = f'{topic}: {owner}: {"; ".join(claimants)}'
-        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
-        message = f'owner claimed by two publishers, both refused{brakes}: {said}'
-        ns = max(self._join.last_ns, 0)
-        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
+        self.guard.contested(topic, owner, claimants, brakes)
 
     def _on_input(self, slot: str, msg: Any, who: Sender) -> None:
         topic, owner = self._topics[slot], self._owners[slot]
         sender = who.name or msg.header.frame_id
         problem = sender_check(who, owner) if owner else None
         # Refused, but answered with a brake request: waiting for it would stall the graph.
-        contested = problem is not None and who.verdict == CONTESTED and slot in BRAKE_ON_CONTEST
+        contested = problem is not None and brakes_on_contest(slot, who.verdict)
         if problem is not None and contested:
             self.guard.drop(topic, problem, sender)
             problem = None
@@ -333,9 +327,7 @@ class AxisControllerNode(Node):
             self._answer(ns, BRAKE)  # the law is not stepped: its state stays finite
             return
         y, est = inputs['position'], inputs['estimate']
-        said = self._said.pop(ns, None)
-        for old in [at for at in self._said if at < ns]:
-            del self._said[old]  # states the timing dropped
+        said = said_at(self._said, ns)  # (and forgets the states the timing dropped)
         if said is False:
             self._drive_reason = ''  # running: a later stop comes with its own reason
         mono, last = time.monotonic_ns(), self._stepped_mono

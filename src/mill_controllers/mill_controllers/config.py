@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,7 +27,7 @@ from mill_common.signals import AxisReference, ControlInputs, Estimate
 from mill_models.axis_data import nominal_input_gain
 from mill_models.loop_tuning import loop_tuning
 
-from mill_controllers.base import AxisController
+from mill_controllers.base import BASE_INPUTS, AxisController
 from mill_controllers.command_shaping import (
     BacklashParams,
     CommandFilterParams,
@@ -171,6 +172,22 @@ def _try_at_rest(law: AxisController, name: str, sample_period: float) -> None:
 def defaults() -> dict[str, Any]:
     """Every parameter of the node at its declared default."""
     return {name: spec.default for name, spec in parameter_specs()}
+
+
+# Parameters whose change keeps the running law (the others replace it, without a bump).
+KEEPS_LAW = ('blend_time', 'following_error_limit', 'input_warn_time', 'input_timeout')
+
+
+def rebuilds_law(values: Mapping[str, Any], old: Mapping[str, Any]) -> bool:
+    """Whether a parameter change replaces the running law (else only the blend time, the
+    following-error limit and the input watch change)."""
+    return any(values[k] != old[k] for k in values if k not in KEEPS_LAW)
+
+
+def unseen_input(law: AxisController, seen: Collection[str]) -> str | None:
+    """An input the law needs each sample, beyond the base ones, of which no sample has
+    arrived yet (a switch to it is refused); None: every one has."""
+    return next((s for s in law.required_inputs() if s not in BASE_INPUTS and s not in seen), None)
 
 
 def check_other_laws(values: dict[str, Any], old: dict[str, Any] | None = None) -> None:

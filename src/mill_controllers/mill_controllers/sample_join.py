@@ -19,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
+from mill_common.checks import CONTESTED as CONTESTED_SENDER
 from mill_common.reference_buffer import ReferenceBuffer
 from mill_common.signals import AxisReference
 from mill_common.stamp_join import StampJoin
@@ -33,6 +34,17 @@ class Contested:
 
 
 CONTESTED = Contested()
+# The inputs of a sample whose contested owner gets it answered by a brake request (the
+# drive brakes: mill_plant.command_intake); the reference is not one of them.
+BRAKE_ON_CONTEST = ('position', 'estimate', 'model')
+
+
+def brakes_on_contest(slot: str, verdict: str) -> bool:
+    """Whether a message of `slot` refused with `verdict` is contested (two publishers claim
+    its owner's name) and its sample therefore answered by a brake request (`contest`), not
+    waited for: the state's, the estimate's and the model's; a contested reference is only
+    refused (the points it would give come again)."""
+    return verdict == CONTESTED_SENDER and slot in BRAKE_ON_CONTEST
 
 
 def is_contested(inputs: dict[str, Any]) -> bool:

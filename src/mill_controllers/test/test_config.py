@@ -6,7 +6,14 @@ from typing import Any
 
 import pytest
 from mill_common.parameters import ParameterError
-from mill_controllers.config import ControllerNodeParams, build_controller, parameter_specs
+from mill_controllers.adaptive_pi import AdaptivePi, AdaptivePiParams
+from mill_controllers.config import (
+    ControllerNodeParams,
+    build_controller,
+    parameter_specs,
+    rebuilds_law,
+    unseen_input,
+)
 from mill_controllers.pd_law import AdrcController
 from mill_models.loop_tuning import loop_tuning
 
@@ -56,3 +63,20 @@ def test_only_fields_declared_with_the_rule_are_tuned() -> None:
     # excitation.omega_c is declared positive, without the rule: 0 is refused, not tuned
     with pytest.raises(ParameterError, match=r'excitation\.omega_c'):
         build_controller(_values(**{'controller': 'excitation', 'excitation.omega_c': 0.0}))
+
+
+def test_a_change_of_limit_blend_or_input_watch_keeps_the_law_any_other_replaces_it() -> None:
+    old = _values()
+    assert not rebuilds_law(_values(**{'following_error_limit': 2e-3, 'blend_time': 0.2}), old)
+    assert not rebuilds_law(_values(**{'input_warn_time': 5.0, 'input_timeout': 50.0}), old)
+    assert rebuilds_law(_values(controller='gpi'), old)
+    assert rebuilds_law(_values(**{'pd.omega_c': 20.0}), old)  # a gain: a new law
+    assert not rebuilds_law(old, old)
+
+
+def test_a_law_reading_the_observers_model_waits_for_a_sample_of_it() -> None:
+    outside = AdaptivePi(0.0, 1e-3, AdaptivePiParams(model_source='observer'))
+    own = AdaptivePi(0.0, 1e-3, AdaptivePiParams())
+    assert unseen_input(outside, {'position', 'estimate'}) == 'model'
+    assert unseen_input(outside, {'position', 'estimate', 'model'}) is None
+    assert unseen_input(own, set()) is None  # the base inputs are never asked for here

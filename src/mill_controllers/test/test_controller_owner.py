@@ -8,47 +8,28 @@ process: the controller node, a plant, a trajectory and two observers of the sam
 from __future__ import annotations
 
 import math
-import os
-import time
 from typing import Any
 
-import pytest
+from mill_common.in_process import Graph
 
 T = 1_000_000  # the sample period [ns] (1 ms, the default)
 CONTESTED_STEPS = 40
 AFTER = 20  # steps answered once the copy is gone
 
 
-def test_a_contested_estimate_is_answered_by_brakes_and_the_controller_goes_on(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    import rclpy
+def test_a_contested_estimate_is_answered_by_brakes_and_the_controller_goes_on() -> None:
     from mill_common.codec import decode_joint_state, encode_joint_trajectory
     from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
     from mill_common.signals import AxisReference, ControlInputs, Estimate
     from mill_controllers.axis_controller_node import AxisControllerNode
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from sensor_msgs.msg import JointState
     from trajectory_msgs.msg import JointTrajectory
 
-    from mill_common import ros_params
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(190 + os.getpid() % 25))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    nodes: list[Any] = []
-    try:
-        controller = AxisControllerNode(
-            context=context, cli_args=['--ros-args', '-r', '__node:=x_controller']
-        )
+    with Graph(190, period=0.01) as graph:
+        controller = graph.named(AxisControllerNode, 'x_controller')
         plant, trajectory, real, copy = (
-            Node(n, context=context) for n in ('plant', 'trajectory', 'x_observer', 'x_observer')
+            graph.node(n) for n in ('plant', 'trajectory', 'x_observer', 'x_observer')
         )
-        nodes += [controller, plant, trajectory, real, copy]
         states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
         reference = trajectory.create_publisher(JointTrajectory, 'mill/reference', DATA_QOS)
         observers = [
@@ -83,23 +64,24 @@ def test_a_contested_estimate_is_answered_by_brakes_and_the_controller_goes_on(
         take(
             plant, JointState, 'mill/x/joint_command', decode_joint_state, command, DATA_QOS, print
         )
-        for node in nodes:
-            executor.add_node(node)
 
         def resumed() -> int:
             """Finite commands answering steps after the contested ones."""
             return sum(math.isfinite(u) for ns, u in commands.items() if ns >= CONTESTED_STEPS * T)
 
         def run(until: int, finite: int = 0) -> None:
-            end = time.monotonic() + 20.0
-            while time.monotonic() < end and (len(commands) < until or resumed() < finite):
+            def answered() -> bool:
+                if len(commands) >= until and resumed() >= finite:
+                    return True
                 if controller._join.references.newest is None:
                     reference.publish(path)  # again until the controller has it
                 elif not sent:
                     state(0)
                 elif not commands:
                     state(0)  # offered again until the controller has matched the plant
-                executor.spin_once(timeout_sec=0.01)
+                return False
+
+            graph.spin_until(answered, 20.0)
 
         run(CONTESTED_STEPS)
         # every step answered, in order: no stall on the contested estimates
@@ -117,12 +99,8 @@ def test_a_contested_estimate_is_answered_by_brakes_and_the_controller_goes_on(
 
         # the copy goes: finite commands again, and only those, once they resume
         observers.pop()
-        end = time.monotonic() + 20.0
-        executor.remove_node(copy)
-        copy.destroy_node()
-        nodes.remove(copy)
-        while controller.count_publishers(topic) > 1 and time.monotonic() < end:
-            executor.spin_once(timeout_sec=0.01)
+        graph.remove(copy)
+        graph.spin_until(lambda: controller.count_publishers(topic) <= 1, 20.0)
         controller._graph.look()  # what its once-a-second timer does: the copy is gone
         run(CONTESTED_STEPS, finite=AFTER)
         assert sorted(commands) == [k * T for k in range(len(commands))]  # none skipped
@@ -134,8 +112,3 @@ def test_a_contested_estimate_is_answered_by_brakes_and_the_controller_goes_on(
         # the law is usable: 1 mm behind its reference at rest, it commands a finite effort
         rest = ControlInputs(0.0, 0.0, AxisReference(1e-3, 0.0, 0.0), Estimate(0.0, 0.0, 0.0))
         assert math.isfinite(controller.loop.law.compute(rest))
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)

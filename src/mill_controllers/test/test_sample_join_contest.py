@@ -4,9 +4,12 @@ state stands in for every input of its sample. ROS-free."""
 
 from __future__ import annotations
 
+from mill_common.checks import CONTESTED as CONTESTED_SENDER
+from mill_common.checks import FOREIGN
 from mill_common.signals import AxisReference, Estimate
 from mill_common.timing import timing
-from mill_controllers.sample_join import CONTESTED, SampleJoin, is_contested
+from mill_controllers.controller_inputs import CLOCK_INPUT
+from mill_controllers.sample_join import CONTESTED, SampleJoin, brakes_on_contest, is_contested
 
 T = 1_000_000
 
@@ -39,3 +42,10 @@ def test_a_contested_state_stands_in_for_every_input_of_its_sample() -> None:
     assert ns == T and inputs == {'position': CONTESTED, 'estimate': CONTESTED}
     j.offer('estimate', T, Estimate(0.0, 0.0, 0.0))  # late: the sample is answered
     assert list(j.due()) == [] and j.waiting_for() is None
+
+
+def test_a_contested_state_estimate_or_model_is_answered_by_a_brake_a_reference_is_not() -> None:
+    for slot in (CLOCK_INPUT, 'estimate', 'model'):
+        assert brakes_on_contest(slot, CONTESTED_SENDER)
+        assert not brakes_on_contest(slot, FOREIGN)  # a foreign sender: only refused
+    assert not brakes_on_contest('reference', CONTESTED_SENDER)

@@ -8,7 +8,8 @@ controller is its brake request: the drive brakes, the observer takes it as no i
 While two publishers claim an input's owner's name (mill_common.graph_owner) both are
 refused, but the step is not waited on: a contested command is taken as the brake the drive
 makes of it, a contested state's step is passed without an estimate (the controller answers
-it with a brake request).
+it with a brake request). Which state is stepped when, with which command, and that contest
+rule are mill_observers.observer_steps' (ROS-free).
 
 Each state goes to the ROS-free ObserverLoop (mill_observers.observer_loop) with the command
 that acted over the period before it, the object the offline simulator steps too, and the
@@ -28,10 +29,9 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import CONTESTED, Rejected, Sender, joint_values, owner_check, sender_check
 from mill_common.codec import decode_joint_state
-from mill_common.hold_window import drive_word
+from mill_common.hold_window import drive_word, said_at
 from mill_common.input_guard import InputGuard
 from mill_common.node_main import run_node
 from mill_common.ros import (
@@ -56,10 +56,8 @@ from sensor_msgs.msg import JointState
 from mill_common import topics
 from mill_observers.config import build_observer_loop, check_other_observers, parameter_specs
 from mill_observers.observer_loop import ObserverLoop
+from mill_observers.observer_steps import PASS, PAST, WAIT, ObserverSteps
 from mill_observers.registry import OBSERVERS
-
-MAX_COAST = 100  # periods the model runs on without a state before it just resumes
-
 
 # The controller of a servo cycle: (stamp, position, estimate, what the drive said, and
 # whether the state came from a contested plant: then answered by a brake request).
@@ -72,15 +70,11 @@ class ObserverNode(Node):
         super().__init__('observer', **options)
         self._name = self.get_name()  # the sender of every message; asked once
         self._loop: ObserverLoop | None = None
-        self._last_ns: int | None = None  # the last state stepped
-        self._states: dict[int, float] = {}
-        self._contested_states: set[int] = set()  # of those, sent by a contested plant
-        self._commands: dict[int, float] = {}  # lockstep: by stamp
-        self._newest_command: float | None = None  # real time: the newest received
         self.params = NodeParameters(self, parameter_specs(), self._configure)
         v = self.params.values
         axis = self.axis = v['axis']
         self.timing = timing(v['timing'], period_ns(v['sample_period']))
+        self.steps = ObserverSteps(self.timing)  # the states and commands, by stamp
         self._owners = {
             'state': v['plant_node'],
             'command': v['controller_node'] or f'{axis}_controller',
@@ -107,13 +101,13 @@ class ObserverNode(Node):
             lambda: self.params.values['input_warn_time'],
             lambda: self.params.values['input_timeout'],
             exit_on_silence=self.timing.EXIT_ON_SILENCE,
-            stamp_ns=lambda: self._last_ns or 0,
+            stamp_ns=lambda: self.steps.last_ns or 0,
         )
         depth = self.timing.depth()
         self._inputs: dict[str, DataInput] = {}
         self._advancing = False
         # Each input's sender as the graph identifies its publisher (mill_common.graph_owner).
-        self._graph = graph_owners(self, self._contested)
+        self._graph = graph_owners(self, self.guard.contested)  # both refused
         for slot, callback in (('state', self._on_state), ('command', self._on_command)):
             topic = self._topics[slot]
             self.guard.watch(topic, self._owners[slot])
@@ -137,6 +131,7 @@ class ObserverNode(Node):
         )
 
     def _configure(self, values: dict[str, Any]) -> None:
+        first = self._loop is None
         if self._loop is not None:
             old = self.params.values['observer']
             units = [OBSERVERS.get(n).DISTURBANCE_UNIT for n in (old, values['observer'])]
@@ -150,21 +145,10 @@ class ObserverNode(Node):
         check_other_observers(values, None if self._loop is None else self.params.values)
         # A rebuilt observer starts from the next measurement, its estimate continuing.
         self._loop = loop if self._loop is None else self._loop.replace(loop)
-        self._commands.clear()
+        if not first:
+            self.steps.forget_commands()
 
     # -- take and check ------------------------------------------------------------------
-    def _contested(self, topic: str, owner: str, claimants: tuple[str, ...]) -> None:
-        """Two or more publishers of an input claim its owner's name: both refused."""
-        self.get_logger().error(
-            f'{len(claimants)} publishers on {topic} claim to be {owner}: '
-            f'{"; ".join(claimants)}: both refused'
-        )
-        said = f'{topic}: {owner}: {"; ".join(claimants)}'
-        values = {'foreign_messages': 0, 'foreign_publishers': 0, 'contested': said}
-        message = f'owner claimed by two publishers, both refused: {said}'
-        ns = self._last_ns or 0
-        self.guard.diagnostics.report(ns, DiagnosticStatus.ERROR, 'ownership', message, values)
-
     def _foreign(self, slot: str, msg: JointState, who: Sender) -> bool:
         """Whether a message is not its owner's (dropped and reported, then)."""
         owner = self._owners[slot]
@@ -184,7 +168,7 @@ class ObserverNode(Node):
         if problem is not None:
             if problem.reason.startswith('stamp') and ns == stamps.newest:
                 return None
-            if not (slot == 'state' and self._last_ns is not None and ns <= self._last_ns):
+            if not (slot == 'state' and self.steps.behind(ns) is not None):
                 self.guard.drop(topic, problem, sender)
             return None
         field = self._fields[slot]
@@ -205,11 +189,12 @@ class ObserverNode(Node):
         elif self._foreign('state', msg, who):
             return
         ns = from_stamp(msg.header.stamp)
-        if self._last_ns is not None and ns <= self._last_ns:
-            if not self.timing.WAITS_FOR_INPUTS or ns < self._last_ns:
+        behind = self.steps.behind(ns)
+        if behind is not None:
+            if behind == PAST:
                 past = Rejected('stamp repeated or in the past')
                 self.guard.drop(self._topics['state'], past, msg.header.frame_id)
-            elif ns == self._last_ns:
+            else:  # AGAIN
                 self.guard.heard(self._topics['state'])  # the plant is there, waiting
                 if self.servo is not None and self._served is not None:
                     self.servo(*self._served)
@@ -224,10 +209,8 @@ class ObserverNode(Node):
         ):
             return  # the plant offers the step again
         self._stamps['state'].accept(got[0])
-        self._states[got[0]] = got[1]
-        if contested:
-            self._contested_states.add(got[0])
-        elif self.servo is not None:
+        self.steps.state(*got, contested)
+        if not contested and self.servo is not None:
             self._said[got[0]] = drive_word(msg.effort)
         self._advance()
 
@@ -248,15 +231,12 @@ class ObserverNode(Node):
 
     def _contested_command(self, msg: JointState, who: Sender) -> None:
         """A command of one of two publishers claiming the controller's name: refused as a
-        command (dropped and named), and taken as what the drive makes of it, a brake
-        request for its step (mill_plant.command_intake: it wins over a valid command of the
-        step not yet used). So the observer predicts the braked axis and goes on: refusing
-        the step outright would stall it, and the real controller behind it, and the copy
-        would then be the only claimant that speaks."""
+        command (dropped and named), and taken as a brake request for its step
+        (ObserverSteps.brakes_pending). Refusing the step outright would stall the observer,
+        and the real controller behind it, and the copy would then be the only claimant
+        that speaks."""
         self._refuse_contested('command', who)
-        ns = from_stamp(msg.header.stamp)
-        if ns in self._commands:  # the step's valid command came first, not used yet
-            self._commands[ns] = math.nan
+        if self.steps.brakes_pending(from_stamp(msg.header.stamp)):
             return
         got = self._accept('command', msg)
         if got is not None:
@@ -273,11 +253,8 @@ class ObserverNode(Node):
         if self.servo is not None:
             self.guard.heard(self._topics['command'])
         self._stamps['command'].accept(ns)
-        self._newest_command = u
-        if self.timing.WAITS_FOR_INPUTS and (self._last_ns is None or ns >= self._last_ns):
-            self._commands[ns] = u
-            if not self._advancing:  # (a servo cycle answers from inside _advance)
-                self._advance()
+        if self.steps.commanded(ns, u) and not self._advancing:
+            self._advance()  # (a servo cycle answers from inside _advance)
 
     # -- step and publish ----------------------------------------------------------------
     def _advance(self) -> None:
@@ -290,21 +267,18 @@ class ObserverNode(Node):
     def _step_due(self) -> None:
         loop = self._loop
         assert loop is not None, 'configured in NodeParameters'
-        for ns in self.timing.due(self._states):
-            if ns in self._contested_states:
-                self._pass_contested(ns)
-                continue
-            acted, missed, late = self._acted(ns)
-            if self.timing.WAITS_FOR_INPUTS and loop.started and acted is None:
+        for step in self.steps.due(lambda: loop.started):
+            if step.kind == WAIT:
                 self._stalled_since = self._stalled_since or time.monotonic()
-                return  # y(k) arrived before u(k − 1): wait for it
-            y = self._states.pop(ns)
-            est = loop.step(y, acted, missed, late)
-            self._last_ns, self._stalled_since = ns, None
+                return
+            self._stalled_since = None
+            if step.kind == PASS:
+                self._pass_contested(step.ns)
+                continue
+            ns, y = step.ns, step.y
+            est = loop.step(y, step.acted, step.missed, step.late)
             if self.servo is not None:  # the command first; the estimate when idle
-                said = self._said.pop(ns, None)
-                for old in [at for at in self._said if at < ns]:
-                    del self._said[old]  # states the timing dropped
+                said = said_at(self._said, ns)  # (and forgets the states the timing dropped)
                 self._served = (ns, y, est, said, False)
                 self.servo(*self._served)
             self._last_estimate = joint_state_bytes(
@@ -324,42 +298,22 @@ class ObserverNode(Node):
                 )
 
     def _pass_contested(self, ns: int) -> None:
-        """A state two publishers sent under the plant's name: no estimate of it, but its
-        step is passed, not waited on. The controller answers it with a brake request
-        (mill_controllers.sample_join), the command the next state is estimated with: the
-        braked axis at rest where it is measured then (ObserverLoop)."""
-        self._contested_states.discard(ns)
-        del self._states[ns]
-        if self._last_ns is not None:
-            self._commands.pop(self._last_ns, None)  # it acted before a state not taken
-        self._last_ns, self._stalled_since = ns, None
+        """A state two publishers sent under the plant's name, passed (ObserverSteps): no
+        estimate of it; in a servo cycle its controller is handed it to brake."""
         self._last_estimate = None
         self._said.pop(ns, None)
         if self.servo is not None:  # its controller takes no state of its own
             self._served = (ns, math.nan, UNMEASURED, None, True)
             self.servo(*self._served)
 
-    def _acted(self, ns: int) -> tuple[float | None, int, float]:
-        """The command that acted before the state ns, the periods missed since the last
-        state and the time beyond whole periods (in periods): lockstep the command stamped
-        like that state, on the grid; real time the newest, and the drive's stamps."""
-        if self._last_ns is None:
-            return None, 0, 0.0
-        if self.timing.WAITS_FOR_INPUTS:
-            return self._commands.pop(self._last_ns, None), 0, 0.0
-        periods = (ns - self._last_ns) / self.timing.period_ns
-        whole = max(round(periods), 1)
-        # Before its first command the drive holds the axis braked (the contract).
-        held = math.nan if self._newest_command is None else self._newest_command
-        return held, min(whole - 1, MAX_COAST), periods - whole
-
     def _report_waiting(self) -> None:
-        if self._last_ns is None or self._stalled_since is None:
+        last_ns = self.steps.last_ns
+        if last_ns is None or self._stalled_since is None:
             return
         if time.monotonic() - self._stalled_since > 2.0:
             topic = topics.joint_command(self.axis)
             self.get_logger().warning(
-                f'waiting for the command answering the state {self.timing.when(self._last_ns)} on '
+                f'waiting for the command answering the state {self.timing.when(last_ns)} on '
                 f'{topic} '
                 f'({self.count_publishers(topic)} publishers)'
             )

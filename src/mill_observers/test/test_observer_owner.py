@@ -6,44 +6,23 @@ rclpy nodes in a private domain: the observer node, a plant, a controller and th
 from __future__ import annotations
 
 import math
-import os
-import time
 from typing import Any
 
-import pytest
+from mill_common.in_process import Graph
 
 T = 1_000_000  # the sample period [ns] (1 ms, the default)
 STEPS = 60
 
 
-def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    import rclpy
+def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken() -> None:
     from mill_common.codec import decode_joint_state
     from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
     from mill_observers.observer_node import ObserverNode
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from sensor_msgs.msg import JointState
 
-    from mill_common import ros_params
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(170 + os.getpid() % 25))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    nodes: list[Any] = []
-    try:
-        observer = ObserverNode(
-            context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
-        )
-        plant, controller, rogue = (
-            Node(n, context=context) for n in ('plant', 'x_controller', 'rogue')
-        )
-        nodes += [observer, plant, controller, rogue]
+    with Graph(170, period=0.01) as graph:
+        observer = graph.named(ObserverNode, 'x_observer')
+        plant, controller, rogue = (graph.node(n) for n in ('plant', 'x_controller', 'rogue'))
         states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
         commands = controller.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS)
         forged = rogue.create_publisher(JointState, 'mill/x/state', DATA_QOS)
@@ -80,57 +59,37 @@ def test_a_ratcheting_state_stream_is_dropped_and_the_plants_is_taken(
             print,
         )
         take(rogue, JointState, 'mill/x/state', decode_joint_state, ratchet, DATA_QOS, print)
-        for node in nodes:
-            executor.add_node(node)
-        end = time.monotonic() + 20.0
-        while time.monotonic() < end and len(set(estimated)) < STEPS:
-            if not estimated:
-                state(0)  # offered again until the observer has matched the plant
-            executor.spin_once(timeout_sec=0.01)
+        graph.spin_until(lambda: all_estimated(estimated, state), 20.0)
         # every step of the plant, in order (a step offered again is answered again)
         assert list(dict.fromkeys(estimated)) == [k * T for k in range(STEPS)]
         topic = 'mill/x/state'
         dropped = observer.guard.drops.counts.get(topic, 0)
         assert dropped >= STEPS // 2  # the rogue's states, one per state it heard
         assert observer.guard.drops.last_reason[topic] == "sent by /rogue, not by its owner 'plant'"
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)
 
 
-def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
+def all_estimated(estimated: list[int], state: Any) -> bool:
+    """Every step estimated; if not one yet, the first state offered again (until the
+    observer has matched the plant)."""
+    if len(set(estimated)) >= STEPS:
+        return True
+    if not estimated:
+        state(0)
+    return False
+
+
+def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on() -> None:
     # Issue 37 item 2: a second x_controller answering beside the real one. The drive takes
     # their commands as brake requests; the observer refused them outright and stalled (in
     # a whole run, for 10 s, silencing the real controller behind it).
-    import rclpy
     from mill_common.codec import decode_joint_state
     from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
     from mill_observers.observer_node import ObserverNode
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from sensor_msgs.msg import JointState
 
-    from mill_common import ros_params
-
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(170 + os.getpid() % 25))
-    monkeypatch.setattr(ros_params, 'command_line', [])
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    nodes: list[Any] = []
-    try:
-        observer = ObserverNode(
-            context=context, cli_args=['--ros-args', '-r', '__node:=x_observer']
-        )
-        plant, real, copy = (
-            Node(n, context=context) for n in ('plant', 'x_controller', 'x_controller')
-        )
-        nodes += [observer, plant, real, copy]
+    with Graph(170, period=0.01) as graph:
+        observer = graph.named(ObserverNode, 'x_observer')
+        plant, real, copy = (graph.node(n) for n in ('plant', 'x_controller', 'x_controller'))
         states = plant.create_publisher(JointState, 'mill/x/state', DATA_QOS)
         publishers = [
             (c.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS), u)
@@ -165,13 +124,7 @@ def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on(
             DATA_QOS,
             print,
         )
-        for node in nodes:
-            executor.add_node(node)
-        end = time.monotonic() + 20.0
-        while time.monotonic() < end and len(set(estimated)) < STEPS:
-            if not estimated:
-                state(0)
-            executor.spin_once(timeout_sec=0.01)
+        graph.spin_until(lambda: all_estimated(estimated, state), 20.0)
         # every step estimated, in order: no stall on the contested commands
         assert list(dict.fromkeys(estimated)) == [k * T for k in range(STEPS)]
         topic = 'mill/x/joint_command'
@@ -180,9 +133,5 @@ def test_contested_commands_are_taken_as_brakes_and_the_observer_goes_on(
             "2 publishers claim to be 'x_controller': /x_controller (gid "
         )
         # taken as brakes: the observer predicted no 10 N·m (the copy's) after the contest
-        assert observer._newest_command is not None and math.isnan(observer._newest_command)
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        newest = observer.steps.newest_command
+        assert newest is not None and math.isnan(newest)

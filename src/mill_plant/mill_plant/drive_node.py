@@ -40,7 +40,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from mill_common.checks import Rejected, Sender
 from mill_common.codec import encode_clock, encode_wrench_stamped
 from mill_common.diagnostics import Diagnostics
-from mill_common.hold_window import HoldWindow
+from mill_common.hold_window import HoldWindow, effort_said
 from mill_common.node_main import request_exit
 from mill_common.parameters import ParameterError, ParamSpec
 from mill_common.ros import DATA_QOS, LATCHED_QOS, from_stamp, graph_owners, joint_state_bytes
@@ -62,14 +62,13 @@ from mill_plant.command_table import CommandTable
 from mill_plant.drive_counts import DriveCounts
 from mill_plant.drive_cycle import CYCLES, DriveCycle, Machine
 from mill_plant.drive_reports import DriveReports
+from mill_plant.drive_setup import MACHINE_AXES, command_owners, configure_refusal
 from mill_plant.drive_topics import DriveTopics
 from mill_plant.joint_states import JointStates
 from mill_plant.ownership import Ownership
 from mill_plant.ros2_control_adapter import Ros2ControlPair
 from mill_plant.spindle import SpindleTrack, spindle_values
 from mill_plant.topic_pair import Ros2ControlParams
-
-MACHINE_AXES = ('x', 'y', 'z')
 
 
 class DriveNode(LifecycleNode):
@@ -116,24 +115,17 @@ class DriveNode(LifecycleNode):
         except (ValueError, OSError) as exc:
             self.get_logger().error(f'cannot configure the machine: {exc}')
             return TransitionCallbackReturn.FAILURE
-        if self.cycle.GRID and not backend.SIMULATED:
-            self.get_logger().error('a real machine cannot run in lockstep: use timing realtime')
-            return TransitionCallbackReturn.FAILURE
         pair = Ros2ControlParams.from_node_values(v)
-        if pair.commands_topic and self.cycle.GRID:
-            self.get_logger().error(
-                'ros2_control.commands_topic needs timing realtime: the controller manager runs '
-                'its own loop on the wall clock and never answers a lockstep step'
-            )
+        refusal = configure_refusal(self.cycle.GRID, backend.SIMULATED, pair)
+        if refusal is not None:
+            self.get_logger().error(refusal)
             return TransitionCallbackReturn.FAILURE
         self.backend = backend
         self.axes = list(backend.axes)
-        owners = dict(zip(MACHINE_AXES, v['command_owners'], strict=True))
-        axis_owners = {a: owners[a] for a in self.axes}  # of mill/<axis>/joint_command
-        # who commands each axis: its controller, or the pair's owner
-        self.owners = {a: pair.owner for a in self.axes} if pair.commands_topic else axis_owners
-        more = {pair.commands_topic: pair.owner, pair.states_topic: self._name}
-        self.ownership = Ownership(self, axis_owners, more if pair.commands_topic else None)
+        owned = command_owners(self.axes, v['command_owners'], pair, self._name)
+        axis_owners = owned.axis_topics
+        self.owners = owned.axes
+        self.ownership = Ownership(self, axis_owners, owned.pair_topics)
         try:
             window = HoldWindow.from_node_values(v)
             MachineTravel.from_node_values(v)  # the guard's travel (refused here, in one line)
@@ -279,8 +271,7 @@ class DriveNode(LifecycleNode):
 
     def _on_command(self, axis: str, msg: JointState, who: Sender) -> None:
         if self.pair is not None:
-            topic, sender = topics.joint_command(axis), msg.header.frame_id
-            named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
+            topic, named = topics.joint_command(axis), who.called(msg.header.frame_id)
             problem = Rejected(
                 f'axis {axis} takes its commands on {self.pair.commands_topic} only '
                 '(ros2_control.commands_topic)'
@@ -308,7 +299,7 @@ class DriveNode(LifecycleNode):
         if got is None:
             return None  # a repeat of an answered step: harmless
         if not isinstance(got, Accepted):
-            named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
+            named = who.called(sender)
             if got.foreign:
                 self._foreign(topic, named)
             self.reports.drop(topic, got.problem, named)
@@ -377,7 +368,7 @@ class DriveNode(LifecycleNode):
         if say_stops:
             table = self.table.by_axis
             for axis, y, u in zip(self.axes, positions, self._written, strict=True):
-                said = math.nan if table[axis].stopped else (u if math.isfinite(u) else 0.0)
+                said = effort_said(bool(table[axis].stopped), u)
                 publishers[axis].publish(
                     joint_state_bytes(ns, (axis,), position=(y,), effort=(said,), sender=name)
                 )

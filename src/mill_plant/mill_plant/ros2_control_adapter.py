@@ -90,8 +90,7 @@ class Ros2ControlPair:
         topic = self.commands_topic
         problem = command_shape(msg.name, msg.position, msg.velocity, msg.effort, self.axes)
         if problem is not None:
-            sender = msg.header.frame_id
-            named = f'{who.name} (frame_id {sender!r})' if who.name else sender or '(unnamed)'
+            named = who.called(msg.header.frame_id)
             if who.verdict == FOREIGN:
                 self._foreign(topic, named)
             self._drop(topic, problem, named)

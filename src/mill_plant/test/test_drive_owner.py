@@ -6,68 +6,46 @@ the owner's name gets both refused, named, and the axis braked."""
 from __future__ import annotations
 
 import math
-import os
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from mill_common.in_process import Graph
+
+
+class Machine(Graph):
+    """The plant node on the wall clock, and the nodes answering its states."""
+
+    drive: Any = None
+
+    def answering(self, name: str, effort: float) -> None:
+        """A node `name` answering each x state of the drive with `effort`, its frame_id
+        'x_controller' whoever it is."""
+        from mill_common.codec import decode_joint_state
+        from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
+        from sensor_msgs.msg import JointState
+
+        node = self.node(name)
+        pub = node.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS)
+
+        def answer(msg: Any) -> None:
+            ns = from_stamp(msg.header.stamp)
+            pub.publish(joint_state_bytes(ns, ('x',), effort=(effort,), sender='x_controller'))
+
+        take_serialized(node, JointState, 'mill/x/state', decode_joint_state, answer, 10, print)
 
 
 @pytest.fixture
-def machine(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
-    import rclpy
+def machine() -> Iterator[Machine]:
     from mill_plant.plant_node import make_node
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from rclpy.parameter import Parameter
 
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(160 + os.getpid() % 25))
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    plant = make_node(context=context, parameter_overrides=[Parameter('timing', value='realtime')])
-    executor.add_node(plant)
-    nodes: list[Any] = [plant]
-
-    class Machine:
-        drive = plant
-
-        def answering(self, name: str, effort: float) -> None:
-            """A node `name` answering each x state of the drive with `effort`, its
-            frame_id 'x_controller' whoever it is."""
-            from mill_common.codec import decode_joint_state
-            from mill_common.ros import DATA_QOS, from_stamp, joint_state_bytes, take_serialized
-            from sensor_msgs.msg import JointState
-
-            node = Node(name, context=context)
-            nodes.append(node)
-            pub = node.create_publisher(JointState, 'mill/x/joint_command', DATA_QOS)
-
-            def answer(msg: Any) -> None:
-                ns = from_stamp(msg.header.stamp)
-                pub.publish(joint_state_bytes(ns, ('x',), effort=(effort,), sender='x_controller'))
-
-            take_serialized(node, JointState, 'mill/x/state', decode_joint_state, answer, 10, print)
-            executor.add_node(node)
-
-        def spin_until(self, done: Callable[[], bool], timeout: float = 10.0) -> bool:
-            end = time.monotonic() + timeout
-            while time.monotonic() < end and not done():
-                executor.spin_once(timeout_sec=0.02)
-            return done()
-
-        def spin(self, seconds: float) -> None:
-            self.spin_until(lambda: False, seconds)
-
-    try:
-        yield Machine()
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)
+    with Machine(160, period=0.02) as machine:
+        realtime = [Parameter('timing', value='realtime')]
+        machine.drive = machine.add(
+            make_node(context=machine.context, parameter_overrides=realtime)
+        )
+        yield machine
 
 
 def test_a_rogue_with_the_owners_frame_id_drives_nothing_and_is_named(machine) -> None:

@@ -10,12 +10,11 @@ ros2_control effort controller would close."""
 from __future__ import annotations
 
 import math
-import os
-import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
+from mill_common.in_process import Graph
 
 COMMANDS = 'robot_joint_commands'
 STATES = 'robot_joint_states'
@@ -28,105 +27,81 @@ AXES = ('x', 'y', 'z')
 KP, KI, KD, LIMIT = 7.0, 15.0, 1.1, 0.2
 
 
+class Side:
+    """The hardware interface's node: its states in, its commands out."""
+
+    def __init__(self, graph: Graph, name: str) -> None:
+        from rclpy.qos import qos_profile_sensor_data
+        from sensor_msgs.msg import JointState
+
+        self.node = graph.node(name)
+        # As TopicBasedSystem makes them: commands QoS(1), states SensorDataQoS.
+        self.pub = self.node.create_publisher(JointState, COMMANDS, 1)
+        self.node.create_subscription(JointState, STATES, self._on_state, qos_profile_sensor_data)
+        self.latest: Any = None
+        self.history: list[Any] = []
+        self.states = 0
+        self.law: Callable[[Any], list[float]] | None = None  # None: silent
+        self.sent: list[float] = []
+
+    def _on_state(self, msg: Any) -> None:
+        self.latest, self.states = msg, self.states + 1
+        self.history.append(msg)
+        if self.law is not None:  # read(), update(), write()
+            self.send(effort=self.law(msg))
+
+    def send(self, names: tuple[str, ...] = AXES, **fields: list[float]) -> None:
+        from sensor_msgs.msg import JointState
+
+        msg = JointState()
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.name = list(names)
+        for field, values in fields.items():
+            setattr(msg, field, [float(v) for v in values])
+        if 'effort' in fields:
+            self.sent = list(fields['effort'])
+        self.pub.publish(msg)
+
+    def position(self, axis: str) -> float:
+        return float(self.latest.position[list(self.latest.name).index(axis)])
+
+
+class Pair(Graph):
+    """The plant node with the pair's commands topic, and what /diagnostics said."""
+
+    drive: Any = None
+    said: list[str]
+
+    def side(self, name: str = OWNER) -> Side:
+        return Side(self, name)
+
+
 @pytest.fixture
-def pair(monkeypatch: pytest.MonkeyPatch) -> Iterator[Any]:
-    import rclpy
+def pair() -> Iterator[Pair]:
     from diagnostic_msgs.msg import DiagnosticArray
     from mill_plant.plant_node import make_node
-    from rclpy.executors import SingleThreadedExecutor
-    from rclpy.node import Node
     from rclpy.parameter import Parameter
-    from rclpy.qos import qos_profile_sensor_data
-    from sensor_msgs.msg import JointState
 
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(185 + os.getpid() % 30))
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    executor = SingleThreadedExecutor(context=context)
-    plant = make_node(
-        context=context,
-        parameter_overrides=[
-            Parameter('timing', value='realtime'),
-            Parameter('sample_period', value=0.005),
-            Parameter('cutting_model', value='none'),  # air: a jog, no workpiece
-            Parameter('ros2_control.commands_topic', value=COMMANDS),
-        ],
-    )
-    executor.add_node(plant)
-    nodes: list[Any] = [plant]
-    diagnostics: list[str] = []
-
-    class Side:
-        """The hardware interface's node: its states in, its commands out."""
-
-        def __init__(self, name: str) -> None:
-            self.node = Node(name, context=context)
-            nodes.append(self.node)
-            # As TopicBasedSystem makes them: commands QoS(1), states SensorDataQoS.
-            self.pub = self.node.create_publisher(JointState, COMMANDS, 1)
-            self.node.create_subscription(
-                JointState, STATES, self._on_state, qos_profile_sensor_data
+    with Pair(185, period=0.02) as pair:
+        pair.drive = pair.add(
+            make_node(
+                context=pair.context,
+                parameter_overrides=[
+                    Parameter('timing', value='realtime'),
+                    Parameter('sample_period', value=0.005),
+                    Parameter('cutting_model', value='none'),  # air: a jog, no workpiece
+                    Parameter('ros2_control.commands_topic', value=COMMANDS),
+                ],
             )
-            self.latest: Any = None
-            self.history: list[Any] = []
-            self.states = 0
-            self.law: Callable[[Any], list[float]] | None = None  # None: silent
-            self.sent: list[float] = []
-            executor.add_node(self.node)
-
-        def _on_state(self, msg: Any) -> None:
-            self.latest, self.states = msg, self.states + 1
-            self.history.append(msg)
-            if self.law is not None:  # read(), update(), write()
-                self.send(effort=self.law(msg))
-
-        def send(self, names: tuple[str, ...] = AXES, **fields: list[float]) -> None:
-            msg = JointState()
-            msg.header.stamp = self.node.get_clock().now().to_msg()
-            msg.name = list(names)
-            for field, values in fields.items():
-                setattr(msg, field, [float(v) for v in values])
-            if 'effort' in fields:
-                self.sent = list(fields['effort'])
-            self.pub.publish(msg)
-
-        def position(self, axis: str) -> float:
-            return float(self.latest.position[list(self.latest.name).index(axis)])
-
-    listener = Node('listener', context=context)
-    nodes.append(listener)
-    listener.create_subscription(
-        DiagnosticArray,
-        '/diagnostics',
-        lambda m: diagnostics.extend(s.message for s in m.status),
-        10,
-    )
-    executor.add_node(listener)
-
-    class Pair:
-        drive = plant
-        said = diagnostics
-
-        def side(self, name: str = OWNER) -> Side:
-            return Side(name)
-
-        def spin_until(self, done: Callable[[], bool], timeout: float = 10.0) -> bool:
-            end = time.monotonic() + timeout
-            while time.monotonic() < end and not done():
-                executor.spin_once(timeout_sec=0.02)
-            return done()
-
-        def spin(self, seconds: float) -> None:
-            self.spin_until(lambda: False, seconds)
-
-    try:
-        yield Pair()
-    finally:
-        executor.shutdown()
-        for node in nodes:
-            node.destroy_node()
-        rclpy.try_shutdown(context=context)
+        )
+        pair.said = []
+        pair.node('listener').create_subscription(
+            DiagnosticArray,
+            '/diagnostics',
+            lambda m: pair.said.extend(s.message for s in m.status),
+            10,
+        )
+        yield pair
 
 
 def pid_to(targets: dict[str, float]) -> Callable[[Any], list[float]]:
@@ -238,21 +213,15 @@ def test_silence_from_ros2_control_brakes_every_axis(pair) -> None:
     assert any(f'on {COMMANDS} (from {OWNER})' in m for m in pair.said)
 
 
-def test_lockstep_refuses_the_pair_at_configure(monkeypatch) -> None:
-    import rclpy
+def test_lockstep_refuses_the_pair_at_configure() -> None:
     from mill_plant.plant_node import make_node
     from rclpy.parameter import Parameter
 
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(185 + os.getpid() % 30))
-    context = rclpy.Context()
-    rclpy.init(args=[], context=context)
-    try:
-        node = make_node(
-            context=context,
-            parameter_overrides=[Parameter('ros2_control.commands_topic', value=COMMANDS)],
+    with Graph(185) as graph:
+        node = graph.add(
+            make_node(
+                context=graph.context,
+                parameter_overrides=[Parameter('ros2_control.commands_topic', value=COMMANDS)],
+            )
         )
         assert node.backend is None and node.pair is None  # not configured
-        node.destroy_node()
-    finally:
-        rclpy.try_shutdown(context=context)

@@ -55,7 +55,7 @@ from mill_common.ros import (
 )
 from mill_common.ros_params import NodeParameters
 from mill_common.signals import AXES, SPINDLE
-from mill_common.timebase import period_ns, seconds
+from mill_common.timebase import period_ns
 from mill_interfaces.srv import Jog, Mdi
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock
@@ -73,8 +73,9 @@ from mill_trajectory.config import (
 )
 from mill_trajectory.feed_override import FeedOverride
 from mill_trajectory.gcode_program import GcodeTrajectory
-from mill_trajectory.hold import PAUSE, Command, EventClock, Holds
-from mill_trajectory.manual import Manual, Order
+from mill_trajectory.hold import PAUSE, EventClock, Holds
+from mill_trajectory.manual import Manual
+from mill_trajectory.operator import BY_HAND, Answer, ByHand, Job, feed
 from mill_trajectory.planned_path import PlannedPath, job_path
 from mill_trajectory.schedule import (
     ClockedReference,
@@ -83,6 +84,11 @@ from mill_trajectory.schedule import (
     WallClockReference,
 )
 from mill_trajectory.wall_clock_start import WallClockStart
+
+
+def _now() -> int:
+    """The system clock [ns], what a realtime job's time is counted on."""
+    return time.time_ns()
 
 
 class TrajectoryNode(Node):
@@ -123,11 +129,11 @@ class TrajectoryNode(Node):
         self.create_service(Trigger, '~/feed_hold', self._on_feed_hold)
         self.create_service(Trigger, '~/resume', self._on_resume)
         # Between jobs, timing realtime: moving the machine by hand (mill_trajectory.manual).
-        self._manual = Manual(manual_machine(v), isinstance(schedule, WallClockReference))
+        manual = Manual(manual_machine(v), isinstance(schedule, WallClockReference))
+        self._by_hand = ByHand(manual)
         self.create_service(Jog, '~/jog', self._on_jog)
-        self.create_service(Trigger, '~/jog_stop', partial(self._on_manual, 'jog_stop'))
-        self.create_service(Trigger, '~/home', partial(self._on_manual, 'home'))
-        self.create_service(Trigger, '~/set_home', partial(self._on_manual, 'set_home'))
+        for what in BY_HAND:
+            self.create_service(Trigger, f'~/{what}', partial(self._on_manual, what))
         self.create_service(Mdi, '~/mdi', self._on_mdi)
         self.get_logger().info(
             f'{v["trajectory"]} path, job ends at t = {self.progress.end_time:.3f} s'
@@ -165,86 +171,42 @@ class TrajectoryNode(Node):
         scaled = s.scaled if isinstance(s, ClockedReference | OverrideReference) else None
         return None if scaled is None else scaled.holds
 
-    # -- the operator --------------------------------------------------------------------
+    # -- the operator: the decisions are mill_trajectory.operator's ----------------------
+    def _job(self) -> Job:
+        done = self.progress.done_at is not None
+        return Job(self._schedule, self._job_time, self.progress.end_time, done)
+
     def _on_feed_hold(self, request: Trigger.Request, response: Trigger.Response) -> Any:
-        return self._command(response, 'feed_hold')
+        return self._respond(feed('feed_hold', self.holds, self._job()), response)
 
     def _on_resume(self, request: Trigger.Request, response: Trigger.Response) -> Any:
-        return self._command(response, 'resume')
+        return self._respond(feed('resume', self.holds, self._job()), response)
 
-    def _command(self, response: Any, what: str) -> Any:
-        holds = self.holds
-        if holds is None:
-            answer = Command(False, f'{what}: this job has no pause and cannot hold its feed')
-        else:
-            answer = holds.feed_hold() if what == 'feed_hold' else holds.resume()
-        response.success, response.message = answer.accepted, answer.message
-        if answer.accepted:  # rclpy wants one severity per call site
-            self.get_logger().info(f'{what}: {answer.message}')
-        else:
-            self.get_logger().warning(f'{what} refused: {answer.message}')
-        self.report(
-            self._job_time,
-            'running',
-            answer.message,
-            level=DiagnosticStatus.OK if answer.accepted else DiagnosticStatus.WARN,
-            event=(what, answer.message, ''),
-        )
-        return response
-
-    # -- by hand, between jobs (realtime) ------------------------------------------------
-    def _manual_time(self) -> float | None:
-        """The job's time now (None: not started); the manual commands take over the
-        job's path once it has started."""
-        schedule = self._schedule
-        if not isinstance(schedule, WallClockReference):
-            return self._job_time
-        if schedule.t0 is None:
-            return None
-        if self._manual.path is None:
-            self._manual.job_started(schedule.path, self.progress.end_time)
-        return seconds(time.time_ns() - schedule.t0)
-
+    # By hand, between jobs (realtime).
     def _on_jog(self, request: Any, response: Any) -> Any:
-        t = self._manual_time()
-        axis, distance, velocity = str(request.axis), request.distance, request.velocity
-        if distance != 0.0 and velocity != 0.0:
-            order = Order(
-                False, 'give a distance (by increment) or a velocity (continuous), not both'
-            )
-        elif velocity != 0.0:
-            order = self._manual.jog_continuous(axis, velocity, t)
-        else:
-            order = self._manual.jog(axis, distance, t)
-        return self._answer_manual('jog', order, t, response)
+        jog = self._by_hand.jog
+        answer = jog(self._job(), str(request.axis), request.distance, request.velocity, _now())
+        return self._respond(answer, response)
 
     def _on_mdi(self, request: Any, response: Any) -> Any:
-        t = self._manual_time()
-        return self._answer_manual('mdi', self._manual.mdi(str(request.line), t), t, response)
+        return self._respond(self._by_hand.mdi(self._job(), str(request.line), _now()), response)
 
     def _on_manual(self, what: str, request: Any, response: Any) -> Any:
-        t = self._manual_time()
-        manual = self._manual
-        command = {'jog_stop': manual.jog_stop, 'home': manual.go_home, 'set_home': manual.set_home}
-        return self._answer_manual(what, command[what](t), t, response)
+        return self._respond(self._by_hand.order(what, self._job(), _now()), response)
 
-    def _answer_manual(self, what: str, order: Order, t: float | None, response: Any) -> Any:
-        schedule = self._schedule
-        if order.accepted and isinstance(schedule, WallClockReference):
-            assert self._manual.path is not None
-            schedule.path = self._manual.path  # published from the next sample on
-        response.success, response.message = order.accepted, order.message
-        if order.accepted:
-            self.get_logger().info(f'{what}: {order.message}')
+    def _respond(self, answer: Answer, response: Any) -> Any:
+        """The answer in the response, the log and the job's status on /diagnostics."""
+        response.success, response.message = answer.accepted, answer.message
+        if answer.accepted:  # rclpy wants one severity per call site
+            self.get_logger().info(f'{answer.what}: {answer.message}')
         else:
-            self.get_logger().warning(f'{what} refused: {order.message}')
-        state = 'done' if self.progress.done_at is not None else 'running'
+            self.get_logger().warning(f'{answer.what} refused: {answer.message}')
         self.report(
-            t or 0.0,
-            state,
-            order.message,
-            level=DiagnosticStatus.OK if order.accepted else DiagnosticStatus.WARN,
-            event=(what, order.message, ''),
+            answer.t,
+            answer.state,
+            answer.message,
+            level=DiagnosticStatus.OK if answer.accepted else DiagnosticStatus.WARN,
+            event=(answer.what, answer.message, ''),
         )
         return response
 
