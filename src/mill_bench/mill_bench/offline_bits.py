@@ -91,6 +91,9 @@ def main(argv: list[str] | None = None) -> int:
         description='Fingerprint the offline record of every scenario and variant.',
     )
     parser.add_argument('--duration', type=float, default=3.0, help='machine time per run [s]')
+    parser.add_argument(
+        '--only', metavar='PREFIX', action='append', help='runs whose name starts so (repeatable)'
+    )
     group = parser.add_mutually_exclusive_group(required=True)
     group.add_argument('--write', metavar='FILE', help='write the fingerprints (JSON)')
     group.add_argument('--compare', metavar='FILE', help='compare with fingerprints written before')
@@ -98,6 +101,8 @@ def main(argv: list[str] | None = None) -> int:
     prints: dict[str, str] = {}
     for name, variant in runs():
         key = name if variant is None else f'{name}/{variant}'
+        if args.only and not any(key.startswith(p) for p in args.only):
+            continue
         prints[key] = run_one(name, variant, args.duration)
         print(f'{key}: {prints[key][:16]}', file=sys.stderr)
     if args.write:
@@ -107,6 +112,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     with open(args.compare, encoding='utf-8') as f:
         before = json.load(f)['runs']
+    if args.only:
+        before = {k: v for k, v in before.items() if k in prints}
     changed = sorted(k for k in set(before) | set(prints) if before.get(k) != prints.get(k))
     for key in changed:
         print(f'changed: {key}: {before.get(key, "-")[:16]} -> {prints.get(key, "-")[:16]}')

@@ -199,8 +199,9 @@ class KlineParams(ParamSet):
 class KlineCuttingForce(CuttingForceModel):
     """Kline quasi-static cutting force (Beltrán 2013 eq. (4)) on a box-shaped workpiece.
 
-    The chip depends on the tool's path: the plant that integrates the tool tells the model
-    every state it accepts (`commit`, in increasing time). One model belongs to one plant.
+    With chip 'tool' the chip depends on the tool's path: the plant that integrates the tool
+    tells the model every state it accepts (`commit`, in increasing time; PATH_DEPENDENT is
+    then True on the instance). One model belongs to one plant.
     """
 
     PARAMS: ClassVar[type[KlineParams]] = KlineParams
@@ -237,6 +238,10 @@ class KlineCuttingForce(CuttingForceModel):
         self._axial = self.radial_ratio * math.tan(self.helix_angle)
         self._programmed_chip = chip == 'programmed'
         self._programmed_depth = depth == 'programmed'
+        # Only the tool's chip reads the tool's past path: with the programmed chip the plant
+        # need not tell this model its states (4 commits a sample saved; nothing else reads
+        # them).
+        self.PATH_DEPENDENT = not self._programmed_chip  # type: ignore[misc]
         # The accepted tool states (t, x, y, v_x, v_y), oldest first, back to 2 T_z ago.
         self._t: list[float] = []
         self._path: list[tuple[float, float, float, float]] = []
