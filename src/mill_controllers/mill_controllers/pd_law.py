@@ -103,8 +103,16 @@ class _PdLaw(AxisController):
         """
         t, y, ref, est = inputs.t, inputs.position, inputs.reference, inputs.estimate
         xi_hat = est.disturbance if self.COMPENSATE else 0.0
-        read = (t, y, ref.position, ref.velocity, ref.acceleration, est.velocity, xi_hat)
-        if not all(math.isfinite(v) for v in read):
+        finite = math.isfinite  # each value by name (no generator: 3 calls a sample)
+        if not (
+            finite(t)
+            and finite(y)
+            and finite(ref.position)
+            and finite(ref.velocity)
+            and finite(ref.acceleration)
+            and finite(est.velocity)
+            and finite(xi_hat)
+        ):
             raise ValueError(
                 f'{type(self).__name__}: non-finite input (t={t!r}, y={y!r}, ref={ref!r}, '
                 f'velocity estimate={est.velocity!r}, disturbance estimate={xi_hat!r})'

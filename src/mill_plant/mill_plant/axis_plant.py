@@ -155,8 +155,7 @@ class AxisPlant:
         rigid = [m for m in self._models if type(m) is RigidAxisModel]
         # Three rigid axes: the scalar path _step_rigid (module docstring).
         self._rigid = len(rigid) == 3 and not self._through
-        self._drive_fn = tuple(m.drive_force for m in rigid)
-        self._acc_fn = tuple(m.acceleration for m in rigid)
+        self._terms_fn = tuple(m.scalar_terms for m in rigid)
 
     def _change_load(self) -> None:
         """Apply load_change_mass to all axes, all or nothing (ValueError names the mass)."""
@@ -423,12 +422,15 @@ class AxisPlant:
 
         The same arithmetic in the same order as _rk4 with _mode (so the same bits), without
         its lists and per-stage calls; the equation is the model's (drive_force and
-        acceleration of RigidAxisModel). Rigid models have no dead time: no pieces.
+        acceleration of RigidAxisModel, written out on its scalar_terms). Rigid models have
+        no dead time: no pieces.
         """
         force = self._cutting.force
         commit = self._commit
-        d0, d1, d2 = self._drive_fn
-        c0, c1, c2 = self._acc_fn
+        # drive_force and acceleration of RigidAxisModel, written out: the same expressions
+        # (read every step: a caller may change a model's load in place).
+        terms = [f() for f in self._terms_fn]
+        (l0, w0, mu0, m0, e0), (l1, w1, mu1, m1, e1), (l2, w2, mu2, m2, e2) = terms
         mode = self._rest_mode
         (x0, v0), (x1, v1), (x2, v2) = self._state
         u0, u1, u2 = uc
@@ -453,21 +455,23 @@ class AxisPlant:
                 s2 = 1.0 if v2 > 0.0 else -1.0
             else:
                 s2 = 0.0 if faulted[2] else mode(2, x2, u2, f1[2])
-            # A stuck or braked axis has v = 0 and x'' = 0: it stays exactly put.
-            a0 = c0 if s0 else _still
-            a1 = c1 if s1 else _still
-            a2 = c2 if s2 else _still
-            g0 = d0(u0, s0) if s0 else 0.0
-            g1 = d1(u1, s1) if s1 else 0.0
-            g2 = d2(u2, s2) if s2 else 0.0
+            # A stuck or braked axis has v = 0 and x'' = 0: it stays exactly put. Sliding:
+            # g = drive_force(u, s), x'' = acceleration(v, g, F_c) = m * (g - F_c - e * v).
+            g0 = u0 * l0 - w0 - mu0 * s0 if s0 else 0.0
+            g1 = u1 * l1 - w1 - mu1 * s1 if s1 else 0.0
+            g2 = u2 * l2 - w2 - mu2 * s2 if s2 else 0.0
             # stage 1
-            a10, a11, a12 = a0(v0, g0, f1[0]), a1(v1, g1, f1[1]), a2(v2, g2, f1[2])
+            a10 = m0 * (g0 - f1[0] - e0 * v0) if s0 else 0.0
+            a11 = m1 * (g1 - f1[1] - e1 * v1) if s1 else 0.0
+            a12 = m2 * (g2 - f1[2] - e2 * v2) if s2 else 0.0
             # stage 2
             p20 = v0 + half * a10
             p21 = v1 + half * a11
             p22 = v2 + half * a12
             f2 = force(t + half, (x0 + half * v0, x1 + half * v1, x2 + half * v2), (p20, p21, p22))
-            a20, a21, a22 = a0(p20, g0, f2[0]), a1(p21, g1, f2[1]), a2(p22, g2, f2[2])
+            a20 = m0 * (g0 - f2[0] - e0 * p20) if s0 else 0.0
+            a21 = m1 * (g1 - f2[1] - e1 * p21) if s1 else 0.0
+            a22 = m2 * (g2 - f2[2] - e2 * p22) if s2 else 0.0
             # stage 3
             p30 = v0 + half * a20
             p31 = v1 + half * a21
@@ -475,13 +479,17 @@ class AxisPlant:
             f3 = force(
                 t + half, (x0 + half * p20, x1 + half * p21, x2 + half * p22), (p30, p31, p32)
             )
-            a30, a31, a32 = a0(p30, g0, f3[0]), a1(p31, g1, f3[1]), a2(p32, g2, f3[2])
+            a30 = m0 * (g0 - f3[0] - e0 * p30) if s0 else 0.0
+            a31 = m1 * (g1 - f3[1] - e1 * p31) if s1 else 0.0
+            a32 = m2 * (g2 - f3[2] - e2 * p32) if s2 else 0.0
             # stage 4
             p40 = v0 + h * a30
             p41 = v1 + h * a31
             p42 = v2 + h * a32
             f4 = force(t + h, (x0 + h * p30, x1 + h * p31, x2 + h * p32), (p40, p41, p42))
-            a40, a41, a42 = a0(p40, g0, f4[0]), a1(p41, g1, f4[1]), a2(p42, g2, f4[2])
+            a40 = m0 * (g0 - f4[0] - e0 * p40) if s0 else 0.0
+            a41 = m1 * (g1 - f4[1] - e1 * p41) if s1 else 0.0
+            a42 = m2 * (g2 - f4[2] - e2 * p42) if s2 else 0.0
             # RK4 update
             nx0 = x0 + sixth * (v0 + 2.0 * p20 + 2.0 * p30 + p40)
             nx1 = x1 + sixth * (v1 + 2.0 * p21 + 2.0 * p31 + p41)
@@ -527,11 +535,6 @@ class AxisPlant:
 def _zeros(state: Sequence[float], u: float, force: float, mode: float) -> State:
     """Derivative of a braked axis."""
     return [0.0] * len(state)
-
-
-def _still(v: float, drive: float, force: float) -> float:
-    """Acceleration of a stuck or braked rigid axis."""
-    return 0.0
 
 
 def _stop_at_crossing(x: float, v: float, v_new: float, h: float) -> tuple[float, float]:

@@ -199,8 +199,9 @@ class KlineParams(ParamSet):
 class KlineCuttingForce(CuttingForceModel):
     """Kline quasi-static cutting force (Beltrán 2013 eq. (4)) on a box-shaped workpiece.
 
-    The chip depends on the tool's path: the plant that integrates the tool tells the model
-    every state it accepts (`commit`, in increasing time). One model belongs to one plant.
+    With chip 'tool' the chip depends on the tool's path: the plant that integrates the tool
+    tells the model every state it accepts (`commit`, in increasing time; PATH_DEPENDENT is
+    then True on the instance). One model belongs to one plant.
     """
 
     PARAMS: ClassVar[type[KlineParams]] = KlineParams
@@ -237,6 +238,10 @@ class KlineCuttingForce(CuttingForceModel):
         self._axial = self.radial_ratio * math.tan(self.helix_angle)
         self._programmed_chip = chip == 'programmed'
         self._programmed_depth = depth == 'programmed'
+        # Only the tool's chip reads the tool's past path: with the programmed chip the plant
+        # need not tell this model its states (4 commits a sample saved; nothing else reads
+        # them).
+        self.PATH_DEPENDENT = not self._programmed_chip  # type: ignore[misc]
         # The accepted tool states (t, x, y, v_x, v_y), oldest first, back to 2 T_z ago.
         self._t: list[float] = []
         self._path: list[tuple[float, float, float, float]] = []
@@ -320,6 +325,14 @@ class KlineCuttingForce(CuttingForceModel):
         """Eq. (4) at time t [s] for the tool at `position`; the chip and the depth come from
         the programmed or the tool's path (module docstring). velocity is not used."""
         if self._programmed_chip and self._programmed_depth:
+            # _outside written out (the plant asks 18 times a sample)
+            x = position[0]
+            y = position[1]
+            top = self.workpiece_top
+            lo = self.workpiece_min
+            hi = self.workpiece_max
+            if position[2] >= top or x < lo[0] or x > hi[0] or y < lo[1] or y > hi[1]:
+                return (0.0, 0.0, 0.0)
             known = self._programmed.get(t)
             if known is None:
                 if len(self._programmed) > _CACHED_TIMES:
@@ -327,10 +340,8 @@ class KlineCuttingForce(CuttingForceModel):
                 now = self.program.position(t)
                 past = self.program.position(t - self.tooth_period)
                 known = self._programmed[t] = self._local_force(
-                    t, now[0] - past[0], now[1] - past[1], self.workpiece_top - now[2]
+                    t, now[0] - past[0], now[1] - past[1], top - now[2]
                 )
-            if self._outside(position):
-                return (0.0, 0.0, 0.0)
             return known
         if self._programmed_chip:
             now = self.program.position(t)

@@ -270,3 +270,24 @@ def test_programmed_depth_ignores_the_tool_z_and_tool_depth_follows_it() -> None
 def test_invalid_path_parameters_are_refused(kwargs: dict, field: str) -> None:
     with pytest.raises(ValueError, match=field):
         KlineCuttingForce(KlineParams(**kwargs))
+
+
+def test_only_the_tools_chip_reads_the_tools_path() -> None:
+    """The programmed chip is not path-dependent, so a plant does not commit its states to it;
+    its force, inside and outside the workpiece box, is the one the tool's path would not change."""
+    from mill_plant.axis_plant import AxisPlant
+    from mill_plant.models.rigid import RigidAxisModel
+
+    assert KlineCuttingForce(KlineParams(chip='tool')).PATH_DEPENDENT
+    programmed = KlineCuttingForce(KlineParams(chip='programmed', depth='programmed'))
+    assert not programmed.PATH_DEPENDENT
+    assert KlineCuttingForce.PATH_DEPENDENT  # the class: a model that may read it
+    rigid = [RigidAxisModel.from_parameters(i, {}) for i in range(3)]
+    plant = AxisPlant(rigid, programmed, initial_position=(-0.075, -0.105, -0.005))
+    for _ in range(40):
+        plant.step((0.1, 0.1, 0.0), 0.001)
+    assert programmed._t == []  # nothing committed
+    inside = programmed.force(0.04, (-0.075, -0.105, -0.005), (0.0, 0.0, 0.0))
+    assert inside[1] > 0.0  # cutting, 40 ms into the programmed +y feed
+    assert programmed.force(0.04, (-0.075, -0.105, 0.001), (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)
+    assert programmed.force(0.04, (0.031, -0.105, -0.005), (0.0, 0.0, 0.0)) == (0.0, 0.0, 0.0)

@@ -135,6 +135,11 @@ class RigidAxisModel(AxisModel):
         # Chávez-Conde eq. (1)-(3): x'' = (tau/a - m g - mu sign(x') - F_c - c_e x') / m_e
         return self._inv_me * (drive - force - self._ce * v)
 
+    def scalar_terms(self) -> tuple[float, float, float, float, float]:
+        """(1/a, m g, mu, 1/m_e, c_e): drive_force = u/a - m g - mu·mode and acceleration =
+        (drive - F_c - c_e v)/m_e written out by a plant that integrates on scalars."""
+        return (self._inv_lead, self._weight, self._mu, self._inv_me, self._ce)
+
     def stick_force(self, state: Sequence[float], u: float, force: float) -> float:
         return u * self._inv_lead - self._weight - force
 
