@@ -59,20 +59,27 @@ def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, 
 
 
 class _Boxes:
-    """The path's segments and the tree of boxes over them (level 0: one box a segment)."""
+    """The path's segments and the tree of boxes over them: level 0 the segments (sizes[0]
+    of them), level L >= 1 boxes of FANOUT boxes (segments) of level L - 1 (sizes[L])."""
 
     def __init__(self, path: np.ndarray) -> None:
         self.start, self.vec = path[:-1], np.diff(path, axis=0)
-        lo = np.minimum(path[:-1], path[1:])
-        hi = np.maximum(path[:-1], path[1:])
-        # each level: the boxes' corners, and a vertex of the path in each (its first)
-        self.levels = [(lo, hi, path[:-1])]
-        step = 1
+        self.sizes = [len(self.start)]
+        # Each level above the segments: the boxes' corners, and a vertex of the path in
+        # each (its first); level 1 from the vertices (segment g FANOUT + j, 0 <= j < FANOUT,
+        # ends at vertex g FANOUT + j + 1).
+        first = np.arange(0, len(self.start), FANOUT)
+        last = path[np.minimum(first + FANOUT, len(path) - 1)]
+        lo = np.minimum(np.minimum.reduceat(self.start, first), last)
+        hi = np.maximum(np.maximum.reduceat(self.start, first), last)
+        self.levels = [(lo, hi, self.start[::FANOUT])]
+        step = FANOUT
         while len(lo) > FANOUT:
             first = np.arange(0, len(lo), FANOUT)
             lo, hi = np.minimum.reduceat(lo, first), np.maximum.reduceat(hi, first)
             step *= FANOUT
-            self.levels.append((lo, hi, path[:-1:step]))
+            self.levels.append((lo, hi, self.start[::step]))
+        self.sizes += [len(lo) for lo, _, _ in self.levels]
         self.scale = float(np.max(np.abs(path)))
 
     def search(
@@ -81,13 +88,13 @@ class _Boxes:
         """distance and nearest of the points at rows_of (finite), in place."""
         pts = points[rows_of]
         scale = max(self.scale, float(np.max(np.abs(pts))))
-        top = len(self.levels[-1][0])
+        top = self.sizes[-1]
         rows = np.repeat(np.arange(len(pts)), top)  # sorted: each level keeps the order
         nodes = np.tile(np.arange(top), len(pts))
         reach = np.full(len(pts), np.inf)  # per point, the square of a distance to the path
-        for level in range(len(self.levels) - 1, 0, -1):
-            rows, nodes = self._kept(pts, rows, nodes, self.levels[level], reach, scale)
-            rows, nodes = _children(rows, nodes, len(self.levels[level - 1][0]))
+        for level in range(len(self.sizes) - 1, 0, -1):
+            rows, nodes = self._kept(pts, rows, nodes, self.levels[level - 1], reach, scale)
+            rows, nodes = _children(rows, nodes, self.sizes[level - 1])
             if rows.size > MAX_PAIRS and len(pts) > 1:
                 half = len(rows_of) // 2
                 self.search(points, rows_of[:half], distance, nearest)
