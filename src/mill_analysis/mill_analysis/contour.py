@@ -40,12 +40,15 @@ def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, 
     """
     path = np.asarray(path, dtype=float)
     points = np.asarray(points, dtype=float)
-    path = path[np.isfinite(path).all(axis=1)]
+    finite = np.isfinite(path).all(axis=1)
+    if not finite.all():  # (a copy only then: the main job's path is 1.3 MB)
+        path = path[finite]
     if len(path) == 0:
         raise ValueError('the path has no finite vertex')
     keep = np.ones(len(path), dtype=bool)
     keep[1:] = np.any(path[1:] != path[:-1], axis=1)  # a zero-length segment is no segment
-    path = path[keep]
+    if not keep.all():
+        path = path[keep]
     if len(path) == 1:
         near = np.where(np.isfinite(points).all(axis=1)[:, None], path[0], np.nan)
         return np.linalg.norm(points - near, axis=1), near
