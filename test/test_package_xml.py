@@ -52,14 +52,9 @@ PYTHON_KEYS = {
     'mcap_ros2': 'mcap-ros2-support',  # rosdistro: pip mcap-ros2-support
     'mcap': 'python3-mcap-pip',  # not in rosdistro: rosdep/mill.yaml, pip mcap
     'control': 'python3-control-pip',  # not in rosdistro: rosdep/mill.yaml, pip control
-    'zstandard': 'python3-zstandard-pip',  # rosdep/mill.yaml, pip zstandard
 }
 # The keys rosdistro lacks: defined in rosdep/mill.yaml, with the pip package of each.
-LOCAL_KEYS = {
-    'python3-mcap-pip': 'mcap',
-    'python3-control-pip': 'control',
-    'python3-zstandard-pip': 'zstandard',
-}
+LOCAL_KEYS = {'python3-mcap-pip': 'mcap', 'python3-control-pip': 'control'}
 ROSDEP_FILE = SRC.parent / 'rosdep' / 'mill.yaml'
 WORKSPACE_TESTS = 'test'  # the workspace's test/ package (its conftest), not a dependency
 # Declared, not imported: provided through another dependency, left to the package's owners.

@@ -22,13 +22,13 @@ from __future__ import annotations
 
 import bisect
 import re
+import zlib
 from array import array
 from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from itertools import accumulate
 from typing import overload
 
-import zstandard
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, StampCheck, owner_check
 from mill_common.timing import Timing
 
@@ -130,10 +130,11 @@ class Forgotten(LookupError):
 
 class MessageLog(Sequence[bytes]):
     """A topic's serialized messages, kept compact: appended to a buffer that is compressed
-    (zstd, level 1) every CHUNK bytes, so that a long run's record costs its runner a few
-    bytes a message instead of a Python object each (the CDR of the main job's samples
-    compresses 6.6-fold, to 8.8 MB; zlib's fastest level gave 11.5 MB in 3 times the CPU),
-    and each message's length, two bytes (four once one is 64 kB or more).
+    (zlib, fastest level) every CHUNK bytes, so that a long run's record costs its runner a
+    few bytes a message instead of a Python object each (the CDR of a sample compresses
+    about fivefold; zstd's one-shot compress compressed more but kept ~50 kB of the
+    runner's heap per chunk, 46 MB in 900 chunks, and a reused zstd context costs more than
+    it saves), and each message's length, two bytes (four once one is 64 kB or more).
     Reading a message gives its bytes back; reading them in order decompresses each chunk
     once.
 
@@ -176,7 +177,7 @@ class MessageLog(Sequence[bytes]):
         self._tail += data
         self._tail_ends.append(len(self._tail))
         if len(self._tail) >= self.CHUNK:
-            self._chunks.append(zstandard.compress(self._tail, 1))
+            self._chunks.append(zlib.compress(self._tail, 1))
             self._first.append(self._tail_first)
             self._tail = bytearray()
             self._tail_first = len(self._sizes)
@@ -208,7 +209,7 @@ class MessageLog(Sequence[bytes]):
             first = self._first[c]
             last = self._first[c + 1] if c + 1 < len(self._first) else self._tail_first
             ends = array('I', accumulate(self._sizes[first:last], initial=0))
-            self._cached = (c, zstandard.decompress(self._chunks[c]), ends)
+            self._cached = (c, zlib.decompress(self._chunks[c]), ends)
         _, data, ends = self._cached
         k = i - self._first[c]
         return data[ends[k] : ends[k + 1]]
