@@ -1,24 +1,33 @@
-"""The distance from points to a polyline path, and its nearest points. ROS-free.
+"""The distance from points to a polyline path, and its nearest points. ROS-free, numpy only.
 
 The contour error of a run (mill_analysis.metrics) is the distance from each measured
 position to the programmed path, the polyline through the reference positions; this is its
-geometry. Exact (point-to-segment distance), in O((N + M) log N) for N path vertices and
-M points: a k-d tree over points spaced at most h along the path gives each point's nearest
-sample at d0; the nearest point of the path is within h/2 of a sample, so every segment that
-may hold it has a sample within d0 + h/2, and only those segments are measured exactly.
+geometry. Exact: the distance to each segment that may be the nearest is measured with the
+point-to-segment formula (`_point_segment`), and the smallest is the answer.
+
+Which segments may be the nearest: a tree of boxes over consecutive segments (a box holds
+FANOUT segments, a box above FANOUT boxes, up to at most FANOUT at the top). Walking down
+from the top, a point keeps the boxes not farther than the nearest vertex of the path it has
+seen (the first vertex of each box it looked at), with a margin far above the rounding of
+the formula; at the bottom it measures the segments it kept. A path's segments follow each
+other, so a box of consecutive ones is small: a point near the path keeps a few boxes a
+level, and the search costs O(M log N) for M points and N vertices. Points are taken BLOCK
+at a time (each point's answer is its own); a block whose candidates would exceed MAX_PAIRS
+is split. No k-d tree: scipy.spatial's cost a runner 37 MB for its summary, and this gives
+the same distances to the bit (the same formula, the same minimum; test_contour).
 """
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
-# Samples h apart, h the median segment length (a path sampled at T: its vertices), but at
-# most MAX_SAMPLES of them, whatever the path's length
-MAX_SAMPLES = 400_000
-NEIGHBOURS = 16  # samples measured per point before a wider (ball) search is needed
-BLOCK = 1024  # points measured at once
+FANOUT = 4  # segments (boxes) a box holds: 4 measured fastest on the main job's path
+BLOCK = 512  # points searched at once
+MAX_PAIRS = 1 << 20  # (point, box) candidates of a block above which it is split
+# The margin of a box kept beside a point's best one: relative to the distance, and to the
+# coordinates' size (the formula's rounding is a few units of 1e-16 of them).
+RELATIVE_MARGIN = 1e-9
+SCALE_MARGIN = 1e-12
 
 
 def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -26,83 +35,110 @@ def distance_to_path(path: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, 
     polyline through the path's vertices (N, D) and the nearest point on it.
 
     Vertices with a non-finite coordinate are left out (the path goes straight across a gap);
-    a point with one gets NaN. A path of a single vertex is that point.
+    a point with one gets NaN. A path of a single vertex is that point. Of segments equally
+    near (to the bit), the later one's nearest point is given (at a vertex: the vertex).
     """
     path = np.asarray(path, dtype=float)
     points = np.asarray(points, dtype=float)
-    path = path[np.isfinite(path).all(axis=1)]
+    finite = np.isfinite(path).all(axis=1)
+    if not finite.all():  # (a copy only then: the main job's path is 1.3 MB)
+        path = path[finite]
     if len(path) == 0:
         raise ValueError('the path has no finite vertex')
     keep = np.ones(len(path), dtype=bool)
     keep[1:] = np.any(path[1:] != path[:-1], axis=1)  # a zero-length segment is no segment
-    path = path[keep]
+    if not keep.all():
+        path = path[keep]
     if len(path) == 1:
         near = np.where(np.isfinite(points).all(axis=1)[:, None], path[0], np.nan)
         return np.linalg.norm(points - near, axis=1), near
-    start, vec = path[:-1], np.diff(path, axis=0)
-    length = np.linalg.norm(vec, axis=1)
-    h = max(float(length.sum()) / MAX_SAMPLES, float(np.median(length)))
-    pieces = np.maximum(1, np.ceil(length / h)).astype(int)  # samples per segment
-    spacing = float(np.max(length / pieces))
-    seg = np.repeat(np.arange(len(start)), pieces)  # each sample's segment
-    frac = (np.arange(seg.size) - np.repeat(np.cumsum(pieces) - pieces, pieces)) / pieces[seg]
-    samples = np.vstack([start[seg] + frac[:, None] * vec[seg], path[-1:]])
-    seg = np.append(seg, len(start) - 1)
-    from scipy.spatial import cKDTree  # here: 37 MB a runner needs only for its summary
-
-    tree = cKDTree(samples)
-
+    boxes = _Boxes(path)
     distance = np.full(len(points), np.nan)
     nearest = np.full(points.shape, np.nan)
     ok = np.flatnonzero(np.isfinite(points).all(axis=1))
-    if ok.size == 0:
-        return distance, nearest
-    k = min(NEIGHBOURS, len(samples))
-    # In blocks of points: each point's answer is its own, and the candidates of all of
-    # them at once take ~1 kB a point (77 MB for the main job's summary).
     for lo in range(0, ok.size, BLOCK):
-        rows_of = ok[lo : lo + BLOCK]
-        d, q = _nearest(tree, samples, seg, start, vec, spacing, k, points[rows_of])
-        distance[rows_of] = d
-        nearest[rows_of] = q
+        boxes.search(points, ok[lo : lo + BLOCK], distance, nearest)
     return distance, nearest
 
 
-def _nearest(
-    tree: Any,
-    samples: np.ndarray,
-    seg: np.ndarray,
-    start: np.ndarray,
-    vec: np.ndarray,
-    spacing: float,
-    k: int,
-    pts: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """distance_to_path's answer for finite points pts: distance and nearest point."""
-    dist, idx = tree.query(pts, k=k)
-    dist, idx = dist.reshape(len(pts), k), idx.reshape(len(pts), k)
-    reach = dist[:, 0] + 0.5 * spacing * (1 + 1e-9) + 1e-15
-    covered = (dist[:, -1] > reach) | (k == len(samples))
-    within = (dist <= reach[:, None]) & covered[:, None]  # the samples that matter
-    rows = np.nonzero(within)[0]
-    cand = idx[within]
-    wide = np.flatnonzero(~covered)  # the k nearest may miss a segment: all within reach
-    if wide.size:
-        balls = tree.query_ball_point(pts[wide], reach[wide])
-        sizes = np.array([len(b) for b in balls])
-        rows = np.concatenate([rows, np.repeat(wide, sizes)])
-        cand = np.concatenate([cand, np.concatenate([np.asarray(b, dtype=int) for b in balls])])
-    # a sample at a segment's start is also the end of the one before
-    segs = np.concatenate([seg[cand], np.maximum(seg[cand] - 1, 0)])
-    rows = np.concatenate([rows, rows])
-    d, q = _point_segment(pts[rows], start[segs], vec[segs])
-    order = np.lexsort((d, rows))  # per row, the nearest first
-    first = order[np.flatnonzero(np.diff(rows[order], prepend=-1))]
-    out_d = np.full(len(pts), np.nan)
-    out_q = np.full(pts.shape, np.nan)
-    out_d[rows[first]] = d[first]
-    out_q[rows[first]] = q[first]
-    return out_d, out_q
+class _Boxes:
+    """The path's segments and the tree of boxes over them: level 0 the segments (sizes[0]
+    of them), level L >= 1 boxes of FANOUT boxes (segments) of level L - 1 (sizes[L])."""
+
+    def __init__(self, path: np.ndarray) -> None:
+        self.start, self.vec = path[:-1], np.diff(path, axis=0)
+        self.sizes = [len(self.start)]
+        # Each level above the segments: the boxes' corners, and a vertex of the path in
+        # each (its first); level 1 from the vertices (segment g FANOUT + j, 0 <= j < FANOUT,
+        # ends at vertex g FANOUT + j + 1).
+        first = np.arange(0, len(self.start), FANOUT)
+        last = path[np.minimum(first + FANOUT, len(path) - 1)]
+        lo = np.minimum(np.minimum.reduceat(self.start, first), last)
+        hi = np.maximum(np.maximum.reduceat(self.start, first), last)
+        self.levels = [(lo, hi, self.start[::FANOUT])]
+        step = FANOUT
+        while len(lo) > FANOUT:
+            first = np.arange(0, len(lo), FANOUT)
+            lo, hi = np.minimum.reduceat(lo, first), np.maximum.reduceat(hi, first)
+            step *= FANOUT
+            self.levels.append((lo, hi, self.start[::step]))
+        self.sizes += [len(lo) for lo, _, _ in self.levels]
+        self.scale = float(np.max(np.abs(path)))
+
+    def search(
+        self, points: np.ndarray, rows_of: np.ndarray, distance: np.ndarray, nearest: np.ndarray
+    ) -> None:
+        """distance and nearest of the points at rows_of (finite), in place."""
+        pts = points[rows_of]
+        scale = max(self.scale, float(np.max(np.abs(pts))))
+        top = self.sizes[-1]
+        rows = np.repeat(np.arange(len(pts)), top)  # sorted: each level keeps the order
+        nodes = np.tile(np.arange(top), len(pts))
+        reach = np.full(len(pts), np.inf)  # per point, the square of a distance to the path
+        for level in range(len(self.sizes) - 1, 0, -1):
+            rows, nodes = self._kept(pts, rows, nodes, self.levels[level - 1], reach, scale)
+            rows, nodes = _children(rows, nodes, self.sizes[level - 1])
+            if rows.size > MAX_PAIRS and len(pts) > 1:
+                half = len(rows_of) // 2
+                self.search(points, rows_of[:half], distance, nearest)
+                self.search(points, rows_of[half:], distance, nearest)
+                return
+        d, q = _point_segment(pts[rows], self.start[nodes], self.vec[nodes])
+        order = np.lexsort((-nodes, d, rows))  # per point the nearest, the later first
+        first = order[np.flatnonzero(np.diff(rows[order], prepend=-1))]
+        distance[rows_of[rows[first]]] = d[first]
+        nearest[rows_of[rows[first]]] = q[first]
+
+    @staticmethod
+    def _kept(
+        pts: np.ndarray,
+        rows: np.ndarray,
+        nodes: np.ndarray,
+        level: tuple[np.ndarray, np.ndarray, np.ndarray],
+        reach: np.ndarray,
+        scale: float,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The (point, box) pairs whose box may hold the point's nearest segment; `reach`
+        (per point, the square of its distance to a vertex) lowered to the vertices seen."""
+        p = pts[rows]
+        gap = np.maximum(np.maximum(level[0][nodes] - p, p - level[1][nodes]), 0.0)
+        below = np.einsum('ij,ij->i', gap, gap)  # to the box, squared
+        to_vertex = p - level[2][nodes]
+        vertex = np.einsum('ij,ij->i', to_vertex, to_vertex)
+        starts = np.flatnonzero(np.diff(rows, prepend=-1))
+        np.minimum(reach, np.minimum.reduceat(vertex, starts), out=reach)
+        near = reach[rows]
+        margin = np.sqrt(near) * RELATIVE_MARGIN + SCALE_MARGIN * scale
+        keep = below <= near + margin * (2 * np.sqrt(near) + margin)  # (d + margin)²
+        return rows[keep], nodes[keep]
+
+
+def _children(rows: np.ndarray, nodes: np.ndarray, below: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each (point, box) pair as the pairs of its boxes (segments) one level down."""
+    first = nodes * FANOUT
+    count = np.minimum(FANOUT, below - first)
+    offset = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    return np.repeat(rows, count), np.repeat(first, count) + offset
 
 
 def _point_segment(p: np.ndarray, a: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -101,10 +101,18 @@ def contour_error(record: RunRecord, path_from: float = -math.inf) -> Contour | 
     path's start, before it, is no part of the programmed path).
     """
     cols = [i for i in range(len(AXES)) if np.isfinite(record['position'][:, i]).any()]
-    ref = record['reference'][:, cols][record.t >= path_from]
+    every = len(cols) == len(AXES)  # the record's own arrays, not copies (1.3 MB each)
+    ref = record['reference'] if every else record['reference'][:, cols]
+    path = record.t >= path_from
+    if not path.all():
+        ref = ref[path]
     if not cols or not np.isfinite(ref).all(axis=1).any():
         return None
-    distance, near = distance_to_path(ref, record['position'][:, cols])
+    distance, near = distance_to_path(
+        ref, record['position'] if every else record['position'][:, cols]
+    )
+    if every:
+        return Contour(''.join(AXES), distance, near)
     nearest = np.full((len(record.t), len(AXES)), np.nan)
     nearest[:, cols] = near
     return Contour(''.join(AXES[i] for i in cols), distance, nearest)

@@ -26,6 +26,7 @@ import zlib
 from array import array
 from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from itertools import accumulate
 from typing import overload
 
 from mill_common.checks import REFERENCE_LEAD_NS, Rejected, StampCheck, owner_check
@@ -123,58 +124,95 @@ class Intake:
         self.drops.add(topic, rejected)
 
 
+class Forgotten(LookupError):
+    """A message of a MessageLog that forgot it (`MessageLog.forget`)."""
+
+
 class MessageLog(Sequence[bytes]):
     """A topic's serialized messages, kept compact: appended to a buffer that is compressed
     (zlib, fastest level) every CHUNK bytes, so that a long run's record costs its runner a
     few bytes a message instead of a Python object each (the CDR of a sample compresses
-    about fivefold). Reading a message gives its bytes back; reading them in order
-    decompresses each chunk once."""
+    about fivefold; zstd's one-shot compress compressed more but kept ~50 kB of the
+    runner's heap per chunk, 46 MB in 900 chunks, and a reused zstd context costs more than
+    it saves), and each message's length, two bytes (four once one is 64 kB or more).
+    Reading a message gives its bytes back; reading them in order decompresses each chunk
+    once.
+
+    Once a record is built from them, `forget` drops all of them but the newest: the log
+    still counts them all (a bag is checked against the count), and reading an older one
+    raises Forgotten.
+    """
 
     CHUNK = 1 << 16
 
     def __init__(self, messages: Iterable[bytes] = ()) -> None:
         self._chunks: list[bytes] = []  # compressed, oldest first
         self._first: list[int] = []  # the index of each chunk's first message
-        self._ends = array('Q', [0])  # where each message ends in the whole stream
+        self._sizes = array('H')  # each message's length
         self._tail = bytearray()  # the messages since the last chunk
         self._tail_first = 0
-        self._cached = (-1, b'')  # the chunk read last, decompressed
+        self._tail_ends = array('I', [0])  # where each of them ends in the tail
+        self._cached: tuple[int, bytes, array[int]] = (-1, b'', array('I'))  # chunk read last
+        self._forgotten = 0  # the messages before the first held (`forget`)
         for data in messages:
             self.append(data)
 
+    def forget(self) -> None:
+        """Drop every message but the newest; the count stays."""
+        n = len(self._sizes)
+        if n <= 1:
+            return
+        newest = self[-1]
+        self._forgotten += n - 1
+        self._chunks, self._first, self._cached = [], [], (-1, b'', array('I'))
+        self._sizes = array(self._sizes.typecode, [len(newest)])
+        self._tail, self._tail_first = bytearray(newest), 0
+        self._tail_ends = array('I', [0, len(newest)])
+
     def append(self, data: bytes) -> None:
+        size = len(data)
+        if size > 0xFFFF and self._sizes.typecode == 'H':
+            self._sizes = array('I', self._sizes)
+        self._sizes.append(size)
         self._tail += data
-        self._ends.append(self._ends[-1] + len(data))
+        self._tail_ends.append(len(self._tail))
         if len(self._tail) >= self.CHUNK:
             self._chunks.append(zlib.compress(self._tail, 1))
             self._first.append(self._tail_first)
             self._tail = bytearray()
-            self._tail_first = len(self._ends) - 1
+            self._tail_first = len(self._sizes)
+            self._tail_ends = array('I', [0])
 
     def __len__(self) -> int:
-        return len(self._ends) - 1
+        return self._forgotten + len(self._sizes)
 
     @overload
     def __getitem__(self, i: int) -> bytes: ...
     @overload
     def __getitem__(self, i: slice) -> list[bytes]: ...
     def __getitem__(self, i: int | slice) -> bytes | list[bytes]:
-        n = len(self._ends) - 1
+        n = len(self)
         if isinstance(i, slice):
             return [self[j] for j in range(*i.indices(n))]
         if i < 0:
             i += n
         if not 0 <= i < n:
             raise IndexError('message index out of range')
-        ends = self._ends
+        if i < self._forgotten:
+            raise Forgotten(f'message {i} of {n} was forgotten (only the newest is kept)')
+        i -= self._forgotten
         if i >= self._tail_first:
-            base = ends[self._tail_first]
-            return bytes(self._tail[ends[i] - base : ends[i + 1] - base])
+            ends, k = self._tail_ends, i - self._tail_first
+            return bytes(self._tail[ends[k] : ends[k + 1]])
         c = bisect.bisect_right(self._first, i) - 1
         if self._cached[0] != c:
-            self._cached = (c, zlib.decompress(self._chunks[c]))
-        base = ends[self._first[c]]
-        return self._cached[1][ends[i] - base : ends[i + 1] - base]
+            first = self._first[c]
+            last = self._first[c + 1] if c + 1 < len(self._first) else self._tail_first
+            ends = array('I', accumulate(self._sizes[first:last], initial=0))
+            self._cached = (c, zlib.decompress(self._chunks[c]), ends)
+        _, data, ends = self._cached
+        k = i - self._first[c]
+        return data[ends[k] : ends[k + 1]]
 
     def __iter__(self) -> Iterator[bytes]:
         for i in range(len(self)):
@@ -185,7 +223,8 @@ class MessageLog(Sequence[bytes]):
         return (
             sum(len(c) for c in self._chunks)
             + len(self._tail)
-            + self._ends.itemsize * len(self._ends)
+            + self._sizes.itemsize * len(self._sizes)
+            + self._tail_ends.itemsize * len(self._tail_ends)
         )
 
 
@@ -199,6 +238,9 @@ class ArrivalOrder(Sequence[str]):
         self._seq = array('H')
         for name in names:
             self.append(name)
+
+    def clear(self) -> None:
+        del self._seq[:]
 
     def append(self, name: str) -> None:
         i = self._index.get(name)
@@ -232,6 +274,15 @@ class Received(dict[str, Sequence[bytes]]):
     def __init__(self) -> None:
         super().__init__()
         self.order = ArrivalOrder()
+
+    def forget(self, keep: Collection[str] = ()) -> None:
+        """Forget the messages of every topic but `keep` (MessageLog.forget: their counts
+        and newest stay); with nothing kept, the order of arrival too."""
+        for topic, messages in self.items():
+            if topic not in keep and isinstance(messages, MessageLog):
+                messages.forget()
+        if not keep:
+            self.order.clear()
 
 
 def subset(raw: Mapping[str, Sequence[bytes]], topics: Collection[str]) -> Received:

@@ -5,7 +5,14 @@ from __future__ import annotations
 import struct
 
 import pytest
-from mill_analysis.node_intake import ArrivalOrder, MessageLog, Received, arrival_order, subset
+from mill_analysis.node_intake import (
+    ArrivalOrder,
+    Forgotten,
+    MessageLog,
+    Received,
+    arrival_order,
+    subset,
+)
 
 
 def _message(k: int) -> bytes:
@@ -70,3 +77,42 @@ def test_the_missing_runs_of_flags_are_those_of_the_sample_set() -> None:
             have = rng.random(n) < share
             want = missing_ranges(set(np.flatnonzero(have).tolist()), n)
             assert missing_runs(have) == want
+
+
+def test_a_forgotten_log_counts_every_message_and_holds_the_newest() -> None:
+    sent = [_message(k) for k in range(20_000)]
+    log = MessageLog(sent)
+    full = log.nbytes()
+    log.forget()
+    assert len(log) == 20_000 and log[-1] == sent[-1] and log[19_999] == sent[-1]
+    assert log.nbytes() < 100 < full  # the newest message and its index
+    with pytest.raises(Forgotten, match='message 12345 of 20000 was forgotten'):
+        log[12_345]
+    for k in range(20_000, 30_000):  # what comes after is kept again, across chunks
+        log.append(_message(k))
+    assert len(log) == 30_000 and log[-1] == _message(29_999) and log[25_000] == _message(25_000)
+    assert log[19_999] == sent[-1]
+    with pytest.raises(IndexError):
+        log[30_000]
+
+
+def test_received_forgets_all_but_the_topics_kept() -> None:
+    raw = Received()
+    raw['a'] = MessageLog([b'a0', b'a1'])
+    raw['b'] = MessageLog([b'b0', b'b1', b'b2'])
+    raw.order = ArrivalOrder(['a', 'b', 'b', 'a', 'b'])
+    raw.forget(keep={'b'})
+    assert list(raw['b']) == [b'b0', b'b1', b'b2'] and len(raw.order) == 5
+    assert len(raw['a']) == 2 and raw['a'][-1] == b'a1'
+    with pytest.raises(Forgotten):
+        raw['a'][0]
+    raw.forget()
+    assert len(raw['b']) == 3 and raw['b'][-1] == b'b2' and len(raw.order) == 0
+
+
+def test_messages_of_64_kb_and_more_keep_their_lengths() -> None:
+    sent = [bytes([k % 251]) * (k * 7919 % 150_000) for k in range(60)]
+    log = MessageLog(sent[:30])  # two bytes a length until one is 64 kB or more
+    for data in sent[30:]:
+        log.append(data)
+    assert list(log) == sent and log[3] == sent[3] and log[-1] == sent[-1]

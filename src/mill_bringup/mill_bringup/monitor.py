@@ -19,7 +19,9 @@ short of CPU slows the job down instead of losing samples of its record.
 In realtime nothing waits for it: its subscriptions keep all (RECORD_QOS), so that a runner
 short of CPU loses nothing that reached it, and the job counts the samples missing from the
 drive's sequence (the run's summary, the bag's notes).
-/diagnostics is also kept decoded, for the faults the summary reports.
+/diagnostics is also kept, as the statuses of this machine (mill_analysis.events.Status: a
+few hundred bytes each; the arrays as rclpy messages took 6 kB each, 7.6 MB in the main
+job), for the faults the summary reports.
 
 The monitor runs in the graph's namespace (and with its remappings), so the job's relative
 topic names resolve as the nodes resolve them; of the shared /diagnostics it reports only
@@ -60,6 +62,8 @@ FLUSH_PERIOD = 0.25
 # [s] between two acknowledgements of a run without a bag: often enough that the clock node,
 # recorder_window steps ahead at most, never waits on a runner that keeps up.
 ACK_PERIOD = 0.05
+# The levels of a status that is a problem (Status.level: the DiagnosticStatus byte's value)
+WARN, ERROR = DiagnosticStatus.WARN[0], DiagnosticStatus.ERROR[0]
 
 
 class _AcknowledgingRecorder(TopicRecorder):
@@ -129,7 +133,7 @@ class Monitor(Node):
         self._late = set(late)
         self._late_after = list(late_after)
         self._held: list[tuple[str, str, Callable[[bytes], None], Callable | None]] = []
-        self.diagnostics: list[DiagnosticArray] = []
+        self._statuses: list[Status] = []  # of this machine, in the order they arrived
         self.recorder: TopicRecorder | None = None
         # A lockstep run's handshake: the steps heard whole (recording: written whole to the
         # bag) are acknowledged on mill/recorded, and the clock node waits for that.
@@ -154,9 +158,7 @@ class Monitor(Node):
         # Every status kept, as every sample (RECORD_QOS): the job's events (a trip, a stop)
         # are parsed from them, and a KEEP_LAST reader drops the oldest while the runner is
         # short of CPU.
-        self.create_subscription(
-            DiagnosticArray, topics.DIAGNOSTICS, self.diagnostics.append, RECORD_QOS
-        )
+        self.create_subscription(DiagnosticArray, topics.DIAGNOSTICS, self._heard, RECORD_QOS)
         if self.recorder is not None:
             # The rest of the contract, subscribed before the graph starts so that the
             # first step is recorded (and kept: the record counts it); discovery adds any
@@ -300,32 +302,30 @@ class Monitor(Node):
         stamp = cdr_stamp_ns(store[-1]) if store else None
         return -1 if stamp is None else stamp
 
+    def _heard(self, array: DiagnosticArray) -> None:
+        self._statuses += statuses_of([array], self.ns)
+
     def status(self, name: str) -> dict[str, str] | None:
         """The newest /diagnostics status of this machine with this name's node and part
         (topics.status_key: the name may leave out the namespace): its values, 'message'
         and 'level'."""
-        key, ns = topics.status_key(name), self.ns
-        for array in reversed(self.diagnostics):
-            for s in array.status:
-                if topics.status_key(s.name) == key and topics.from_machine(s.hardware_id, ns):
-                    values = {kv.key: kv.value for kv in s.values}
-                    level = s.level[0] if isinstance(s.level, bytes) else int(s.level)
-                    return values | {'message': s.message, 'level': str(level)}
+        key = topics.status_key(name)
+        for s in reversed(self._statuses):
+            if topics.status_key(s.name) == key:
+                return dict(s.values) | {'message': s.message, 'level': str(s.level)}
         return None
 
     def statuses(self) -> list[Status]:
         """Every /diagnostics status of this machine heard so far, in order, with its values
         (mill_analysis.events reads them)."""
-        return statuses_of(self.diagnostics, self.ns)
+        return list(self._statuses)
 
     def problems(self) -> list[str]:
         """Every WARN or ERROR status heard on /diagnostics, once each, in order."""
         seen: dict[str, None] = {}
-        for array in self.diagnostics:
-            for s in array.status:
-                mine = topics.from_machine(s.hardware_id, self.ns)
-                if mine and s.level in (DiagnosticStatus.WARN, DiagnosticStatus.ERROR):
-                    seen.setdefault(f'{s.name}: {s.message}', None)
+        for s in self._statuses:
+            if s.level in (WARN, ERROR):
+                seen.setdefault(f'{s.name}: {s.message}', None)
         for topic, per in self.refused.items():
             for who, n in per.items():
                 seen.setdefault(

@@ -275,3 +275,14 @@ def test_the_record_kind_says_how_two_records_of_a_job_differ() -> None:
     again.signals['position'][100, 1] += 1e-6  # y 1 µm off at one sample
     assert job.RECORD.differences(rec, again)['tracking_error'] == pytest.approx(1e-6, rel=1e-6)
     assert job.RECORD.gaps(rec) == {} and job.RECORD.foreign(rec) == {}
+
+
+def test_the_runner_keeps_past_the_record_only_the_messages_a_summary_reads() -> None:
+    """Once the record is built the runner forgets every topic's messages but these: none
+    of a lockstep job (its summary reads the record), the commands and states of a realtime
+    one (their arrival times give the drive's figures)."""
+    assert job_for(scenario.load('slotting')).summary_topics() == frozenset()
+    realtime = _realtime_slotting()
+    assert realtime.summary_topics() == {
+        f'mill/{axis}/{kind}' for axis in 'xyz' for kind in ('state', 'joint_command')
+    }

@@ -216,6 +216,11 @@ class Job(ABC, Generic[R]):
     def record(self, raw: Mapping[str, Sequence[bytes]]) -> tuple[R, dict[str, int]]:
         """The record from a run's serialized messages, and samples missing per topic."""
 
+    def summary_topics(self) -> frozenset[str]:
+        """The topics whose messages `summary` reads besides the record (from the ending's
+        source): the runner keeps them, and forgets the others' once the record is built."""
+        return frozenset()
+
     # -- offline ---------------------------------------------------------------------------
     @abstractmethod
     def simulation(self, times: CoreTimer | None = None) -> Simulation[R]:

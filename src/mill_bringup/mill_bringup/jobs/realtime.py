@@ -158,6 +158,9 @@ class RealtimeAxisJob(Job[RunRecord]):
         # the commands for their latency; the states for the drive's silence (check)
         return {f(a) for a in self.axes for f in (topics.joint_command, topics.state)}
 
+    def summary_topics(self) -> frozenset[str]:
+        return frozenset(self.timed_topics())  # the commands' timing (summary)
+
     def late_topics(self) -> tuple[set[str], list[str]]:
         # The trajectory starts the job once the monitor reads the reference (prepare_graph);
         # the monitor reads it once it hears the drive, which may be on another host and

@@ -71,6 +71,9 @@ def collect(session: Session, job: Job[Any], options: RunOptions, ending: Ending
         _drain(session)
     try:
         record, gaps = job.record(monitor.raw)
+        # Built: the messages no figure reads are dropped (their counts stay for the bag's
+        # check), 16 MB of the main job's.
+        monitor.raw.forget(job.summary_topics())
         # What the machine told until the job ended (or the run stopped), in the record as
         # the offline simulator and a bag's reader put it there.
         record.events = job.events(ending.statuses)
