@@ -37,11 +37,14 @@ from test.conftest import ros_node, spin_until
 
 pytestmark = pytest.mark.system
 
-# From the slotting job's start (x -75, y -105, z -5 mm): 6 mm in +y at 5 mm/s, held on the
-# way; an M0; 2 mm in +x. Short moves: the graph's start and end take most of the test.
+# From the slotting job's start (x -75, y -105, z -5 mm): 6 mm in +y at 1 mm/s, held on the
+# way; an M0; 2 mm in +x. Short moves: the graph's start and end take most of the test. A
+# lockstep graph of one process runs about 3x real time on a quiet machine: the 6 s of the
+# first line leave the operator about 2 s of wall time to see it move and hold it (at
+# 5 mm/s, 0.4 s, and 4 runs in 9 saw the line end before the operator had heard the graph).
 PART = (
     'G21 G90 G17 G54\n'
-    'G1 Y-99 F300 (6 mm in +y at 5 mm/s: the feed is held on the way)\n'
+    'G1 Y-99 F60 (6 mm in +y at 1 mm/s: the feed is held on the way)\n'
     'M0 (check the slot)\n'
     'G1 X-73 (2 mm in +x)\n'
     'M30\n'
@@ -113,6 +116,18 @@ class Operator:
         return first if rest else None
 
 
+def job_server_with(start_node: Any, tmp_path: Path, name: str, program: str) -> tuple:
+    """The part program written to tmp_path/name, the controllers' following-error bound
+    [m], and a job_server process whose goals run under tmp_path."""
+    part = tmp_path / name
+    part.write_text(program)
+    bound = load('slotting').parameters('x_controller')['following_error_limit']
+    server = start_node(
+        'mill_bringup.job_server', 'job_server', '-p', f'runs_dir:={tmp_path}', params_file=False
+    )
+    return part, bound, server
+
+
 def test_an_operator_holds_resumes_and_is_refused_through_ros_while_a_job_runs(
     start_node: Any, tmp_path: Path
 ) -> None:
@@ -120,15 +135,10 @@ def test_an_operator_holds_resumes_and_is_refused_through_ros_while_a_job_runs(
     from mill_interfaces.action import RunJob
     from rclpy.action import ActionClient
 
-    part = tmp_path / 'part.ngc'
-    part.write_text(PART)
-    bound = load('slotting').parameters('x_controller')['following_error_limit']  # [m]
-    server = start_node(
-        'mill_bringup.job_server', 'job_server', '-p', f'runs_dir:={tmp_path}', params_file=False
-    )
+    part, bound, server = job_server_with(start_node, tmp_path, 'part.ngc', PART)
     goal = RunJob.Goal(
         job=str(part),
-        duration=30.0,  # machine time, an upper bound: the job ends where its path ends
+        duration=120.0,  # machine time, an upper bound: the job ends where its path ends
         layout='single',
         # a plan with room to hold the feed; the M0 waits for the operator (far longer than
         # this test: a pause that ended by itself would leave the M0's resume refused)

@@ -18,10 +18,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from mill_bringup.scenario import load
 
 from test.conftest import ros_node, spin_until
-from test.test_operator import EXACT, TIMEOUT, Operator
+from test.test_operator import EXACT, TIMEOUT, Operator, job_server_with
 
 # Realtime, the axes on the wall clock: alone on the machine (scripts/test.sh, serial).
 pytestmark = [pytest.mark.system, pytest.mark.serial]
@@ -52,12 +51,7 @@ def test_after_a_realtime_job_the_graph_stays_up_and_the_operator_jogs_homes_and
     from mill_interfaces.srv import Mdi
     from rclpy.action import ActionClient
 
-    part = tmp_path / 'line.ngc'
-    part.write_text(LINE)
-    bound = load('slotting').parameters('x_controller')['following_error_limit']  # [m]
-    server = start_node(
-        'mill_bringup.job_server', 'job_server', '-p', f'runs_dir:={tmp_path}', params_file=False
-    )
+    part, bound, server = job_server_with(start_node, tmp_path, 'line.ngc', LINE)
     goal = RunJob.Goal(job=str(part), layout='single', stay=True, **REALTIME)
     with ros_node('operator') as (node, executor):
         op = Operator(node, executor)
