@@ -1,8 +1,11 @@
-"""Benchmark: one run_scenario command run again and again, beside busy loops if asked.
+"""Benchmark: one run_scenario command run again and again, beside busy loops if asked,
+and beside a client that joins and leaves the run's domain if asked (--join-every).
 
     python -m mill_bench.repeat_runs                       # 10 realtime 1 kHz commissioning
                                                            # runs beside two busy loops
     python -m mill_bench.repeat_runs --runs 50 --busy 0 -- slotting   # the main job, quiet
+    python -m mill_bench.repeat_runs --runs 3 --busy 0 --join-every 0.5 -- slotting \
+        --duration 15                      # a participant joins the domain every 0.5 s
 
 What a run's ending says is read from its summary.json (mill_bringup's runner writes one
 for every ending): its exit code, the samples its record lacks, the drive's own stalls, and
@@ -100,14 +103,34 @@ def outcome(run_dir: Path, code: int, output: str) -> RunOutcome:
     )
 
 
-def run_once(args: Sequence[str], run_dir: Path) -> RunOutcome:
+@contextlib.contextmanager
+def joiner(period: float, env: dict[str, str]) -> Iterator[None]:
+    """mill_bench.joiner in the run's domain (period 0: none), terminated at the end."""
+    if period <= 0:
+        yield
+        return
+    cmd = [sys.executable, '-m', 'mill_bench.joiner', str(period)]
+    proc = subprocess.Popen(cmd, env=env, stderr=subprocess.DEVNULL)
+    try:
+        yield
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def run_once(args: Sequence[str], run_dir: Path, join_every: float = 0.0) -> RunOutcome:
     base = dict(os.environ)
     base.pop('ROS_DOMAIN_ID', None)
     env = ros_environment(base)  # a private domain of its own
     cmd = [sys.executable, '-m', 'mill_bringup.runner', *args, '--output', str(run_dir)]
     cmd.append('--quiet')
     try:
-        proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=TIMEOUT)
+        with joiner(join_every, env):
+            proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=TIMEOUT)
     except subprocess.TimeoutExpired as exc:
         out = exc.stderr if isinstance(exc.stderr, str) else ''
         return outcome(run_dir, -1, out)
@@ -151,6 +174,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         '--busy', type=int, default=2, help='busy loops beside the runs (default 2)'
     )
     parser.add_argument(
+        '--join-every',
+        type=float,
+        default=0.0,
+        metavar='SECONDS',
+        help='beside each run, a client that joins its domain (a participant reading the '
+        'reference) and leaves after SECONDS, again and again (mill_bench.joiner; default 0: '
+        'none)',
+    )
+    parser.add_argument(
         'run',
         nargs='*',
         help='run_scenario arguments (after --); default: ' + ' '.join(DEFAULT_RUN),
@@ -158,12 +190,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.runs < 1:
         parser.error('--runs: at least 1')
+    if args.join_every < 0:
+        parser.error('--join-every: 0 (none) or more seconds')
     run = args.run or list(DEFAULT_RUN)
-    print(f'{args.runs} runs of: run_scenario {" ".join(run)}; {args.busy} busy loops', flush=True)
+    joins = f', a client joining every {args.join_every:g} s' if args.join_every else ''
+    print(
+        f'{args.runs} runs of: run_scenario {" ".join(run)}; {args.busy} busy loops{joins}',
+        flush=True,
+    )
     outcomes = []
     with tempfile.TemporaryDirectory(prefix='repeat_runs_') as tmp, busy_loops(args.busy):
         for i in range(1, args.runs + 1):
-            o = run_once(run, Path(tmp) / f'run{i}')
+            o = run_once(run, Path(tmp) / f'run{i}', args.join_every)
             outcomes.append(o)
             print(o.line(i), flush=True)
             for w in o.warnings[:3]:

@@ -51,3 +51,16 @@ def test_a_lockstep_runs_step_waits_are_counted_over_the_runs(tmp_path: Path) ->
     text = table(runs)
     assert 'waited over 10 ms: 7, 100 ms: 1, 1000 ms: 1 (in 1 of 2 runs over 100 ms' in text
     assert 'the longest 2807.5 ms' in text
+
+
+def test_a_bad_join_period_is_refused_in_one_line(capsys) -> None:  # type: ignore[no-untyped-def]
+    import pytest
+
+    from mill_bench import joiner, repeat_runs
+
+    for main, argv in ((repeat_runs.main, ['--join-every', '-1']), (joiner.main, ['0'])):
+        with pytest.raises(SystemExit) as info:
+            main(argv)
+        assert info.value.code == 2
+        err = [ln for ln in capsys.readouterr().err.splitlines() if 'error' in ln]
+        assert len(err) == 1 and ('join-every' in err[0] or 'period' in err[0]), err
