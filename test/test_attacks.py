@@ -29,11 +29,15 @@ import pytest
 
 from test.conftest import EXTENDED, ParameterClient, ros_node, start_scenario  # noqa: F401
 
-# Each attacker races a 1 s job (it must hear the job's states while the job runs): alone on
+# Each attacker races a 2 s job (it must hear the job's states while the job runs): alone on
 # the machine (scripts/test.sh, serial), so that the job does not end before it has spoken.
+# With 1 s, the ratchet once answered 94 states in a CI run: it joins the running graph,
+# and a joining participant holds the graph up and is matched late (docs/performance.md, "A
+# participant joining the domain holds the graph up").
 pytestmark = pytest.mark.serial
 
-DURATION = '1'
+DURATION = '2'
+SAMPLES = 2001  # t = 0 .. DURATION at 1 kHz, the start included
 PERIOD_NS = 1_000_000  # slotting's sample period (1 kHz)
 MARK = 12345.0  # the effort in the ratchet's states: it answers the plant's only
 
@@ -167,7 +171,7 @@ def test_a_second_copy_of_the_x_controller_is_refused_and_named(ros_env, tmp_pat
     assert max_error(summary, 'x') <= clean, (max_error(summary, 'x'), clean, text[-3000:])
     # The job ran to its end; in lockstep a brake is not a machine's failure, but the
     # runner's record lacks the refused commands: exit 3.
-    assert summary['samples'] == 1001 and summary['error'] is None, text[-3000:]
+    assert summary['samples'] == SAMPLES and summary['error'] is None, text[-3000:]
     left_out = 'left out .* messages on mill/x/joint_command from /x_controller'
     assert any(re.search(left_out, p) for p in summary['problems']), summary['problems']
     assert code == 3 == summary['exit_code'], text[-3000:]
@@ -187,7 +191,7 @@ def test_a_ratchet_of_states_in_the_plants_name_is_dropped_and_named(ros_env, tm
         code, text, summary = run_job(ros_env, tmp_path / 'run', go)
     assert sent[0] > 100, text[-3000:]
     # The job completed, as the offline simulator computes it without the ratchet.
-    assert summary['samples'] == 1001 and summary['events'] == [], text[-3000:]
+    assert summary['samples'] == SAMPLES and summary['events'] == [], text[-3000:]
     assert summary['offline_max_difference'] == 0.0, text[-3000:]
     named = ' '.join(summary['foreign_publishers'])
     assert 'ratchet' in named and 'mill/x/state' in named, summary['foreign_publishers']
@@ -234,7 +238,7 @@ def test_bad_parameter_sequences_at_run_time_are_refused_and_the_job_finishes(
     # and the job finished. The laws it ran on for a few steps may trip x (a switch's
     # transient, the law's own doing): then the one true line of it is x_controller's
     # following-error trip, and the drive's brake on its request; nothing else happened.
-    assert summary['samples'] == 1001 and summary['error'] is None, text[-3000:]
+    assert summary['samples'] == SAMPLES and summary['error'] is None, text[-3000:]
     happened = {(e['axis'], e['kind'], e['source']) for e in summary['events']}
     assert happened <= {('x', 'trip', 'x_controller'), ('x', 'braked', 'plant')}, happened
     assert code == 0 == summary['exit_code'], text[-3000:]  # a lockstep trip is the law's
